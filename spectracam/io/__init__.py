@@ -1,0 +1,1 @@
+"""File formats spectracam reads and writes."""

@@ -1,0 +1,143 @@
+"""OpenEXR files: spectral radiance (Fichet, Pacanowski & Wilkie, JCGT 10(3), 2021) and generic I/O.
+
+Spectral layout: one float32 channel per band named ``S0.<λ>nm`` with a comma as the decimal
+separator (``S0.550,000000nm``), attributes ``spectralLayoutVersion = "1.0"`` and
+``emissiveUnits = "W.m^-2.sr^-1"``, plus R, G, B preview channels so ordinary viewers show an image.
+Every file spectracam writes carries ``spectracam*`` attributes recording what made it.
+"""
+from __future__ import annotations
+
+import json
+import os
+import re
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from .. import __version__
+from ..errors import SpectracamError
+from ..render import RadianceCube
+from ..spectra import K_M_LM_PER_W, WavelengthGrid, cmf_band_weights
+
+SPECTRAL_CHANNEL = re.compile(r"^S0\.(\d+(?:,\d+)?)nm$")
+SPECTRAL_LAYOUT_VERSION = "1.0"
+#: Fichet 2021's unit string for emissive channels (per nm is implied by the layout).
+EMISSIVE_UNITS = "W.m^-2.sr^-1"
+PREVIEW_NOTE = ("R,G,B: linear sRGB (ITU-R BT.709 primaries) of the CIE 1931 XYZ of each pixel, scaled so that "
+                "Y = 1 is the luminance of a perfect white diffuser under the scene illuminant; no white balance")
+
+
+def spectral_channel_name(wavelength_nm: float) -> str:
+    return "S0." + f"{wavelength_nm:.6f}".replace(".", ",") + "nm"
+
+
+def parse_spectral_channel(name: str) -> float | None:
+    m = SPECTRAL_CHANNEL.match(name)
+    return float(m.group(1).replace(",", ".")) if m else None
+
+
+def write_exr(path: str | Path, channels: dict[str, np.ndarray], attributes: dict) -> Path:
+    """Write float32 channels and attributes; the file appears complete or not at all (temp + rename)."""
+    import OpenEXR
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    for k, v in attributes.items():
+        header[k] = v if isinstance(v, (str, int)) else (json.dumps(v) if isinstance(v, (dict, list)) else v)
+    # OpenEXR silently writes wrong pixels from non-contiguous views (DESIGN.md): always copy.
+    data = {k: np.ascontiguousarray(v, dtype=np.float32) for k, v in channels.items()}
+    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".exr", dir=path.parent)
+    os.close(fd)
+    try:
+        OpenEXR.File(header, data).write(tmp)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    return path
+
+
+def read_exr(path: str | Path) -> tuple[dict[str, np.ndarray], dict]:
+    """All channels (name → (H, W) array) and header attributes of a single-part EXR file."""
+    import OpenEXR
+
+    try:
+        f = OpenEXR.File(str(path), separate_channels=True)
+    except Exception as e:  # OpenEXR raises a bare RuntimeError/OSError with a long message
+        raise SpectracamError(f"file = {str(path)!r}: not a readable OpenEXR file ({str(e).splitlines()[0]})") from None
+    channels = {name: np.asarray(c.pixels) for name, c in f.channels().items()}
+    return channels, dict(f.header())
+
+
+def preview_rgb(radiance: np.ndarray, grid: WavelengthGrid, white_luminance_cd_m2: float) -> np.ndarray:
+    """Linear sRGB preview ``(H, W, 3)``; see :data:`PREVIEW_NOTE`."""
+    import colour
+
+    xyz = np.tensordot(radiance, cmf_band_weights(grid), axes=([-1], [0])) * (K_M_LM_PER_W / white_luminance_cd_m2)
+    m = np.asarray(colour.RGB_COLOURSPACES["sRGB"].matrix_XYZ_to_RGB)
+    return np.tensordot(xyz, m, axes=([-1], [1]))
+
+
+def radiance_attributes(cube: RadianceCube, scene) -> dict:
+    meta = dict(cube.metadata)
+    return {
+        "spectralLayoutVersion": SPECTRAL_LAYOUT_VERSION,
+        "emissiveUnits": EMISSIVE_UNITS,
+        "spectracamVersion": __version__,
+        "spectracamKind": "radiance",
+        "spectracamUnits": "band-averaged spectral radiance, W.m^-2.sr^-1.nm^-1",
+        "spectracamRenderer": str(meta.get("renderer")),
+        "spectracamVariant": str(meta.get("variant")),
+        "spectracamSamplesPerPixel": int(meta["samples_per_pixel"]) if meta.get("samples_per_pixel") else 0,
+        "spectracamSeed": int(scene.render.seed),
+        "spectracamScene": scene.to_json(),
+        "spectracamRender": json.dumps(meta, sort_keys=True, default=str),
+        "spectracamPreview": PREVIEW_NOTE,
+    }
+
+
+def write_radiance_exr(path: str | Path, cube: RadianceCube, scene) -> Path:
+    """Write a radiance cube as a spectral EXR with an RGB preview and the scene it came from."""
+    channels = {spectral_channel_name(w): cube.radiance[:, :, i] for i, w in enumerate(cube.wavelengths_nm)}
+    rgb = preview_rgb(cube.radiance, cube.grid, scene.illuminant.white_luminance_cd_m2)
+    channels.update({"R": rgb[..., 0], "G": rgb[..., 1], "B": rgb[..., 2]})
+    return write_exr(path, channels, radiance_attributes(cube, scene))
+
+
+def read_radiance_exr(path: str | Path) -> tuple[RadianceCube, dict]:
+    """Read a spectral EXR back into a :class:`RadianceCube` (bands sorted by wavelength) and its attributes."""
+    channels, attrs = read_exr(path)
+    bands = sorted((w, n) for n in channels if (w := parse_spectral_channel(n)) is not None)
+    if not bands:
+        raise SpectracamError(f"file = {str(path)!r}: has no spectral channels S0.<λ>nm; not a spectral EXR")
+    cube = np.stack([channels[n] for _, n in bands], axis=-1)
+    meta = json.loads(attrs["spectracamRender"]) if "spectracamRender" in attrs else {}
+    return RadianceCube(cube, np.array([w for w, _ in bands]), meta), attrs
+
+
+def describe(path: str | Path) -> str:
+    """What a person wants to know about an EXR file: size, channels, recorded parameters, statistics."""
+    channels, attrs = read_exr(path)
+    (x0, y0), (x1, y1) = attrs["dataWindow"]
+    lines = [f"{path}", f"  size: {x1 - x0 + 1} x {y1 - y0 + 1} pixels, {len(channels)} channels"]
+    known = {"channels", "compression", "dataWindow", "displayWindow", "lineOrder", "pixelAspectRatio",
+             "screenWindowCenter", "screenWindowWidth", "type"}
+    lines.append("  attributes:")
+    for k in sorted(a for a in attrs if a not in known):
+        v = attrs[k]
+        if isinstance(v, str) and v.startswith("{"):
+            try:
+                v = json.dumps(json.loads(v), sort_keys=True)
+            except ValueError:
+                pass
+        lines.append(f"    {k}: {v}")
+    spectral = sorted((w, n) for n in channels if (w := parse_spectral_channel(n)) is not None)
+    others = sorted(n for n in channels if parse_spectral_channel(n) is None)
+    order = [n for _, n in spectral] + others
+    lines.append(f"  {'channel':<20} {'min':>12} {'mean':>12} {'max':>12}")
+    for n in order:
+        c = channels[n]
+        lines.append(f"  {n:<20} {c.min():>12.6g} {c.mean(dtype=np.float64):>12.6g} {c.max():>12.6g}")
+    return "\n".join(lines)

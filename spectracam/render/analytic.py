@@ -1,0 +1,36 @@
+"""Closed-form radiance cube of the chart scene.
+
+Every surface is Lambertian and faces the illuminant, so its radiance is ``L(λ) = E(λ)·S(λ)/π``
+(paper, section 3.1: colour signal = illuminant × reflectance).  A pixel's value is the
+area-weighted mix of the surfaces in its footprint, which is the expectation of a box-filtered
+Monte Carlo render of the same scene.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..chart import View, patch_coverage, patch_reflectances
+from ..illuminant import spectral_irradiance
+from ..spectra import band_average
+from . import RadianceCube
+
+
+def material_radiance(scene) -> tuple[list[str], np.ndarray, np.ndarray]:
+    """Band-averaged radiance of each patch ``(24, n_bands)`` and of the surround ``(n_bands,)``."""
+    E = spectral_irradiance(scene.illuminant)
+    names, rows = [], []
+    for name, rho in patch_reflectances(scene.chart):
+        names.append(name)
+        rows.append(band_average(lambda lam, rho=rho: E(lam) * rho(lam) / np.pi, scene.grid))
+    surround = scene.chart.surround_reflectance * band_average(lambda lam: E(lam) / np.pi, scene.grid)
+    return names, np.array(rows), surround
+
+
+def render_analytic(scene) -> RadianceCube:
+    _, patches, surround = material_radiance(scene)
+    view = View.fit(scene.chart, scene.image.width, scene.image.height)
+    cy, cx = patch_coverage(scene.chart, view)
+    cover = cy[:, :, None] * cx[:, None, :]  # (24, H, W)
+    cube = np.tensordot(cover, patches - surround[None, :], axes=([0], [0])) + surround
+    meta = {"renderer": "analytic", "variant": None, "samples_per_pixel": None, "seed": scene.render.seed}
+    return RadianceCube(cube.astype(np.float32), np.asarray(scene.grid.centres_nm, float), meta)

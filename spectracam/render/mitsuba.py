@@ -1,0 +1,216 @@
+"""Mitsuba 3 renderer (spectral variant) for the chart scene, built programmatically.
+
+How bands are rendered
+----------------------
+``specfilm`` draws each path's wavelengths from the response it was *built* with and does not
+re-derive that distribution when the response is updated, and a newly built scene compiles a new
+kernel (~0.1 s each).  So the scene is built once, with a film whose single channel is a box of
+height 1/w over a fixed reference window ``[REFERENCE_WINDOW_NM, +w]``, and every spectrum in it
+(illuminant irradiance, 24 reflectances) is a ``regular`` spectrum over that window whose values
+are *updated per band*: for band ``[a, b]`` the window holds the spectrum sampled at
+``a + (b - a)·t``, ``t ∈ [0, 1]``.  The film then records ``(1/(b-a))∫_a^b E·S/π dλ`` — the band
+average — and one compiled kernel serves every band.  Nothing in this scene depends on wavelength
+except the spectra (Lambertian BSDFs, a delta-direction light), so the remapping is exact.
+"""
+from __future__ import annotations
+
+import ctypes.util
+import glob
+import os
+import subprocess
+import sys
+from functools import lru_cache
+
+import numpy as np
+
+from ..chart import View, patch_rectangles_mm, patch_reflectances
+from ..errors import SpectracamError
+from ..illuminant import spectral_irradiance
+from ..spectra import band_sample_points
+from . import RadianceCube
+
+#: Start of the reference wavelength window every band is mapped into (any visible value works).
+REFERENCE_WINDOW_NM = 500.0
+#: Linear segments per band in the spectra handed to Mitsuba (0.5 nm for 10 nm bands).
+POINTS_PER_BAND = 20
+#: Height of the patches above the board, mm, so that the board never pokes through a patch.
+PATCH_LIFT_MM = 0.01
+#: Distance of the orthographic camera from the chart, mm (irrelevant to the image).
+CAMERA_DISTANCE_MM = 1000.0
+
+VARIANT_NAMES = {"llvm": "llvm_ad_spectral", "scalar": "scalar_spectral", "cuda": "cuda_ad_spectral"}
+
+_LLVM19_GLOBS = ("/usr/lib/x86_64-linux-gnu/libLLVM-19.so*", "/usr/lib/aarch64-linux-gnu/libLLVM-19.so*",
+                 "/usr/lib/llvm-19/lib/libLLVM*.so*", "/usr/lib64/libLLVM-19.so*")
+
+_PROBE = r"""
+import mitsuba as mi, numpy as np, sys
+mi.set_variant(sys.argv[1])
+box = {'type': 'irregular', 'wavelengths': '500, 510', 'values': '0.1, 0.1'}
+s = mi.load_dict({'type': 'scene', 'integrator': {'type': 'direct'},
+    'sensor': {'type': 'orthographic', 'film': {'type': 'specfilm', 'width': 4, 'height': 4, 'b': box,
+               'component_format': 'float32'}, 'to_world': mi.ScalarTransform4f().look_at(
+               origin=[0, 0, 1], target=[0, 0, 0], up=[0, 1, 0])},
+    'r': {'type': 'rectangle', 'to_world': mi.ScalarTransform4f().scale(3),
+          'bsdf': {'type': 'diffuse', 'reflectance': {'type': 'uniform', 'value': 0.5}}},
+    'e': {'type': 'directional', 'direction': [0, 0, -1], 'irradiance': {'type': 'uniform', 'value': 3.14159265}}})
+v = float(np.mean(np.array(mi.render(s))))
+sys.exit(0 if abs(v - 0.5) < 1e-3 else 3)
+"""
+
+
+def find_libllvm19() -> str | None:
+    """Path of a libLLVM 19 shared library on this machine, if any (DESIGN.md: drjit needs 19)."""
+    for pattern in _LLVM19_GLOBS:
+        hits = sorted(glob.glob(pattern))
+        if hits:
+            return hits[0]
+    return None
+
+
+def _jit_env() -> dict:
+    env = dict(os.environ)
+    if "DRJIT_LIBLLVM_PATH" not in env:
+        lib = find_libllvm19()
+        if lib:
+            env["DRJIT_LIBLLVM_PATH"] = lib
+    return env
+
+
+def run_probe(variant: str, env: dict) -> bool:
+    """Render a 4x4 test scene with ``variant`` in a subprocess with ``env``; True if it gives the right value.
+
+    A subprocess, because a wrong libLLVM aborts the whole process on the first render (DESIGN.md).
+    """
+    try:
+        r = subprocess.run([sys.executable, "-c", _PROBE, variant], env=env, capture_output=True, timeout=300)
+    except (subprocess.TimeoutExpired, OSError):
+        return False
+    return r.returncode == 0
+
+
+@lru_cache(maxsize=None)
+def probe_variant(variant: str) -> bool:
+    """Does ``variant`` actually render here (probed once per process)?"""
+    return run_probe(variant, _jit_env())
+
+
+def _gpu_present() -> bool:
+    return bool(ctypes.util.find_library("cuda")) or os.path.exists("/dev/nvidia0")
+
+
+def select_variant(requested: str) -> tuple[str, str]:
+    """Resolve ``auto|llvm|scalar|cuda`` to a Mitsuba variant that renders here, and say why."""
+    if requested == "auto":
+        if _gpu_present() and probe_variant(VARIANT_NAMES["cuda"]):
+            return VARIANT_NAMES["cuda"], "auto: a CUDA GPU renders"
+        if probe_variant(VARIANT_NAMES["llvm"]):
+            return VARIANT_NAMES["llvm"], "auto: no working CUDA GPU; the LLVM backend renders"
+        return VARIANT_NAMES["scalar"], ("auto: no working CUDA GPU and the LLVM backend does not render "
+                                         "(it needs libLLVM 19: install Debian's libllvm19 or set "
+                                         "DRJIT_LIBLLVM_PATH); falling back to the slow scalar variant")
+    name = VARIANT_NAMES[requested]
+    if requested != "scalar" and not probe_variant(name):
+        hint = ("it needs libLLVM 19: install Debian's libllvm19 or set DRJIT_LIBLLVM_PATH" if requested == "llvm"
+                else "no working CUDA GPU/driver")
+        raise SpectracamError(f"render.variant = {requested!r}: {name} does not render on this machine ({hint}); "
+                              "use 'auto' or 'scalar'")
+    return name, f"requested: {requested}"
+
+
+def _activate(variant: str):
+    env = _jit_env()
+    if "DRJIT_LIBLLVM_PATH" in env:
+        os.environ.setdefault("DRJIT_LIBLLVM_PATH", env["DRJIT_LIBLLVM_PATH"])
+    import mitsuba as mi
+
+    if mi.variant() != variant:
+        mi.set_variant(variant)
+    return mi
+
+
+def _regular(values: np.ndarray, width_nm: float) -> dict:
+    return {"type": "regular", "wavelength_min": REFERENCE_WINDOW_NM,
+            "wavelength_max": REFERENCE_WINDOW_NM + width_nm,
+            "values": ", ".join(f"{v:.9g}" for v in values)}
+
+
+def build_scene(mi, scene, width_nm: float) -> dict:
+    """The Mitsuba scene dictionary: board, 24 patches, a directional light, an orthographic camera."""
+    view = View.fit(scene.chart, scene.image.width, scene.image.height)
+    vw, vh = view.size_mm
+    T = mi.ScalarTransform4f
+    placeholder = np.ones(POINTS_PER_BAND + 1)
+    d = {
+        "type": "scene",
+        "integrator": {"type": "direct", "emitter_samples": 1, "bsdf_samples": 0},
+        "sensor": {
+            "type": "orthographic",
+            # Mitsuba's orthographic camera images x ∈ [-1, 1], y ∈ [-1/aspect, 1/aspect], scaled by
+            # to_world: a uniform scale of half the view width gives square pixels.
+            "to_world": T().look_at(origin=[0, 0, CAMERA_DISTANCE_MM], target=[0, 0, 0], up=[0, 1, 0])
+            @ T().scale([vw / 2, vw / 2, 1]),
+            "film": {"type": "specfilm", "width": scene.image.width, "height": scene.image.height,
+                     "component_format": "float32", "rfilter": {"type": "box"},
+                     "band": {"type": "irregular",
+                              "wavelengths": f"{REFERENCE_WINDOW_NM}, {REFERENCE_WINDOW_NM + width_nm}",
+                              "values": f"{1 / width_nm}, {1 / width_nm}"}},
+            "sampler": {"type": "independent", "sample_count": scene.render.samples_per_pixel},
+        },
+        "light": {"type": "directional", "direction": [0, 0, -1], "irradiance": _regular(placeholder, width_nm)},
+        "board": {"type": "rectangle", "to_world": T().scale([vw, vh, 1]),
+                  "bsdf": {"type": "diffuse", "reflectance": _regular(placeholder, width_nm)}},
+    }
+    for p, (x0, x1, y0, y1) in enumerate(patch_rectangles_mm(scene.chart)):
+        d[f"patch{p:02d}"] = {
+            "type": "rectangle",
+            "to_world": T().translate([(x0 + x1) / 2, (y0 + y1) / 2, PATCH_LIFT_MM]) @ T().scale([(x1 - x0) / 2, (y1 - y0) / 2, 1]),
+            "bsdf": {"type": "diffuse", "reflectance": _regular(placeholder, width_nm)},
+        }
+    return d
+
+
+def band_seed(seed: int, band: int) -> int:
+    """Independent, reproducible 32-bit sampler seed for each band of one render."""
+    return int(np.random.SeedSequence([seed, band]).generate_state(1)[0])
+
+
+def render_mitsuba(scene, progress: bool = False, log=None) -> RadianceCube:
+    variant, reason = select_variant(scene.render.variant)
+    if log:
+        log(f"Mitsuba variant {variant} ({reason})")
+    mi = _activate(variant)
+
+    grid = scene.grid
+    widths = grid.widths_nm
+    ref_width = float(widths.max())
+    # optimize=False: the loader would otherwise merge the 25 rectangles (and their BSDFs, identical
+    # placeholders) into one mesh, and the per-patch spectra could no longer be updated.
+    mi_scene = mi.load_dict(build_scene(mi, scene, ref_width), optimize=False)
+    params = mi.traverse(mi_scene)
+
+    E = spectral_irradiance(scene.illuminant)
+    reflectances = patch_reflectances(scene.chart)
+    lam = band_sample_points(grid, POINTS_PER_BAND)  # (B, N+1)
+    # A narrower band than the reference window covers only the front of the window; the rest is 0.
+    H, W, B = scene.image.height, scene.image.width, len(grid)
+    cube = np.empty((H, W, B), dtype=np.float32)
+    Float = type(params["board.bsdf.reflectance.values"])  # mi.Float, or a buffer type in scalar variants
+    params["board.bsdf.reflectance.values"] = Float(np.full(POINTS_PER_BAND + 1, scene.chart.surround_reflectance))
+
+    from tqdm import tqdm
+
+    for b in tqdm(range(B), desc="render bands", unit="band", disable=not progress, leave=False):
+        if not np.isclose(widths[b], ref_width):
+            raise SpectracamError(f"wavelengths: Mitsuba renders evenly spaced grids only (band {b} is "
+                                  f"{widths[b]:g} nm wide, others {ref_width:g} nm)")
+        params["light.irradiance.values"] = Float(E(lam[b]).astype(np.float32))
+        for p, (_, rho) in enumerate(reflectances):
+            params[f"patch{p:02d}.bsdf.reflectance.values"] = Float(rho(lam[b]).astype(np.float32))
+        params.update()
+        img = mi.render(mi_scene, params, seed=band_seed(scene.render.seed, b))
+        cube[:, :, b] = np.asarray(img)[:, :, 0]
+    meta = {"renderer": "mitsuba", "variant": variant, "variant_reason": reason,
+            "samples_per_pixel": scene.render.samples_per_pixel, "seed": scene.render.seed,
+            "mitsuba_version": mi.__version__}
+    return RadianceCube(cube, np.asarray(grid.centres_nm, float), meta)

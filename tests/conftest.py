@@ -1,0 +1,38 @@
+"""Shared fixtures: a small chart scene (160x120 px) rendered once per test session."""
+import numpy as np
+import pytest
+
+from spectracam.scene import parse_scene
+
+SMALL = {"image": {"width": 160, "height": 120}}
+
+
+def small_scene(**tables):
+    data = {k: dict(v) for k, v in SMALL.items()}
+    for k, v in tables.items():
+        data.setdefault(k, {}).update(v)
+    return parse_scene(data)
+
+
+@pytest.fixture(scope="session")
+def scene_5000():
+    return small_scene(illuminant={"temperature_K": 5000})
+
+
+@pytest.fixture(scope="session")
+def analytic_5000(scene_5000):
+    from spectracam.render import render
+
+    return render(scene_5000, "analytic")
+
+
+@pytest.fixture(scope="session")
+def mitsuba_5000(scene_5000):
+    from spectracam.render import render
+
+    return render(scene_5000, "mitsuba")
+
+
+def patch_means(cube, masks):
+    """(24, n_bands) mean radiance of each patch's masked pixels."""
+    return np.stack([cube.radiance[m].mean(axis=0, dtype=np.float64) for m in masks])
