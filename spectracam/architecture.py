@@ -1,0 +1,109 @@
+"""Colour architectures (paper, section 2): how the three channels are sampled and timed.
+
+An architecture turns per-channel photo-electron rates ``(H, W, 3)`` and per-channel exposure times
+into recorded frames.  Add one by subclassing :class:`Architecture` and decorating it with
+:func:`register`; nothing else needs editing.
+"""
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+
+import numpy as np
+
+from .errors import SpectracamError
+from .filters import CHANNELS
+from .sensor import TEMPORAL_STREAM, SensorSpec, expose, fixed_pattern, rng_for
+
+ARCHITECTURES: dict[str, type["Architecture"]] = {}
+CFA_PATTERNS = ("RGGB", "GRBG", "GBRG", "BGGR")
+
+
+def register(cls):
+    ARCHITECTURES[cls.name] = cls
+    return cls
+
+
+class Architecture(ABC):
+    name: str = ""
+    description: str = ""
+    #: Can each channel have its own exposure time?
+    independent_exposures: bool = True
+
+    def __init__(self, cfa_pattern: str = "RGGB"):
+        self.cfa_pattern = cfa_pattern
+
+    @abstractmethod
+    def capture_time_s(self, times_s: np.ndarray) -> float:
+        """Total time the capture takes, given the per-channel exposure times."""
+
+    @abstractmethod
+    def record(self, rates: np.ndarray, times_s: np.ndarray, sensor: SensorSpec, seed: int):
+        """Returns ``(digital, expected_e)``: arrays of the architecture's frame layout."""
+
+    def channel_names(self) -> list[str]:
+        return list(CHANNELS)
+
+
+@register
+class ColourFilterArray(Architecture):
+    name = "cfa"
+    description = "one sensor with a Bayer colour filter array; one exposure; a mosaic of R, G, B pixels"
+    independent_exposures = False
+
+    def capture_time_s(self, times_s):
+        return float(times_s[0])
+
+    def channel_index(self, shape: tuple[int, int]) -> np.ndarray:
+        """``(H, W)`` channel index (0 R, 1 G, 2 B) of every pixel for this Bayer pattern."""
+        tile = np.array([CHANNELS.index(c) for c in self.cfa_pattern]).reshape(2, 2)
+        h, w = shape
+        return np.tile(tile, ((h + 1) // 2, (w + 1) // 2))[:h, :w]
+
+    def record(self, rates, times_s, sensor, seed):
+        h, w, _ = rates.shape
+        mosaic = np.empty((h, w), dtype=np.float32)
+        for i, c in enumerate(self.cfa_pattern):  # strided selection, no per-pixel work
+            dy, dx = divmod(i, 2)
+            mosaic[dy::2, dx::2] = rates[dy::2, dx::2, CHANNELS.index(c)]
+        return expose(mosaic, times_s[0], sensor, rng_for(seed, TEMPORAL_STREAM, 0),
+                      fixed_pattern(sensor, (h, w), seed, 0))
+
+
+@register
+class DichroicPrism(Architecture):
+    name = "prism"
+    description = "dichroic prism onto three sensors; each sees every pixel in its band; capture time = longest exposure"
+
+    def capture_time_s(self, times_s):
+        return float(np.max(times_s))
+
+    def record(self, rates, times_s, sensor, seed):
+        h, w, _ = rates.shape
+        out = [expose(np.ascontiguousarray(rates[:, :, k]), times_s[k], sensor, rng_for(seed, TEMPORAL_STREAM, k),
+                      fixed_pattern(sensor, (h, w), seed, k))  # three physical sensors
+               for k in range(3)]
+        return np.stack([o[0] for o in out]), np.stack([o[1] for o in out])
+
+
+@register
+class FieldSequential(Architecture):
+    name = "fsc"
+    description = "one sensor behind a time-varying filter; three exposures in sequence; capture time = their sum"
+
+    def capture_time_s(self, times_s):
+        return float(np.sum(times_s))
+
+    def record(self, rates, times_s, sensor, seed):
+        h, w, _ = rates.shape
+        pattern = fixed_pattern(sensor, (h, w), seed, 0)  # one sensor: the same FPN in every frame
+        out = [expose(np.ascontiguousarray(rates[:, :, k]), times_s[k], sensor, rng_for(seed, TEMPORAL_STREAM, k), pattern)
+               for k in range(3)]
+        return np.stack([o[0] for o in out]), np.stack([o[1] for o in out])
+
+
+def make_architecture(name: str, cfa_pattern: str = "RGGB") -> Architecture:
+    if name not in ARCHITECTURES:
+        raise SpectracamError(f"capture.architecture = {name!r}: must be one of {', '.join(ARCHITECTURES)}")
+    if cfa_pattern not in CFA_PATTERNS:
+        raise SpectracamError(f"capture.cfa_pattern = {cfa_pattern!r}: must be one of {', '.join(CFA_PATTERNS)}")
+    return ARCHITECTURES[name](cfa_pattern)

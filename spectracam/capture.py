@@ -1,0 +1,94 @@
+"""The sensor back end in one call: radiance cube → optics → responsivities → exposure → sensor.
+
+``ρ_k = A·T_k·∫E_q(λ)·R_k(λ)dλ`` (paper, 3.3) is computed for every pixel and channel with one
+matrix product over the bands; the architecture then samples and records it.
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .architecture import make_architecture
+from .chart import patch_masks
+from .exposure import exposure_times_s
+from .filters import FilterSpec, responsivities
+from .optics import OpticsSpec, photon_irradiance
+from .sensor import SensorSpec
+
+#: Index of the white patch ("white 9.5 (.05 D)") in the standard ColorChecker order.
+WHITE_PATCH = 18
+
+
+@dataclass(frozen=True)
+class CameraSpec:
+    """Everything between the scene and the digital numbers."""
+
+    optics: OpticsSpec = field(default_factory=OpticsSpec)
+    filters: FilterSpec = field(default_factory=FilterSpec)
+    sensor: SensorSpec = field(default_factory=SensorSpec)
+    architecture: str = "cfa"
+    exposure: str = "single"
+    cfa_pattern: str = "RGGB"
+
+    def to_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+@dataclass
+class RawCapture:
+    """What the sensor recorded.
+
+    ``digital``: digital numbers, ``(H, W)`` mosaic for the CFA, ``(3, H, W)`` planes (prism) or
+    frames (field-sequential) otherwise; ``expected_e``: the same layout, noise-free electrons
+    (photo + dark); ``exposure_times_s``: per channel R, G, B; ``capture_time_s``: total.
+    """
+
+    digital: np.ndarray
+    expected_e: np.ndarray
+    exposure_times_s: np.ndarray
+    capture_time_s: float
+    architecture: str
+    exposure: str
+    cfa_pattern: str | None
+    camera: CameraSpec
+    seed: int
+    white_rate_e_per_s: np.ndarray
+    metadata: dict = field(default_factory=dict)
+
+
+def photo_electron_rates(cube, camera: CameraSpec) -> np.ndarray:
+    """``(H, W, 3)`` photo-electrons per second per pixel for each channel, float32."""
+    Eq = photon_irradiance(cube.radiance, cube.wavelengths_nm, camera.optics)  # photons s⁻¹ m⁻² nm⁻¹
+    R = responsivities(camera.filters, cube.grid)  # (3, B) e⁻/photon
+    area_m2 = camera.sensor.pixel_area_um2 * 1e-12
+    weights = (R * cube.grid.widths_nm[None, :] * area_m2).T.astype(np.float32)  # (B, 3)
+    h, w, b = Eq.shape
+    return (Eq.reshape(h * w, b) @ weights).reshape(h, w, 3)
+
+
+def capture(cube, sensor: SensorSpec | None = None, architecture: str = "cfa", exposure: str = "single",
+            seed: int = 0, *, camera: CameraSpec | None = None, white_mask: np.ndarray | None = None,
+            scene=None) -> RawCapture:
+    """Capture a radiance cube.  The white patch for metering comes from ``white_mask``, else from
+    the chart geometry of ``scene`` (or of the scene recorded in the cube's metadata)."""
+    camera = camera or CameraSpec()
+    camera = dataclasses.replace(camera, sensor=sensor or camera.sensor, architecture=architecture or camera.architecture,
+                                 exposure=exposure or camera.exposure)
+    arch = make_architecture(camera.architecture, camera.cfa_pattern)
+    rates = photo_electron_rates(cube, camera)
+    h, w, _ = rates.shape
+    if white_mask is None:
+        if scene is None:
+            from .scene import parse_scene
+
+            scene = parse_scene(cube.metadata["scene"])
+        white_mask = patch_masks(scene.chart, w, h)[WHITE_PATCH]
+    white_rate = rates[white_mask].mean(axis=0, dtype=np.float64)
+    times = exposure_times_s(camera.exposure, white_rate, camera.sensor, arch)
+    digital, expected = arch.record(rates, times, camera.sensor, seed)
+    return RawCapture(digital=digital, expected_e=expected, exposure_times_s=times,
+                      capture_time_s=arch.capture_time_s(times), architecture=arch.name, exposure=camera.exposure,
+                      cfa_pattern=camera.cfa_pattern if arch.name == "cfa" else None, camera=camera, seed=seed,
+                      white_rate_e_per_s=white_rate)

@@ -1,0 +1,85 @@
+"""Colour filters and sensor quantum efficiency → spectral responsivities R_k(λ) (paper, section 3.3).
+
+``R_k(λ) = filter transmittance_k(λ) × QE(λ)`` in electrons per photon, band-averaged on the
+scene's wavelength grid, channels in the order R, G, B.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .spectra import WavelengthGrid, band_average, tabulated
+
+CHANNELS = ("R", "G", "B")
+FILTER_KINDS = ("block", "gaussian", "camera")
+QE_KINDS = ("flat", "silicon")
+CAMERAS = ("Nikon 5100 (NPL)", "Sigma SDMerill (NPL)")
+
+#: A silicon-like external QE of a front-illuminated CMOS photodiode without IR-cut filter: low in
+#: the blue (shallow absorption, surface recombination), peaking near 550–650 nm, falling into the
+#: red.  Shape after typical published curves (e.g. Theuwissen, "Solid-State Imaging with
+#: Charge-Coupled Devices", 1995, Fig. 4.9); scaled by ``qe_peak``.
+SILICON_QE_SHAPE = (
+    (380.0, 400.0, 450.0, 500.0, 550.0, 600.0, 650.0, 700.0, 750.0, 800.0, 850.0),
+    (0.25, 0.35, 0.60, 0.80, 0.95, 1.00, 0.97, 0.88, 0.75, 0.60, 0.45),
+)
+
+
+@dataclass(frozen=True)
+class FilterSpec:
+    #: "block" (the paper, 4.3: ideal pass bands), "gaussian" (centres, FWHM) or "camera".
+    kind: str = "block"
+    #: Block filter cutoffs, nm: blue below the first, green between, red above (paper: 490, 610).
+    cutoffs_nm: tuple[float, float] = (490.0, 610.0)
+    #: Gaussian filters: centres and full widths at half maximum for R, G, B, nm.
+    centres_nm: tuple[float, float, float] = (610.0, 540.0, 460.0)
+    fwhm_nm: tuple[float, float, float] = (60.0, 60.0, 60.0)
+    #: Measured camera sensitivities colour-science ships (normalised to a peak of 1).
+    camera: str = "Nikon 5100 (NPL)"
+    #: "flat" or "silicon" (:data:`SILICON_QE_SHAPE`).
+    qe: str = "flat"
+    #: Peak quantum efficiency, electrons per photon.  The paper states none; 0.5 is typical of
+    #: front-illuminated CMOS photodiodes of the paper's time (0.3–0.6).
+    qe_peak: float = 0.5
+
+
+def _transmittance(spec: FilterSpec, k: int):
+    """Transmittance of channel k for smooth (gaussian, camera) filters; block filters are exact above."""
+    if spec.kind == "gaussian":
+        c, sigma = spec.centres_nm[k], spec.fwhm_nm[k] / (2 * np.sqrt(2 * np.log(2)))
+        return lambda lam: np.exp(-0.5 * ((lam - c) / sigma) ** 2)
+    import colour
+
+    msds = colour.MSDS_CAMERA_SENSITIVITIES[spec.camera]
+    values = np.asarray(msds.values, float)
+    return tabulated(msds.wavelengths, values[:, k] / values.max())
+
+
+def quantum_efficiency(spec: FilterSpec):
+    if spec.qe == "flat":
+        return lambda lam: np.full_like(np.asarray(lam, float), spec.qe_peak)
+    wl, shape = SILICON_QE_SHAPE
+    return tabulated(wl, np.asarray(shape) * spec.qe_peak)
+
+
+def _block_responsivity(spec: FilterSpec, grid: WavelengthGrid, k: int) -> np.ndarray:
+    """Exact band average of an ideal pass band × QE: QE integrated over the overlap only, so a
+    band that straddles a cutoff gets exactly its overlapping fraction."""
+    lo_c, hi_c = [(spec.cutoffs_nm[1], np.inf), spec.cutoffs_nm, (-np.inf, spec.cutoffs_nm[0])][k]
+    e = grid.edges_nm
+    lo, hi = np.maximum(e[:-1], lo_c), np.minimum(e[1:], hi_c)
+    t = np.linspace(0.0, 1.0, 401)
+    lam = lo[:, None] + (hi - lo)[:, None] * t[None, :]
+    qe = quantum_efficiency(spec)(lam)
+    mean_qe = 0.5 * (qe[:, 1:] + qe[:, :-1]).mean(axis=1)
+    return np.where(hi > lo, mean_qe * (hi - lo) / (e[1:] - e[:-1]), 0.0)
+
+
+def responsivities(spec: FilterSpec, grid: WavelengthGrid) -> np.ndarray:
+    """``(3, n_bands)`` band-averaged R_k(λ), electrons per photon, channels R, G, B."""
+    if spec.kind == "block":
+        return np.stack([_block_responsivity(spec, grid, k) for k in range(3)])
+    qe = quantum_efficiency(spec)
+    return np.stack([band_average(lambda lam, t=_transmittance(spec, k): t(lam) * qe(lam), grid, 400)
+                     for k in range(3)])

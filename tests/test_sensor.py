@@ -1,0 +1,171 @@
+"""The sensor back end against closed forms (issue 3)."""
+import dataclasses
+
+import numpy as np
+import pytest
+
+from spectracam.architecture import ColourFilterArray, make_architecture
+from spectracam.capture import CameraSpec, capture, photo_electron_rates
+from spectracam.errors import SpectracamError
+from spectracam.exposure import exposure_times_s
+from spectracam.filters import FilterSpec, responsivities
+from spectracam.optics import OpticsSpec, irradiance_factor
+from spectracam.render import RadianceCube
+from spectracam.sensor import SensorSpec, expose, fixed_pattern, rng_for
+from spectracam.spectra import PLANCK_H_J_S, SPEED_OF_LIGHT_M_S, WavelengthGrid
+
+GRID = np.arange(400.0, 701.0, 10.0)
+QUIET = SensorSpec().off("shot_noise", "dark_current", "read_noise", "fpn", "quantization", "clipping")
+
+
+def flat_cube(L=1e-3, shape=(64, 64)):
+    """A uniform field of constant band-averaged radiance L, W·m⁻²·sr⁻¹·nm⁻¹."""
+    return RadianceCube(np.full((*shape, GRID.size), L, np.float32), GRID.copy(), {})
+
+
+def test_irradiance_factor_forms():
+    assert irradiance_factor(OpticsSpec(1.4)) == pytest.approx(np.pi / (4 * 1.96))
+    assert irradiance_factor(OpticsSpec(1.4, irradiance_form="exact")) == pytest.approx(np.pi / (1 + 4 * 1.96))
+    assert irradiance_factor(OpticsSpec(2.8)) == pytest.approx(irradiance_factor(OpticsSpec(1.4)) / 4)
+
+
+def test_photo_electrons_match_closed_form():
+    # block filters with cutoffs on band edges, flat QE: ρ_k = A·q·k·L/(hc)·∫λ dλ over the pass band
+    L, qe, N = 2e-3, 0.5, 1.4
+    cam = CameraSpec(optics=OpticsSpec(N), filters=FilterSpec(cutoffs_nm=(495.0, 605.0), qe_peak=qe))
+    rates = photo_electron_rates(flat_cube(L), cam)
+    A = cam.sensor.pixel_area_um2 * 1e-12
+    k = np.pi / (4 * N**2)
+    bands = {"R": (605.0, 705.0), "G": (495.0, 605.0), "B": (395.0, 495.0)}
+    for c, (a, b) in zip("RGB", bands.values()):
+        expected = A * qe * k * L * (b**2 - a**2) / 2 * 1e-9 / (PLANCK_H_J_S * SPEED_OF_LIGHT_M_S)
+        assert rates[..., "RGB".index(c)].mean() == pytest.approx(expected, rel=1e-5)
+
+
+def test_block_filters_split_a_straddling_band():
+    R = responsivities(FilterSpec(qe_peak=1.0), WavelengthGrid(GRID))
+    i490, i610 = list(GRID).index(490.0), list(GRID).index(610.0)
+    assert R[2, i490] == pytest.approx(0.5) and R[1, i490] == pytest.approx(0.5)
+    assert R[1, i610] == pytest.approx(0.5) and R[0, i610] == pytest.approx(0.5)
+    np.testing.assert_allclose(R.sum(axis=0), 1.0)  # block filters pass every photon exactly once
+
+
+def test_mean_electrons_and_photon_transfer_variance():
+    sensor = SensorSpec(fpn=False, quantization=False)
+    rate = np.full((400, 400), 2.0e6, np.float32)
+    t = 0.01
+    dn, expected = expose(rate, t, sensor, rng_for(3, 9))
+    e = dn * sensor.quantization_step_e
+    mean_e = 2.0e6 * t + sensor.dark_rate_e_per_s * t
+    assert expected.mean() == pytest.approx(mean_e, rel=1e-6)
+    assert e.mean() == pytest.approx(mean_e, rel=1e-3)
+    # photon transfer: var = shot (= mean, photo + dark) + read²; 160k samples → ±0.35 % (1σ)
+    assert e.var() == pytest.approx(mean_e + sensor.read_noise_e**2, rel=0.02)
+
+
+@pytest.mark.parametrize("model", ["gaussian", "poisson"])
+def test_dark_frame_statistics(model):
+    sensor = SensorSpec(fpn=False, quantization=False, shot_noise_model=model)
+    t = 2.0
+    dn, _ = expose(np.zeros((400, 400), np.float32), t, sensor, rng_for(1, 9))
+    e = dn * sensor.quantization_step_e
+    dark = sensor.dark_current_e_per_s_um2 * sensor.pixel_area_um2 * t  # 2000 e⁻
+    assert e.mean() == pytest.approx(dark, rel=2e-3)
+    assert e.var() == pytest.approx(dark + sensor.read_noise_e**2, rel=0.02)
+
+
+def test_quantisation_step_is_qmax_over_2n():
+    sensor = QUIET.__class__(**{**dataclasses.asdict(QUIET), "quantization": True, "adc_bits": 8})
+    assert sensor.quantization_step_e == 512.0
+    electrons = np.arange(0, 131072, 37, dtype=np.float32)
+    dn, _ = expose(electrons, 1.0, sensor, rng_for(0))
+    np.testing.assert_array_equal(dn, np.floor(electrons / 512.0))
+    s12 = dataclasses.replace(sensor, adc_bits=12)
+    assert expose(np.array([1000.0], np.float32), 1.0, s12, rng_for(0))[0][0] == np.floor(1000 / 32)
+
+
+def test_full_well_clipping():
+    sensor = SensorSpec(fpn=False, read_noise=False, quantization=False)
+    dn, _ = expose(np.full(1000, 1e9, np.float32), 1.0, sensor, rng_for(0))
+    assert dn.max() == 255.0  # ADC full scale: 2ⁿ − 1
+    # the well holds q_max: with shot noise off, 0.9·q_max passes and 1.5·q_max reads as q_max
+    s16 = dataclasses.replace(sensor, adc_bits=16, shot_noise=False, dark_current=False)
+    dn, _ = expose(np.array([0.9, 1.5], np.float32) * np.float32(131072), 1.0, s16, rng_for(0))
+    np.testing.assert_allclose(dn * s16.quantization_step_e, [0.9 * 131072, 131072 - 2])  # ADC tops at 2ⁿ − 1
+    assert expose(np.array([2e5], np.float32), 1.0, s16.off("clipping"), rng_for(0))[0][0] * 2 == 2e5
+    unclipped, _ = expose(np.full(10, 1e9, np.float32), 1.0, sensor.off("clipping"), rng_for(0))
+    assert unclipped.min() > 1e5
+
+
+@pytest.mark.parametrize("reading, rms", [("std", 0.01 * 131072), ("bound", 0.01 * 131072 / np.sqrt(12))])
+def test_fpn_fixed_across_frames_different_across_pixels(reading, rms):
+    sensor = SensorSpec(fpn_reading=reading)
+    a, _ = fixed_pattern(sensor, (300, 300), seed=5, sensor_index=0)
+    b, _ = fixed_pattern(sensor, (300, 300), seed=5, sensor_index=0)
+    c, _ = fixed_pattern(sensor, (300, 300), seed=5, sensor_index=1)
+    np.testing.assert_array_equal(a, b)
+    assert a.std() == pytest.approx(rms, rel=0.02) and abs(np.corrcoef(a.ravel(), c.ravel())[0, 1]) < 0.01
+    if reading == "bound":
+        assert np.abs(a).max() <= 0.005 * 131072
+
+
+def test_fsc_frames_share_fpn_prism_sensors_do_not():
+    cube = flat_cube(shape=(200, 200))
+    mask = np.ones((200, 200), bool)
+    sensor = SensorSpec(quantization=False, shot_noise=False, read_noise=False, dark_current=False)
+    for arch, shared in (("fsc", True), ("prism", False)):
+        raw = capture(cube, sensor, arch, "optimal", seed=2, white_mask=mask)
+        resid = raw.digital * sensor.quantization_step_e - raw.expected_e
+        corr = np.corrcoef(resid[0].ravel(), resid[2].ravel())[0, 1]
+        assert (corr > 0.999) if shared else (abs(corr) < 0.02)
+
+
+def test_exposure_rules():
+    white = np.array([3e6, 5e6, 1e6])
+    s = SensorSpec()
+    sat = s.q_max_e / (white + s.dark_rate_e_per_s)
+    cfa, fsc, prism = (make_architecture(n) for n in ("cfa", "fsc", "prism"))
+    single = exposure_times_s("single", white, s, cfa)
+    np.testing.assert_allclose(single, sat.min())
+    opt = exposure_times_s("optimal", white, s, fsc)
+    np.testing.assert_allclose(opt, sat)
+    assert fsc.capture_time_s(opt) == pytest.approx(sat.sum())
+    assert prism.capture_time_s(opt) == pytest.approx(sat.max())
+    bal = exposure_times_s("balanced", white, s, fsc)
+    assert fsc.capture_time_s(bal) == pytest.approx(single[0]) and bal / bal[0] == pytest.approx(sat / sat[0])
+    assert prism.capture_time_s(exposure_times_s("balanced", white, s, prism)) == pytest.approx(single[0])
+    with pytest.raises(SpectracamError, match="one exposure"):
+        exposure_times_s("optimal", white, s, cfa)
+
+
+def test_optimal_prism_and_fsc_have_identical_expected_electrons(scene_5000, analytic_5000):
+    p = capture(analytic_5000, architecture="prism", exposure="optimal", scene=scene_5000)
+    f = capture(analytic_5000, architecture="fsc", exposure="optimal", scene=scene_5000)
+    np.testing.assert_array_equal(p.expected_e, f.expected_e)
+    from spectracam.chart import patch_masks
+
+    white = patch_masks(scene_5000.chart, 160, 120)[18]
+    # each channel's white-patch mean reaches full well (photo + dark)
+    np.testing.assert_allclose(p.expected_e[:, white].mean(axis=1), 131072.0, rtol=1e-5)
+    assert p.capture_time_s == pytest.approx(p.exposure_times_s.max())
+    assert f.capture_time_s == pytest.approx(f.exposure_times_s.sum())
+
+
+@pytest.mark.parametrize("pattern", ["RGGB", "GRBG", "GBRG", "BGGR"])
+def test_cfa_mosaic_samples_the_right_channel(pattern, scene_5000, analytic_5000):
+    cam = CameraSpec(cfa_pattern=pattern)
+    raw = capture(analytic_5000, camera=cam, scene=scene_5000)
+    rates = photo_electron_rates(analytic_5000, cam)
+    idx = ColourFilterArray(pattern).channel_index(rates.shape[:2])
+    assert "RGB"[idx[0, 0]] == pattern[0] and "RGB"[idx[1, 1]] == pattern[3]
+    expected = np.take_along_axis(rates, idx[..., None], axis=2)[..., 0] * raw.exposure_times_s[0]
+    np.testing.assert_allclose(raw.expected_e, expected + SensorSpec().dark_rate_e_per_s * raw.exposure_times_s[0], rtol=1e-5)
+    assert raw.digital.shape == (120, 160) and raw.cfa_pattern == pattern
+
+
+def test_same_seed_same_capture(scene_5000, analytic_5000):
+    a = capture(analytic_5000, seed=7, scene=scene_5000)
+    b = capture(analytic_5000, seed=7, scene=scene_5000)
+    c = capture(analytic_5000, seed=8, scene=scene_5000)
+    np.testing.assert_array_equal(a.digital, b.digital)
+    assert not np.array_equal(a.digital, c.digital)
