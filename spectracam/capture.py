@@ -16,6 +16,7 @@ from .exposure import exposure_times_s
 from .filters import FilterSpec, responsivities
 from .optics import OpticsSpec, photon_irradiance
 from .sensor import SensorSpec
+from .spectra import K_M_LM_PER_W, cmf_band_weights
 
 #: Index of the white patch ("white 9.5 (.05 D)") in the standard ColorChecker order.
 WHITE_PATCH = 18
@@ -46,7 +47,7 @@ class RawCapture:
     """
 
     digital: np.ndarray
-    expected_e: np.ndarray
+    expected_e: np.ndarray | None
     exposure_times_s: np.ndarray
     capture_time_s: float
     architecture: str
@@ -55,6 +56,10 @@ class RawCapture:
     camera: CameraSpec
     seed: int
     white_rate_e_per_s: np.ndarray
+    #: Noise-free photo-electron rates ``(24, 3)`` of each patch's masked pixels, e⁻/s, and the
+    #: patches' CIE 1931 XYZ (Y = 1 for a perfect white diffuser), when the chart geometry is known.
+    patch_rates_e_per_s: np.ndarray | None = None
+    patch_xyz: np.ndarray | None = None
     metadata: dict = field(default_factory=dict)
 
 
@@ -79,16 +84,22 @@ def capture(cube, sensor: SensorSpec | None = None, architecture: str = "cfa", e
     arch = make_architecture(camera.architecture, camera.cfa_pattern)
     rates = photo_electron_rates(cube, camera)
     h, w, _ = rates.shape
+    patch_rates = patch_xyz = None
     if white_mask is None:
         if scene is None:
             from .scene import parse_scene
 
             scene = parse_scene(cube.metadata["scene"])
-        white_mask = patch_masks(scene.chart, w, h)[WHITE_PATCH]
+        masks = patch_masks(scene.chart, w, h)
+        white_mask = masks[WHITE_PATCH]
+        patch_rates = np.stack([rates[m].mean(axis=0, dtype=np.float64) for m in masks])
+        radiance = np.stack([cube.radiance[m].mean(axis=0, dtype=np.float64) for m in masks])
+        patch_xyz = radiance @ cmf_band_weights(cube.grid) * (K_M_LM_PER_W / scene.illuminant.white_luminance_cd_m2)
     white_rate = rates[white_mask].mean(axis=0, dtype=np.float64)
     times = exposure_times_s(camera.exposure, white_rate, camera.sensor, arch)
     digital, expected = arch.record(rates, times, camera.sensor, seed)
     return RawCapture(digital=digital, expected_e=expected, exposure_times_s=times,
                       capture_time_s=arch.capture_time_s(times), architecture=arch.name, exposure=camera.exposure,
                       cfa_pattern=camera.cfa_pattern if arch.name == "cfa" else None, camera=camera, seed=seed,
-                      white_rate_e_per_s=white_rate)
+                      white_rate_e_per_s=white_rate, patch_rates_e_per_s=patch_rates, patch_xyz=patch_xyz,
+                      metadata={"scene": scene.to_dict()} if scene is not None else {})

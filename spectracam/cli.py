@@ -9,6 +9,8 @@ import click
 
 from . import __version__
 from .errors import SpectracamError
+from .architecture import ARCHITECTURES
+from .exposure import EXPOSURE_SCHEMES
 from .render import RENDERERS
 
 
@@ -52,6 +54,49 @@ def render_cmd(scene_file: Path, out_dir: Path, renderer: str, quiet: bool):
     path = write_radiance_exr(out_dir / "radiance.exr", cube, scene)
     h, w, b = cube.shape
     log(f"wrote {path} ({w}x{h} px, {b} bands, {renderer}, {time.perf_counter() - t0:.2f} s)")
+
+
+@main.command("capture")
+@click.argument("radiance_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("-o", "--output", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
+              help="Directory to write raw.exr (and raw.dng for the colour filter array) into.")
+@click.option("--arch", type=click.Choice(list(ARCHITECTURES)), default=None,
+              help="Colour architecture [default: the scene's, else cfa].")
+@click.option("--exposure", type=click.Choice(EXPOSURE_SCHEMES), default=None,
+              help="Exposure control [default: the scene's, else single].")
+@click.option("--config", "config_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="TOML with [optics], [filters], [sensor], [capture] tables, over the scene's.")
+@click.option("--seed", type=int, default=None, help="Noise seed [default: the scene's render.seed].")
+@click.option("--quiet", is_flag=True, help="No notices.")
+def capture_cmd(radiance_file: Path, out_dir: Path, arch, exposure, config_file, seed, quiet):
+    """Capture a spectral RADIANCE_FILE with a simulated sensor; write DIR/raw.exr (+ raw.dng for cfa)."""
+
+    from .capture import capture
+    from .io.dng import write_dng
+    from .io.exr import read_radiance_exr, write_raw_exr
+    from .scene import load_camera_config, parse_camera, parse_scene
+
+    cube, attrs = read_radiance_exr(radiance_file)
+    if "scene" not in cube.metadata:
+        raise SpectracamError(f"file = {str(radiance_file)!r}: records no scene (spectracamScene), so the white "
+                              "patch for exposure metering is unknown; render it with spectracam")
+    scene = parse_scene(cube.metadata["scene"], source=str(radiance_file))
+    camera = load_camera_config(config_file, base=scene.camera) if config_file else scene.camera
+    flags = {k: v for k, v in (("architecture", arch), ("exposure", exposure)) if v}
+    if flags:  # validate the combination like a config file would
+        from .scene import camera_tables
+
+        tables = camera_tables(camera)
+        tables["capture"].update(flags)
+        camera = parse_camera(tables, source="command line")
+    seed = scene.render.seed if seed is None else seed
+    raw = capture(cube, camera.sensor, camera.architecture, camera.exposure, seed, camera=camera, scene=scene)
+    paths = [write_raw_exr(out_dir / "raw.exr", raw)]
+    if raw.architecture == "cfa":
+        paths.append(write_dng(out_dir / "raw.dng", raw))
+    times = ", ".join(f"{c} {1e3 * t:.2f} ms" for c, t in zip("RGB", raw.exposure_times_s))
+    _log(quiet)(f"{raw.architecture}/{raw.exposure}: exposures {times}; capture time {1e3 * raw.capture_time_s:.2f} ms")
+    _log(quiet)("wrote " + ", ".join(map(str, paths)))
 
 
 @main.command("inspect")

@@ -16,7 +16,13 @@ from pathlib import Path
 
 import numpy as np
 
+from .architecture import ARCHITECTURES, CFA_PATTERNS
+from .capture import CameraSpec
 from .chart import DATASETS, ChartSpec, dataset_range_nm
+from .exposure import EXPOSURE_SCHEMES
+from .filters import CAMERAS, FILTER_KINDS, QE_KINDS, FilterSpec
+from .optics import IRRADIANCE_FORMS, OpticsSpec
+from .sensor import FPN_READINGS, SHOT_NOISE_MODELS, SensorSpec
 from .errors import ConfigError
 from .illuminant import TEMPERATURE_RANGE_K, IlluminantSpec
 from .spectra import CIE_RANGE_NM, WavelengthGrid
@@ -48,6 +54,7 @@ class Scene:
     grid: WavelengthGrid = field(default_factory=lambda: WavelengthGrid(np.arange(400.0, 701.0, 10.0)))
     image: ImageSpec = field(default_factory=ImageSpec)
     render: RenderSpec = field(default_factory=RenderSpec)
+    camera: CameraSpec = field(default_factory=CameraSpec)
 
     def to_dict(self) -> dict:
         """A plain, JSON-serialisable description that round-trips through :func:`parse_scene`."""
@@ -64,6 +71,7 @@ class Scene:
             "wavelengths": {"centres_nm": [float(x) for x in self.grid.centres_nm]},
             "image": dataclasses.asdict(self.image),
             "render": dataclasses.asdict(self.render),
+            **camera_tables(self.camera),
         }
 
     def to_json(self) -> str:
@@ -111,6 +119,22 @@ class _Table:
         if isinstance(v, bool) or not isinstance(v, int) or v < lo or (hi is not None and v > hi):
             raise self.error(key, v, allowed)
         return int(v)
+
+    def boolean(self, key, default) -> bool:
+        v = self.data.pop(key, default)
+        if not isinstance(v, bool):
+            raise self.error(key, v, "must be true or false")
+        return v
+
+    def numbers(self, key, default, n, lo=-math.inf, *, increasing=False, unit="") -> tuple:
+        v = self.data.pop(key, default)
+        u = f" {unit}" if unit else ""
+        allowed = f"must be a list of {n} numbers ≥ {lo:g}{u}" + (", increasing" if increasing else "")
+        ok = isinstance(v, (list, tuple)) and len(v) == n and all(
+            isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) and x >= lo for x in v)
+        if not ok or (increasing and any(b <= a for a, b in zip(v, v[1:]))):
+            raise self.error(key, v, allowed)
+        return tuple(float(x) for x in v)
 
     def choice(self, key, default, choices) -> str:
         v = self.data.pop(key, default)
@@ -202,6 +226,72 @@ def _parse_grid(t: _Table) -> WavelengthGrid:
     return grid
 
 
+CAMERA_TABLES = ("optics", "filters", "sensor", "capture")
+
+
+def camera_tables(camera: CameraSpec) -> dict:
+    """The ``[optics]``, ``[filters]``, ``[sensor]`` and ``[capture]`` tables describing a camera."""
+    return {"optics": dataclasses.asdict(camera.optics),
+            "filters": {k: list(v) if isinstance(v, tuple) else v for k, v in dataclasses.asdict(camera.filters).items()},
+            "sensor": dataclasses.asdict(camera.sensor),
+            "capture": {"architecture": camera.architecture, "exposure": camera.exposure,
+                        "cfa_pattern": camera.cfa_pattern}}
+
+
+def _parse_camera(top: _Table) -> CameraSpec:
+    o, d = top.table("optics"), OpticsSpec()
+    optics = OpticsSpec(f_number=o.number("f_number", d.f_number, 0.5, 64.0),
+                        transmittance=o.number("transmittance", d.transmittance, 0, 1, lo_open=True),
+                        irradiance_form=o.choice("irradiance_form", d.irradiance_form, IRRADIANCE_FORMS))
+    o.done()
+    f, d = top.table("filters"), FilterSpec()
+    filters = FilterSpec(kind=f.choice("kind", d.kind, FILTER_KINDS),
+                         cutoffs_nm=f.numbers("cutoffs_nm", d.cutoffs_nm, 2, 0, increasing=True, unit="nm"),
+                         centres_nm=f.numbers("centres_nm", d.centres_nm, 3, 0, unit="nm"),
+                         fwhm_nm=f.numbers("fwhm_nm", d.fwhm_nm, 3, 1e-3, unit="nm"),
+                         camera=f.choice("camera", d.camera, CAMERAS),
+                         qe=f.choice("qe", d.qe, QE_KINDS),
+                         qe_peak=f.number("qe_peak", d.qe_peak, 0, 1, lo_open=True))
+    f.done()
+    t, d = top.table("sensor"), SensorSpec()
+    sensor = SensorSpec(
+        q_max_e=t.number("q_max_e", d.q_max_e, 1, 1e9, unit="e-"),
+        read_noise_e=t.number("read_noise_e", d.read_noise_e, 0, 1e6, unit="e-"),
+        dark_current_e_per_s_um2=t.number("dark_current_e_per_s_um2", d.dark_current_e_per_s_um2, 0, 1e9),
+        adc_bits=t.integer("adc_bits", d.adc_bits, 1, 24),
+        fpn_fraction=t.number("fpn_fraction", d.fpn_fraction, 0, 1),
+        fpn_reading=t.choice("fpn_reading", d.fpn_reading, FPN_READINGS),
+        prnu_fraction=t.number("prnu_fraction", d.prnu_fraction, 0, 1),
+        pixel_pitch_um=t.number("pixel_pitch_um", d.pixel_pitch_um, 0.1, 1000, unit="µm"),
+        fill_factor=t.number("fill_factor", d.fill_factor, 0, 1, lo_open=True),
+        conversion_gain_uV_per_e=t.number("conversion_gain_uV_per_e", d.conversion_gain_uV_per_e, 0, lo_open=True),
+        shot_noise_model=t.choice("shot_noise_model", d.shot_noise_model, SHOT_NOISE_MODELS),
+        **{k: t.boolean(k, getattr(d, k)) for k in
+           ("shot_noise", "dark_current", "read_noise", "fpn", "quantization", "clipping")})
+    t.done()
+    c, d = top.table("capture"), CameraSpec()
+    camera = CameraSpec(optics=optics, filters=filters, sensor=sensor,
+                        architecture=c.choice("architecture", d.architecture, tuple(ARCHITECTURES)),
+                        exposure=c.choice("exposure", d.exposure, EXPOSURE_SCHEMES),
+                        cfa_pattern=c.choice("cfa_pattern", d.cfa_pattern, CFA_PATTERNS))
+    c.done()
+    if camera.exposure != "single" and not ARCHITECTURES[camera.architecture].independent_exposures:
+        raise c.error("exposure", camera.exposure,
+                      f"the {camera.architecture} architecture has one exposure for all channels; use 'single'")
+    return camera
+
+
+def parse_camera(data: dict, source: str | None = None, base: CameraSpec | None = None) -> CameraSpec:
+    """A camera from ``[optics]``/``[filters]``/``[sensor]``/``[capture]`` tables; keys not given keep
+    the values of ``base`` (e.g. the scene file's camera)."""
+    merged = camera_tables(base or CameraSpec())
+    top = _Table(data, "", source)
+    for name in CAMERA_TABLES:
+        merged[name].update(top.table(name).data)
+    top.done()
+    return _parse_camera(_Table(merged, "", source))
+
+
 def parse_scene(data: dict, source: str | None = None) -> Scene:
     """Validate a parsed TOML/JSON dict and build a :class:`Scene`."""
     top = _Table(data, "", source)
@@ -218,24 +308,33 @@ def parse_scene(data: dict, source: str | None = None) -> Scene:
                         variant=r.choice("variant", RenderSpec.variant, VARIANTS),
                         seed=r.integer("seed", RenderSpec.seed, 0, 2**31 - 1))
     r.done()
+    camera = _parse_camera(top)
     top.done()
     d_lo, d_hi = dataset_range_nm(chart.dataset)
     if grid.edges_nm[0] < d_lo or grid.edges_nm[-1] > d_hi:
         raise ConfigError("wavelengths", f"{grid.centres_nm[0]:g}–{grid.centres_nm[-1]:g} nm",
                           f"bands span {grid.edges_nm[0]:g}–{grid.edges_nm[-1]:g} nm, beyond the reflectance "
                           f"data of {chart.dataset!r} ({d_lo:g}–{d_hi:g} nm)", source)
-    return Scene(name=name, chart=chart, illuminant=illuminant, grid=grid, image=image, render=render)
+    return Scene(name=name, chart=chart, illuminant=illuminant, grid=grid, image=image, render=render, camera=camera)
 
 
-def load_scene(path: str | Path) -> Scene:
-    """Read and validate a TOML scene file."""
+def _read_toml(path: str | Path, what: str) -> dict:
     p = Path(path)
     try:
         text = p.read_text()
     except OSError as e:
-        raise ConfigError("scene file", str(p), f"cannot be read ({e.strerror})") from None
+        raise ConfigError(what, str(p), f"cannot be read ({e.strerror})") from None
     try:
-        data = tomllib.loads(text)
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
-        raise ConfigError("scene file", str(p), f"is not valid TOML ({e})") from None
-    return parse_scene(data, source=str(p))
+        raise ConfigError(what, str(p), f"is not valid TOML ({e})") from None
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Read and validate a TOML scene file."""
+    return parse_scene(_read_toml(path, "scene file"), source=str(path))
+
+
+def load_camera_config(path: str | Path, base: CameraSpec | None = None) -> CameraSpec:
+    """Read a camera config file (the scene file's camera tables only), over ``base``."""
+    return parse_camera(_read_toml(path, "config file"), source=str(path), base=base)

@@ -81,7 +81,7 @@ def preview_rgb(radiance: np.ndarray, grid: WavelengthGrid, white_luminance_cd_m
 
 
 def radiance_attributes(cube: RadianceCube, scene) -> dict:
-    meta = dict(cube.metadata)
+    meta = {k: v for k, v in cube.metadata.items() if k != "scene"}
     return {
         "spectralLayoutVersion": SPECTRAL_LAYOUT_VERSION,
         "emissiveUnits": EMISSIVE_UNITS,
@@ -114,6 +114,8 @@ def read_radiance_exr(path: str | Path) -> tuple[RadianceCube, dict]:
         raise SpectracamError(f"file = {str(path)!r}: has no spectral channels S0.<λ>nm; not a spectral EXR")
     cube = np.stack([channels[n] for _, n in bands], axis=-1)
     meta = json.loads(attrs["spectracamRender"]) if "spectracamRender" in attrs else {}
+    if "spectracamScene" in attrs:
+        meta["scene"] = json.loads(attrs["spectracamScene"])
     return RadianceCube(cube, np.array([w for w, _ in bands]), meta), attrs
 
 
@@ -141,3 +143,61 @@ def describe(path: str | Path) -> str:
         c = channels[n]
         lines.append(f"  {n:<20} {c.min():>12.6g} {c.mean(dtype=np.float64):>12.6g} {c.max():>12.6g}")
     return "\n".join(lines)
+
+
+def raw_channel_names(raw) -> list[str]:
+    """One channel "Y" for a mosaic (viewers show it as a grey Bayer image), else R, G, B."""
+    return ["Y"] if raw.digital.ndim == 2 else ["R", "G", "B"]
+
+
+def raw_attributes(raw) -> dict:
+    cam = raw.camera
+    attrs = {
+        "spectracamVersion": __version__,
+        "spectracamKind": "raw",
+        "spectracamUnits": f"digital numbers, 0..{2**cam.sensor.adc_bits - 1} ({cam.sensor.adc_bits}-bit ADC; "
+                           f"{cam.sensor.quantization_step_e:g} e- per DN)",
+        "spectracamArchitecture": raw.architecture,
+        "spectracamExposure": raw.exposure,
+        "spectracamExposureTimesS": json.dumps(dict(zip("RGB", map(float, raw.exposure_times_s)))),
+        "spectracamCaptureTimeS": json.dumps(float(raw.capture_time_s)),
+        "spectracamCamera": json.dumps(cam.to_dict(), sort_keys=True),
+        "spectracamSeed": int(raw.seed),
+    }
+    if raw.cfa_pattern:
+        attrs["spectracamCfaPattern"] = raw.cfa_pattern
+    if raw.architecture == "fsc":
+        attrs["spectracamFrames"] = "R, G, B: three exposures of one sensor in sequence, in this order"
+    if raw.architecture == "prism":
+        attrs["spectracamFrames"] = "R, G, B: three sensors behind a dichroic prism, exposed together"
+    if "scene" in raw.metadata:
+        attrs["spectracamScene"] = json.dumps(raw.metadata["scene"], sort_keys=True)
+    return attrs
+
+
+def write_raw_exr(path: str | Path, raw) -> Path:
+    """Write what the sensor recorded (digital numbers) with every parameter that produced it."""
+    planes = [raw.digital] if raw.digital.ndim == 2 else list(raw.digital)
+    return write_exr(path, dict(zip(raw_channel_names(raw), planes)), raw_attributes(raw))
+
+
+def read_raw_exr(path: str | Path):
+    """Read a raw EXR back into a :class:`~spectracam.capture.RawCapture` (without expected electrons)."""
+    from ..capture import RawCapture
+    from ..scene import parse_camera
+
+    channels, attrs = read_exr(path)
+    if attrs.get("spectracamKind") != "raw":
+        raise SpectracamError(f"file = {str(path)!r}: not a spectracam raw capture (spectracamKind = "
+                              f"{attrs.get('spectracamKind')!r})")
+    cam = json.loads(attrs["spectracamCamera"])
+    camera = parse_camera({k: cam[k] for k in ("optics", "filters", "sensor")} |
+                          {"capture": {"architecture": cam["architecture"], "exposure": cam["exposure"],
+                                       "cfa_pattern": cam["cfa_pattern"]}}, source=str(path))
+    digital = channels["Y"] if "Y" in channels else np.stack([channels[c] for c in "RGB"])
+    times = json.loads(attrs["spectracamExposureTimesS"])
+    meta = {"scene": json.loads(attrs["spectracamScene"])} if "spectracamScene" in attrs else {}
+    return RawCapture(digital=digital, expected_e=None, exposure_times_s=np.array([times[c] for c in "RGB"]),
+                      capture_time_s=json.loads(attrs["spectracamCaptureTimeS"]), architecture=camera.architecture,
+                      exposure=camera.exposure, cfa_pattern=attrs.get("spectracamCfaPattern"), camera=camera,
+                      seed=int(attrs["spectracamSeed"]), white_rate_e_per_s=None, metadata=meta)

@@ -38,9 +38,12 @@ def render(scene, renderer: str = "mitsuba", progress: bool = False, log=None) -
     if renderer == "analytic":
         from .analytic import render_analytic
 
-        return render_analytic(scene)
-    if renderer == "mitsuba":
+        cube = render_analytic(scene)
+    elif renderer == "mitsuba":
         from .mitsuba import render_mitsuba
 
-        return render_mitsuba(scene, progress=progress, log=log)
-    raise SpectracamError(f"renderer = {renderer!r}: must be one of {', '.join(RENDERERS)}")
+        cube = render_mitsuba(scene, progress=progress, log=log)
+    else:
+        raise SpectracamError(f"renderer = {renderer!r}: must be one of {', '.join(RENDERERS)}")
+    cube.metadata["scene"] = scene.to_dict()  # later stages find the chart geometry here
+    return cube
