@@ -12,7 +12,7 @@ import numpy as np
 
 from .errors import SpectracamError
 from .filters import CHANNELS
-from .sensor import TEMPORAL_STREAM, SensorSpec, expose, fixed_pattern, rng_for
+from .sensor import TEMPORAL_STREAM, SensorSpec, expose, fixed_pattern, noise_stream
 
 ARCHITECTURES: dict[str, type["Architecture"]] = {}
 CFA_PATTERNS = ("RGGB", "GRBG", "GBRG", "BGGR")
@@ -65,7 +65,7 @@ class ColourFilterArray(Architecture):
         for i, c in enumerate(self.cfa_pattern):  # strided selection, no per-pixel work
             dy, dx = divmod(i, 2)
             mosaic[dy::2, dx::2] = rates[dy::2, dx::2, CHANNELS.index(c)]
-        return expose(mosaic, times_s[0], sensor, rng_for(seed, TEMPORAL_STREAM, 0),
+        return expose(mosaic, times_s[0], sensor, noise_stream(seed, TEMPORAL_STREAM, 0),
                       fixed_pattern(sensor, (h, w), seed, 0))
 
 
@@ -79,7 +79,7 @@ class DichroicPrism(Architecture):
 
     def record(self, rates, times_s, sensor, seed):
         h, w, _ = rates.shape
-        out = [expose(np.ascontiguousarray(rates[:, :, k]), times_s[k], sensor, rng_for(seed, TEMPORAL_STREAM, k),
+        out = [expose(np.ascontiguousarray(rates[:, :, k]), times_s[k], sensor, noise_stream(seed, TEMPORAL_STREAM, k),
                       fixed_pattern(sensor, (h, w), seed, k))  # three physical sensors
                for k in range(3)]
         return np.stack([o[0] for o in out]), np.stack([o[1] for o in out])
@@ -96,7 +96,7 @@ class FieldSequential(Architecture):
     def record(self, rates, times_s, sensor, seed):
         h, w, _ = rates.shape
         pattern = fixed_pattern(sensor, (h, w), seed, 0)  # one sensor: the same FPN in every frame
-        out = [expose(np.ascontiguousarray(rates[:, :, k]), times_s[k], sensor, rng_for(seed, TEMPORAL_STREAM, k), pattern)
+        out = [expose(np.ascontiguousarray(rates[:, :, k]), times_s[k], sensor, noise_stream(seed, TEMPORAL_STREAM, k), pattern)
                for k in range(3)]
         return np.stack([o[0] for o in out]), np.stack([o[1] for o in out])
 

@@ -11,10 +11,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .architecture import make_architecture
-from .chart import patch_masks
+from .chart import patch_boxes, patch_means
 from .exposure import exposure_times_s
 from .filters import FilterSpec, responsivities
-from .optics import OpticsSpec, photon_irradiance
+from .optics import OpticsSpec, radiance_to_photon_irradiance
 from .sensor import SensorSpec
 from .spectra import K_M_LM_PER_W, cmf_band_weights
 
@@ -64,13 +64,17 @@ class RawCapture:
 
 
 def photo_electron_rates(cube, camera: CameraSpec) -> np.ndarray:
-    """``(H, W, 3)`` photo-electrons per second per pixel for each channel, float32."""
-    Eq = photon_irradiance(cube.radiance, cube.wavelengths_nm, camera.optics)  # photons s⁻¹ m⁻² nm⁻¹
+    """``(H, W, 3)`` photo-electrons per second per pixel for each channel, float32.
+
+    Optics, photon conversion, responsivity, band width and pixel area are folded into one
+    ``(n_bands, 3)`` weight matrix, so the cube is read once and never copied.
+    """
+    to_photons = radiance_to_photon_irradiance(cube.wavelengths_nm, camera.optics)  # (B,)
     R = responsivities(camera.filters, cube.grid)  # (3, B) e⁻/photon
     area_m2 = camera.sensor.pixel_area_um2 * 1e-12
-    weights = (R * cube.grid.widths_nm[None, :] * area_m2).T.astype(np.float32)  # (B, 3)
-    h, w, b = Eq.shape
-    return (Eq.reshape(h * w, b) @ weights).reshape(h, w, 3)
+    weights = (R * (to_photons * cube.grid.widths_nm * area_m2)[None, :]).T.astype(np.float32)  # (B, 3)
+    h, w, b = cube.radiance.shape
+    return (cube.radiance.reshape(h * w, b) @ weights).reshape(h, w, 3)
 
 
 def capture(cube, sensor: SensorSpec | None = None, architecture: str = "cfa", exposure: str = "single",
@@ -90,12 +94,13 @@ def capture(cube, sensor: SensorSpec | None = None, architecture: str = "cfa", e
             from .scene import parse_scene
 
             scene = parse_scene(cube.metadata["scene"])
-        masks = patch_masks(scene.chart, w, h)
-        white_mask = masks[WHITE_PATCH]
-        patch_rates = np.stack([rates[m].mean(axis=0, dtype=np.float64) for m in masks])
-        radiance = np.stack([cube.radiance[m].mean(axis=0, dtype=np.float64) for m in masks])
-        patch_xyz = radiance @ cmf_band_weights(cube.grid) * (K_M_LM_PER_W / scene.illuminant.white_luminance_cd_m2)
-    white_rate = rates[white_mask].mean(axis=0, dtype=np.float64)
+        boxes = patch_boxes(scene.chart, w, h)
+        patch_rates = patch_means(rates, boxes)
+        patch_xyz = (patch_means(cube.radiance, boxes) @ cmf_band_weights(cube.grid)
+                     * (K_M_LM_PER_W / scene.illuminant.white_luminance_cd_m2))
+        white_rate = patch_rates[WHITE_PATCH]
+    else:
+        white_rate = rates[white_mask].mean(axis=0, dtype=np.float64)
     times = exposure_times_s(camera.exposure, white_rate, camera.sensor, arch)
     digital, expected = arch.record(rates, times, camera.sensor, seed)
     return RawCapture(digital=digital, expected_e=expected, exposure_times_s=times,

@@ -118,17 +118,34 @@ def patch_coverage(chart: ChartSpec, view: View) -> tuple[np.ndarray, np.ndarray
     return cy, cx
 
 
-def patch_masks(chart: ChartSpec, width_px: int, height_px: int) -> np.ndarray:
-    """``(24, H, W)`` boolean masks: pixels lying wholly inside each patch shrunk by ``mask_margin``.
+def patch_boxes(chart: ChartSpec, width_px: int, height_px: int) -> list[tuple[slice, slice]]:
+    """``(rows, cols)`` slices of the pixels lying wholly inside each patch shrunk by ``mask_margin``.
 
     Later stages score patches on these pixels only, away from edges where pixels mix materials.
+    Slices are views: a patch statistic never copies the image.
     """
     view = View.fit(chart, width_px, height_px)
     xe, ye = view.pixel_edges_mm()
     inset = chart.mask_margin * chart.patch_size_mm
+    boxes = []
+    for x0, x1, y0, y1 in patch_rectangles_mm(chart):
+        cols = np.flatnonzero((xe[:-1] >= x0 + inset) & (xe[1:] <= x1 - inset))
+        rows = np.flatnonzero((ye[1:] >= y0 + inset) & (ye[:-1] <= y1 - inset))
+        if rows.size == 0 or cols.size == 0:
+            boxes.append((slice(0, 0), slice(0, 0)))
+        else:
+            boxes.append((slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1)))
+    return boxes
+
+
+def patch_masks(chart: ChartSpec, width_px: int, height_px: int) -> np.ndarray:
+    """``(24, H, W)`` boolean masks of the pixels of :func:`patch_boxes`."""
     masks = np.zeros((ROWS * COLUMNS, height_px, width_px), dtype=bool)
-    for p, (x0, x1, y0, y1) in enumerate(patch_rectangles_mm(chart)):
-        mx = (xe[:-1] >= x0 + inset) & (xe[1:] <= x1 - inset)
-        my = (ye[1:] >= y0 + inset) & (ye[:-1] <= y1 - inset)
-        masks[p] = my[:, None] & mx[None, :]
+    for p, box in enumerate(patch_boxes(chart, width_px, height_px)):
+        masks[(p, *box)] = True
     return masks
+
+
+def patch_means(image: np.ndarray, boxes: list[tuple[slice, slice]]) -> np.ndarray:
+    """``(24, ...)`` float64 mean of each patch's pixels of an ``(H, W, ...)`` image."""
+    return np.stack([image[r, c].mean(axis=(0, 1), dtype=np.float64) for r, c in boxes])

@@ -30,8 +30,13 @@ def irradiance_factor(optics: OpticsSpec) -> float:
     return float(np.pi / (4 * n2) if optics.irradiance_form == "paraxial" else np.pi / (1 + 4 * n2))
 
 
+def radiance_to_photon_irradiance(wavelengths_nm: np.ndarray, optics: OpticsSpec) -> np.ndarray:
+    """Per-band factor from spectral radiance (W·m⁻²·sr⁻¹·nm⁻¹) to photon irradiance at the sensor
+    (photons·s⁻¹·m⁻²·nm⁻¹): π/(4N²)·T·λ/(hc)."""
+    k = irradiance_factor(optics) * optics.transmittance
+    return energy_to_photons(1.0, np.asarray(wavelengths_nm, float)) * k
+
+
 def photon_irradiance(radiance: np.ndarray, wavelengths_nm: np.ndarray, optics: OpticsSpec) -> np.ndarray:
     """Band-averaged photon irradiance at the sensor, photons·s⁻¹·m⁻²·nm⁻¹, float32, same shape."""
-    k = irradiance_factor(optics) * optics.transmittance
-    per_band = (energy_to_photons(1.0, np.asarray(wavelengths_nm, float)) * k).astype(np.float32)
-    return radiance * per_band
+    return radiance * radiance_to_photon_irradiance(wavelengths_nm, optics).astype(np.float32)

@@ -8,6 +8,7 @@ conversion gain only names the voltage scale.  Each noise source switches off on
 """
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -76,61 +77,130 @@ class SensorSpec:
         return dataclasses.replace(self, **{s: False for s in sources})
 
 
-def rng_for(seed: int, *stream: int) -> np.random.Generator:
-    """An independent generator for one purpose, derived from the one seed (NumPy SeedSequence)."""
-    return np.random.default_rng(np.random.SeedSequence([seed, *stream]))
+def noise_stream(seed: int, *stream: int) -> np.random.SeedSequence:
+    """The seed sequence for one purpose (fixed pattern, a frame's temporal noise), from the one seed."""
+    return np.random.SeedSequence([seed, *stream])
 
 
 FPN_STREAM, TEMPORAL_STREAM = 1, 2
+#: Pixels per independently seeded chunk: chunks run on all cores, and the result does not depend
+#: on how many there are.
+CHUNK_PX = 1 << 20
+
+
+def _chunk_rng(seq: np.random.SeedSequence, i: int) -> np.random.Generator:
+    return np.random.default_rng(np.random.SeedSequence(seq.entropy, spawn_key=(*seq.spawn_key, i)))
+
+
+def _pool():
+    global _POOL
+    if _POOL is None:
+        from concurrent.futures import ThreadPoolExecutor
+
+        _POOL = ThreadPoolExecutor(max_workers=os.cpu_count() or 1)
+    return _POOL
+
+
+_POOL = None
+
+
+def _map_chunks(fn, n: int) -> None:
+    """Run ``fn(i, slice)`` over the flat chunks of an n-pixel frame (NumPy releases the GIL)."""
+    chunks = [(i, slice(a, min(a + CHUNK_PX, n))) for i, a in enumerate(range(0, n, CHUNK_PX))]
+    if len(chunks) == 1:
+        fn(*chunks[0])
+    else:
+        for f in [_pool().submit(fn, i, sl) for i, sl in chunks]:
+            f.result()
 
 
 def fixed_pattern(sensor: SensorSpec, shape: tuple[int, int], seed: int, sensor_index: int = 0):
     """Per-pixel offset (electrons) and gain of one physical sensor: the same for every frame and
     capture with this seed and sensor index, different across pixels and sensors."""
-    rng = rng_for(seed, FPN_STREAM, sensor_index)
     offset = gain = None
+    n = int(np.prod(shape))
     if sensor.fpn and sensor.fpn_fraction > 0:
-        if sensor.fpn_reading == "std":
-            offset = rng.standard_normal(shape, dtype=np.float32) * np.float32(sensor.fpn_rms_e)
-        else:
-            offset = (rng.random(shape, dtype=np.float32) - np.float32(0.5)) * np.float32(sensor.fpn_fraction * sensor.q_max_e)
+        offset = np.empty(n, np.float32)
+        seq = noise_stream(seed, FPN_STREAM, sensor_index, 0)
+        swing = np.float32(sensor.fpn_fraction * sensor.q_max_e)
+
+        def draw_offset(i, sl):
+            rng = _chunk_rng(seq, i)
+            if sensor.fpn_reading == "std":
+                rng.standard_normal(out=offset[sl], dtype=np.float32)
+                offset[sl] *= swing
+            else:  # uniform over a spread of fpn_fraction of full swing
+                rng.random(out=offset[sl], dtype=np.float32)
+                offset[sl] -= np.float32(0.5)
+                offset[sl] *= swing
+
+        _map_chunks(draw_offset, n)
+        offset = offset.reshape(shape)
     if sensor.fpn and sensor.prnu_fraction > 0:
-        gain = 1 + rng.standard_normal(shape, dtype=np.float32) * np.float32(sensor.prnu_fraction)
+        gain = np.empty(n, np.float32)
+        seq = noise_stream(seed, FPN_STREAM, sensor_index, 1)
+
+        def draw_gain(i, sl):
+            _chunk_rng(seq, i).standard_normal(out=gain[sl], dtype=np.float32)
+            gain[sl] *= np.float32(sensor.prnu_fraction)
+            gain[sl] += np.float32(1.0)
+
+        _map_chunks(draw_gain, n)
+        gain = gain.reshape(shape)
     return offset, gain
 
 
-def expose(photo_rate_e_per_s: np.ndarray, time_s: float, sensor: SensorSpec, rng: np.random.Generator,
+def expose(photo_rate_e_per_s: np.ndarray, time_s: float, sensor: SensorSpec, noise: np.random.SeedSequence,
            pattern=(None, None)) -> tuple[np.ndarray, np.ndarray]:
     """One exposure of one frame.  Returns (digital numbers, expected electrons without noise).
 
-    ``photo_rate_e_per_s`` is ``A·∫E_q·R_k dλ`` per pixel (paper, 3.3); ``pattern`` is the sensor's
-    ``(offset_e, gain)`` from :func:`fixed_pattern`.  Digital numbers are float32 integers in
-    ``[0, 2ⁿ − 1]`` (or unquantised ``V/step`` when quantisation is off).
+    ``photo_rate_e_per_s`` is ``A·∫E_q·R_k dλ`` per pixel (paper, 3.3); ``noise`` seeds this frame's
+    temporal noise; ``pattern`` is the sensor's ``(offset_e, gain)`` from :func:`fixed_pattern`.
+    Digital numbers are float32 integers in ``[0, 2ⁿ − 1]`` (or unquantised ``V/step`` when
+    quantisation is off).  Works in place, chunk by chunk, on all cores.
     """
     offset, gain = pattern
+    shape = photo_rate_e_per_s.shape
+    rate = np.ascontiguousarray(photo_rate_e_per_s, dtype=np.float32).reshape(-1)
+    off = None if offset is None else offset.reshape(-1)
+    g = None if gain is None else gain.reshape(-1)
+    n = rate.size
+    mean = np.empty(n, np.float32)
+    q = np.empty(n, np.float32)
     t = np.float32(time_s)
-    mean = photo_rate_e_per_s * t
-    if gain is not None:
-        mean *= gain
-    mean += np.float32(sensor.dark_rate_e_per_s * time_s)
-    if sensor.shot_noise:
-        if sensor.shot_noise_model == "poisson":
-            q = rng.poisson(mean).astype(np.float32)
+    dark = np.float32(sensor.dark_rate_e_per_s * time_s)
+    inv_step = np.float32(1.0 / sensor.quantization_step_e)
+    top = np.float32(2**sensor.adc_bits - 1)
+
+    def run(i, sl):
+        rng = _chunk_rng(noise, i)
+        m, out = mean[sl], q[sl]
+        np.multiply(rate[sl], t, out=m)
+        if g is not None:
+            m *= g[sl]
+        m += dark
+        if sensor.shot_noise:
+            if sensor.shot_noise_model == "poisson":
+                out[...] = rng.poisson(m)
+            else:  # the paper's 3.4: Gaussian with variance = mean
+                rng.standard_normal(out=out, dtype=np.float32)
+                out *= np.sqrt(m)
+                out += m
         else:
-            q = rng.standard_normal(mean.shape, dtype=np.float32)
-            q *= np.sqrt(mean)
-            q += mean
-    else:
-        q = mean.copy()
-    if sensor.clipping:
-        np.clip(q, 0.0, sensor.q_max_e, out=q)  # the well holds 0..q_max electrons
-    if sensor.read_noise and sensor.read_noise_e > 0:
-        q += rng.standard_normal(q.shape, dtype=np.float32) * np.float32(sensor.read_noise_e)
-    if offset is not None:
-        q += offset
-    q *= np.float32(1.0 / sensor.quantization_step_e)  # V/(g·step): digital-number units
-    if sensor.quantization:
-        np.floor(q, out=q)
-    if sensor.clipping:
-        np.clip(q, 0.0, 2**sensor.adc_bits - 1, out=q)
-    return q, mean
+            out[...] = m
+        if sensor.clipping:
+            np.clip(out, 0.0, sensor.q_max_e, out=out)  # the well holds 0..q_max electrons
+        if sensor.read_noise and sensor.read_noise_e > 0:
+            r = rng.standard_normal(out.size, dtype=np.float32)
+            r *= np.float32(sensor.read_noise_e)
+            out += r
+        if off is not None:
+            out += off[sl]
+        out *= inv_step  # V/(g·step): digital-number units
+        if sensor.quantization:
+            np.floor(out, out=out)
+        if sensor.clipping:
+            np.clip(out, 0.0, top, out=out)
+
+    _map_chunks(run, n)
+    return q.reshape(shape), mean.reshape(shape)

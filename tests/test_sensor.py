@@ -11,7 +11,7 @@ from spectracam.exposure import exposure_times_s
 from spectracam.filters import FilterSpec, responsivities
 from spectracam.optics import OpticsSpec, irradiance_factor
 from spectracam.render import RadianceCube
-from spectracam.sensor import SensorSpec, expose, fixed_pattern, rng_for
+from spectracam.sensor import SensorSpec, expose, fixed_pattern, noise_stream
 from spectracam.spectra import PLANCK_H_J_S, SPEED_OF_LIGHT_M_S, WavelengthGrid
 
 GRID = np.arange(400.0, 701.0, 10.0)
@@ -54,7 +54,7 @@ def test_mean_electrons_and_photon_transfer_variance():
     sensor = SensorSpec(fpn=False, quantization=False)
     rate = np.full((400, 400), 2.0e6, np.float32)
     t = 0.01
-    dn, expected = expose(rate, t, sensor, rng_for(3, 9))
+    dn, expected = expose(rate, t, sensor, noise_stream(3, 9))
     e = dn * sensor.quantization_step_e
     mean_e = 2.0e6 * t + sensor.dark_rate_e_per_s * t
     assert expected.mean() == pytest.approx(mean_e, rel=1e-6)
@@ -67,7 +67,7 @@ def test_mean_electrons_and_photon_transfer_variance():
 def test_dark_frame_statistics(model):
     sensor = SensorSpec(fpn=False, quantization=False, shot_noise_model=model)
     t = 2.0
-    dn, _ = expose(np.zeros((400, 400), np.float32), t, sensor, rng_for(1, 9))
+    dn, _ = expose(np.zeros((400, 400), np.float32), t, sensor, noise_stream(1, 9))
     e = dn * sensor.quantization_step_e
     dark = sensor.dark_current_e_per_s_um2 * sensor.pixel_area_um2 * t  # 2000 e⁻
     assert e.mean() == pytest.approx(dark, rel=2e-3)
@@ -78,22 +78,22 @@ def test_quantisation_step_is_qmax_over_2n():
     sensor = QUIET.__class__(**{**dataclasses.asdict(QUIET), "quantization": True, "adc_bits": 8})
     assert sensor.quantization_step_e == 512.0
     electrons = np.arange(0, 131072, 37, dtype=np.float32)
-    dn, _ = expose(electrons, 1.0, sensor, rng_for(0))
+    dn, _ = expose(electrons, 1.0, sensor, noise_stream(0))
     np.testing.assert_array_equal(dn, np.floor(electrons / 512.0))
     s12 = dataclasses.replace(sensor, adc_bits=12)
-    assert expose(np.array([1000.0], np.float32), 1.0, s12, rng_for(0))[0][0] == np.floor(1000 / 32)
+    assert expose(np.array([1000.0], np.float32), 1.0, s12, noise_stream(0))[0][0] == np.floor(1000 / 32)
 
 
 def test_full_well_clipping():
     sensor = SensorSpec(fpn=False, read_noise=False, quantization=False)
-    dn, _ = expose(np.full(1000, 1e9, np.float32), 1.0, sensor, rng_for(0))
+    dn, _ = expose(np.full(1000, 1e9, np.float32), 1.0, sensor, noise_stream(0))
     assert dn.max() == 255.0  # ADC full scale: 2ⁿ − 1
     # the well holds q_max: with shot noise off, 0.9·q_max passes and 1.5·q_max reads as q_max
     s16 = dataclasses.replace(sensor, adc_bits=16, shot_noise=False, dark_current=False)
-    dn, _ = expose(np.array([0.9, 1.5], np.float32) * np.float32(131072), 1.0, s16, rng_for(0))
+    dn, _ = expose(np.array([0.9, 1.5], np.float32) * np.float32(131072), 1.0, s16, noise_stream(0))
     np.testing.assert_allclose(dn * s16.quantization_step_e, [0.9 * 131072, 131072 - 2])  # ADC tops at 2ⁿ − 1
-    assert expose(np.array([2e5], np.float32), 1.0, s16.off("clipping"), rng_for(0))[0][0] * 2 == 2e5
-    unclipped, _ = expose(np.full(10, 1e9, np.float32), 1.0, sensor.off("clipping"), rng_for(0))
+    assert expose(np.array([2e5], np.float32), 1.0, s16.off("clipping"), noise_stream(0))[0][0] * 2 == 2e5
+    unclipped, _ = expose(np.full(10, 1e9, np.float32), 1.0, sensor.off("clipping"), noise_stream(0))
     assert unclipped.min() > 1e5
 
 
@@ -169,3 +169,29 @@ def test_same_seed_same_capture(scene_5000, analytic_5000):
     c = capture(analytic_5000, seed=8, scene=scene_5000)
     np.testing.assert_array_equal(a.digital, b.digital)
     assert not np.array_equal(a.digital, c.digital)
+
+
+def test_chunked_noise_is_deterministic_and_independent_across_chunks():
+    from spectracam.sensor import CHUNK_PX
+
+    n = 2 * CHUNK_PX + 12345  # three chunks, run on a thread pool
+    rate = np.full(n, 1e6, np.float32)
+    sensor = SensorSpec(fpn=False, quantization=False, clipping=False, dark_current=False)
+    a, _ = expose(rate, 0.01, sensor, noise_stream(1, 2))
+    b, _ = expose(rate, 0.01, sensor, noise_stream(1, 2))
+    np.testing.assert_array_equal(a, b)
+    e = a * sensor.quantization_step_e - 1e4
+    first, second = e[:CHUNK_PX], e[CHUNK_PX:2 * CHUNK_PX]
+    assert abs(np.corrcoef(first, second)[0, 1]) < 0.005
+    assert second.var() == pytest.approx(1e4 + 400, rel=0.01)
+
+
+def test_folded_weights_equal_the_explicit_optics_path():
+    from spectracam.optics import photon_irradiance
+
+    cube = RadianceCube(np.random.default_rng(0).random((8, 9, GRID.size), dtype=np.float32) * 1e-3, GRID.copy(), {})
+    cam = CameraSpec(filters=FilterSpec(qe="silicon"), optics=OpticsSpec(2.0, 0.9, "exact"))
+    Eq = photon_irradiance(cube.radiance, GRID, cam.optics).astype(np.float64)
+    R = responsivities(cam.filters, WavelengthGrid(GRID))
+    explicit = np.einsum("hwb,kb->hwk", Eq, R * 10.0) * cam.sensor.pixel_area_um2 * 1e-12
+    np.testing.assert_allclose(photo_electron_rates(cube, cam), explicit, rtol=1e-5)

@@ -30,7 +30,13 @@ def render_analytic(scene) -> RadianceCube:
     _, patches, surround = material_radiance(scene)
     view = View.fit(scene.chart, scene.image.width, scene.image.height)
     cy, cx = patch_coverage(scene.chart, view)
-    cover = cy[:, :, None] * cx[:, None, :]  # (24, H, W)
-    cube = np.tensordot(cover, patches - surround[None, :], axes=([0], [0])) + surround
+    cube = np.empty((scene.image.height, scene.image.width, len(scene.grid)), dtype=np.float32)
+    cube[...] = surround.astype(np.float32)
+    for p, contrast in enumerate((patches - surround[None, :]).astype(np.float32)):
+        rows, cols = np.flatnonzero(cy[p]), np.flatnonzero(cx[p])  # the patch's bounding box only
+        if rows.size and cols.size:
+            r, c = slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1)
+            cover = (cy[p, r, None] * cx[p, None, c]).astype(np.float32)
+            cube[r, c] += cover[:, :, None] * contrast
     meta = {"renderer": "analytic", "variant": None, "samples_per_pixel": None, "seed": scene.render.seed}
-    return RadianceCube(cube.astype(np.float32), np.asarray(scene.grid.centres_nm, float), meta)
+    return RadianceCube(cube, np.asarray(scene.grid.centres_nm, float), meta)
