@@ -9,10 +9,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .spectra import WavelengthGrid, band_average, tabulated
+from .spectra import WavelengthGrid, band_average, cie_1931_cmfs, tabulated
 
 CHANNELS = ("R", "G", "B")
-FILTER_KINDS = ("block", "gaussian", "camera")
+FILTER_KINDS = ("block", "gaussian", "camera", "xyz")
 QE_KINDS = ("flat", "silicon")
 CAMERAS = ("Nikon 5100 (NPL)", "Sigma SDMerill (NPL)")
 
@@ -28,7 +28,9 @@ SILICON_QE_SHAPE = (
 
 @dataclass(frozen=True)
 class FilterSpec:
-    #: "block" (the paper, 4.3: ideal pass bands), "gaussian" (centres, FWHM) or "camera".
+    #: "block" (the paper, 4.3: ideal pass bands), "gaussian" (centres, FWHM), "camera", or "xyz":
+    #: the CIE 1931 colour-matching functions in quantal form, x̄ȳz̄(λ)·(555 nm/λ), a camera that
+    #: meets the Luther condition exactly (its photon counts are a linear transform of XYZ).
     kind: str = "block"
     #: Block filter cutoffs, nm: blue below the first, green between, red above (paper: 490, 610).
     cutoffs_nm: tuple[float, float] = (490.0, 610.0)
@@ -49,6 +51,10 @@ def _transmittance(spec: FilterSpec, k: int):
     if spec.kind == "gaussian":
         c, sigma = spec.centres_nm[k], spec.fwhm_nm[k] / (2 * np.sqrt(2 * np.log(2)))
         return lambda lam: np.exp(-0.5 * ((lam - c) / sigma) ** 2)
+    if spec.kind == "xyz":
+        wl, cmfs = cie_1931_cmfs()
+        quantal = cmfs * (555.0 / wl)[:, None]
+        return tabulated(wl, quantal[:, k] / quantal.max())  # channels 0, 1, 2 = X, Y, Z
     import colour
 
     msds = colour.MSDS_CAMERA_SENSITIVITIES[spec.camera]
