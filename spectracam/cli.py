@@ -99,6 +99,100 @@ def capture_cmd(radiance_file: Path, out_dir: Path, arch, exposure, config_file,
     _log(quiet)("wrote " + ", ".join(map(str, paths)))
 
 
+def _processing_options(f):
+    from .color import ADAPTATIONS, DEMOSAIC_METHODS, DISPLAYS
+    from .metrics import DELTA_E_METHODS
+
+    f = click.option("--demosaic", type=click.Choice(DEMOSAIC_METHODS), default=None,
+                     help="Demosaicking of the colour filter array [default: the scene's, else bilinear].")(f)
+    f = click.option("--display", type=click.Choice(DISPLAYS), default=None, help="Display model [default: crt].")(f)
+    f = click.option("--adaptation", type=click.Choice(ADAPTATIONS), default=None,
+                     help="How scene XYZ is carried to the display white [default: xyz_scaling].")(f)
+    f = click.option("--delta-e", "delta_e", type=click.Choice(DELTA_E_METHODS), default=None,
+                     help="Colour difference formula [default: cie1976].")(f)
+    f = click.option("--gamut-clip/--no-gamut-clip", default=None, help="Clip display RGB to [0, 1].")(f)
+    return f
+
+
+def _processing(scene, demosaic, display, adaptation, delta_e, gamut_clip):
+    from .scene import parse_processing
+
+    flags = {k: v for k, v in dict(demosaic=demosaic, display=display, adaptation=adaptation, delta_e=delta_e,
+                                   gamut_clip=gamut_clip).items() if v is not None}
+    return parse_processing(flags, source="command line", base=scene.processing)
+
+
+def _score_and_write(raw, scene, processing, out_dir: Path, log):
+    from .io.report import write_score_outputs
+    from .score import score
+
+    result = score(raw, scene, processing)
+    paths = write_score_outputs(out_dir, result, processing)
+    c = result.report["chart"]
+    log(f"{raw.architecture}/{raw.exposure}: mean ΔE*ab {c['delta_e_mean']:.2f} per pixel, {c['delta_e_of_mean']:.2f} "
+        f"of patch means ({c['delta_e_conversion']:.2f} from the conversion alone); SNR "
+        + ("∞ (noise-free)" if c["snr_combined_db"] is None else f"{c['snr_combined_db']:.1f} dB"))
+    log("wrote " + ", ".join(map(str, paths)))
+
+
+@main.command("score")
+@click.argument("raw_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("--scene", "scene_file", required=True, type=click.Path(dir_okay=False, path_type=Path),
+              help="The scene the capture was taken of (its [processing] table applies).")
+@click.option("-o", "--output", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path))
+@_processing_options
+@click.option("--quiet", is_flag=True)
+def score_cmd(raw_file, scene_file, out_dir, demosaic, display, adaptation, delta_e, gamut_clip, quiet):
+    """Render RAW_FILE on a display and score it: rendered.exr/.png, delta_e.png, report.json/.csv."""
+    from .io.exr import read_raw_exr
+    from .scene import load_scene
+
+    scene = load_scene(scene_file)
+    processing = _processing(scene, demosaic, display, adaptation, delta_e, gamut_clip)
+    raw = read_raw_exr(raw_file)
+    h, w = raw.digital.shape[-2:]
+    if (w, h) != (scene.image.width, scene.image.height):
+        raise SpectracamError(f"image = {w}x{h}: the capture does not match scene {str(scene_file)!r} "
+                              f"({scene.image.width}x{scene.image.height})")
+    _score_and_write(raw, scene, processing, out_dir, _log(quiet))
+
+
+@main.command("simulate")
+@click.argument("scene_file", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("-o", "--output", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path))
+@click.option("--arch", type=click.Choice(list(ARCHITECTURES)), default=None)
+@click.option("--exposure", type=click.Choice(EXPOSURE_SCHEMES), default=None)
+@click.option("--renderer", type=click.Choice(RENDERERS), default="mitsuba", show_default=True)
+@_processing_options
+@click.option("--quiet", is_flag=True)
+def simulate_cmd(scene_file, out_dir, arch, exposure, renderer, demosaic, display, adaptation, delta_e, gamut_clip,
+                 quiet):
+    """Render → capture → score SCENE_FILE in one go; writes every file of the three steps."""
+    from .capture import capture
+    from .io.dng import write_dng
+    from .io.exr import write_radiance_exr, write_raw_exr
+    from .render import render
+    from .scene import camera_tables, load_scene, parse_camera
+
+    scene = load_scene(scene_file)
+    camera = scene.camera
+    flags = {k: v for k, v in (("architecture", arch), ("exposure", exposure)) if v}
+    if flags:
+        tables = camera_tables(camera)
+        tables["capture"].update(flags)
+        camera = parse_camera(tables, source="command line")
+    processing = _processing(scene, demosaic, display, adaptation, delta_e, gamut_clip)
+    log = _log(quiet)
+    cube = render(scene, renderer=renderer, progress=not quiet, log=log)
+    write_radiance_exr(out_dir / "radiance.exr", cube, scene)
+    raw = capture(cube, camera.sensor, camera.architecture, camera.exposure, scene.render.seed, camera=camera,
+                  scene=scene)
+    write_raw_exr(out_dir / "raw.exr", raw)
+    if raw.architecture == "cfa":
+        write_dng(out_dir / "raw.dng", raw)
+    _score_and_write(raw, scene, processing, out_dir, log)
+
+
 @main.command("inspect")
 @click.argument("file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
 def inspect_cmd(file: Path):

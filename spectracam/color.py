@@ -30,6 +30,10 @@ class ProcessingSpec:
     #: Clip display RGB to [0, 1] before it is shown (off by default: the paper scores the linear
     #: conversion, and clipping would mix gamut limits into the conversion error).
     gamut_clip: bool = False
+    #: "cie1976" (ΔE*ab, the paper's) or "ciede2000".
+    delta_e: str = "cie1976"
+    #: How the three channel SNRs combine: "power" (10·log10 Σμ²/Σσ²) or "mean_db".
+    snr_combination: str = "power"
 
 
 def display_rgb_to_xyz(display: str) -> np.ndarray:

@@ -51,10 +51,6 @@ def _transmittance(spec: FilterSpec, k: int):
     if spec.kind == "gaussian":
         c, sigma = spec.centres_nm[k], spec.fwhm_nm[k] / (2 * np.sqrt(2 * np.log(2)))
         return lambda lam: np.exp(-0.5 * ((lam - c) / sigma) ** 2)
-    if spec.kind == "xyz":
-        wl, cmfs = cie_1931_cmfs()
-        quantal = cmfs * (555.0 / wl)[:, None]
-        return tabulated(wl, quantal[:, k] / quantal.max())  # channels 0, 1, 2 = X, Y, Z
     import colour
 
     msds = colour.MSDS_CAMERA_SENSITIVITIES[spec.camera]
@@ -86,6 +82,13 @@ def responsivities(spec: FilterSpec, grid: WavelengthGrid) -> np.ndarray:
     """``(3, n_bands)`` band-averaged R_k(λ), electrons per photon, channels R, G, B."""
     if spec.kind == "block":
         return np.stack([_block_responsivity(spec, grid, k) for k in range(3)])
+    if spec.kind == "xyz":
+        # quantal CMFs on the band grid: photon counts Σ L_b·(λ_b/hc)·R_b·Δλ_b are then exactly
+        # proportional to the X, Y, Z that cmf_band_weights gives for the same cube
+        wl, cmfs = cie_1931_cmfs()
+        avg = np.stack([band_average(tabulated(wl, cmfs[:, k]), grid) for k in range(3)])
+        quantal = avg * (555.0 / np.asarray(grid.centres_nm, float))[None, :]
+        return quantal / quantal.max() * quantum_efficiency(spec)(np.asarray(grid.centres_nm, float))[None, :]
     qe = quantum_efficiency(spec)
     return np.stack([band_average(lambda lam, t=_transmittance(spec, k): t(lam) * qe(lam), grid, 400)
                      for k in range(3)])

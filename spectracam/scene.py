@@ -19,6 +19,8 @@ import numpy as np
 from .architecture import ARCHITECTURES, CFA_PATTERNS
 from .capture import CameraSpec
 from .chart import DATASETS, ChartSpec, dataset_range_nm
+from .color import ADAPTATIONS, DEMOSAIC_METHODS, DISPLAYS, ProcessingSpec
+from .metrics import DELTA_E_METHODS, SNR_COMBINATIONS
 from .exposure import EXPOSURE_SCHEMES
 from .filters import CAMERAS, FILTER_KINDS, QE_KINDS, FilterSpec
 from .optics import IRRADIANCE_FORMS, OpticsSpec
@@ -55,6 +57,7 @@ class Scene:
     image: ImageSpec = field(default_factory=ImageSpec)
     render: RenderSpec = field(default_factory=RenderSpec)
     camera: CameraSpec = field(default_factory=CameraSpec)
+    processing: ProcessingSpec = field(default_factory=ProcessingSpec)
 
     def to_dict(self) -> dict:
         """A plain, JSON-serialisable description that round-trips through :func:`parse_scene`."""
@@ -72,6 +75,7 @@ class Scene:
             "image": dataclasses.asdict(self.image),
             "render": dataclasses.asdict(self.render),
             **camera_tables(self.camera),
+            "processing": dataclasses.asdict(self.processing),
         }
 
     def to_json(self) -> str:
@@ -281,6 +285,25 @@ def _parse_camera(top: _Table) -> CameraSpec:
     return camera
 
 
+def _parse_processing(t: _Table) -> ProcessingSpec:
+    d = ProcessingSpec()
+    spec = ProcessingSpec(demosaic=t.choice("demosaic", d.demosaic, DEMOSAIC_METHODS),
+                          display=t.choice("display", d.display, DISPLAYS),
+                          adaptation=t.choice("adaptation", d.adaptation, ADAPTATIONS),
+                          gamut_clip=t.boolean("gamut_clip", d.gamut_clip),
+                          delta_e=t.choice("delta_e", d.delta_e, DELTA_E_METHODS),
+                          snr_combination=t.choice("snr_combination", d.snr_combination, SNR_COMBINATIONS))
+    t.done()
+    return spec
+
+
+def parse_processing(data: dict, source: str | None = None, base: ProcessingSpec | None = None) -> ProcessingSpec:
+    """A processing spec from a ``[processing]``-style dict over ``base``."""
+    merged = dataclasses.asdict(base or ProcessingSpec())
+    merged.update(data)
+    return _parse_processing(_Table(merged, "processing", source))
+
+
 def parse_camera(data: dict, source: str | None = None, base: CameraSpec | None = None) -> CameraSpec:
     """A camera from ``[optics]``/``[filters]``/``[sensor]``/``[capture]`` tables; keys not given keep
     the values of ``base`` (e.g. the scene file's camera)."""
@@ -309,13 +332,15 @@ def parse_scene(data: dict, source: str | None = None) -> Scene:
                         seed=r.integer("seed", RenderSpec.seed, 0, 2**31 - 1))
     r.done()
     camera = _parse_camera(top)
+    processing = _parse_processing(top.table("processing"))
     top.done()
     d_lo, d_hi = dataset_range_nm(chart.dataset)
     if grid.edges_nm[0] < d_lo or grid.edges_nm[-1] > d_hi:
         raise ConfigError("wavelengths", f"{grid.centres_nm[0]:g}–{grid.centres_nm[-1]:g} nm",
                           f"bands span {grid.edges_nm[0]:g}–{grid.edges_nm[-1]:g} nm, beyond the reflectance "
                           f"data of {chart.dataset!r} ({d_lo:g}–{d_hi:g} nm)", source)
-    return Scene(name=name, chart=chart, illuminant=illuminant, grid=grid, image=image, render=render, camera=camera)
+    return Scene(name=name, chart=chart, illuminant=illuminant, grid=grid, image=image, render=render, camera=camera,
+                 processing=processing)
 
 
 def _read_toml(path: str | Path, what: str) -> dict:

@@ -21,6 +21,14 @@ from .render import RadianceCube
 from .spectra import K_M_LM_PER_W, cmf_band_weights
 
 
+def _finite(x) -> float | None:
+    return float(x) if np.isfinite(x) else None
+
+
+def _mean_or_none(values) -> float | None:
+    return None if any(v is None for v in values) else float(np.mean(values))
+
+
 @dataclass
 class Score:
     report: dict
@@ -80,10 +88,10 @@ def channel_stats(raw, boxes) -> tuple[np.ndarray, np.ndarray]:
     return means, stds
 
 
-def score(raw, scene, processing: ProcessingSpec | None = None, delta_e_method: str = "cie1976",
-          snr_combination: str = "power") -> Score:
+def score(raw, scene, processing: ProcessingSpec | None = None) -> Score:
     """Render a capture on the display and score it against the scene; see the module docstring."""
-    processing = processing or ProcessingSpec()
+    processing = processing or scene.processing
+    delta_e_method, snr_combination = processing.delta_e, processing.snr_combination
     camera = raw.camera
     patches, scene_xyz, white_xyz = scene_reference(scene)
     # noise-free chart responses of this camera, e⁻/s (the fit's input: paper 3.5)
@@ -114,14 +122,16 @@ def score(raw, scene, processing: ProcessingSpec | None = None, delta_e_method: 
         de = delta_e(lab[r, c], scene_lab[p], delta_e_method)
         de_map[r, c] = de
         mean_lab = xyz_to_lab(rgb[r, c].reshape(-1, 3).mean(axis=0) @ M_disp.T, display_white)
-        snr = 20 * np.log10(means[p] / stds[p])
+        with np.errstate(divide="ignore"):  # a noise-free capture has infinite SNR: reported as null
+            snr = 20 * np.log10(means[p] / stds[p])
+            combined = combine_snr_db(means[p], stds[p], snr_combination)
         rows.append({
             "patch": p, "name": names[p],
             "scene_lab": scene_lab[p].round(4).tolist(), "rendered_lab": mean_lab.round(4).tolist(),
             "delta_e_mean": float(de.mean()), "delta_e_of_mean": float(delta_e(mean_lab, scene_lab[p], delta_e_method)),
             "delta_e_conversion": float(delta_e(conversion_lab[p], scene_lab[p], delta_e_method)),
-            "snr_db": dict(zip("RGB", map(float, snr))),
-            "snr_combined_db": float(combine_snr_db(means[p], stds[p], snr_combination)),
+            "snr_db": dict(zip("RGB", map(_finite, snr))),
+            "snr_combined_db": _finite(combined),
             "pixels": int((r.stop - r.start) * (c.stop - c.start)),
         })
     report = {
@@ -140,8 +150,8 @@ def score(raw, scene, processing: ProcessingSpec | None = None, delta_e_method: 
             "delta_e_mean": float(np.mean([r["delta_e_mean"] for r in rows])),
             "delta_e_of_mean": float(np.mean([r["delta_e_of_mean"] for r in rows])),
             "delta_e_conversion": float(np.mean([r["delta_e_conversion"] for r in rows])),
-            "snr_db": {k: float(np.mean([r["snr_db"][k] for r in rows])) for k in "RGB"},
-            "snr_combined_db": float(np.mean([r["snr_combined_db"] for r in rows])),
+            "snr_db": {k: _mean_or_none([r["snr_db"][k] for r in rows]) for k in "RGB"},
+            "snr_combined_db": _mean_or_none([r["snr_combined_db"] for r in rows]),
         },
     }
     return Score(report, rgb.astype(np.float32), de_map.astype(np.float32))

@@ -156,8 +156,8 @@ def expose(photo_rate_e_per_s: np.ndarray, time_s: float, sensor: SensorSpec, no
 
     ``photo_rate_e_per_s`` is ``A·∫E_q·R_k dλ`` per pixel (paper, 3.3); ``noise`` seeds this frame's
     temporal noise; ``pattern`` is the sensor's ``(offset_e, gain)`` from :func:`fixed_pattern`.
-    Digital numbers are float32 integers in ``[0, 2ⁿ − 1]`` (or unquantised ``V/step`` when
-    quantisation is off).  Works in place, chunk by chunk, on all cores.
+    Digital numbers are float32 integers in ``[0, 2ⁿ − 1]`` (or unquantised ``V/step`` in
+    ``[0, 2ⁿ]`` when quantisation is off).  Works in place, chunk by chunk, on all cores.
     """
     offset, gain = pattern
     shape = photo_rate_e_per_s.shape
@@ -170,7 +170,9 @@ def expose(photo_rate_e_per_s: np.ndarray, time_s: float, sensor: SensorSpec, no
     t = np.float32(time_s)
     dark = np.float32(sensor.dark_rate_e_per_s * time_s)
     inv_step = np.float32(1.0 / sensor.quantization_step_e)
-    top = np.float32(2**sensor.adc_bits - 1)
+    # full scale (the full well) is 2ⁿ steps: the top code 2ⁿ − 1 holds [q_max − step, q_max);
+    # without quantisation the output is the continuous V/step, clipped at full scale
+    top = np.float32(2**sensor.adc_bits - 1 if sensor.quantization else 2**sensor.adc_bits)
 
     def run(i, sl):
         rng = _chunk_rng(noise, i)

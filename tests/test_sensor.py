@@ -87,11 +87,13 @@ def test_quantisation_step_is_qmax_over_2n():
 def test_full_well_clipping():
     sensor = SensorSpec(fpn=False, read_noise=False, quantization=False)
     dn, _ = expose(np.full(1000, 1e9, np.float32), 1.0, sensor, noise_stream(0))
-    assert dn.max() == 255.0  # ADC full scale: 2ⁿ − 1
+    np.testing.assert_array_equal(dn, 256.0)  # unquantised: full scale = q_max/step = 2ⁿ
+    dn, _ = expose(np.full(1000, 1e9, np.float32), 1.0, dataclasses.replace(sensor, quantization=True), noise_stream(0))
+    np.testing.assert_array_equal(dn, 255.0)  # quantised: the top code 2ⁿ − 1
     # the well holds q_max: with shot noise off, 0.9·q_max passes and 1.5·q_max reads as q_max
     s16 = dataclasses.replace(sensor, adc_bits=16, shot_noise=False, dark_current=False)
     dn, _ = expose(np.array([0.9, 1.5], np.float32) * np.float32(131072), 1.0, s16, noise_stream(0))
-    np.testing.assert_allclose(dn * s16.quantization_step_e, [0.9 * 131072, 131072 - 2])  # ADC tops at 2ⁿ − 1
+    np.testing.assert_allclose(dn * s16.quantization_step_e, [0.9 * 131072, 131072])
     assert expose(np.array([2e5], np.float32), 1.0, s16.off("clipping"), noise_stream(0))[0][0] * 2 == 2e5
     unclipped, _ = expose(np.full(10, 1e9, np.float32), 1.0, sensor.off("clipping"), noise_stream(0))
     assert unclipped.min() > 1e5

@@ -1,0 +1,135 @@
+"""Colour processing and scoring against closed forms (issue 4)."""
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from conftest import small_scene
+from spectracam.capture import CameraSpec, capture
+from spectracam.color import ProcessingSpec, display_rgb_to_xyz, tile_replicate
+from spectracam.filters import FilterSpec
+from spectracam.metrics import combine_snr_db, delta_e, xyz_to_lab
+from spectracam.render import render
+from spectracam.score import score
+from spectracam.sensor import SensorSpec
+
+NOISELESS = SensorSpec().off("shot_noise", "dark_current", "read_noise", "fpn", "quantization")
+
+
+def test_luther_camera_without_noise_is_perfect(scene_5000, analytic_5000):
+    cam = CameraSpec(filters=FilterSpec(kind="xyz"), sensor=NOISELESS, architecture="prism", exposure="optimal")
+    raw = capture(analytic_5000, camera=cam, scene=scene_5000)
+    rep = score(raw, scene_5000).report
+    assert rep["chart"]["delta_e_conversion"] < 0.01
+    assert max(r["delta_e_mean"] for r in rep["patches"]) < 0.01
+    assert rep["chart"]["snr_combined_db"] is None  # noise-free: infinite SNR
+
+
+def test_block_filters_leave_a_conversion_error(scene_5000, analytic_5000):
+    raw = capture(analytic_5000, camera=CameraSpec(sensor=NOISELESS), scene=scene_5000)
+    rep = score(raw, scene_5000).report
+    # the paper's 5.3: conversion is one of the main error sources with block filters
+    assert 2.0 < rep["chart"]["delta_e_conversion"] < 15.0
+    # noise-free, inside masks: every pixel's ΔE equals the conversion-only ΔE of its patch
+    for r in rep["patches"]:
+        assert r["delta_e_mean"] == pytest.approx(r["delta_e_conversion"], abs=1e-3)
+
+
+def test_delta_e_matches_colour_science():
+    import colour
+
+    lab1, lab2 = np.array([50.0, 2.6772, -79.7751]), np.array([50.0, 0.0, -82.7485])
+    assert delta_e(lab1, lab2) == pytest.approx(colour.delta_E(lab1, lab2, method="CIE 1976"))
+    # Sharma, Wu & Dalal (2005) test data, pair 1: ΔE00 = 2.0425
+    assert delta_e(lab1, lab2, "ciede2000") == pytest.approx(2.0425, abs=1e-4)
+
+
+def test_lab_of_the_white_is_100():
+    w = np.array([0.95, 1.0, 1.09])
+    np.testing.assert_allclose(xyz_to_lab(w * 3, w * 3), [100, 0, 0], atol=1e-9)
+
+
+def test_crt_display_white_has_unit_luminance():
+    M = display_rgb_to_xyz("crt")
+    assert M[1].sum() == pytest.approx(1.0)
+    np.testing.assert_allclose(display_rgb_to_xyz("srgb").sum(axis=1), [0.9505, 1.0, 1.089], atol=1e-3)
+
+
+@pytest.mark.parametrize("arch, scheme", [("fsc", "optimal"), ("fsc", "balanced"), ("prism", "balanced")])
+def test_conversion_error_does_not_depend_on_exposure(scene_5000, analytic_5000, arch, scheme):
+    ref = score(capture(analytic_5000, camera=CameraSpec(sensor=NOISELESS), scene=scene_5000), scene_5000).report
+    other = score(capture(analytic_5000, camera=CameraSpec(sensor=NOISELESS, architecture=arch, exposure=scheme),
+                          scene=scene_5000), scene_5000).report
+    for a, b in zip(ref["patches"], other["patches"]):
+        assert b["delta_e_mean"] == pytest.approx(a["delta_e_mean"], abs=1e-4)
+
+
+@pytest.mark.parametrize("arch, scheme", [("cfa", "single"), ("fsc", "optimal")])
+def test_scores_do_not_depend_on_light_level(arch, scheme):
+    reports = []
+    for level in (100.0, 1000.0):
+        scene = small_scene(illuminant={"white_luminance_cd_m2": level})
+        raw = capture(render(scene, "analytic"), architecture=arch, exposure=scheme, seed=3, scene=scene)
+        reports.append(score(raw, scene).report["chart"])
+    a, b = reports
+    # exposure scales as 1/level, so the electrons are the same but for the (tiny) dark charge
+    assert b["snr_combined_db"] == pytest.approx(a["snr_combined_db"], abs=0.05)
+    assert b["delta_e_mean"] == pytest.approx(a["delta_e_mean"], rel=0.01)
+
+
+def test_snr_against_closed_form():
+    # shot + read only: SNR of a channel = 20·log10(μ/√(μ + σ_r²)) for μ photo-electrons
+    scene = small_scene(image={"width": 480, "height": 360})
+    sensor = SensorSpec(fpn=False, quantization=False, dark_current=False)
+    raw = capture(render(scene, "analytic"), sensor, "prism", "optimal", seed=1, scene=scene)
+    rep = score(raw, scene).report
+    from spectracam.chart import patch_boxes
+
+    r, c = patch_boxes(scene.chart, 480, 360)[21]  # neutral 5: far from full well, so no clipping
+    assert (r.stop - r.start) * (c.stop - c.start) > 1500  # σ estimated to ±1.8 % (1σ), 0.16 dB
+    for k in range(3):
+        mu = raw.expected_e[k, r, c].mean()
+        expected = 20 * np.log10(mu / np.sqrt(mu + 400))
+        # 0.5 dB ≈ 3σ; a factor 2 in the noise variance is 3 dB
+        assert rep["patches"][21]["snr_db"]["RGB"[k]] == pytest.approx(expected, abs=0.5)
+    assert combine_snr_db(np.array([3.0, 4.0, 0.0]), np.array([1.0, 1.0, 1.0])) == pytest.approx(10 * np.log10(25 / 3))
+
+
+def test_cfa_scores_all_demosaicking_methods(scene_5000, analytic_5000):
+    raw = capture(analytic_5000, seed=1, scene=scene_5000)
+    results = {m: score(raw, scene_5000, ProcessingSpec(demosaic=m)).report["chart"]["delta_e_mean"]
+               for m in ("bilinear", "malvar2004", "menon2007", "patch")}
+    assert all(2 < v < 20 for v in results.values())
+    # interpolation averages neighbours, so it has less noise than per-tile replication
+    assert results["bilinear"] < results["patch"]
+
+
+def test_tile_replicate_takes_each_channel_from_its_own_pixels():
+    mosaic = np.array([[1.0, 2.0], [3.0, 4.0]])  # RGGB: R=1, G=2,3, B=4
+    np.testing.assert_allclose(tile_replicate(mosaic, "RGGB")[0, 0], [1.0, 2.5, 4.0])
+    np.testing.assert_allclose(tile_replicate(mosaic, "BGGR")[1, 1], [4.0, 2.5, 1.0])
+
+
+def test_score_and_simulate_commands(tmp_path):
+    scene = tmp_path / "s.toml"
+    scene.write_text("[image]\nwidth = 96\nheight = 72\n[illuminant]\ntemperature_K = 3000\n")
+    run = lambda *a: subprocess.run([sys.executable, "-m", "spectracam", *a], capture_output=True, text=True)
+    r = run("simulate", str(scene), "-o", str(tmp_path / "sim"), "--renderer", "analytic", "--arch", "fsc",
+            "--exposure", "optimal", "--quiet")
+    assert r.returncode == 0, r.stderr
+    for f in ("radiance.exr", "raw.exr", "rendered.exr", "rendered.png", "delta_e.png", "report.json", "report.csv"):
+        assert (tmp_path / "sim" / f).exists(), f
+    rep = json.loads((tmp_path / "sim" / "report.json").read_text())
+    assert len(rep["patches"]) == 24 and rep["parameters"]["camera"]["architecture"] == "fsc"
+    r = run("score", str(tmp_path / "sim" / "raw.exr"), "--scene", str(scene), "-o", str(tmp_path / "sc"),
+            "--delta-e", "ciede2000", "--quiet")
+    assert r.returncode == 0, r.stderr
+    again = json.loads((tmp_path / "sc" / "report.json").read_text())
+    assert again["parameters"]["delta_e_method"] == "ciede2000"
+    csv_lines = (tmp_path / "sc" / "report.csv").read_text().splitlines()
+    assert len(csv_lines) == 26 and csv_lines[-1].startswith("chart,average")
+    bad = run("score", str(tmp_path / "sim" / "raw.exr"), "--scene", str(scene), "-o", str(tmp_path / "x"),
+              "--demosaic", "magic")
+    assert bad.returncode == 2 and not (tmp_path / "x").exists()
