@@ -73,15 +73,11 @@ def channel_stats(raw, boxes) -> tuple[np.ndarray, np.ndarray]:
     means, stds = np.zeros((len(boxes), 3)), np.zeros((len(boxes), 3))
     for p, (r, c) in enumerate(boxes):
         if e.ndim == 2:
-            for i, ch in enumerate(raw.cfa_pattern):
-                dy, dx = divmod(i, 2)
-                rows = np.arange(r.start, r.stop)
-                cols = np.arange(c.start, c.stop)
-                sub = e[np.ix_(rows[rows % 2 == dy], cols[cols % 2 == dx])]
-                k = "RGB".index(ch)
-                if ch == "G" and means[p, k]:
-                    continue  # the second green of the tile is the same channel: use the first
-                means[p, k], stds[p, k] = sub.mean(), sub.std()
+            for k, ch in enumerate("RGB"):  # all tile positions of the channel (both greens)
+                parts = [e[r, c][(r.start + dy) % 2::2, (c.start + dx) % 2::2].ravel()
+                         for i, pc in enumerate(raw.cfa_pattern) if pc == ch for dy, dx in [divmod(i, 2)]]
+                pix = np.concatenate(parts)
+                means[p, k], stds[p, k] = pix.mean(), pix.std()
         else:
             block = e[:, r, c].reshape(3, -1)
             means[p], stds[p] = block.mean(axis=1), block.std(axis=1)
