@@ -193,6 +193,44 @@ def simulate_cmd(scene_file, out_dir, arch, exposure, renderer, demosaic, displa
     _score_and_write(raw, scene, processing, out_dir, log)
 
 
+@main.command("paper")
+@click.option("-o", "--output", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path))
+@click.option("--experiment", "experiment_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Experiment file [default: scenes/paper.toml shipped with spectracam].")
+@click.option("--renderer", type=click.Choice(RENDERERS), default="mitsuba", show_default=True)
+@click.option("--quick", is_flag=True, help="A first look: 160x120 pixels instead of the scene's size.")
+@click.option("--no-cache", is_flag=True, help="Render again even if the render cache has the scene.")
+@click.option("--quiet", is_flag=True)
+def paper_cmd(out_dir, experiment_file, renderer, quick, no_cache, quiet):
+    """Reproduce the paper's Figures 4, 5a, 5b and 6: figures, results.json, report.md, case files."""
+    import time
+
+    from .experiments.paper import load_experiment, run_paper
+    from .experiments.report import write_paper_outputs
+
+    path = experiment_file or default_experiment()
+    exp = load_experiment(path)
+    log = _log(quiet)
+    t0 = time.perf_counter()
+    step = lambda msg: log(f"[{time.perf_counter() - t0:6.1f} s] {msg}")
+    results, cases, cubes = run_paper(exp, renderer=renderer, quick=quick, use_cache=not no_cache, step=step,
+                                      log=log, progress=not quiet)
+    command = "spectracam paper -o " + str(out_dir) + (f" --experiment {experiment_file}" if experiment_file else "") \
+        + (f" --renderer {renderer}" if renderer != "mitsuba" else "") + (" --quick" if quick else "")
+    write_paper_outputs(out_dir, results, cases, cubes, command, step)
+    for c in results["claims"]:
+        log(f"  {c['verdict']:<10} {c['claim']}: {c['measured']}")
+    step(f"done: {out_dir}/report.md")
+
+
+def default_experiment() -> Path:
+    """scenes/paper.toml of this checkout (the README's main job)."""
+    here = Path(__file__).resolve().parent.parent / "scenes" / "paper.toml"
+    if not here.exists():
+        raise SpectracamError("experiment = scenes/paper.toml: not found next to the package; pass --experiment FILE")
+    return here
+
+
 @main.command("inspect")
 @click.argument("file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
 def inspect_cmd(file: Path):

@@ -84,8 +84,12 @@ def channel_stats(raw, boxes) -> tuple[np.ndarray, np.ndarray]:
     return means, stds
 
 
-def score(raw, scene, processing: ProcessingSpec | None = None) -> Score:
-    """Render a capture on the display and score it against the scene; see the module docstring."""
+def score(raw, scene, processing: ProcessingSpec | None = None, reference: str = "scene") -> Score:
+    """Render a capture on the display and score it against the scene; see the module docstring.
+
+    ``reference="camera"`` scores per-pixel ΔE against the noise-free rendering of the same camera
+    instead (the conversion error removed): how the paper's error budget isolates the noise steps.
+    """
     processing = processing or scene.processing
     delta_e_method, snr_combination = processing.delta_e, processing.snr_combination
     camera = raw.camera
@@ -115,7 +119,7 @@ def score(raw, scene, processing: ProcessingSpec | None = None) -> Score:
 
     names = [n for n, _, _ in patch_names_and_data(scene.chart.dataset)]
     for p, (r, c) in enumerate(boxes):
-        de = delta_e(lab[r, c], scene_lab[p], delta_e_method)
+        de = delta_e(lab[r, c], (scene_lab if reference == "scene" else conversion_lab)[p], delta_e_method)
         de_map[r, c] = de
         mean_lab = xyz_to_lab(rgb[r, c].reshape(-1, 3).mean(axis=0) @ M_disp.T, display_white)
         with np.errstate(divide="ignore"):  # a noise-free capture has infinite SNR: reported as null
@@ -133,7 +137,7 @@ def score(raw, scene, processing: ProcessingSpec | None = None) -> Score:
     report = {
         "parameters": {
             "scene": scene.to_dict(), "camera": camera.to_dict(), "processing": dataclasses.asdict(processing),
-            "delta_e_method": delta_e_method, "snr_combination": snr_combination, "seed": raw.seed,
+            "delta_e_method": delta_e_method, "delta_e_reference": reference, "snr_combination": snr_combination, "seed": raw.seed,
             "exposure_times_ms": dict(zip("RGB", (1e3 * np.asarray(raw.exposure_times_s)).tolist())),
             "capture_time_ms": 1e3 * raw.capture_time_s,
             "conversion_matrix": M.tolist(),

@@ -1,0 +1,1 @@
+"""Experiments built on the pipeline: the paper's figures (paper.py) and, later, sweeps."""

@@ -1,0 +1,88 @@
+"""Figures 4, 5 and 6 drawn like the paper's: colour temperature on x, a marker per channel/design."""
+from __future__ import annotations
+
+import io
+
+import numpy as np
+
+#: The paper's markers: Fig. 4 circles R, triangles G, squares B; Fig. 5 circles CFA, triangles FSC,
+#: squares FSC balanced (the prism, not in the paper's Fig. 5, gets diamonds).
+CHANNEL_STYLE = {"R": ("o", "tab:red"), "G": ("^", "tab:green"), "B": ("s", "tab:blue")}
+DESIGN_STYLE = {"cfa/single": ("o", "black", "-"), "fsc/optimal": ("^", "tab:blue", "--"),
+                "fsc/balanced": ("s", "tab:orange", ":"), "prism/optimal": ("D", "tab:purple", "-.")}
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def fig4(results: dict):
+    plt = _plt()
+    f4 = results["fig4_white_response"]
+    designs = [d for d in ("cfa/single", "fsc/optimal") if d in f4] or list(f4)[:2]
+    fig, axes = plt.subplots(1, len(designs), figsize=(4.2 * len(designs), 3.6), sharey=True, squeeze=False)
+    for ax, d in zip(axes[0], designs):
+        T = sorted(f4[d], key=float)
+        resp = np.array([f4[d][t] for t in T])
+        for k, c in enumerate("RGB"):
+            m, col = CHANNEL_STYLE[c]
+            ax.plot([float(t) for t in T], resp[:, k], marker=m, color=col, mfc="none", label=f'"{c.lower()}" channel'
+                    .replace('"r"', '"red"').replace('"g"', '"green"').replace('"b"', '"blue"'))
+        ax.set_title(f"{d}", fontsize=10)
+        ax.set_xlabel("colour temperature (K)")
+        ax.set_ylim(0, 1.08)
+        ax.grid(alpha=0.3)
+    axes[0][0].set_ylabel("relative response to white (1 = full well)")
+    axes[0][-1].legend(fontsize=8, loc="lower right")
+    fig.suptitle("Figure 4: response of the three channels to a white surface", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def fig5(results: dict):
+    plt = _plt()
+    fig, (a, b) = plt.subplots(1, 2, figsize=(9, 3.8))
+    for ax, key, ylabel, title in ((a, "fig5a_snr_db", "SNR (dB)", "(a) SNR"),
+                                   (b, "fig5b_delta_e", "mean ΔE*ab", "(b) perceptual error")):
+        for d, per_T in results[key].items():
+            m, col, ls = DESIGN_STYLE.get(d, ("x", "gray", "-"))
+            T = sorted(per_T, key=float)
+            ms = results["exposure_ms"][d]
+            ax.plot([float(t) for t in T], [per_T[t] for t in T], marker=m, color=col, ls=ls, mfc="none",
+                    label=f"{d} ({np.mean(list(ms.values())):.0f} ms)")
+        ax.set_xlabel("colour temperature (K)")
+        ax.set_ylabel(ylabel)
+        ax.set_title(title, fontsize=10)
+        ax.grid(alpha=0.3)
+    b.set_ylim(bottom=0)
+    a.legend(fontsize=7)
+    fig.suptitle("Figure 5: averages over the 24 patches (mean capture time in the legend)", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def fig6(results: dict):
+    plt = _plt()
+    steps = results["fig6_budget_delta_e"]
+    fig, ax = plt.subplots(figsize=(6.5, 3.6))
+    names = [s.replace("+ ", "+\n").replace(" (", "\n(") for s, _ in steps]
+    ax.bar(range(len(steps)), [v for _, v in steps], color="0.55", edgecolor="black")
+    for i, (_, v) in enumerate(steps):
+        ax.text(i, v, f"{v:.2f}", ha="center", va="bottom", fontsize=8)
+    ax.set_xticks(range(len(steps)), names, fontsize=7)
+    ax.set_ylabel("mean ΔE*ab")
+    p = results["parameters"]
+    ax.set_title(f"Figure 6: cumulative error, {p['budget_design']} under {p['budget_illuminant']}", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def render_figure(fig, fmt: str) -> bytes:
+    buf = io.BytesIO()
+    fig.savefig(buf, format=fmt, dpi=130)
+    return buf.getvalue()

@@ -1,0 +1,56 @@
+"""A render cache keyed on everything that determines the radiance cube.
+
+Key: SHA-256 of the scene's render-relevant tables (chart, illuminant, wavelengths, image, render),
+the renderer, and the spectracam and Mitsuba versions.  An entry is a spectral EXR; on a hit the
+scene recorded in the file is compared with the request, so a collision or a hand-edited file can
+never serve a stale cube.  Location: ``$SPECTRACAM_CACHE`` or ``~/.cache/spectracam/renders``.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from pathlib import Path
+
+from .. import __version__
+
+RENDER_TABLES = ("name", "chart", "illuminant", "wavelengths", "image", "render")
+
+
+def cache_dir() -> Path:
+    return Path(os.environ.get("SPECTRACAM_CACHE") or Path.home() / ".cache" / "spectracam" / "renders")
+
+
+def render_key(scene, renderer: str) -> tuple[str, dict]:
+    import mitsuba
+
+    d = scene.to_dict()
+    ident = {"scene": {k: d[k] for k in RENDER_TABLES if k != "name"}, "renderer": renderer,
+             "spectracam": __version__, "mitsuba": mitsuba.__version__ if renderer == "mitsuba" else None}
+    text = json.dumps(ident, sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()[:32], ident
+
+
+def cached_render(scene, renderer: str = "mitsuba", progress: bool = False, log=None, directory: Path | None = None):
+    """``(cube, hit)``: the cached cube for this scene and renderer, or a fresh render stored for next time."""
+    from ..io.exr import read_radiance_exr, write_radiance_exr
+    from . import render
+
+    key, ident = render_key(scene, renderer)
+    path = (directory or cache_dir()) / f"{key}.exr"
+    if path.exists():
+        try:
+            cube, attrs = read_radiance_exr(path)
+            recorded = json.loads(attrs.get("spectracamScene", "{}"))
+            if {k: recorded.get(k) for k in ident["scene"]} == ident["scene"] and attrs.get("spectracamRenderer") == renderer:
+                cube.metadata["scene"] = scene.to_dict()
+                return cube, True
+        except Exception:  # unreadable entry: render again and overwrite it
+            pass
+    cube = render(scene, renderer=renderer, progress=progress, log=log)
+    try:
+        write_radiance_exr(path, cube, scene)
+    except OSError as e:  # a read-only cache never stops a run
+        if log:
+            log(f"render cache not written ({e})")
+    return cube, False
