@@ -1,0 +1,141 @@
+"""The paper's experiment (issue 5) on the quick (160x120) setting."""
+import dataclasses
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from spectracam.experiments.claims import evaluate
+from spectracam.experiments.paper import load_experiment, run_paper
+from spectracam.experiments.report import write_paper_outputs
+
+PAPER = Path(__file__).parent.parent / "scenes" / "paper.toml"
+
+
+@pytest.fixture(scope="module")
+def experiment():
+    exp = load_experiment(PAPER)
+    return dataclasses.replace(exp, alternatives=exp.alternatives[:2])
+
+
+@pytest.fixture(scope="module")
+def cache(tmp_path_factory):
+    return tmp_path_factory.mktemp("cache")
+
+
+@pytest.fixture(scope="module")
+def analytic_run(experiment):
+    return run_paper(experiment, renderer="analytic", quick=True, use_cache=False)
+
+
+@pytest.fixture(scope="module")
+def mitsuba_run(experiment, cache):
+    import os
+
+    old = os.environ.get("SPECTRACAM_CACHE")
+    os.environ["SPECTRACAM_CACHE"] = str(cache)
+    try:
+        return run_paper(experiment, renderer="mitsuba", quick=True)
+    finally:
+        os.environ.pop("SPECTRACAM_CACHE") if old is None else os.environ.__setitem__("SPECTRACAM_CACHE", old)
+
+
+def test_light_level_gives_the_papers_cfa_exposure(analytic_run):
+    results = analytic_run[0]
+    assert results["exposure_ms"]["cfa/single"]["5000"] == pytest.approx(28.0, rel=1e-4)
+    assert results["exposure_ms"]["fsc/balanced"]["5000"] == pytest.approx(28.0, rel=1e-4)
+    fsc = results["channel_exposure_ms"]["fsc/optimal"]["5000"]
+    assert results["exposure_ms"]["fsc/optimal"]["5000"] == pytest.approx(sum(fsc))
+    assert results["exposure_ms"]["prism/optimal"]["5000"] == pytest.approx(max(fsc))
+    assert results["parameters"]["white_luminance_cd_m2"] > 0
+
+
+def test_results_have_the_documented_shape(analytic_run):
+    r = analytic_run[0]
+    designs = ["cfa/single", "fsc/optimal", "fsc/balanced", "prism/optimal"]
+    temps = ["3000", "4000", "5000", "6000", "7000"]
+    for key in ("exposure_ms", "fig5a_snr_db", "fig5b_delta_e"):
+        assert list(r[key]) == designs and all(list(r[key][d]) == temps for d in designs)
+    assert all(len(r["fig4_white_response"][d][t]) == 3 for d in designs for t in temps)
+    # optimal exposure fills every channel's well on white; single fills exactly one
+    np.testing.assert_allclose(r["fig4_white_response"]["fsc/optimal"]["3000"], 1.0, rtol=1e-5)
+    assert max(r["fig4_white_response"]["cfa/single"]["7000"]) == pytest.approx(1.0, rel=1e-5)
+    steps = [s for s, _ in r["fig6_budget_delta_e"]]
+    assert steps[0] == "perfect system" and steps[-1] == "+ colour conversion" and len(steps) == 5
+    assert r["fig6_budget_delta_e"][0][1] == pytest.approx(0.0, abs=1e-4)  # float32 pipeline
+    json.dumps(r)  # serialisable as is
+
+
+def test_outputs_are_written(tmp_path, analytic_run):
+    results, cases, cubes = analytic_run
+    write_paper_outputs(tmp_path, results, cases, cubes, "spectracam paper -o x --quick --renderer analytic")
+    for f in ("fig4.png", "fig4.svg", "fig5.png", "fig5.svg", "fig6.png", "fig6.svg", "results.json", "report.md"):
+        assert (tmp_path / f).stat().st_size > 0, f
+    md = (tmp_path / "report.md").read_text()
+    assert "## The paper's claims beside this run" in md and "Sensitivity" in md and "cd/m²" in md
+    assert (tmp_path / "cases" / "5000" / "radiance.exr").exists()
+    assert (tmp_path / "cases" / "5000" / "fsc-balanced" / "raw.exr").exists()
+    assert (tmp_path / "cases" / "D65" / "budget-4" / "rendered.exr").exists()
+
+
+def test_mitsuba_agrees_with_analytic_within_monte_carlo_spread(analytic_run, mitsuba_run):
+    a, m = analytic_run[0], mitsuba_run[0]
+    for d in a["exposure_ms"]:
+        for t in a["exposure_ms"][d]:
+            # white-patch metering: ~200 px × 4 spp per band, per-pixel noise ~0.3 % → < 0.1 %
+            assert m["exposure_ms"][d][t] == pytest.approx(a["exposure_ms"][d][t], rel=2e-3)
+            # same noise seed; the render's Monte Carlo noise (~0.3 %/px) is far below the sensor's
+            assert m["fig5a_snr_db"][d][t] == pytest.approx(a["fig5a_snr_db"][d][t], abs=0.1)
+            assert m["fig5b_delta_e"][d][t] == pytest.approx(a["fig5b_delta_e"][d][t], rel=0.02, abs=0.05)
+
+
+def test_second_run_uses_the_render_cache(experiment, cache, mitsuba_run):
+    import os
+
+    os.environ["SPECTRACAM_CACHE"] = str(cache)
+    try:
+        msgs = []
+        again, _, _ = run_paper(dataclasses.replace(experiment, alternatives=()), renderer="mitsuba", quick=True,
+                                step=msgs.append)
+    finally:
+        del os.environ["SPECTRACAM_CACHE"]
+    renders = [m for m in msgs if m.startswith("render")]
+    assert len(renders) == 6 and all("cached" in m for m in renders)
+    assert again["fig5b_delta_e"] == mitsuba_run[0]["fig5b_delta_e"]
+
+
+def test_cache_rejects_an_entry_for_another_scene(tmp_path):
+    from conftest import small_scene
+    from spectracam.io.exr import write_radiance_exr
+    from spectracam.render import render
+    from spectracam.render.cache import cached_render, render_key
+
+    a = small_scene(image={"width": 32, "height": 24})
+    b = small_scene(image={"width": 32, "height": 24}, illuminant={"temperature_K": 3000})
+    key, _ = render_key(a, "analytic")
+    write_radiance_exr(tmp_path / f"{key}.exr", render(b, "analytic"), b)  # a stale/foreign entry under a's key
+    cube, hit = cached_render(a, "analytic", directory=tmp_path)
+    assert not hit
+    np.testing.assert_array_equal(cube.radiance, render(a, "analytic").radiance)
+    assert cached_render(a, "analytic", directory=tmp_path)[1]  # now stored properly
+
+
+def test_claims_follow_the_numbers():
+    temps = ["3000", "5000", "7000"]
+    paper_like = {
+        "exposure_ms": {"cfa/single": {t: 28.0 for t in temps}, "fsc/optimal": {t: 111.0 for t in temps}},
+        "fig4_white_response": {"cfa/single": {"3000": [0.9, 1, 0.3], "5000": [0.7, 1, 0.5], "7000": [0.5, 1, 0.8]}},
+        "fig5a_snr_db": {"cfa/single": {"3000": 30, "5000": 31, "7000": 30},
+                         "fsc/optimal": {"3000": 33, "5000": 32, "7000": 33},
+                         "fsc/balanced": {"3000": 23, "5000": 22, "7000": 23}},
+        "fig5b_delta_e": {"cfa/single": {t: 7.0 for t in temps}, "fsc/optimal": {t: 6.5 for t in temps},
+                          "fsc/balanced": {t: 9.0 for t in temps}, "prism/optimal": {t: 6.5 for t in temps}},
+        "fig6_budget_delta_e": [["perfect system", 0.0], ["+ photon shot noise", 0.5],
+                                ["+ CMOS noise (read, dark, FPN)", 3.0], ["+ 8-bit quantization", 3.3],
+                                ["+ colour conversion", 7.0]],
+    }
+    verdicts = {c["id"]: c["verdict"] for c in evaluate(paper_like)}
+    assert set(verdicts.values()) == {"reproduced"}, verdicts
+    paper_like["fig5a_snr_db"]["fsc/optimal"] = {"3000": 29, "5000": 30, "7000": 29}
+    assert {c["id"]: c["verdict"] for c in evaluate(paper_like)}["snr-fsc"] == "not"
