@@ -139,3 +139,14 @@ def test_claims_follow_the_numbers():
     assert set(verdicts.values()) == {"reproduced"}, verdicts
     paper_like["fig5a_snr_db"]["fsc/optimal"] = {"3000": 29, "5000": 30, "7000": 29}
     assert {c["id"]: c["verdict"] for c in evaluate(paper_like)}["snr-fsc"] == "not"
+
+
+def test_light_scale_alternative_scales_scene_and_cube_together(experiment):
+    from spectracam.experiments.paper import Alternative
+
+    exp = dataclasses.replace(experiment, temperatures_K=(5000.0,), alternatives=(Alternative("dim", "", {}, 0.1),))
+    r, _, _ = run_paper(exp, renderer="analytic", quick=True, use_cache=False)
+    dim = r["sensitivity"]["alternatives"]["dim"]
+    assert dim["exposure_ms"]["cfa/single"]["5000"] == pytest.approx(280.0, rel=2e-3)  # dark charge aside: 10x
+    for d in r["fig5b_delta_e"]:
+        assert dim["fig5b_delta_e"][d]["5000"] == pytest.approx(r["fig5b_delta_e"][d]["5000"], rel=0.03)

@@ -136,9 +136,14 @@ def white_rates(scene: Scene, camera: CameraSpec) -> np.ndarray:
     return photo_electron_rates(chart, camera)[0, WHITE_PATCH].astype(np.float64)
 
 
-def scaled(cube: RadianceCube, factor: float) -> RadianceCube:
-    """Rendering is linear in the light level: a scaled cube is the render at a scaled level."""
-    return cube if factor == 1.0 else RadianceCube(cube.radiance * np.float32(factor), cube.wavelengths_nm, dict(cube.metadata))
+def scaled(scene: Scene, cube: RadianceCube, factor: float) -> tuple[Scene, RadianceCube]:
+    """Rendering is linear in the light level: a scaled cube is the render at a scaled level (the
+    scene says so too, so that scoring fits the conversion on the light the camera saw)."""
+    if factor == 1.0:
+        return scene, cube
+    ill = dataclasses.replace(scene.illuminant, white_luminance_cd_m2=scene.illuminant.white_luminance_cd_m2 * factor)
+    scene = scene.replace(illuminant=ill)
+    return scene, RadianceCube(cube.radiance * np.float32(factor), cube.wavelengths_nm, {**cube.metadata, "scene": scene.to_dict()})
 
 
 def design_case(cube, scene: Scene, camera: CameraSpec, processing: ProcessingSpec, design: str, seed: int):
@@ -186,8 +191,7 @@ def comparison(exp: PaperExperiment, cubes: dict, camera: CameraSpec, processing
     cases = {}
     for T in exp.temperatures_K:
         key = f"{T:g}"
-        scene, cube = cubes[key]
-        cube = scaled(cube, light_scale)
+        scene, cube = scaled(*cubes[key], light_scale)
         for design in exp.designs:
             c = design_case(cube, scene, camera, processing, design, seed)
             for field_, value in (("exposure_ms", c["exposure_ms"]), ("channel_exposure_ms", c["channel_ms"]),
@@ -197,8 +201,8 @@ def comparison(exp: PaperExperiment, cubes: dict, camera: CameraSpec, processing
                 res[field_].setdefault(design, {})[key] = value
             if keep_cases:
                 cases[(key, design)] = c
-    scene, cube = cubes[exp.budget_illuminant]
-    budget = error_budget(scaled(cube, light_scale), scene, camera, processing, exp.budget_design, seed)
+    scene, cube = scaled(*cubes[exp.budget_illuminant], light_scale)
+    budget = error_budget(cube, scene, camera, processing, exp.budget_design, seed)
     res["fig6_budget_delta_e"] = [[step, de] for step, de, _, _ in budget]
     if keep_cases:
         cases[(exp.budget_illuminant, "budget")] = budget
@@ -269,8 +273,9 @@ def run_paper(exp: PaperExperiment, renderer: str = "mitsuba", quick: bool = Fal
                                   if exp.white_luminance_cd_m2 is None else "fixed in the experiment file"),
             "scene": base.to_dict(),
             "fig6_method": "noise steps: per-pixel ΔE*ab against the noise-free rendering of the same camera (the "
-                           "conversion error removed), sources added in the order shown; last step: against the "
-                           "scene, adding the colour conversion error",
+                           "conversion error removed), sources added in the order shown, so the perfect system's "
+                           "residual is the Monte Carlo noise of the render; last step: against the scene, adding "
+                           "the colour conversion error",
             "snr": "chart average of each patch's combined SNR (see processing.snr_combination)",
             "delta_e": "chart average of each patch's mean per-pixel ΔE (processing.delta_e)",
         },
