@@ -43,6 +43,14 @@ class Architecture(ABC):
     def channel_names(self) -> list[str]:
         return list(CHANNELS)
 
+    @staticmethod
+    def expose_planes(rates, times_s, sensor, seed, patterns):
+        """Three full-resolution exposures, channel k with fixed pattern ``patterns[k]``;
+        returns ``(3, H, W)`` digital numbers and expected electrons."""
+        out = [expose(np.ascontiguousarray(rates[:, :, k]), times_s[k], sensor, noise_stream(seed, TEMPORAL_STREAM, k),
+                      patterns[k]) for k in range(3)]
+        return np.stack([o[0] for o in out]), np.stack([o[1] for o in out])
+
 
 @register
 class ColourFilterArray(Architecture):
@@ -78,11 +86,8 @@ class DichroicPrism(Architecture):
         return float(np.max(times_s))
 
     def record(self, rates, times_s, sensor, seed):
-        h, w, _ = rates.shape
-        out = [expose(np.ascontiguousarray(rates[:, :, k]), times_s[k], sensor, noise_stream(seed, TEMPORAL_STREAM, k),
-                      fixed_pattern(sensor, (h, w), seed, k))  # three physical sensors
-               for k in range(3)]
-        return np.stack([o[0] for o in out]), np.stack([o[1] for o in out])
+        shape = rates.shape[:2]  # three physical sensors: three fixed patterns
+        return self.expose_planes(rates, times_s, sensor, seed, [fixed_pattern(sensor, shape, seed, k) for k in range(3)])
 
 
 @register
@@ -94,11 +99,8 @@ class FieldSequential(Architecture):
         return float(np.sum(times_s))
 
     def record(self, rates, times_s, sensor, seed):
-        h, w, _ = rates.shape
-        pattern = fixed_pattern(sensor, (h, w), seed, 0)  # one sensor: the same FPN in every frame
-        out = [expose(np.ascontiguousarray(rates[:, :, k]), times_s[k], sensor, noise_stream(seed, TEMPORAL_STREAM, k), pattern)
-               for k in range(3)]
-        return np.stack([o[0] for o in out]), np.stack([o[1] for o in out])
+        pattern = fixed_pattern(sensor, rates.shape[:2], seed, 0)  # one sensor: the same FPN in every frame
+        return self.expose_planes(rates, times_s, sensor, seed, [pattern] * 3)
 
 
 def make_architecture(name: str, cfa_pattern: str = "RGGB") -> Architecture:
