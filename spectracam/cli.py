@@ -223,6 +223,42 @@ def paper_cmd(out_dir, experiment_file, renderer, quick, no_cache, quiet):
     step(f"done: {out_dir}/report.md")
 
 
+@main.command("sweep")
+@click.argument("sweep_file", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("-o", "--output", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path))
+@click.option("--scheduler", default=None, help="Address of a running Dask scheduler, tcp://HOST:PORT "
+              "[default: a local cluster of processes made for the run].")
+@click.option("--workers", type=click.IntRange(1, 1024), default=None, help="Local cluster size [default: cores].")
+@click.option("--serial", is_flag=True, help="Run the cells in this process, without Dask.")
+@click.option("--resume", is_flag=True, help="Continue an interrupted sweep in DIR, skipping finished cells.")
+@click.option("--quiet", is_flag=True)
+def sweep_cmd(sweep_file, out_dir, scheduler, workers, serial, resume, quiet):
+    """Run every cell of SWEEP_FILE on Dask; results.parquet/.csv/.jsonl in DIR, a row per cell and trial."""
+    from .experiments.sweep import load_sweep, run_sweep
+
+    if serial and scheduler:
+        raise SpectracamError("--serial and --scheduler: choose one")
+    sweep = load_sweep(sweep_file)
+    t = run_sweep(sweep, out_dir, scheduler=scheduler, workers=workers, serial=serial, resume=resume,
+                  progress=not quiet, log=_log(quiet))
+    _log(quiet)(f"{t['new_cells']} of {t['cells']} cells computed in {t['wall_s']:.1f} s "
+                f"(cell compute {t['compute_s']:.1f} s); tables in {out_dir}")
+
+
+@main.command("plot-sweep")
+@click.argument("out_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
+@click.option("--x", "x_axis", default=None, help="Axis on the x axis [default: the last varying axis].")
+@click.option("--line", "line_axis", default=None, help="Axis drawn as one line per value.")
+@click.option("--panel", "panel_axis", default=None, help="Axis drawn as one panel per value.")
+@click.option("--metric", "metrics", multiple=True, help="Metric(s) to plot [default: all recorded].")
+def plot_sweep_cmd(out_dir, x_axis, line_axis, panel_axis, metrics):
+    """Plot a finished sweep: DIR/plots/<metric>.png and .svg."""
+    from .experiments.sweep_plot import plot_sweep
+
+    paths = plot_sweep(out_dir, x_axis, line_axis, panel_axis, list(metrics) or None)
+    click.echo("wrote " + ", ".join(str(p) for p in paths if p.suffix == ".png"))
+
+
 def default_experiment() -> Path:
     """scenes/paper.toml of this checkout (the README's main job)."""
     here = Path(__file__).resolve().parent.parent / "scenes" / "paper.toml"

@@ -97,7 +97,8 @@ def _pool():
     if _POOL is None:
         from concurrent.futures import ThreadPoolExecutor
 
-        _POOL = ThreadPoolExecutor(max_workers=os.cpu_count() or 1)
+        # SPECTRACAM_THREADS: e.g. 1 in each worker process of a Dask cluster, which already has one per core
+        _POOL = ThreadPoolExecutor(max_workers=int(os.environ.get("SPECTRACAM_THREADS") or os.cpu_count() or 1))
     return _POOL
 
 

@@ -1,0 +1,312 @@
+"""Design-space sweeps on Dask: every combination of the axes, with noise trials.
+
+A sweep file names a base scene, the axes to vary (any scene, optics, filter, sensor, capture or
+processing parameter, by its ``table.field`` path, ``table.field[i]`` for one element of a list),
+the metrics to record and the number of noise trials.  Each combination is a *cell*: one Dask task
+that captures and scores all of its trials.  Cells that see the same radiance (same render-relevant
+scene) share one render, done once in the driver (through the render cache) and scattered.
+
+Rows (one per cell and trial, every parameter and metric) are appended to ``results.jsonl`` as
+cells finish; ``--resume`` skips the cells already there, so none is lost or computed twice.
+``results.parquet`` and ``results.csv`` are the same rows sorted by (cell, trial).
+"""
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import math
+import os
+import re
+import time
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ConfigError, SpectracamError
+from ..scene import Scene, load_scene, parse_scene
+
+METRICS = ("delta_e_mean", "delta_e_of_mean", "delta_e_conversion", "snr_combined_db", "snr_R_db", "snr_G_db",
+           "snr_B_db", "capture_time_ms", "exposure_R_ms", "exposure_G_ms", "exposure_B_ms")
+DESIGN_AXIS = "capture.design"  # "arch/scheme" in one value, so invalid pairs are never crossed
+_PATH = re.compile(r"^([a-z_]+)\.([A-Za-z_0-9]+)(?:\[(\d+)\])?$")
+
+
+@dataclass(frozen=True)
+class Sweep:
+    base: dict  # the base scene as a dict, [scene] overrides applied
+    axes: tuple  # ((path, (values...)), ...)
+    metrics: tuple
+    trials: int
+    seed: int
+    renderer: str
+    source: str
+
+    @property
+    def digest(self) -> str:
+        text = json.dumps({"base": self.base, "axes": self.axes, "metrics": self.metrics, "trials": self.trials,
+                           "seed": self.seed, "renderer": self.renderer}, sort_keys=True, default=list)
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+    def cells(self) -> list[dict]:
+        names = [p for p, _ in self.axes]
+        return [dict(zip(names, combo)) for combo in itertools.product(*(v for _, v in self.axes))]
+
+
+def _axis_values(t: dict | list, field: str, source: str) -> tuple:
+    if isinstance(t, list) and t:
+        return tuple(t)
+    if isinstance(t, dict) and set(t) == {"start", "stop", "step"}:
+        a, b, s = (t[k] for k in ("start", "stop", "step"))
+        if not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in (a, b, s)) or s <= 0 or b < a:
+            raise ConfigError(field, t, "a range needs numbers start ≤ stop and step > 0", source)
+        n = int(math.floor((b - a) / s + 1e-9)) + 1
+        vals = [a + i * s for i in range(n)]
+        return tuple(int(v) if all(isinstance(x, int) for x in (a, b, s)) else float(v) for v in vals)
+    raise ConfigError(field, t, "must be a non-empty list of values or a table {start, stop, step}", source)
+
+
+def load_sweep(path: str | Path) -> Sweep:
+    """Read and validate a sweep file; every cell's scene is validated here, before anything runs."""
+    p = Path(path)
+    try:
+        data = tomllib.loads(p.read_text())
+    except OSError as e:
+        raise ConfigError("sweep file", str(p), f"cannot be read ({e.strerror})") from None
+    except tomllib.TOMLDecodeError as e:
+        raise ConfigError("sweep file", str(p), f"is not valid TOML ({e})") from None
+    src = str(p)
+    known = {"base_scene", "scene", "axes", "metrics", "trials", "seed", "renderer"}
+    for k in data:
+        if k not in known:
+            raise ConfigError(k, data[k], "unknown key; a sweep file has " + ", ".join(sorted(known)), src)
+    base = load_scene(p.parent / data.get("base_scene", "blackbody_5000K.toml")).to_dict()
+    for table, values in data.get("scene", {}).items():
+        if table not in base or not isinstance(values, dict):
+            raise ConfigError(f"scene.{table}", values, "must be a table of the scene file", src)
+        base[table].update(values)
+    axes = []
+    for field, spec in data.get("axes", {}).items():
+        if field != DESIGN_AXIS and not _PATH.match(field):
+            raise ConfigError(f"axes.{field}", spec, "an axis is a 'table.field' or 'table.field[i]' path", src)
+        axes.append((field, _axis_values(spec, f"axes.{field}", src)))
+    if not axes:
+        raise ConfigError("axes", {}, "needs at least one axis", src)
+    metrics = data.get("metrics", ["delta_e_mean", "snr_combined_db"])
+    bad = [m for m in metrics if m not in METRICS] if isinstance(metrics, list) else [metrics]
+    if bad or not metrics:
+        raise ConfigError("metrics", metrics, "must be a list drawn from " + ", ".join(METRICS), src)
+    trials = data.get("trials", 1)
+    if isinstance(trials, bool) or not isinstance(trials, int) or not 1 <= trials <= 10000:
+        raise ConfigError("trials", trials, "must be an integer between 1 and 10000", src)
+    seed = data.get("seed", base["render"]["seed"])
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ConfigError("seed", seed, "must be an integer ≥ 0", src)
+    renderer = data.get("renderer", "mitsuba")
+    if renderer not in ("mitsuba", "analytic"):
+        raise ConfigError("renderer", renderer, "must be 'mitsuba' or 'analytic'", src)
+    sweep = Sweep(base, tuple(axes), tuple(metrics), trials, seed, renderer, src)
+    for i, cell in enumerate(sweep.cells()):
+        cell_scene(sweep, cell, i)  # validate every combination now
+    return sweep
+
+
+def cell_scene(sweep: Sweep, cell: dict, index: int) -> Scene:
+    d = json.loads(json.dumps(sweep.base))
+    for path, value in cell.items():
+        if path == DESIGN_AXIS:
+            arch, _, scheme = str(value).partition("/")
+            d["capture"].update(architecture=arch, exposure=scheme)
+            continue
+        table, field, idx = _PATH.match(path).groups()
+        if table not in d or not isinstance(d[table], dict):
+            raise ConfigError(f"axes.{path}", value, f"no table {table!r} in a scene", sweep.source)
+        if idx is None:
+            d[table][field] = value
+        else:
+            lst = d[table].get(field)
+            if not isinstance(lst, list) or int(idx) >= len(lst):
+                raise ConfigError(f"axes.{path}", value, f"{table}.{field} is not a list with element {idx}", sweep.source)
+            lst[int(idx)] = value
+    return parse_scene(d, source=f"{sweep.source}: cell {index} {cell}")
+
+
+def trial_seed(sweep_seed: int, trial: int) -> int:
+    """Noise seed of a trial, the same in every cell (common random numbers across cells)."""
+    return int(np.random.SeedSequence([sweep_seed, trial]).generate_state(1)[0] >> 1)
+
+
+def _flatten(d: dict, prefix: str = "") -> dict:
+    out = {}
+    for k, v in d.items():
+        key = f"{prefix}{k}"
+        if isinstance(v, dict):
+            out.update(_flatten(v, key + "."))
+        else:
+            out[key] = json.dumps(v) if isinstance(v, list) else v
+    return out
+
+
+def run_cell(index: int, cell: dict, scene: Scene, cube, trials: int, sweep_seed: int, metrics: tuple) -> dict:
+    """One cell: capture and score every trial.  Runs on a Dask worker (or in-process)."""
+    from ..capture import capture
+    from ..score import score
+
+    t0 = time.perf_counter()
+    params = _flatten({k: v for k, v in scene.to_dict().items() if k != "wavelengths"})
+    params["wavelengths.centres_nm"] = json.dumps([float(x) for x in scene.grid.centres_nm])
+    rows = []
+    for trial in range(trials):
+        seed = trial_seed(sweep_seed, trial)
+        cam = scene.camera
+        raw = capture(cube, cam.sensor, cam.architecture, cam.exposure, seed, camera=cam, scene=scene)
+        rep = score(raw, scene, scene.processing).report
+        c = rep["chart"]
+        values = {"delta_e_mean": c["delta_e_mean"], "delta_e_of_mean": c["delta_e_of_mean"],
+                  "delta_e_conversion": c["delta_e_conversion"], "snr_combined_db": c["snr_combined_db"],
+                  **{f"snr_{k}_db": c["snr_db"][k] for k in "RGB"}, "capture_time_ms": 1e3 * raw.capture_time_s,
+                  **{f"exposure_{k}_ms": 1e3 * float(t) for k, t in zip("RGB", raw.exposure_times_s)}}
+        rows.append({"cell": index, "trial": trial, "seed": seed,
+                     **{f"axis:{k}": v for k, v in cell.items()}, **params, **{m: values[m] for m in metrics}})
+    return {"cell": index, "rows": rows, "compute_s": time.perf_counter() - t0}
+
+
+# --------------------------------------------------------------------------------------------
+# the driver
+
+
+def _read_journal(path: Path) -> list[dict]:
+    rows = []
+    if path.exists():
+        with open(path, "rb") as f:
+            for line in f:
+                if not line.endswith(b"\n"):
+                    break  # a line cut short by a kill: that cell is not done
+                rows.append(json.loads(line))
+    return rows
+
+
+def _write_tables(out: Path, rows: list[dict]) -> None:
+    import csv
+    import io
+
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from ..io.report import _atomic_bytes
+
+    rows = sorted(rows, key=lambda r: (r["cell"], r["trial"]))
+    columns = list(dict.fromkeys(k for r in rows for k in r))
+    table = pa.Table.from_pylist(rows)
+    buf = pa.BufferOutputStream()
+    pq.write_table(table, buf)
+    _atomic_bytes(out / "results.parquet", buf.getvalue().to_pybytes())
+    s = io.StringIO()
+    w = csv.DictWriter(s, fieldnames=columns)
+    w.writeheader()
+    w.writerows(rows)
+    _atomic_bytes(out / "results.csv", s.getvalue().encode())
+
+
+def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None, workers: int | None = None,
+              serial: bool = False, resume: bool = False, progress: bool = True, log=lambda m: None,
+              stop_after: int | None = None) -> dict:
+    """Run (or resume) a sweep; returns timing figures.  ``stop_after`` ends after that many new cells
+    (for tests of interruption)."""
+    from tqdm import tqdm
+
+    from ..render.cache import cached_render, render_key
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    journal = out / "results.jsonl"
+    meta_path = out / "sweep.json"
+    meta = {"source": sweep.source, "digest": sweep.digest, "axes": [[p, list(v)] for p, v in sweep.axes],
+            "metrics": list(sweep.metrics), "trials": sweep.trials, "seed": sweep.seed, "renderer": sweep.renderer}
+    if journal.exists() or meta_path.exists():
+        if not resume:
+            raise SpectracamError(f"output = {str(out)!r}: already holds a sweep; pass --resume to continue it, "
+                                  "or choose a new directory")
+        old = json.loads(meta_path.read_text()) if meta_path.exists() else {}
+        if old.get("digest") != sweep.digest:
+            raise SpectracamError(f"output = {str(out)!r}: holds a different sweep (digest {old.get('digest')} ≠ "
+                                  f"{sweep.digest}); choose a new directory")
+    from ..io.report import _atomic_bytes
+
+    _atomic_bytes(meta_path, json.dumps(meta, indent=1).encode())
+    rows = _read_journal(journal)
+    if journal.exists():  # drop a partial last line, so appends start on a clean line
+        with open(journal, "r+b") as f:
+            f.truncate(sum(len(json.dumps(r)) + 1 for r in rows))
+    counts: dict[int, int] = {}
+    for r in rows:
+        counts[r["cell"]] = counts.get(r["cell"], 0) + 1
+    done = {c for c, n in counts.items() if n == sweep.trials}
+    rows = [r for r in rows if r["cell"] in done]  # a cell with missing trials is recomputed whole
+    cells = sweep.cells()
+    todo = [(i, c) for i, c in enumerate(cells) if i not in done]
+    scenes = {i: cell_scene(sweep, c, i) for i, c in todo}
+
+    # one render per distinct radiance
+    t0 = time.perf_counter()
+    cubes, groups = {}, {}
+    for i, s in scenes.items():
+        key, _ = render_key(s, sweep.renderer)
+        groups[i] = key
+        if key not in cubes:
+            cubes[key], hit = cached_render(s, sweep.renderer, log=log)
+            log(f"render {s.illuminant.label}, {s.image.width}x{s.image.height}: "
+                f"{'cached' if hit else sweep.renderer}")
+    t_render = time.perf_counter() - t0
+
+    with open(journal, "ab") as jf:
+        bar = tqdm(total=len(cells), initial=len(done), desc="sweep cells", unit="cell", disable=not progress)
+        compute, t1, n_new = [], time.perf_counter(), 0
+
+        def record(res):
+            nonlocal n_new
+            jf.write(b"".join(json.dumps(r).encode() + b"\n" for r in res["rows"]))
+            jf.flush()
+            os.fsync(jf.fileno())
+            rows.extend(res["rows"])
+            compute.append(res["compute_s"])
+            n_new += 1
+            bar.update(1)
+
+        if serial or not todo:
+            for i, c in todo:
+                record(run_cell(i, c, scenes[i], cubes[groups[i]], sweep.trials, sweep.seed, sweep.metrics))
+                if stop_after is not None and n_new >= stop_after:
+                    break
+        else:
+            from distributed import Client, LocalCluster, as_completed
+
+            cluster = None
+            if scheduler:
+                client = Client(scheduler)
+            else:
+                # one single-threaded process per core: no BLAS or sensor-chunk threads fighting over cores
+                single = {v: "1" for v in ("SPECTRACAM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
+                                           "MKL_NUM_THREADS")}
+                cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
+                                       processes=True, dashboard_address=None, env=single)
+                client = Client(cluster)
+            try:
+                shared = {k: client.scatter(v, broadcast=False) for k, v in cubes.items()}
+                futures = [client.submit(run_cell, i, c, scenes[i], shared[groups[i]], sweep.trials, sweep.seed,
+                                         sweep.metrics, key=f"cell-{sweep.digest}-{i}", pure=False) for i, c in todo]
+                for fut in as_completed(futures):
+                    record(fut.result())
+                    if stop_after is not None and n_new >= stop_after:
+                        break
+            finally:
+                client.close()
+                if cluster is not None:
+                    cluster.close()
+        bar.close()
+        wall = time.perf_counter() - t1
+    _write_tables(out, rows)
+    return {"cells": len(cells), "new_cells": n_new, "render_s": t_render, "wall_s": wall,
+            "compute_s": float(np.sum(compute)) if compute else 0.0}
