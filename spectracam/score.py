@@ -9,6 +9,7 @@ time, and the fitted 3×3 matrix maps the result to linear display RGB.
 from __future__ import annotations
 
 import dataclasses
+import json
 from dataclasses import dataclass
 
 import numpy as np
@@ -36,9 +37,23 @@ class Score:
     delta_e_map: np.ndarray  # (H, W), NaN outside the patches' masks
 
 
+_REFERENCE_CACHE: dict[str, tuple] = {}
+
+
 def scene_reference(scene) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Patch radiance ``(24, B)``, patch XYZ ``(24, 3)`` and illuminant white XYZ, Y = 1 for a
-    perfect white diffuser on the scene's wavelength grid."""
+    perfect white diffuser on the scene's wavelength grid (memoised on the chart, light and grid:
+    sweeps and noise trials score the same scene many times)."""
+    d = scene.to_dict()
+    key = json.dumps([d["chart"], d["illuminant"], d["wavelengths"]], sort_keys=True)
+    if key not in _REFERENCE_CACHE:
+        if len(_REFERENCE_CACHE) > 64:
+            _REFERENCE_CACHE.clear()
+        _REFERENCE_CACHE[key] = _scene_reference(scene)
+    return _REFERENCE_CACHE[key]
+
+
+def _scene_reference(scene) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     from .render.analytic import material_radiance
 
     _, patches, _ = material_radiance(scene)
@@ -118,10 +133,12 @@ def score(raw, scene, processing: ProcessingSpec | None = None, reference: str =
     from .chart import patch_names_and_data
 
     names = [n for n, _, _ in patch_names_and_data(scene.chart.dataset)]
+    mean_labs = xyz_to_lab(np.stack([rgb[r, c].reshape(-1, 3).mean(axis=0) for r, c in boxes]) @ M_disp.T,
+                           display_white)
     for p, (r, c) in enumerate(boxes):
         de = delta_e(lab[r, c], (scene_lab if reference == "scene" else conversion_lab)[p], delta_e_method)
         de_map[r, c] = de
-        mean_lab = xyz_to_lab(rgb[r, c].reshape(-1, 3).mean(axis=0) @ M_disp.T, display_white)
+        mean_lab = mean_labs[p]
         with np.errstate(divide="ignore"):  # a noise-free capture has infinite SNR: reported as null
             snr = 20 * np.log10(means[p] / stds[p])
             combined = combine_snr_db(means[p], stds[p], snr_combination)

@@ -263,7 +263,7 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
 
     with open(journal, "ab") as jf:
         bar = tqdm(total=len(cells), initial=len(done), desc="sweep cells", unit="cell", disable=not progress)
-        compute, t1, n_new = [], time.perf_counter(), 0
+        compute, t1, n_new, cluster_start = [], time.perf_counter(), 0, 0.0
 
         def record(res):
             nonlocal n_new
@@ -284,15 +284,24 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
             from distributed import Client, LocalCluster, as_completed
 
             cluster = None
+            t_start = time.perf_counter()
             if scheduler:
                 client = Client(scheduler)
             else:
-                # one single-threaded process per core: no BLAS or sensor-chunk threads fighting over cores
-                single = {v: "1" for v in ("SPECTRACAM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
-                                           "MKL_NUM_THREADS")}
-                cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
-                                       processes=True, dashboard_address=None, env=single)
+                import dask
+
+                # one single-threaded process per core (no BLAS or sensor-chunk threads fighting over
+                # cores), and without the nanny's MALLOC_TRIM_THRESHOLD_, which makes every large
+                # NumPy allocation an mmap and doubled the time of a cell (measured: 0.10 → 0.05 s)
+                environ = {k: v for k, v in dask.config.get("distributed.nanny.pre-spawn-environ", {}).items()
+                           if k != "MALLOC_TRIM_THRESHOLD_"}
+                environ.update({v: "1" for v in ("SPECTRACAM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
+                                                 "MKL_NUM_THREADS")})
+                with dask.config.set({"distributed.nanny.pre-spawn-environ": environ}):
+                    cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
+                                           processes=True, dashboard_address=None)
                 client = Client(cluster)
+            cluster_start = time.perf_counter() - t_start
             try:
                 shared = {k: client.scatter(v, broadcast=False) for k, v in cubes.items()}
                 futures = [client.submit(run_cell, i, c, scenes[i], shared[groups[i]], sweep.trials, sweep.seed,
@@ -309,4 +318,4 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
         wall = time.perf_counter() - t1
     _write_tables(out, rows)
     return {"cells": len(cells), "new_cells": n_new, "render_s": t_render, "wall_s": wall,
-            "compute_s": float(np.sum(compute)) if compute else 0.0}
+            "cluster_start_s": cluster_start, "compute_s": float(np.sum(compute)) if compute else 0.0}
