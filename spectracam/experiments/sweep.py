@@ -173,6 +173,17 @@ def run_cell(index: int, cell: dict, scene: Scene, cube, trials: int, sweep_seed
     return {"cell": index, "rows": rows, "compute_s": time.perf_counter() - t0}
 
 
+def run_cells(items: list, cube, trials: int, sweep_seed: int, metrics: tuple) -> list[dict]:
+    """Several cells that share a radiance cube, as one Dask task: a task costs the engine a few
+    milliseconds (scheduling, transfer), which a batch of cells shares."""
+    return [run_cell(i, cell, scene, cube, trials, sweep_seed, metrics) for i, cell, scene in items]
+
+
+def cells_per_task(n_cells: int, workers: int) -> int:
+    """About eight tasks per worker (load balance, progress), at most 32 cells each."""
+    return max(1, min(32, math.ceil(n_cells / (8 * max(workers, 1)))))
+
+
 # --------------------------------------------------------------------------------------------
 # the driver
 
@@ -264,12 +275,15 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
     with open(journal, "ab") as jf:
         bar = tqdm(total=len(cells), initial=len(done), desc="sweep cells", unit="cell", disable=not progress)
         compute, t1, n_new, cluster_start = [], time.perf_counter(), 0, 0.0
+        last_sync = [time.perf_counter()]
 
         def record(res):
             nonlocal n_new
             jf.write(b"".join(json.dumps(r).encode() + b"\n" for r in res["rows"]))
-            jf.flush()
-            os.fsync(jf.fileno())
+            jf.flush()  # in the OS's hands: survives a killed process
+            if time.perf_counter() - last_sync[0] > 1.0:  # and on disk at least every second
+                os.fsync(jf.fileno())
+                last_sync[0] = time.perf_counter()
             rows.extend(res["rows"])
             compute.append(res["compute_s"])
             n_new += 1
@@ -304,10 +318,19 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
             cluster_start = time.perf_counter() - t_start
             try:
                 shared = {k: client.scatter(v, broadcast=False) for k, v in cubes.items()}
-                futures = [client.submit(run_cell, i, c, scenes[i], shared[groups[i]], sweep.trials, sweep.seed,
-                                         sweep.metrics, key=f"cell-{sweep.digest}-{i}", pure=False) for i, c in todo]
+                n_workers = max(len(client.scheduler_info(n_workers=-1).get("workers", {})), 1)
+                size = cells_per_task(len(todo), n_workers)
+                futures = []
+                for key in dict.fromkeys(groups[i] for i, _ in todo):  # cells of one radiance together
+                    items = [(i, c, scenes[i]) for i, c in todo if groups[i] == key]
+                    for a in range(0, len(items), size):
+                        chunk = items[a:a + size]
+                        futures.append(client.submit(run_cells, chunk, shared[key], sweep.trials, sweep.seed,
+                                                     sweep.metrics, key=f"cells-{sweep.digest}-{chunk[0][0]}",
+                                                     pure=False))
                 for fut in as_completed(futures):
-                    record(fut.result())
+                    for res in fut.result():
+                        record(res)
                     if stop_after is not None and n_new >= stop_after:
                         break
             finally:

@@ -1,0 +1,144 @@
+"""Design-space sweeps on Dask (issue 6)."""
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from spectracam.errors import ConfigError
+from spectracam.experiments.sweep import load_sweep, run_sweep
+
+BASE = (Path(__file__).parent.parent / "scenes" / "blackbody_5000K.toml").resolve()
+
+
+def sweep_file(tmp_path, cutoffs=(480, 500, 10), temps=(3000, 6500), trials=2, extra=""):
+    text = f"""
+base_scene = "{BASE}"
+renderer = "analytic"
+trials = {trials}
+seed = 7
+metrics = ["delta_e_mean", "snr_combined_db", "capture_time_ms"]
+[scene]
+image = {{ width = 96, height = 72 }}
+[axes]
+"illuminant.temperature_K" = {list(temps)}
+"filters.cutoffs_nm[0]" = {{ start = {cutoffs[0]}, stop = {cutoffs[1]}, step = {cutoffs[2]} }}
+{extra}
+"""
+    p = tmp_path / "sweep.toml"
+    p.write_text(text)
+    return p
+
+
+def read_table(out):
+    import pyarrow.parquet as pq
+
+    return pq.read_table(Path(out) / "results.parquet").to_pylist()
+
+
+def test_sweep_file_validation(tmp_path):
+    with pytest.raises(ConfigError, match="axes.filters.cutoffs_nm\\[0\\] = .*start ≤ stop"):
+        load_sweep(sweep_file(tmp_path, cutoffs=(500, 480, 10)))
+    with pytest.raises(ConfigError, match="sensor.adc_bits = 0"):  # every cell is validated up front
+        load_sweep(sweep_file(tmp_path, extra='"sensor.adc_bits" = [8, 0]'))
+    with pytest.raises(ConfigError, match="capture.exposure = 'optimal'"):
+        load_sweep(sweep_file(tmp_path, extra='"capture.design" = ["cfa/single", "cfa/optimal"]'))
+    sw = load_sweep(sweep_file(tmp_path, extra='"capture.design" = ["cfa/single", "fsc/optimal"]'))
+    assert len(sw.cells()) == 2 * 3 * 2
+
+
+def test_serial_and_two_worker_cluster_give_the_same_table(tmp_path):
+    sw = load_sweep(sweep_file(tmp_path, extra='"capture.design" = ["cfa/single", "prism/optimal"]'))
+    run_sweep(sw, tmp_path / "serial", serial=True, progress=False)
+    t = run_sweep(sw, tmp_path / "dask", workers=2, progress=False)
+    assert t["new_cells"] == 12
+    a, b = read_table(tmp_path / "serial"), read_table(tmp_path / "dask")
+    assert len(a) == 12 * 2 and a == b
+    assert (tmp_path / "serial" / "results.csv").read_bytes() == (tmp_path / "dask" / "results.csv").read_bytes()
+    row = a[0]
+    assert {"cell", "trial", "seed", "axis:illuminant.temperature_K", "sensor.read_noise_e", "delta_e_mean"} <= set(row)
+    # common random numbers: trial t has the same noise seed in every cell
+    assert len({r["seed"] for r in a if r["trial"] == 1}) == 1
+
+
+def test_killed_sweep_resumes_without_loss_or_duplicates(tmp_path):
+    sw_path = sweep_file(tmp_path, cutoffs=(450, 530, 2), trials=3)  # 2 × 41 cells
+    out = tmp_path / "run"
+    proc = subprocess.Popen([sys.executable, "-m", "spectracam", "sweep", str(sw_path), "-o", str(out), "--serial",
+                             "--quiet"])
+    journal = out / "results.jsonl"
+    deadline = time.time() + 120
+    while time.time() < deadline:
+        if journal.exists() and journal.read_bytes().count(b"\n") >= 30:
+            break
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    n_before = journal.read_bytes().count(b"\n")
+    assert 30 <= n_before < 82 * 3, "the sweep should have been killed half way"
+    with open(journal, "ab") as f:
+        f.write(b'{"cell": 999, "tri')  # a line cut short by the kill
+    r = subprocess.run([sys.executable, "-m", "spectracam", "sweep", str(sw_path), "-o", str(out), "--serial",
+                        "--quiet"], capture_output=True, text=True)
+    assert r.returncode == 2 and "--resume" in r.stderr
+    r = subprocess.run([sys.executable, "-m", "spectracam", "sweep", str(sw_path), "-o", str(out), "--serial",
+                        "--resume", "--quiet"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    rows = read_table(out)
+    keys = [(x["cell"], x["trial"]) for x in rows]
+    assert len(keys) == len(set(keys)) == 82 * 3
+    run_sweep(load_sweep(sw_path), tmp_path / "whole", serial=True, progress=False)
+    assert rows == read_table(tmp_path / "whole")
+    journal_rows = [json.loads(line) for line in journal.read_text().splitlines()]
+    assert len(journal_rows) == 82 * 3  # nothing computed twice, the cut line dropped
+
+
+def _free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_sweep_through_a_separate_scheduler_and_worker(tmp_path):
+    port = _free_port()
+    addr = f"tcp://127.0.0.1:{port}"
+    env = dict(os.environ, SPECTRACAM_THREADS="1")
+    sched = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
+                              "--port", str(port), "--no-dashboard"], stdout=subprocess.DEVNULL,
+                             stderr=subprocess.DEVNULL, env=env)
+    worker = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", addr, "--nworkers", "1",
+                               "--nthreads", "1", "--no-dashboard", "--host", "127.0.0.1"],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
+    try:
+        sw_path = sweep_file(tmp_path)
+        r = subprocess.run([sys.executable, "-m", "spectracam", "sweep", str(sw_path), "-o", str(tmp_path / "remote"),
+                            "--scheduler", addr, "--quiet"], capture_output=True, text=True, timeout=180)
+        assert r.returncode == 0, r.stderr
+        run_sweep(load_sweep(sw_path), tmp_path / "serial", serial=True, progress=False)
+        assert read_table(tmp_path / "remote") == read_table(tmp_path / "serial")
+    finally:
+        for p in (worker, sched):
+            p.terminate()
+            try:
+                p.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                p.kill()
+
+
+def test_plot_sweep(tmp_path):
+    sw = load_sweep(sweep_file(tmp_path))
+    run_sweep(sw, tmp_path / "out", serial=True, progress=False)
+    r = subprocess.run([sys.executable, "-m", "spectracam", "plot-sweep", str(tmp_path / "out"), "--x",
+                        "filters.cutoffs_nm[0]", "--line", "illuminant.temperature_K"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    for m in ("delta_e_mean", "snr_combined_db", "capture_time_ms"):
+        assert (tmp_path / "out" / "plots" / f"{m}.png").stat().st_size > 0
+        assert (tmp_path / "out" / "plots" / f"{m}.svg").exists()
+    bad = subprocess.run([sys.executable, "-m", "spectracam", "plot-sweep", str(tmp_path / "out"), "--x", "nope"],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and "must be one of the sweep's axes" in bad.stderr
