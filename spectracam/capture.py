@@ -77,11 +77,13 @@ def photo_electron_rates(cube, camera: CameraSpec) -> np.ndarray:
     return (cube.radiance.reshape(h * w, b) @ weights).reshape(h, w, 3)
 
 
-def capture(cube, sensor: SensorSpec | None = None, architecture: str = "cfa", exposure: str = "single",
+def capture(cube, sensor: SensorSpec | None = None, architecture: str | None = None, exposure: str | None = None,
             seed: int = 0, *, camera: CameraSpec | None = None, white_mask: np.ndarray | None = None,
             scene=None) -> RawCapture:
-    """Capture a radiance cube.  The white patch for metering comes from ``white_mask``, else from
-    the chart geometry of ``scene`` (or of the scene recorded in the cube's metadata)."""
+    """Capture a radiance cube.  ``sensor``, ``architecture`` and ``exposure`` override those of
+    ``camera`` (default: the paper's camera, cfa/single).  The white patch for metering comes from
+    ``white_mask``, else from the chart geometry of ``scene`` (or of the scene recorded in the
+    cube's metadata)."""
     camera = camera or CameraSpec()
     camera = dataclasses.replace(camera, sensor=sensor or camera.sensor, architecture=architecture or camera.architecture,
                                  exposure=exposure or camera.exposure)

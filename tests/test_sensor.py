@@ -165,6 +165,14 @@ def test_cfa_mosaic_samples_the_right_channel(pattern, scene_5000, analytic_5000
     assert raw.digital.shape == (120, 160) and raw.cfa_pattern == pattern
 
 
+def test_camera_spec_design_is_used_unless_overridden(scene_5000, analytic_5000):
+    raw = capture(analytic_5000, camera=CameraSpec(architecture="prism", exposure="optimal"), scene=scene_5000)
+    assert raw.architecture == "prism" and raw.digital.shape == (3, 120, 160)
+    raw = capture(analytic_5000, None, "fsc", None, camera=CameraSpec(architecture="prism", exposure="optimal"),
+                  scene=scene_5000)
+    assert raw.architecture == "fsc" and raw.exposure == "optimal"
+
+
 def test_same_seed_same_capture(scene_5000, analytic_5000):
     a = capture(analytic_5000, seed=7, scene=scene_5000)
     b = capture(analytic_5000, seed=7, scene=scene_5000)
