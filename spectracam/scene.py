@@ -182,7 +182,6 @@ def _parse_illuminant(t: _Table) -> IlluminantSpec:
     else:
         import colour
 
-        names = sorted(colour.SDS_ILLUMINANTS)
         name = t.string("name", "D65")
         if name not in colour.SDS_ILLUMINANTS:
             raise t.error("name", name, "must be a CIE illuminant colour-science ships, e.g. D65, D50, A, FL2")
@@ -343,7 +342,8 @@ def parse_scene(data: dict, source: str | None = None) -> Scene:
                  processing=processing)
 
 
-def _read_toml(path: str | Path, what: str) -> dict:
+def read_toml(path: str | Path, what: str) -> dict:
+    """Parse a TOML file; an unreadable or invalid file is one ConfigError naming ``what``."""
     p = Path(path)
     try:
         text = p.read_text()
@@ -357,9 +357,9 @@ def _read_toml(path: str | Path, what: str) -> dict:
 
 def load_scene(path: str | Path) -> Scene:
     """Read and validate a TOML scene file."""
-    return parse_scene(_read_toml(path, "scene file"), source=str(path))
+    return parse_scene(read_toml(path, "scene file"), source=str(path))
 
 
 def load_camera_config(path: str | Path, base: CameraSpec | None = None) -> CameraSpec:
     """Read a camera config file (the scene file's camera tables only), over ``base``."""
-    return parse_camera(_read_toml(path, "config file"), source=str(path), base=base)
+    return parse_camera(read_toml(path, "config file"), source=str(path), base=base)

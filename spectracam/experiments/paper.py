@@ -9,7 +9,6 @@ last step scores against the scene, adding the conversion error.
 from __future__ import annotations
 
 import dataclasses
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -17,10 +16,10 @@ import numpy as np
 
 from ..capture import CameraSpec, capture
 from ..color import ProcessingSpec
-from ..errors import ConfigError, SpectracamError
+from ..errors import SpectracamError
 from ..illuminant import IlluminantSpec
 from ..render import RadianceCube
-from ..scene import Scene, _Table, camera_tables, load_scene, parse_camera, parse_processing
+from ..scene import Scene, _Table, camera_tables, load_scene, parse_camera, parse_processing, read_toml
 from ..score import scene_reference, score
 
 BUDGET_STEPS = ("perfect system", "+ photon shot noise", "+ CMOS noise (read, dark, FPN)",
@@ -57,13 +56,7 @@ def _design(name: str, source: str) -> tuple[str, str]:
 def load_experiment(path: str | Path) -> PaperExperiment:
     """Read and validate an experiment file (see scenes/paper.toml)."""
     p = Path(path)
-    try:
-        data = tomllib.loads(p.read_text())
-    except OSError as e:
-        raise ConfigError("experiment file", str(p), f"cannot be read ({e.strerror})") from None
-    except tomllib.TOMLDecodeError as e:
-        raise ConfigError("experiment file", str(p), f"is not valid TOML ({e})") from None
-    t = _Table(data, "", str(p))
+    t = _Table(read_toml(p, "experiment file"), "", str(p))
     base = load_scene(p.parent / t.string("base_scene", "blackbody_5000K.toml"))
     temps = t.data.pop("temperatures_K", list(PaperExperiment.temperatures_K))
     if not isinstance(temps, list) or not temps or not all(

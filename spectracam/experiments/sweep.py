@@ -19,14 +19,13 @@ import math
 import os
 import re
 import time
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import ConfigError, SpectracamError
-from ..scene import Scene, load_scene, parse_scene
+from ..scene import Scene, load_scene, parse_scene, read_toml
 
 METRICS = ("delta_e_mean", "delta_e_of_mean", "delta_e_conversion", "snr_combined_db", "snr_R_db", "snr_G_db",
            "snr_B_db", "capture_time_ms", "exposure_R_ms", "exposure_G_ms", "exposure_B_ms")
@@ -71,12 +70,7 @@ def _axis_values(t: dict | list, field: str, source: str) -> tuple:
 def load_sweep(path: str | Path) -> Sweep:
     """Read and validate a sweep file; every cell's scene is validated here, before anything runs."""
     p = Path(path)
-    try:
-        data = tomllib.loads(p.read_text())
-    except OSError as e:
-        raise ConfigError("sweep file", str(p), f"cannot be read ({e.strerror})") from None
-    except tomllib.TOMLDecodeError as e:
-        raise ConfigError("sweep file", str(p), f"is not valid TOML ({e})") from None
+    data = read_toml(p, "sweep file")
     src = str(p)
     known = {"base_scene", "scene", "axes", "metrics", "trials", "seed", "renderer"}
     for k in data:
