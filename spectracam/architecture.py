@@ -25,7 +25,6 @@ def register(cls):
 
 class Architecture(ABC):
     name: str = ""
-    description: str = ""
     #: Can each channel have its own exposure time?
     independent_exposures: bool = True
 
@@ -40,9 +39,6 @@ class Architecture(ABC):
     def record(self, rates: np.ndarray, times_s: np.ndarray, sensor: SensorSpec, seed: int):
         """Returns ``(digital, expected_e)``: arrays of the architecture's frame layout."""
 
-    def channel_names(self) -> list[str]:
-        return list(CHANNELS)
-
     @staticmethod
     def expose_planes(rates, times_s, sensor, seed, patterns):
         """Three full-resolution exposures, channel k with fixed pattern ``patterns[k]``;
@@ -55,7 +51,6 @@ class Architecture(ABC):
 @register
 class ColourFilterArray(Architecture):
     name = "cfa"
-    description = "one sensor with a Bayer colour filter array; one exposure; a mosaic of R, G, B pixels"
     independent_exposures = False
 
     def capture_time_s(self, times_s):
@@ -80,7 +75,6 @@ class ColourFilterArray(Architecture):
 @register
 class DichroicPrism(Architecture):
     name = "prism"
-    description = "dichroic prism onto three sensors; each sees every pixel in its band; capture time = longest exposure"
 
     def capture_time_s(self, times_s):
         return float(np.max(times_s))
@@ -93,7 +87,6 @@ class DichroicPrism(Architecture):
 @register
 class FieldSequential(Architecture):
     name = "fsc"
-    description = "one sensor behind a time-varying filter; three exposures in sequence; capture time = their sum"
 
     def capture_time_s(self, times_s):
         return float(np.sum(times_s))

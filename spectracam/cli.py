@@ -1,6 +1,7 @@
 """The ``spectracam`` command line."""
 from __future__ import annotations
 
+import json
 import sys
 import time
 from pathlib import Path
@@ -154,6 +155,14 @@ def score_cmd(raw_file, scene_file, out_dir, demosaic, display, adaptation, delt
     if (w, h) != (scene.image.width, scene.image.height):
         raise SpectracamError(f"image = {w}x{h}: the capture does not match scene {str(scene_file)!r} "
                               f"({scene.image.width}x{scene.image.height})")
+    recorded = raw.metadata.get("scene")
+    if recorded is not None:
+        given = scene.to_dict()
+        for table in ("chart", "illuminant", "wavelengths"):
+            if recorded.get(table) != given[table]:
+                raise SpectracamError(f"{table} = {json.dumps(given[table], sort_keys=True)[:120]}: scene "
+                                      f"{str(scene_file)!r} is not the scene the capture recorded "
+                                      f"({json.dumps(recorded.get(table), sort_keys=True)[:120]})")
     _score_and_write(raw, scene, processing, out_dir, _log(quiet))
 
 

@@ -29,8 +29,9 @@ SILICON_QE_SHAPE = (
 @dataclass(frozen=True)
 class FilterSpec:
     #: "block" (the paper, 4.3: ideal pass bands), "gaussian" (centres, FWHM), "camera", or "xyz":
-    #: the CIE 1931 colour-matching functions in quantal form, x̄ȳz̄(λ)·(555 nm/λ), a camera that
-    #: meets the Luther condition exactly (its photon counts are a linear transform of XYZ).
+    #: the CIE 1931 colour-matching functions in quantal form, x̄ȳz̄(λ)·(555 nm/λ), times the QE — with
+    #: ``qe = "flat"`` a camera that meets the Luther condition exactly (its photon counts are a
+    #: linear transform of XYZ).
     kind: str = "block"
     #: Block filter cutoffs, nm: blue below the first, green between, red above (paper: 490, 610).
     cutoffs_nm: tuple[float, float] = (490.0, 610.0)

@@ -27,10 +27,9 @@ def delta_e(lab1: np.ndarray, lab2: np.ndarray, method: str = "cie1976") -> np.n
     return colour.delta_E(lab1, lab2, method="CIE 2000")
 
 
-def snr_db(signal: np.ndarray, axis=None) -> np.ndarray:
-    """20·log10(mean/std) of a recorded signal (electrons) over ``axis``."""
-    s = np.asarray(signal, np.float64)
-    return 20 * np.log10(s.mean(axis=axis) / s.std(axis=axis))
+def snr_db(means: np.ndarray, stds: np.ndarray) -> np.ndarray:
+    """20·log10(μ/σ) of a recorded signal (electrons) per channel."""
+    return 20 * np.log10(np.asarray(means, float) / np.asarray(stds, float))
 
 
 def combine_snr_db(means: np.ndarray, stds: np.ndarray, how: str = "power") -> np.ndarray:

@@ -32,7 +32,7 @@ def irradiance_factor(optics: OpticsSpec) -> float:
 
 def radiance_to_photon_irradiance(wavelengths_nm: np.ndarray, optics: OpticsSpec) -> np.ndarray:
     """Per-band factor from spectral radiance (W·m⁻²·sr⁻¹·nm⁻¹) to photon irradiance at the sensor
-    (photons·s⁻¹·m⁻²·nm⁻¹): π/(4N²)·T·λ/(hc)."""
+    (photons·s⁻¹·m⁻²·nm⁻¹): :func:`irradiance_factor` × T × λ/(hc)."""
     k = irradiance_factor(optics) * optics.transmittance
     return energy_to_photons(1.0, np.asarray(wavelengths_nm, float)) * k
 

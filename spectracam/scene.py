@@ -30,6 +30,8 @@ from .illuminant import TEMPERATURE_RANGE_K, IlluminantSpec
 from .spectra import CIE_RANGE_NM, WavelengthGrid
 
 VARIANTS = ("auto", "llvm", "scalar", "cuda")
+#: Fewest pixels across a patch's mask: a 4×4 mask still holds 4 pixels of each Bayer colour.
+MIN_PATCH_PX = 4
 
 
 @dataclass(frozen=True)
@@ -333,6 +335,13 @@ def parse_scene(data: dict, source: str | None = None) -> Scene:
     camera = _parse_camera(top)
     processing = _parse_processing(top.table("processing"))
     top.done()
+    from .chart import patch_boxes
+
+    smallest = min(min(r.stop - r.start, c.stop - c.start) for r, c in patch_boxes(chart, image.width, image.height))
+    if smallest < MIN_PATCH_PX:
+        raise ConfigError("image", f"{image.width}x{image.height}",
+                          f"too small: the smallest patch mask is {smallest} px across, at least {MIN_PATCH_PX} "
+                          "are needed to meter and score a patch", source)
     d_lo, d_hi = dataset_range_nm(chart.dataset)
     if grid.edges_nm[0] < d_lo or grid.edges_nm[-1] > d_hi:
         raise ConfigError("wavelengths", f"{grid.centres_nm[0]:g}–{grid.centres_nm[-1]:g} nm",

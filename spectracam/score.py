@@ -17,7 +17,7 @@ import numpy as np
 from .capture import photo_electron_rates
 from .chart import patch_boxes
 from .color import ProcessingSpec, adaptation_matrix, demosaic, display_rgb_to_xyz, fit_conversion
-from .metrics import combine_snr_db, delta_e, xyz_to_lab
+from .metrics import combine_snr_db, delta_e, snr_db, xyz_to_lab
 from .render import RadianceCube
 from .spectra import K_M_LM_PER_W, cmf_band_weights
 
@@ -140,7 +140,7 @@ def score(raw, scene, processing: ProcessingSpec | None = None, reference: str =
         de_map[r, c] = de
         mean_lab = mean_labs[p]
         with np.errstate(divide="ignore"):  # a noise-free capture has infinite SNR: reported as null
-            snr = 20 * np.log10(means[p] / stds[p])
+            snr = snr_db(means[p], stds[p])
             combined = combine_snr_db(means[p], stds[p], snr_combination)
         rows.append({
             "patch": p, "name": names[p],

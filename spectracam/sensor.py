@@ -129,7 +129,7 @@ def fixed_pattern(sensor: SensorSpec, shape: tuple[int, int], seed: int, sensor_
             rng = _chunk_rng(seq, i)
             if sensor.fpn_reading == "std":
                 rng.standard_normal(out=offset[sl], dtype=np.float32)
-                offset[sl] *= swing
+                offset[sl] *= np.float32(sensor.fpn_rms_e)
             else:  # uniform over a spread of fpn_fraction of full swing
                 rng.random(out=offset[sl], dtype=np.float32)
                 offset[sl] -= np.float32(0.5)

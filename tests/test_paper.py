@@ -111,8 +111,8 @@ def test_cache_rejects_an_entry_for_another_scene(tmp_path):
     from spectracam.render import render
     from spectracam.render.cache import cached_render, render_key
 
-    a = small_scene(image={"width": 32, "height": 24})
-    b = small_scene(image={"width": 32, "height": 24}, illuminant={"temperature_K": 3000})
+    a = small_scene(image={"width": 64, "height": 48})
+    b = small_scene(image={"width": 64, "height": 48}, illuminant={"temperature_K": 3000})
     key, _ = render_key(a, "analytic")
     write_radiance_exr(tmp_path / f"{key}.exr", render(b, "analytic"), b)  # a stale/foreign entry under a's key
     cube, hit = cached_render(a, "analytic", directory=tmp_path)

@@ -70,6 +70,10 @@ def load_experiment(path: str | Path) -> PaperExperiment:
     budget_design = t.string("budget_design", PaperExperiment.budget_design)
     _design(budget_design, f"{p}: budget_design")
     budget_illuminant = t.string("budget_illuminant", PaperExperiment.budget_illuminant)
+    import colour
+
+    if budget_illuminant not in colour.SDS_ILLUMINANTS:
+        raise t.error("budget_illuminant", budget_illuminant, "must be a CIE illuminant colour-science ships, e.g. D65")
     light = t.table("light")
     level = cfa_ms = None
     if light.has("white_luminance_cd_m2"):
@@ -93,10 +97,6 @@ def load_experiment(path: str | Path) -> PaperExperiment:
                            budget_design=budget_design, designs=tuple(designs), cfa_exposure_ms=cfa_ms,
                            calibration_temperature_K=cal_T, white_luminance_cd_m2=level,
                            alternatives=tuple(alternatives))
-
-
-def label(illuminant: IlluminantSpec) -> str:
-    return f"{illuminant.temperature_K:g}" if illuminant.kind == "blackbody" else illuminant.name
 
 
 def with_camera(camera: CameraSpec, design: str) -> CameraSpec:
@@ -254,14 +254,13 @@ def run_paper(exp: PaperExperiment, renderer: str = "mitsuba", quick: bool = Fal
         alt_claims[alt.name] = evaluate(r)
         step(f"sensitivity: {alt.name}")
     timings["sensitivity_s"] = time.perf_counter() - t
-    base = scenes_for(exp, level, quick)[f"{exp.calibration_temperature_K:g}"] if exp.white_luminance_cd_m2 is None \
-        else exp.base
+    base = exp.base.replace(illuminant=IlluminantSpec("blackbody", exp.calibration_temperature_K, None, level))
     results = {
         "parameters": {
             "renderer": renderer, "quick": quick, "seed": exp.base.render.seed,
             "designs": list(exp.designs), "temperatures_K": [f"{T:g}" for T in exp.temperatures_K],
             "budget_illuminant": exp.budget_illuminant, "budget_design": exp.budget_design,
-            "white_luminance_cd_m2": level, "illuminance_lux": float(np.pi * level),
+            "white_luminance_cd_m2": level, "illuminance_lux": base.illuminant.illuminance_lux,
             "light_calibration": (f"cfa/single needs {exp.cfa_exposure_ms:g} ms at {exp.calibration_temperature_K:g} K"
                                   if exp.white_luminance_cd_m2 is None else "fixed in the experiment file"),
             "scene": base.to_dict(),

@@ -76,6 +76,10 @@ def load_sweep(path: str | Path) -> Sweep:
     for k in data:
         if k not in known:
             raise ConfigError(k, data[k], "unknown key; a sweep file has " + ", ".join(sorted(known)), src)
+    for key, kind, name in (("base_scene", str, "a path to a scene file"), ("scene", dict, "a table of scene tables"),
+                            ("axes", dict, "a table of axis = values")):
+        if key in data and not isinstance(data[key], kind):
+            raise ConfigError(key, data[key], f"must be {name}", src)
     base = load_scene(p.parent / data.get("base_scene", "blackbody_5000K.toml")).to_dict()
     for table, values in data.get("scene", {}).items():
         if table not in base or not isinstance(values, dict):

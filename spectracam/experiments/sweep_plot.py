@@ -42,6 +42,9 @@ def plot_sweep(out_dir: str | Path, x: str | None = None, line: str | None = Non
     line = line or (rest.pop() if rest else None)
     rest = [a for a in rest if a != line]
     panel = panel or (rest.pop(0) if rest else None)
+    for m in metrics or []:
+        if m not in meta["metrics"]:
+            raise SpectracamError(f"--metric = {m!r}: this sweep recorded {', '.join(meta['metrics'])}")
     metrics = metrics or meta["metrics"]
     panels = sorted({r[f"axis:{panel}"] for r in rows}, key=str) if panel else [None]
     lines = sorted({r[f"axis:{line}"] for r in rows}, key=str) if line else [None]

@@ -72,7 +72,7 @@ def write_dng(path: str | Path, raw) -> Path:
     if M is not None:
         scene = raw.metadata.get("scene", {})
         ill = scene.get("illuminant", {})
-        code = _ILLUMINANT_CODE.get(ill.get("name"), 255) if ill.get("type") == "cie" else 21
+        code = _ILLUMINANT_CODE.get(ill.get("name"), 255) if ill.get("type") == "cie" else 255
         neutral = M @ _white_xyz(raw.patch_xyz)
         tags += [(50721, 10, 9, _srational(M.ravel()), True),  # ColorMatrix1
                  (50778, 3, 1, code, True),  # CalibrationIlluminant1

@@ -162,6 +162,8 @@ def raw_attributes(raw) -> dict:
         "spectracamExposureTimesS": json.dumps(dict(zip("RGB", map(float, raw.exposure_times_s)))),
         "spectracamCaptureTimeS": json.dumps(float(raw.capture_time_s)),
         "spectracamCamera": json.dumps(cam.to_dict(), sort_keys=True),
+        # V = g·Q + V_FPN (paper 3.4): the ADC's full scale, g·q_max, in volts
+        "spectracamFullSwingV": json.dumps(cam.sensor.conversion_gain_uV_per_e * 1e-6 * cam.sensor.q_max_e),
         "spectracamSeed": int(raw.seed),
     }
     if raw.cfa_pattern:

@@ -13,7 +13,6 @@ from ..errors import SpectracamError
 from ..spectra import WavelengthGrid
 
 RENDERERS = ("mitsuba", "analytic")
-RADIANCE_UNITS = "W.m^-2.sr^-1.nm^-1"
 
 
 @dataclass

@@ -14,7 +14,7 @@ from pathlib import Path
 
 from .. import __version__
 
-RENDER_TABLES = ("name", "chart", "illuminant", "wavelengths", "image", "render")
+RENDER_TABLES = ("chart", "illuminant", "wavelengths", "image", "render")
 
 
 def cache_dir() -> Path:
@@ -25,7 +25,7 @@ def render_key(scene, renderer: str) -> tuple[str, dict]:
     import mitsuba
 
     d = scene.to_dict()
-    ident = {"scene": {k: d[k] for k in RENDER_TABLES if k != "name"}, "renderer": renderer,
+    ident = {"scene": {k: d[k] for k in RENDER_TABLES}, "renderer": renderer,
              "spectracam": __version__, "mitsuba": mitsuba.__version__ if renderer == "mitsuba" else None}
     text = json.dumps(ident, sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:32], ident

@@ -192,7 +192,9 @@ def render_mitsuba(scene, progress: bool = False, log=None) -> RadianceCube:
     E = spectral_irradiance(scene.illuminant)
     reflectances = patch_reflectances(scene.chart)
     lam = band_sample_points(grid, POINTS_PER_BAND)  # (B, N+1)
-    # A narrower band than the reference window covers only the front of the window; the rest is 0.
+    if not np.allclose(widths, ref_width):
+        raise SpectracamError(f"wavelengths: Mitsuba renders evenly spaced grids only (bands are "
+                              f"{widths.min():g}–{ref_width:g} nm wide)")
     H, W, B = scene.image.height, scene.image.width, len(grid)
     cube = np.empty((H, W, B), dtype=np.float32)
     Float = type(params["board.bsdf.reflectance.values"])  # mi.Float, or a buffer type in scalar variants
@@ -201,9 +203,6 @@ def render_mitsuba(scene, progress: bool = False, log=None) -> RadianceCube:
     from tqdm import tqdm
 
     for b in tqdm(range(B), desc="render bands", unit="band", disable=not progress, leave=False):
-        if not np.isclose(widths[b], ref_width):
-            raise SpectracamError(f"wavelengths: Mitsuba renders evenly spaced grids only (band {b} is "
-                                  f"{widths[b]:g} nm wide, others {ref_width:g} nm)")
         params["light.irradiance.values"] = Float(E(lam[b]).astype(np.float32))
         for p, (_, rho) in enumerate(reflectances):
             params[f"patch{p:02d}.bsdf.reflectance.values"] = Float(rho(lam[b]).astype(np.float32))
