@@ -18,6 +18,11 @@ ARCHITECTURES: dict[str, type["Architecture"]] = {}
 CFA_PATTERNS = ("RGGB", "GRBG", "GBRG", "BGGR")
 
 
+def bayer_sites(pattern: str) -> list[tuple[int, int, int]]:
+    """``(dy, dx, channel)`` of the four sites of a 2×2 Bayer tile, channel 0 R, 1 G, 2 B."""
+    return [(i // 2, i % 2, CHANNELS.index(c)) for i, c in enumerate(pattern)]
+
+
 def register(cls):
     ARCHITECTURES[cls.name] = cls
     return cls
@@ -58,16 +63,17 @@ class ColourFilterArray(Architecture):
 
     def channel_index(self, shape: tuple[int, int]) -> np.ndarray:
         """``(H, W)`` channel index (0 R, 1 G, 2 B) of every pixel for this Bayer pattern."""
-        tile = np.array([CHANNELS.index(c) for c in self.cfa_pattern]).reshape(2, 2)
+        tile = np.zeros((2, 2), dtype=int)
+        for dy, dx, k in bayer_sites(self.cfa_pattern):
+            tile[dy, dx] = k
         h, w = shape
         return np.tile(tile, ((h + 1) // 2, (w + 1) // 2))[:h, :w]
 
     def record(self, rates, times_s, sensor, seed):
         h, w, _ = rates.shape
         mosaic = np.empty((h, w), dtype=np.float32)
-        for i, c in enumerate(self.cfa_pattern):  # strided selection, no per-pixel work
-            dy, dx = divmod(i, 2)
-            mosaic[dy::2, dx::2] = rates[dy::2, dx::2, CHANNELS.index(c)]
+        for dy, dx, k in bayer_sites(self.cfa_pattern):  # strided selection, no per-pixel work
+            mosaic[dy::2, dx::2] = rates[dy::2, dx::2, k]
         return expose(mosaic, times_s[0], sensor, noise_stream(seed, TEMPORAL_STREAM, 0),
                       fixed_pattern(sensor, (h, w), seed, 0))
 

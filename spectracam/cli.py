@@ -32,6 +32,18 @@ def main():
     """Simulate colour image sensors on a rendered Macbeth chart (Catrysse, Wandell & El Gamal, 1999)."""
 
 
+def _with_design(camera, arch, exposure):
+    """The camera with --arch/--exposure applied, validated like a config file (cfa + optimal is refused)."""
+    from .scene import camera_tables, parse_camera
+
+    flags = {k: v for k, v in (("architecture", arch), ("exposure", exposure)) if v}
+    if not flags:
+        return camera
+    tables = camera_tables(camera)
+    tables["capture"].update(flags)
+    return parse_camera(tables, source="command line")
+
+
 def _log(quiet: bool):
     return (lambda msg: None) if quiet else (lambda msg: click.echo(msg, err=True))
 
@@ -75,7 +87,7 @@ def capture_cmd(radiance_file: Path, out_dir: Path, arch, exposure, config_file,
     from .capture import capture
     from .io.dng import write_dng
     from .io.exr import read_radiance_exr, write_raw_exr
-    from .scene import load_camera_config, parse_camera, parse_scene
+    from .scene import load_camera_config, parse_scene
 
     cube, attrs = read_radiance_exr(radiance_file)
     if "scene" not in cube.metadata:
@@ -83,13 +95,7 @@ def capture_cmd(radiance_file: Path, out_dir: Path, arch, exposure, config_file,
                               "patch for exposure metering is unknown; render it with spectracam")
     scene = parse_scene(cube.metadata["scene"], source=str(radiance_file))
     camera = load_camera_config(config_file, base=scene.camera) if config_file else scene.camera
-    flags = {k: v for k, v in (("architecture", arch), ("exposure", exposure)) if v}
-    if flags:  # validate the combination like a config file would
-        from .scene import camera_tables
-
-        tables = camera_tables(camera)
-        tables["capture"].update(flags)
-        camera = parse_camera(tables, source="command line")
+    camera = _with_design(camera, arch, exposure)
     seed = scene.render.seed if seed is None else seed
     raw = capture(cube, camera.sensor, camera.architecture, camera.exposure, seed, camera=camera, scene=scene)
     paths = [write_raw_exr(out_dir / "raw.exr", raw)]
@@ -181,15 +187,11 @@ def simulate_cmd(scene_file, out_dir, arch, exposure, renderer, demosaic, displa
     from .io.dng import write_dng
     from .io.exr import write_radiance_exr, write_raw_exr
     from .render import render
-    from .scene import camera_tables, load_scene, parse_camera
+    from .scene import load_scene
 
     scene = load_scene(scene_file)
     camera = scene.camera
-    flags = {k: v for k, v in (("architecture", arch), ("exposure", exposure)) if v}
-    if flags:
-        tables = camera_tables(camera)
-        tables["capture"].update(flags)
-        camera = parse_camera(tables, source="command line")
+    camera = _with_design(camera, arch, exposure)
     processing = _processing(scene, demosaic, display, adaptation, delta_e, gamut_clip)
     log = _log(quiet)
     cube = render(scene, renderer=renderer, progress=not quiet, log=log)

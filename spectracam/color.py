@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .architecture import bayer_sites
 from .errors import SpectracamError
 
 DEMOSAIC_METHODS = ("bilinear", "malvar2004", "menon2007", "patch")
@@ -84,9 +85,7 @@ def tile_replicate(mosaic: np.ndarray, pattern: str) -> np.ndarray:
     out = np.zeros((h, w, 3), dtype=np.float64)
     acc = np.zeros((H // 2, W // 2, 3))
     cnt = np.zeros(3)
-    for i, c in enumerate(pattern):
-        dy, dx = divmod(i, 2)
-        k = "RGB".index(c)
+    for dy, dx, k in bayer_sites(pattern):
         acc[:, :, k] += mosaic[dy:H:2, dx:W:2]
         cnt[k] += 1
     acc /= cnt

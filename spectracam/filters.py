@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .spectra import WavelengthGrid, band_average, cie_1931_cmfs, tabulated
+from .spectra import WavelengthGrid, band_average, cmf_band_weights, tabulated
 
 CHANNELS = ("R", "G", "B")
 FILTER_KINDS = ("block", "gaussian", "camera", "xyz")
@@ -86,8 +86,7 @@ def responsivities(spec: FilterSpec, grid: WavelengthGrid) -> np.ndarray:
     if spec.kind == "xyz":
         # quantal CMFs on the band grid: photon counts Σ L_b·(λ_b/hc)·R_b·Δλ_b are then exactly
         # proportional to the X, Y, Z that cmf_band_weights gives for the same cube
-        wl, cmfs = cie_1931_cmfs()
-        avg = np.stack([band_average(tabulated(wl, cmfs[:, k]), grid) for k in range(3)])
+        avg = (cmf_band_weights(grid) / grid.widths_nm[:, None]).T  # band-averaged x̄ȳz̄, (3, B)
         quantal = avg * (555.0 / np.asarray(grid.centres_nm, float))[None, :]
         return quantal / quantal.max() * quantum_efficiency(spec)(np.asarray(grid.centres_nm, float))[None, :]
     qe = quantum_efficiency(spec)

@@ -14,7 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .capture import photo_electron_rates
+from .architecture import bayer_sites
+from .capture import WHITE_PATCH, photo_electron_rates
 from .chart import patch_boxes
 from .color import ProcessingSpec, adaptation_matrix, demosaic, display_rgb_to_xyz, fit_conversion
 from .metrics import combine_snr_db, delta_e, snr_db, xyz_to_lab
@@ -65,6 +66,18 @@ def _scene_reference(scene) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return patches, patches @ W, white / white[1]
 
 
+def chart_photo_rates(scene, camera) -> np.ndarray:
+    """Noise-free photo-electron rates ``(24, 3)`` (e⁻/s) of the chart's patches for a camera, from
+    the closed-form patch radiance: the colour-conversion fit's input (paper 3.5)."""
+    patches, _, _ = scene_reference(scene)
+    chart = RadianceCube(patches[None].astype(np.float32), np.asarray(scene.grid.centres_nm, float))
+    return photo_electron_rates(chart, camera)[0].astype(np.float64)
+
+
+def white_patch_rates(scene, camera) -> np.ndarray:
+    return chart_photo_rates(scene, camera)[WHITE_PATCH]
+
+
 def recorded_electrons(raw) -> tuple[np.ndarray, np.ndarray]:
     """Dark-subtracted electrons in the capture's layout, and the dark charge subtracted per channel."""
     s = raw.camera.sensor
@@ -88,10 +101,10 @@ def channel_stats(raw, boxes) -> tuple[np.ndarray, np.ndarray]:
     means, stds = np.zeros((len(boxes), 3)), np.zeros((len(boxes), 3))
     for p, (r, c) in enumerate(boxes):
         if e.ndim == 2:
-            for k, ch in enumerate("RGB"):  # all tile positions of the channel (both greens)
-                parts = [e[r, c][(r.start + dy) % 2::2, (c.start + dx) % 2::2].ravel()
-                         for i, pc in enumerate(raw.cfa_pattern) if pc == ch for dy, dx in [divmod(i, 2)]]
-                pix = np.concatenate(parts)
+            sites = bayer_sites(raw.cfa_pattern)
+            for k in range(3):  # all tile sites of the channel (both greens)
+                pix = np.concatenate([e[r, c][(r.start + dy) % 2::2, (c.start + dx) % 2::2].ravel()
+                                      for dy, dx, kk in sites if kk == k])
                 means[p, k], stds[p, k] = pix.mean(), pix.std()
         else:
             block = e[:, r, c].reshape(3, -1)
@@ -104,14 +117,13 @@ def score(raw, scene, processing: ProcessingSpec | None = None, reference: str =
 
     ``reference="camera"`` scores per-pixel ΔE against the noise-free rendering of the same camera
     instead (the conversion error removed): how the paper's error budget isolates the noise steps.
+    ``delta_e_of_mean`` and ``delta_e_conversion`` are always against the scene.
     """
     processing = processing or scene.processing
     delta_e_method, snr_combination = processing.delta_e, processing.snr_combination
     camera = raw.camera
-    patches, scene_xyz, white_xyz = scene_reference(scene)
-    # noise-free chart responses of this camera, e⁻/s (the fit's input: paper 3.5)
-    chart = RadianceCube(patches[None].astype(np.float32), np.asarray(scene.grid.centres_nm, float))
-    chart_rates = photo_electron_rates(chart, camera)[0].astype(np.float64)
+    _, scene_xyz, white_xyz = scene_reference(scene)
+    chart_rates = chart_photo_rates(scene, camera)
     M_disp = display_rgb_to_xyz(processing.display)
     display_white = M_disp.sum(axis=1)
     to_display_xyz = adaptation_matrix(white_xyz, display_white, processing.adaptation)

@@ -20,7 +20,7 @@ from ..errors import SpectracamError
 from ..illuminant import IlluminantSpec
 from ..render import RadianceCube
 from ..scene import Scene, _Table, camera_tables, load_scene, parse_camera, parse_processing, read_toml
-from ..score import scene_reference, score
+from ..score import score, white_patch_rates
 
 BUDGET_STEPS = ("perfect system", "+ photon shot noise", "+ CMOS noise (read, dark, FPN)",
                 "+ 8-bit quantization", "+ colour conversion")
@@ -110,7 +110,7 @@ def calibrated_luminance(exp: PaperExperiment, camera: CameraSpec) -> float:
     if exp.white_luminance_cd_m2 is not None:
         return exp.white_luminance_cd_m2
     ref = exp.base.replace(illuminant=IlluminantSpec("blackbody", exp.calibration_temperature_K, None, 100.0))
-    white = white_rates(ref, camera)
+    white = white_patch_rates(ref, camera)
     s = camera.sensor
     T = exp.cfa_exposure_ms * 1e-3
     need = s.q_max_e / T - s.dark_rate_e_per_s
@@ -118,15 +118,6 @@ def calibrated_luminance(exp: PaperExperiment, camera: CameraSpec) -> float:
         raise SpectracamError(f"light.cfa_exposure_ms = {exp.cfa_exposure_ms:g}: dark current alone fills the well "
                               "sooner; choose a shorter exposure")
     return 100.0 * need / white.max()
-
-
-def white_rates(scene: Scene, camera: CameraSpec) -> np.ndarray:
-    """Noise-free photo-electron rates (e⁻/s) of the white patch, closed form."""
-    from ..capture import WHITE_PATCH, photo_electron_rates
-
-    patches, _, _ = scene_reference(scene)
-    chart = RadianceCube(patches[None].astype(np.float32), np.asarray(scene.grid.centres_nm, float))
-    return photo_electron_rates(chart, camera)[0, WHITE_PATCH].astype(np.float64)
 
 
 def scaled(scene: Scene, cube: RadianceCube, factor: float) -> tuple[Scene, RadianceCube]:

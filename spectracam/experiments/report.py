@@ -105,7 +105,8 @@ def _key_numbers(r: dict) -> list[str]:
 
 def write_paper_outputs(out_dir: str | Path, results: dict, cases: dict, cubes: dict | None, command: str,
                         step=lambda msg: None) -> list[Path]:
-    from ..io.exr import write_exr, write_radiance_exr, write_raw_exr
+    from ..io.exr import write_radiance_exr, write_raw_exr
+    from ..io.report import write_rendered_exr
 
     out = Path(out_dir)
     paths = []
@@ -124,9 +125,6 @@ def write_paper_outputs(out_dir: str | Path, results: dict, cases: dict, cubes: 
                  [(f"budget-{i}", raw, res) for i, (_, _, raw, res) in enumerate(c)])
         for name, raw, res in items:
             write_raw_exr(out / "cases" / key / name / "raw.exr", raw)
-            rgb = res.rendered_rgb
-            write_exr(out / "cases" / key / name / "rendered.exr", {"R": rgb[..., 0], "G": rgb[..., 1], "B": rgb[..., 2]},
-                      {"spectracamKind": "rendered", "spectracamParameters": json.dumps(res.report["parameters"]),
-                       "spectracamSeed": int(raw.seed)})
+            write_rendered_exr(out / "cases" / key / name / "rendered.exr", res)
     step("case files written")
     return paths

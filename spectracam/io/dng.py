@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__
+from ..capture import WHITE_PATCH
 from ..errors import SpectracamError
 
 #: DNG CFAPattern colour codes.
@@ -36,7 +37,7 @@ def xyz_to_camera_matrix(raw) -> np.ndarray | None:
 
 def _white_xyz(patch_xyz: np.ndarray) -> np.ndarray:
     """XYZ of the illuminant's white at Y = 1, taken from the (near-neutral) white patch."""
-    w = patch_xyz[18]
+    w = patch_xyz[WHITE_PATCH]
     return w / w[1]
 
 

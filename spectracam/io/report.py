@@ -72,16 +72,22 @@ def _num(x) -> str:
     return "inf" if x is None else f"{x:.3f}"
 
 
+def write_rendered_exr(path: str | Path, result) -> Path:
+    """The displayed image (linear display RGB) with every parameter of the score that made it."""
+    params = result.report["parameters"]
+    attrs = {"spectracamVersion": __version__, "spectracamKind": "rendered",
+             "spectracamUnits": f"linear RGB of the display ({params['processing']['display']}), white = 1",
+             "spectracamParameters": json.dumps(params, sort_keys=True), "spectracamSeed": int(params["seed"])}
+    rgb = result.rendered_rgb
+    return write_exr(path, {"R": rgb[..., 0], "G": rgb[..., 1], "B": rgb[..., 2]}, attrs)
+
+
 def write_score_outputs(out_dir: str | Path, result, processing) -> list[Path]:
     out = Path(out_dir)
     rep = result.report
     params = rep["parameters"]
-    attrs = {"spectracamVersion": __version__, "spectracamKind": "rendered",
-             "spectracamUnits": f"linear RGB of the display ({processing.display}), white = 1",
-             "spectracamParameters": json.dumps(params, sort_keys=True), "spectracamSeed": int(params["seed"])}
-    rgb = result.rendered_rgb
-    paths = [write_exr(out / "rendered.exr", {"R": rgb[..., 0], "G": rgb[..., 1], "B": rgb[..., 2]}, attrs),
-             _png(out / "rendered.png", srgb_preview(rgb, processing.display))]
+    paths = [write_rendered_exr(out / "rendered.exr", result),
+             _png(out / "rendered.png", srgb_preview(result.rendered_rgb, processing.display))]
     chart = rep["chart"]
     cam = params["camera"]
     snr = "∞" if chart["snr_combined_db"] is None else f"{chart['snr_combined_db']:.1f}"
