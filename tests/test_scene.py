@@ -45,6 +45,7 @@ def test_scene_round_trips_through_to_dict():
     ({"chart": {"dataset": "Pantone"}}, "chart.dataset", "'BabelColor Average'"),
     ({"chart": {"surround_reflectance": 1.5}}, "chart.surround_reflectance", "between 0 and 1"),
     ({"image": {"width": 640.5}}, "image.width", "integer"),
+    ({"image": {"width": 24, "height": 18}}, "image", "too small"),
     ({"render": {"samples_per_pixel": 0}}, "render.samples_per_pixel", "integer"),
     ({"render": {"variant": "optix"}}, "render.variant", "'auto', 'llvm', 'scalar', 'cuda'"),
 ])

@@ -160,3 +160,8 @@ def test_score_and_simulate_commands(tmp_path):
     bad = run("score", str(tmp_path / "sim" / "raw.exr"), "--scene", str(scene), "-o", str(tmp_path / "x"),
               "--demosaic", "magic")
     assert bad.returncode == 2 and not (tmp_path / "x").exists()
+    other = tmp_path / "other.toml"
+    other.write_text(scene.read_text().replace("3000", "7000"))
+    wrong = run("score", str(tmp_path / "sim" / "raw.exr"), "--scene", str(other), "-o", str(tmp_path / "y"))
+    assert wrong.returncode == 2 and "not the scene the capture recorded" in wrong.stderr
+    assert not (tmp_path / "y").exists()
