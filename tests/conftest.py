@@ -14,6 +14,20 @@ def small_scene(**tables):
     return parse_scene(data)
 
 
+@pytest.fixture(scope="session", autouse=True)
+def private_render_cache(tmp_path_factory):
+    """Keep the tests' renders out of the user's render cache (subprocesses inherit the variable)."""
+    import os
+
+    old = os.environ.get("SPECTRACAM_CACHE")
+    os.environ["SPECTRACAM_CACHE"] = str(tmp_path_factory.mktemp("render-cache"))
+    yield
+    if old is None:
+        os.environ.pop("SPECTRACAM_CACHE", None)
+    else:
+        os.environ["SPECTRACAM_CACHE"] = old
+
+
 @pytest.fixture(scope="session")
 def scene_5000():
     return small_scene(illuminant={"temperature_K": 5000})

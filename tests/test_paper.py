@@ -93,13 +93,14 @@ def test_mitsuba_agrees_with_analytic_within_monte_carlo_spread(analytic_run, mi
 def test_second_run_uses_the_render_cache(experiment, cache, mitsuba_run):
     import os
 
+    old = os.environ.get("SPECTRACAM_CACHE")
     os.environ["SPECTRACAM_CACHE"] = str(cache)
     try:
         msgs = []
         again, _, _ = run_paper(dataclasses.replace(experiment, alternatives=()), renderer="mitsuba", quick=True,
                                 step=msgs.append)
     finally:
-        del os.environ["SPECTRACAM_CACHE"]
+        os.environ.pop("SPECTRACAM_CACHE") if old is None else os.environ.__setitem__("SPECTRACAM_CACHE", old)
     renders = [m for m in msgs if m.startswith("render")]
     assert len(renders) == 6 and all("cached" in m for m in renders)
     assert again["fig5b_delta_e"] == mitsuba_run[0]["fig5b_delta_e"]
