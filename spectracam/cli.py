@@ -97,7 +97,7 @@ def capture_cmd(radiance_file: Path, out_dir: Path, arch, exposure, config_file,
     camera = load_camera_config(config_file, base=scene.camera) if config_file else scene.camera
     camera = _with_design(camera, arch, exposure)
     seed = scene.render.seed if seed is None else seed
-    raw = capture(cube, camera.sensor, camera.architecture, camera.exposure, seed, camera=camera, scene=scene)
+    raw = capture(cube, seed=seed, camera=camera, scene=scene)
     paths = [write_raw_exr(out_dir / "raw.exr", raw)]
     if raw.architecture == "cfa":
         paths.append(write_dng(out_dir / "raw.dng", raw))
@@ -196,8 +196,7 @@ def simulate_cmd(scene_file, out_dir, arch, exposure, renderer, demosaic, displa
     log = _log(quiet)
     cube = render(scene, renderer=renderer, progress=not quiet, log=log)
     write_radiance_exr(out_dir / "radiance.exr", cube, scene)
-    raw = capture(cube, camera.sensor, camera.architecture, camera.exposure, scene.render.seed, camera=camera,
-                  scene=scene)
+    raw = capture(cube, seed=scene.render.seed, camera=camera, scene=scene)
     write_raw_exr(out_dir / "raw.exr", raw)
     if raw.architecture == "cfa":
         write_dng(out_dir / "raw.dng", raw)

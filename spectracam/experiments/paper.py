@@ -132,7 +132,7 @@ def scaled(scene: Scene, cube: RadianceCube, factor: float) -> tuple[Scene, Radi
 
 def design_case(cube, scene: Scene, camera: CameraSpec, processing: ProcessingSpec, design: str, seed: int):
     cam = with_camera(camera, design)
-    raw = capture(cube, cam.sensor, cam.architecture, cam.exposure, seed, camera=cam, scene=scene)
+    raw = capture(cube, seed=seed, camera=cam, scene=scene)
     result = score(raw, scene, processing)
     from ..capture import WHITE_PATCH
 
@@ -157,8 +157,7 @@ def error_budget(cube, scene: Scene, camera: CameraSpec, processing: ProcessingS
                s0]
     out = []
     for step, sensor in zip(BUDGET_STEPS, sensors):
-        raw = capture(cube, sensor, cam.architecture, cam.exposure, seed, camera=dataclasses.replace(cam, sensor=sensor),
-                      scene=scene)
+        raw = capture(cube, sensor, seed=seed, camera=cam, scene=scene)
         res = score(raw, scene, processing, reference="camera")
         out.append((step, res.report["chart"]["delta_e_mean"], raw, res))
     res = score(out[-1][2], scene, processing, reference="scene")

@@ -159,7 +159,7 @@ def run_cell(index: int, cell: dict, scene: Scene, cube, trials: int, sweep_seed
     for trial in range(trials):
         seed = trial_seed(sweep_seed, trial)
         cam = scene.camera
-        raw = capture(cube, cam.sensor, cam.architecture, cam.exposure, seed, camera=cam, scene=scene)
+        raw = capture(cube, seed=seed, camera=cam, scene=scene)
         rep = score(raw, scene, scene.processing).report
         c = rep["chart"]
         values = {"delta_e_mean": c["delta_e_mean"], "delta_e_of_mean": c["delta_e_of_mean"],
