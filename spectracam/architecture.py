@@ -1,34 +1,91 @@
 """Colour architectures (paper, section 2): how the three channels are sampled and timed.
 
 An architecture turns per-channel photo-electron rates ``(H, W, 3)`` and per-channel exposure times
-into recorded frames.  Add one by subclassing :class:`Architecture` and decorating it with
-:func:`register`; nothing else needs editing.
+into recorded frames, and says what those frames are — its :class:`Layout`.  Later stages
+(demosaicking, scoring, the EXR and DNG writers) dispatch on the layout, never on the
+architecture's name, so a new architecture is one subclass registered in :data:`ARCHITECTURES`
+(``@ARCHITECTURES.register("name")``), from any module.
 """
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import SpectracamError
 from .filters import CHANNELS
+from .registry import Registry
 from .sensor import TEMPORAL_STREAM, SensorSpec, expose, fixed_pattern, noise_stream
 
-ARCHITECTURES: dict[str, type["Architecture"]] = {}
+#: Architectures: name → :class:`Architecture` subclass.
+ARCHITECTURES: Registry = Registry("capture.architecture", "architecture")
 CFA_PATTERNS = ("RGGB", "GRBG", "GBRG", "BGGR")
 
 
-def bayer_sites(pattern: str) -> list[tuple[int, int, int]]:
-    """``(dy, dx, channel)`` of the four sites of a 2×2 Bayer tile, channel 0 R, 1 G, 2 B."""
-    return [(i // 2, i % 2, CHANNELS.index(c)) for i, c in enumerate(pattern)]
+@dataclass(frozen=True)
+class MosaicLayout:
+    """One frame in which every pixel sees one channel, in a repeating tile of channel indices
+    (0 R, 1 G, 2 B); ``(H, W)`` digital numbers.
+
+    >>> MosaicLayout.bayer("GRBG").channel_index((2, 4)).tolist()
+    [[1, 0, 1, 0], [2, 1, 2, 1]]
+    """
+
+    tile: tuple[tuple[int, ...], ...]
+
+    @classmethod
+    def bayer(cls, pattern: str) -> "MosaicLayout":
+        """The 2×2 Bayer tile of a pattern such as ``"RGGB"`` (read row by row)."""
+        k = [CHANNELS.index(c) for c in pattern]
+        return cls(((k[0], k[1]), (k[2], k[3])))
+
+    @property
+    def tile_shape(self) -> tuple[int, int]:
+        return len(self.tile), len(self.tile[0])
+
+    @property
+    def pattern(self) -> str:
+        """The tile's channels as letters, row by row (``"RGGB"``; 16 letters for a 4×4 tile)."""
+        return "".join(CHANNELS[k] for row in self.tile for k in row)
+
+    @property
+    def bayer_pattern(self) -> str | None:
+        """The Bayer pattern name when the tile is a 2×2 Bayer tile, else ``None``."""
+        return self.pattern if self.tile_shape == (2, 2) and self.pattern in CFA_PATTERNS else None
+
+    def sites(self) -> list[tuple[int, int, int]]:
+        """``(dy, dx, channel)`` of every site of the tile."""
+        return [(dy, dx, k) for dy, row in enumerate(self.tile) for dx, k in enumerate(row)]
+
+    def channel_index(self, shape: tuple[int, int]) -> np.ndarray:
+        """``(H, W)`` channel index of every pixel."""
+        th, tw = self.tile_shape
+        h, w = shape
+        return np.tile(np.asarray(self.tile), (-(-h // th), -(-w // tw)))[:h, :w]
+
+    def sample(self, rates: np.ndarray) -> np.ndarray:
+        """``(H, W)`` mosaic of an ``(H, W, 3)`` image: strided selection, no per-pixel work."""
+        h, w, _ = rates.shape
+        th, tw = self.tile_shape
+        mosaic = np.empty((h, w), dtype=np.float32)
+        for dy, dx, k in self.sites():
+            mosaic[dy::th, dx::tw] = rates[dy::th, dx::tw, k]
+        return mosaic
 
 
-def register(cls):
-    ARCHITECTURES[cls.name] = cls
-    return cls
+@dataclass(frozen=True)
+class PlanesLayout:
+    """Three full-resolution planes R, G, B, ``(3, H, W)`` digital numbers: three sensors exposed
+    together (``"sensors"``) or three frames of one sensor in sequence (``"frames"``)."""
+
+    kind: str
+    description: str
 
 
 class Architecture(ABC):
+    """A way of sampling three colour channels.  Subclasses set ``name``, ``independent_exposures``
+    and ``layout`` and implement :meth:`capture_time_s` and :meth:`record`."""
+
     name: str = ""
     #: Can each channel have its own exposure time?
     independent_exposures: bool = True
@@ -36,16 +93,27 @@ class Architecture(ABC):
     def __init__(self, cfa_pattern: str = "RGGB"):
         self.cfa_pattern = cfa_pattern
 
+    @property
+    @abstractmethod
+    def layout(self) -> MosaicLayout | PlanesLayout:
+        """What the recorded frames are."""
+
     @abstractmethod
     def capture_time_s(self, times_s: np.ndarray) -> float:
         """Total time the capture takes, given the per-channel exposure times."""
 
     @abstractmethod
     def record(self, rates: np.ndarray, times_s: np.ndarray, sensor: SensorSpec, seed: int):
-        """Returns ``(digital, expected_e)``: arrays of the architecture's frame layout."""
+        """Returns ``(digital, expected_e)``: arrays of the architecture's layout."""
+
+    def record_mosaic(self, rates, times_s, sensor, seed):
+        """One exposure of one sensor behind a colour filter array of this architecture's layout."""
+        mosaic = self.layout.sample(rates)
+        return expose(mosaic, times_s[0], sensor, noise_stream(seed, TEMPORAL_STREAM, 0),
+                      fixed_pattern(sensor, mosaic.shape, seed, 0))
 
     @staticmethod
-    def expose_planes(rates, times_s, sensor, seed, patterns):
+    def record_planes(rates, times_s, sensor, seed, patterns):
         """Three full-resolution exposures, channel k with fixed pattern ``patterns[k]``;
         returns ``(3, H, W)`` digital numbers and expected electrons."""
         out = [expose(np.ascontiguousarray(rates[:, :, k]), times_s[k], sensor, noise_stream(seed, TEMPORAL_STREAM, k),
@@ -53,58 +121,54 @@ class Architecture(ABC):
         return np.stack([o[0] for o in out]), np.stack([o[1] for o in out])
 
 
-@register
+@ARCHITECTURES.register("cfa")
 class ColourFilterArray(Architecture):
+    """One sensor, one exposure, a Bayer colour filter array (paper 2: CFA)."""
+
     name = "cfa"
     independent_exposures = False
+
+    @property
+    def layout(self):
+        return MosaicLayout.bayer(self.cfa_pattern)
 
     def capture_time_s(self, times_s):
         return float(times_s[0])
 
-    def channel_index(self, shape: tuple[int, int]) -> np.ndarray:
-        """``(H, W)`` channel index (0 R, 1 G, 2 B) of every pixel for this Bayer pattern."""
-        tile = np.zeros((2, 2), dtype=int)
-        for dy, dx, k in bayer_sites(self.cfa_pattern):
-            tile[dy, dx] = k
-        h, w = shape
-        return np.tile(tile, ((h + 1) // 2, (w + 1) // 2))[:h, :w]
-
     def record(self, rates, times_s, sensor, seed):
-        h, w, _ = rates.shape
-        mosaic = np.empty((h, w), dtype=np.float32)
-        for dy, dx, k in bayer_sites(self.cfa_pattern):  # strided selection, no per-pixel work
-            mosaic[dy::2, dx::2] = rates[dy::2, dx::2, k]
-        return expose(mosaic, times_s[0], sensor, noise_stream(seed, TEMPORAL_STREAM, 0),
-                      fixed_pattern(sensor, (h, w), seed, 0))
+        return self.record_mosaic(rates, times_s, sensor, seed)
 
 
-@register
+@ARCHITECTURES.register("prism")
 class DichroicPrism(Architecture):
+    """Three sensors behind a dichroic prism, exposed together, each with its own fixed pattern."""
+
     name = "prism"
+    layout = PlanesLayout("sensors", "R, G, B: three sensors behind a dichroic prism, exposed together")
 
     def capture_time_s(self, times_s):
         return float(np.max(times_s))
 
     def record(self, rates, times_s, sensor, seed):
         shape = rates.shape[:2]  # three physical sensors: three fixed patterns
-        return self.expose_planes(rates, times_s, sensor, seed, [fixed_pattern(sensor, shape, seed, k) for k in range(3)])
+        return self.record_planes(rates, times_s, sensor, seed, [fixed_pattern(sensor, shape, seed, k) for k in range(3)])
 
 
-@register
+@ARCHITECTURES.register("fsc")
 class FieldSequential(Architecture):
+    """One sensor, three exposures in sequence through a time-varying filter (paper 2: FSC)."""
+
     name = "fsc"
+    layout = PlanesLayout("frames", "R, G, B: three exposures of one sensor in sequence, in this order")
 
     def capture_time_s(self, times_s):
         return float(np.sum(times_s))
 
     def record(self, rates, times_s, sensor, seed):
         pattern = fixed_pattern(sensor, rates.shape[:2], seed, 0)  # one sensor: the same FPN in every frame
-        return self.expose_planes(rates, times_s, sensor, seed, [pattern] * 3)
+        return self.record_planes(rates, times_s, sensor, seed, [pattern] * 3)
 
 
 def make_architecture(name: str, cfa_pattern: str = "RGGB") -> Architecture:
-    if name not in ARCHITECTURES:
-        raise SpectracamError(f"capture.architecture = {name!r}: must be one of {', '.join(ARCHITECTURES)}")
-    if cfa_pattern not in CFA_PATTERNS:
-        raise SpectracamError(f"capture.cfa_pattern = {cfa_pattern!r}: must be one of {', '.join(CFA_PATTERNS)}")
+    """An instance of the registered architecture ``name``."""
     return ARCHITECTURES[name](cfa_pattern)

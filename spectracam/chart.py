@@ -10,17 +10,23 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .spec import Spec
 from .spectra import Spectrum, tabulated
 
 ROWS, COLUMNS = 4, 6
 
 #: Reflectance datasets colour-science ships for the ColorChecker Classic (24 patches, standard order).
 DATASETS = ("BabelColor Average", "ColorChecker N Ohta")
+#: Index of the white patch ("white 9.5 (.05 D)") in the standard ColorChecker order: metering
+#: (paper 4.5) and the DNG's neutral use it.
+WHITE_PATCH = 18
 
 
 @dataclass(frozen=True)
-class ChartSpec:
+class ChartSpec(Spec):
     """What the scene file's ``[chart]`` table describes."""
+
+    TABLE = "chart"
 
     dataset: str = "BabelColor Average"
     #: Defaults approximate the X-Rite ColorChecker Classic (279 × 216 mm board).
@@ -31,6 +37,14 @@ class ChartSpec:
     surround_reflectance: float = 0.04
     #: Fraction of the patch side trimmed from each edge before a pixel counts as the patch's own.
     mask_margin: float = 0.15
+
+    def validate(self) -> None:
+        self.choice("dataset", DATASETS)
+        self.number("patch_size_mm", 0, lo_open=True, unit="mm")
+        self.number("gap_mm", 0, unit="mm")
+        self.number("border_mm", 0, unit="mm")
+        self.number("surround_reflectance", 0, 1)
+        self.number("mask_margin", 0, 0.45)
 
     @property
     def board_size_mm(self) -> tuple[float, float]:

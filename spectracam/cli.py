@@ -1,7 +1,6 @@
-"""The ``spectracam`` command line."""
+"""The ``spectracam`` command line: arguments → the same loaders as Python → the library."""
 from __future__ import annotations
 
-import json
 import sys
 import time
 from pathlib import Path
@@ -9,9 +8,11 @@ from pathlib import Path
 import click
 
 from . import __version__
-from .errors import SpectracamError
 from .architecture import ARCHITECTURES
+from .color import ADAPTATIONS, DEMOSAIC_METHODS, DISPLAYS
+from .errors import ConfigError, SpectracamError
 from .exposure import EXPOSURE_SCHEMES
+from .metrics import DELTA_E_METHODS
 from .render import RENDERERS
 
 
@@ -26,207 +27,274 @@ class _Group(click.Group):
             sys.exit(2)
 
 
+class RegistryChoice(click.ParamType):
+    """A name from a registry, read when the command runs, so registered plug-ins are accepted; an
+    unknown name is the registry's one-line error."""
+
+    name = "name"
+
+    def __init__(self, registry, option: str):
+        self.registry, self.option = registry, option
+
+    def get_metavar(self, param, ctx=None):
+        return "[" + "|".join(self.registry.names) + "]"
+
+    def convert(self, value, param, ctx):
+        return self.registry.check(value, self.option)
+
+
 @click.group(cls=_Group)
 @click.version_option(__version__, prog_name="spectracam")
 def main():
     """Simulate colour image sensors on a rendered Macbeth chart (Catrysse, Wandell & El Gamal, 1999)."""
 
 
-def _with_design(camera, arch, exposure):
-    """The camera with --arch/--exposure applied, validated like a config file (cfa + optimal is refused)."""
-    from .scene import camera_tables, parse_camera
-
-    flags = {k: v for k, v in (("architecture", arch), ("exposure", exposure)) if v}
-    if not flags:
-        return camera
-    tables = camera_tables(camera)
-    tables["capture"].update(flags)
-    return parse_camera(tables, source="command line")
-
-
 def _log(quiet: bool):
     return (lambda msg: None) if quiet else (lambda msg: click.echo(msg, err=True))
 
 
+# ------------------------------------------------------------------------------------------------
+# shared options: every flag is an override of a scene-file field, applied in the order
+# scene file < --config < flags < --set
+
+_SET_HELP = ("Override a field of the scene (or experiment/sweep) file: PATH=VALUE, e.g. sensor.adc_bits=12, "
+             "filters.cutoffs_nm[1]=600, capture.design=fsc/optimal; VALUE is TOML, a bare word a string. Repeatable.")
+
+
+def _output(help_text: str):
+    return click.option("-o", "--output", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
+                        help=help_text)
+
+
+_set_option = click.option("--set", "sets", multiple=True, metavar="PATH=VALUE", help=_SET_HELP)
+_quiet_option = click.option("--quiet", is_flag=True, help="No progress or notices on stderr.")
+_renderer_option = click.option("--renderer", type=RegistryChoice(RENDERERS, "--renderer"), default="mitsuba",
+                                show_default=True, help="Mitsuba (Monte Carlo) or the closed form.")
+
+
+def _camera_options(f):
+    f = click.option("--seed", type=click.IntRange(0, 2**31 - 1), default=None,
+                     help="Noise seed [default: the scene's render.seed].")(f)
+    f = click.option("--config", "config_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
+                     help="TOML with [optics], [filters], [sensor], [capture] tables, over the scene's.")(f)
+    f = click.option("--exposure", type=RegistryChoice(EXPOSURE_SCHEMES, "--exposure"), default=None,
+                     help="Exposure control [default: the scene's capture.exposure].")(f)
+    f = click.option("--arch", type=RegistryChoice(ARCHITECTURES, "--arch"), default=None,
+                     help="Colour architecture [default: the scene's capture.architecture].")(f)
+    return f
+
+
+def _processing_options(f):
+    f = click.option("--gamut-clip/--no-gamut-clip", default=None, help="Clip display RGB to [0, 1].")(f)
+    f = click.option("--delta-e", "delta_e", type=RegistryChoice(DELTA_E_METHODS, "--delta-e"), default=None,
+                     help="Colour difference formula [default: the scene's, else cie1976].")(f)
+    f = click.option("--adaptation", type=RegistryChoice(ADAPTATIONS, "--adaptation"), default=None,
+                     help="How scene XYZ is carried to the display white [default: xyz_scaling].")(f)
+    f = click.option("--display", type=RegistryChoice(DISPLAYS, "--display"), default=None,
+                     help="Display model [default: the scene's, else crt].")(f)
+    f = click.option("--demosaic", type=RegistryChoice(DEMOSAIC_METHODS, "--demosaic"), default=None,
+                     help="Demosaicking of a mosaic [default: the scene's, else bilinear].")(f)
+    return f
+
+
+def _flag_overrides(**flags) -> list[tuple[str, object]]:
+    """``(path, value)`` overrides of the flags given on the command line."""
+    paths = {"arch": "capture.architecture", "exposure": "capture.exposure", "demosaic": "processing.demosaic",
+             "display": "processing.display", "adaptation": "processing.adaptation", "delta_e": "processing.delta_e",
+             "gamut_clip": "processing.gamut_clip"}
+    return [(paths[k], v) for k, v in flags.items() if v is not None]
+
+
+def _scene(data: dict, source: str, config_file=None, flags=(), sets=()):
+    """A Scene from a scene dict with the config file's camera tables, the flags and ``--set``."""
+    from .camera import CAMERA_TABLES
+    from .overrides import apply_overrides
+    from .scene import Scene, parse_scene, read_toml
+
+    if config_file is not None:
+        config = read_toml(config_file, "config file")
+        for k, v in config.items():
+            if k not in CAMERA_TABLES or not isinstance(v, dict):
+                raise ConfigError(k, v, "a config file has the camera tables " + ", ".join(CAMERA_TABLES),
+                                  str(config_file))
+            data = {**data, k: {**data.get(k, {}), **v}}
+        Scene.from_dict(data, source=str(config_file))  # the config file's own errors name it
+    data = apply_overrides(data, flags, source="command line")
+    defaults = lambda: parse_scene(data, source).to_dict()  # noqa: E731  lists a --set element refers to
+    data = apply_overrides(data, sets, defaults=defaults)
+    return parse_scene(data, source if not (flags or sets) else f"{source} with the command line's options")
+
+
+def _check_writable(out_dir: Path) -> None:
+    """Refuse before any work when the output directory could not be made or written (nothing is
+    created here: a run that fails later leaves no empty directory behind)."""
+    import os
+
+    p = out_dir.absolute()
+    while not p.exists():
+        p = p.parent
+    if not p.is_dir():
+        raise SpectracamError(f"output = {str(out_dir)!r}: {str(p)!r} is a file, not a directory")
+    if not os.access(p, os.W_OK | os.X_OK):
+        raise SpectracamError(f"output = {str(out_dir)!r}: {str(p)!r} is not writable")
+
+
+# ------------------------------------------------------------------------------------------------
+
+
 @main.command("render")
 @click.argument("scene_file", type=click.Path(dir_okay=False, path_type=Path))
-@click.option("-o", "--output", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
-              help="Directory to write radiance.exr into.")
-@click.option("--renderer", type=click.Choice(RENDERERS), default="mitsuba", show_default=True)
-@click.option("--quiet", is_flag=True, help="No progress or notices.")
-def render_cmd(scene_file: Path, out_dir: Path, renderer: str, quiet: bool):
+@_output("Directory to write radiance.exr into.")
+@_renderer_option
+@_set_option
+@_quiet_option
+def render_cmd(scene_file: Path, out_dir: Path, renderer: str, sets, quiet: bool):
     """Render SCENE_FILE into DIR/radiance.exr (spectral EXR, W·m⁻²·sr⁻¹·nm⁻¹ per band)."""
     from .io.exr import write_radiance_exr
     from .render import render
-    from .scene import load_scene
+    from .scene import read_toml
 
-    scene = load_scene(scene_file)  # validates before anything is written
+    scene = _scene(read_toml(scene_file, "scene file"), str(scene_file), sets=sets)  # validated before any work
+    _check_writable(out_dir)
     log = _log(quiet)
     t0 = time.perf_counter()
     cube = render(scene, renderer=renderer, progress=not quiet, log=log)
-    path = write_radiance_exr(out_dir / "radiance.exr", cube, scene)
+    path = write_radiance_exr(out_dir / "radiance.exr", cube)
     h, w, b = cube.shape
     log(f"wrote {path} ({w}x{h} px, {b} bands, {renderer}, {time.perf_counter() - t0:.2f} s)")
 
 
+def _write_capture(out_dir: Path, raw, scene) -> list[Path]:
+    from .architecture import MosaicLayout
+    from .io.dng import write_dng
+    from .io.exr import write_raw_exr
+    from .reference import ChartReference
+
+    paths = [write_raw_exr(out_dir / "raw.exr", raw)]
+    if isinstance(raw.layout, MosaicLayout):
+        paths.append(write_dng(out_dir / "raw.dng", raw, ChartReference.of(scene)))
+    return paths
+
+
 @main.command("capture")
 @click.argument("radiance_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
-@click.option("-o", "--output", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
-              help="Directory to write raw.exr (and raw.dng for the colour filter array) into.")
-@click.option("--arch", type=click.Choice(list(ARCHITECTURES)), default=None,
-              help="Colour architecture [default: the scene's, else cfa].")
-@click.option("--exposure", type=click.Choice(EXPOSURE_SCHEMES), default=None,
-              help="Exposure control [default: the scene's, else single].")
-@click.option("--config", "config_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="TOML with [optics], [filters], [sensor], [capture] tables, over the scene's.")
-@click.option("--seed", type=int, default=None, help="Noise seed [default: the scene's render.seed].")
-@click.option("--quiet", is_flag=True, help="No notices.")
-def capture_cmd(radiance_file: Path, out_dir: Path, arch, exposure, config_file, seed, quiet):
-    """Capture a spectral RADIANCE_FILE with a simulated sensor; write DIR/raw.exr (+ raw.dng for cfa)."""
+@_output("Directory to write raw.exr (and raw.dng for a mosaic) into.")
+@_camera_options
+@_set_option
+@_quiet_option
+def capture_cmd(radiance_file: Path, out_dir: Path, arch, exposure, config_file, seed, sets, quiet):
+    """Capture a spectral RADIANCE_FILE with a simulated sensor; write DIR/raw.exr (+ raw.dng for a mosaic)."""
+    from .io.exr import read_radiance_exr
+    from .pipeline import capture
 
-    from .capture import capture
-    from .io.dng import write_dng
-    from .io.exr import read_radiance_exr, write_raw_exr
-    from .scene import load_camera_config, parse_scene
-
-    cube, attrs = read_radiance_exr(radiance_file)
+    cube, _ = read_radiance_exr(radiance_file)
     if "scene" not in cube.metadata:
         raise SpectracamError(f"file = {str(radiance_file)!r}: records no scene (spectracamScene), so the white "
                               "patch for exposure metering is unknown; render it with spectracam")
-    scene = parse_scene(cube.metadata["scene"], source=str(radiance_file))
-    camera = load_camera_config(config_file, base=scene.camera) if config_file else scene.camera
-    camera = _with_design(camera, arch, exposure)
-    seed = scene.render.seed if seed is None else seed
-    raw = capture(cube, seed=seed, camera=camera, scene=scene)
-    paths = [write_raw_exr(out_dir / "raw.exr", raw)]
-    if raw.architecture == "cfa":
-        paths.append(write_dng(out_dir / "raw.dng", raw))
+    scene = _scene(cube.metadata["scene"], str(radiance_file), config_file, _flag_overrides(arch=arch, exposure=exposure),
+                   sets)
+    _check_writable(out_dir)
+    raw = capture(cube, seed=seed, scene=scene)
+    paths = _write_capture(out_dir, raw, scene)
     times = ", ".join(f"{c} {1e3 * t:.2f} ms" for c, t in zip("RGB", raw.exposure_times_s))
-    _log(quiet)(f"{raw.architecture}/{raw.exposure}: exposures {times}; capture time {1e3 * raw.capture_time_s:.2f} ms")
+    _log(quiet)(f"{raw.design}: exposures {times}; capture time {1e3 * raw.capture_time_s:.2f} ms")
     _log(quiet)("wrote " + ", ".join(map(str, paths)))
 
 
-def _processing_options(f):
-    from .color import ADAPTATIONS, DEMOSAIC_METHODS, DISPLAYS
-    from .metrics import DELTA_E_METHODS
-
-    f = click.option("--demosaic", type=click.Choice(DEMOSAIC_METHODS), default=None,
-                     help="Demosaicking of the colour filter array [default: the scene's, else bilinear].")(f)
-    f = click.option("--display", type=click.Choice(DISPLAYS), default=None, help="Display model [default: crt].")(f)
-    f = click.option("--adaptation", type=click.Choice(ADAPTATIONS), default=None,
-                     help="How scene XYZ is carried to the display white [default: xyz_scaling].")(f)
-    f = click.option("--delta-e", "delta_e", type=click.Choice(DELTA_E_METHODS), default=None,
-                     help="Colour difference formula [default: cie1976].")(f)
-    f = click.option("--gamut-clip/--no-gamut-clip", default=None, help="Clip display RGB to [0, 1].")(f)
-    return f
-
-
-def _processing(scene, demosaic, display, adaptation, delta_e, gamut_clip):
-    from .scene import parse_processing
-
-    flags = {k: v for k, v in dict(demosaic=demosaic, display=display, adaptation=adaptation, delta_e=delta_e,
-                                   gamut_clip=gamut_clip).items() if v is not None}
-    return parse_processing(flags, source="command line", base=scene.processing)
-
-
-def _score_and_write(raw, scene, processing, out_dir: Path, log):
+def _score_and_write(raw, scene, out_dir: Path, log):
     from .io.report import write_score_outputs
-    from .score import score
+    from .pipeline import score
 
-    result = score(raw, scene, processing)
-    paths = write_score_outputs(out_dir, result, processing)
-    c = result.report["chart"]
-    log(f"{raw.architecture}/{raw.exposure}: mean ΔE*ab {c['delta_e_mean']:.2f} per pixel, {c['delta_e_of_mean']:.2f} "
-        f"of patch means ({c['delta_e_conversion']:.2f} from the conversion alone); SNR "
-        + ("∞ (noise-free)" if c["snr_combined_db"] is None else f"{c['snr_combined_db']:.1f} dB"))
+    result = score(raw, scene)
+    paths = write_score_outputs(out_dir, result)
+    c = result.summary
+    log(f"{raw.design}: mean ΔE*ab {c.delta_e_mean:.2f} per pixel, {c.delta_e_of_mean:.2f} of patch means "
+        f"({c.delta_e_conversion:.2f} from the conversion alone); SNR "
+        + ("∞ (noise-free)" if c.snr_combined_db is None else f"{c.snr_combined_db:.1f} dB"))
     log("wrote " + ", ".join(map(str, paths)))
 
 
 @main.command("score")
 @click.argument("raw_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
-@click.option("--scene", "scene_file", required=True, type=click.Path(dir_okay=False, path_type=Path),
-              help="The scene the capture was taken of (its [processing] table applies).")
-@click.option("-o", "--output", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path))
+@click.option("--scene", "scene_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="The scene the capture was taken of (its [processing] table applies) [default: the scene the "
+                   "raw file records].")
+@_output("Directory to write rendered.exr/.png, delta_e.png and report.json/.csv into.")
 @_processing_options
-@click.option("--quiet", is_flag=True)
-def score_cmd(raw_file, scene_file, out_dir, demosaic, display, adaptation, delta_e, gamut_clip, quiet):
+@_set_option
+@_quiet_option
+def score_cmd(raw_file, scene_file, out_dir, demosaic, display, adaptation, delta_e, gamut_clip, sets, quiet):
     """Render RAW_FILE on a display and score it: rendered.exr/.png, delta_e.png, report.json/.csv."""
     from .io.exr import read_raw_exr
-    from .scene import load_scene
+    from .scene import read_toml
 
-    scene = load_scene(scene_file)
-    processing = _processing(scene, demosaic, display, adaptation, delta_e, gamut_clip)
     raw = read_raw_exr(raw_file)
-    h, w = raw.digital.shape[-2:]
-    if (w, h) != (scene.image.width, scene.image.height):
-        raise SpectracamError(f"image = {w}x{h}: the capture does not match scene {str(scene_file)!r} "
-                              f"({scene.image.width}x{scene.image.height})")
-    recorded = raw.metadata.get("scene")
-    if recorded is not None:
-        given = scene.to_dict()
-        for table in ("chart", "illuminant", "wavelengths"):
-            if recorded.get(table) != given[table]:
-                raise SpectracamError(f"{table} = {json.dumps(given[table], sort_keys=True)[:120]}: scene "
-                                      f"{str(scene_file)!r} is not the scene the capture recorded "
-                                      f"({json.dumps(recorded.get(table), sort_keys=True)[:120]})")
-    _score_and_write(raw, scene, processing, out_dir, _log(quiet))
+    if scene_file is not None:
+        data, source = read_toml(scene_file, "scene file"), str(scene_file)
+    elif raw.scene is not None:
+        data, source = raw.scene, f"the scene recorded in {raw_file}"
+    else:
+        raise SpectracamError(f"file = {str(raw_file)!r}: records no scene; pass --scene SCENE.toml")
+    flags = _flag_overrides(demosaic=demosaic, display=display, adaptation=adaptation, delta_e=delta_e,
+                            gamut_clip=gamut_clip)
+    scene = _scene(data, source, flags=flags, sets=sets)
+    _check_writable(out_dir)
+    _score_and_write(raw, scene, out_dir, _log(quiet))
 
 
 @main.command("simulate")
 @click.argument("scene_file", type=click.Path(dir_okay=False, path_type=Path))
-@click.option("-o", "--output", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path))
-@click.option("--arch", type=click.Choice(list(ARCHITECTURES)), default=None)
-@click.option("--exposure", type=click.Choice(EXPOSURE_SCHEMES), default=None)
-@click.option("--renderer", type=click.Choice(RENDERERS), default="mitsuba", show_default=True)
+@_output("Directory to write every file of render, capture and score into.")
+@_renderer_option
+@_camera_options
 @_processing_options
-@click.option("--quiet", is_flag=True)
-def simulate_cmd(scene_file, out_dir, arch, exposure, renderer, demosaic, display, adaptation, delta_e, gamut_clip,
-                 quiet):
+@_set_option
+@_quiet_option
+def simulate_cmd(scene_file, out_dir, renderer, arch, exposure, config_file, seed, demosaic, display, adaptation,
+                 delta_e, gamut_clip, sets, quiet):
     """Render → capture → score SCENE_FILE in one go; writes every file of the three steps."""
-    from .capture import capture
-    from .io.dng import write_dng
-    from .io.exr import write_radiance_exr, write_raw_exr
+    from .io.exr import write_radiance_exr
+    from .pipeline import capture
     from .render import render
-    from .scene import load_scene
+    from .scene import read_toml
 
-    scene = load_scene(scene_file)
-    camera = scene.camera
-    camera = _with_design(camera, arch, exposure)
-    processing = _processing(scene, demosaic, display, adaptation, delta_e, gamut_clip)
+    flags = _flag_overrides(arch=arch, exposure=exposure, demosaic=demosaic, display=display, adaptation=adaptation,
+                            delta_e=delta_e, gamut_clip=gamut_clip)
+    scene = _scene(read_toml(scene_file, "scene file"), str(scene_file), config_file, flags, sets)
+    _check_writable(out_dir)
     log = _log(quiet)
     cube = render(scene, renderer=renderer, progress=not quiet, log=log)
-    write_radiance_exr(out_dir / "radiance.exr", cube, scene)
-    raw = capture(cube, seed=scene.render.seed, camera=camera, scene=scene)
-    write_raw_exr(out_dir / "raw.exr", raw)
-    if raw.architecture == "cfa":
-        write_dng(out_dir / "raw.dng", raw)
-    _score_and_write(raw, scene, processing, out_dir, log)
+    write_radiance_exr(out_dir / "radiance.exr", cube)
+    raw = capture(cube, seed=seed, scene=scene)
+    _write_capture(out_dir, raw, scene)
+    _score_and_write(raw, scene, out_dir, log)
 
 
 @main.command("paper")
-@click.option("-o", "--output", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path))
+@_output("Directory to write the figures, results.json, report.md and the case files into.")
 @click.option("--experiment", "experiment_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Experiment file [default: scenes/paper.toml shipped with spectracam].")
-@click.option("--renderer", type=click.Choice(RENDERERS), default="mitsuba", show_default=True)
+@_renderer_option
 @click.option("--quick", is_flag=True, help="A first look: 160x120 pixels instead of the scene's size.")
 @click.option("--no-cache", is_flag=True, help="Render again even if the render cache has the scene.")
-@click.option("--quiet", is_flag=True)
-def paper_cmd(out_dir, experiment_file, renderer, quick, no_cache, quiet):
+@_set_option
+@_quiet_option
+def paper_cmd(out_dir, experiment_file, renderer, quick, no_cache, sets, quiet):
     """Reproduce the paper's Figures 4, 5a, 5b and 6: figures, results.json, report.md, case files."""
-    import time
-
     from .experiments.paper import load_experiment, run_paper
     from .experiments.report import write_paper_outputs
 
     path = experiment_file or default_experiment()
-    exp = load_experiment(path)
+    exp = load_experiment(path, sets)
+    _check_writable(out_dir)
     log = _log(quiet)
     t0 = time.perf_counter()
-    step = lambda msg: log(f"[{time.perf_counter() - t0:6.1f} s] {msg}")
+    step = lambda msg: log(f"[{time.perf_counter() - t0:6.1f} s] {msg}")  # noqa: E731
     results, cases, cubes = run_paper(exp, renderer=renderer, quick=quick, use_cache=not no_cache, step=step,
                                       log=log, progress=not quiet)
     command = "spectracam paper -o " + str(out_dir) + (f" --experiment {experiment_file}" if experiment_file else "") \
-        + (f" --renderer {renderer}" if renderer != "mitsuba" else "") + (" --quick" if quick else "")
+        + (f" --renderer {renderer}" if renderer != "mitsuba" else "") + (" --quick" if quick else "") \
+        + "".join(f" --set {s}" for s in sets)
     write_paper_outputs(out_dir, results, cases, cubes, command, step)
     for c in results["claims"]:
         log(f"  {c['verdict']:<10} {c['claim']}: {c['measured']}")
@@ -235,20 +303,21 @@ def paper_cmd(out_dir, experiment_file, renderer, quick, no_cache, quiet):
 
 @main.command("sweep")
 @click.argument("sweep_file", type=click.Path(dir_okay=False, path_type=Path))
-@click.option("-o", "--output", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path))
+@_output("Directory for results.jsonl/.parquet/.csv and sweep.json.")
 @click.option("--scheduler", default=None, help="Address of a running Dask scheduler, tcp://HOST:PORT "
               "[default: a local cluster of processes made for the run].")
 @click.option("--workers", type=click.IntRange(1, 1024), default=None, help="Local cluster size [default: cores].")
 @click.option("--serial", is_flag=True, help="Run the cells in this process, without Dask.")
 @click.option("--resume", is_flag=True, help="Continue an interrupted sweep in DIR, skipping finished cells.")
-@click.option("--quiet", is_flag=True)
-def sweep_cmd(sweep_file, out_dir, scheduler, workers, serial, resume, quiet):
+@_set_option
+@_quiet_option
+def sweep_cmd(sweep_file, out_dir, scheduler, workers, serial, resume, sets, quiet):
     """Run every cell of SWEEP_FILE on Dask; results.parquet/.csv/.jsonl in DIR, a row per cell and trial."""
     from .experiments.sweep import load_sweep, run_sweep
 
     if serial and scheduler:
         raise SpectracamError("--serial and --scheduler: choose one")
-    sweep = load_sweep(sweep_file)
+    sweep = load_sweep(sweep_file, sets)
     t = run_sweep(sweep, out_dir, scheduler=scheduler, workers=workers, serial=serial, resume=resume,
                   progress=not quiet, log=_log(quiet))
     _log(quiet)(f"{t['new_cells']} of {t['cells']} cells computed in {t['wall_s']:.1f} s "
@@ -270,10 +339,15 @@ def plot_sweep_cmd(out_dir, x_axis, line_axis, panel_axis, metrics):
 
 
 def default_experiment() -> Path:
-    """scenes/paper.toml of this checkout (the README's main job)."""
+    """The paper's experiment file shipped with spectracam (scenes/paper.toml)."""
+    from importlib.resources import files
+
+    shipped = files("spectracam") / "scenes" / "paper.toml"
+    if shipped.is_file():
+        return Path(str(shipped))
     here = Path(__file__).resolve().parent.parent / "scenes" / "paper.toml"
     if not here.exists():
-        raise SpectracamError("experiment = scenes/paper.toml: not found next to the package; pass --experiment FILE")
+        raise SpectracamError("experiment = scenes/paper.toml: not shipped with this installation; pass --experiment FILE")
     return here
 
 

@@ -5,7 +5,7 @@ Target of the conversion: the display RGB that reproduces the scene's CIE 1931 X
 display white — by scaling XYZ (von Kries in XYZ, the default: CIELAB against each white is then
 preserved exactly) or by a Bradford transform.  The 3×3 matrix is fitted by least squares on the
 chart's noise-free camera responses (paper 3.5: "a linear transformation, found using conventional
-methods").
+methods").  Demosaicking dispatches on the capture's layout, never on the architecture's name.
 """
 from __future__ import annotations
 
@@ -13,18 +13,27 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .architecture import bayer_sites
-from .errors import SpectracamError
+from .architecture import MosaicLayout
+from .errors import ConfigError
+from .metrics import DELTA_E_METHODS, SNR_COMBINATIONS
+from .registry import Registry
+from .spec import Spec
 
-DEMOSAIC_METHODS = ("bilinear", "malvar2004", "menon2007", "patch")
-DISPLAYS = ("crt", "srgb")
-ADAPTATIONS = ("xyz_scaling", "bradford")
 #: colour-science's phosphor spectra of a typical CRT (Brainard 1997), the paper's "simple CRT display".
 CRT_PRIMARIES = "Typical CRT Brainard 1997"
 
+#: Demosaicking methods: name → function ``(mosaic (H, W), layout) → (H, W, 3)``.
+DEMOSAIC_METHODS: Registry = Registry("processing.demosaic", "demosaicking method")
+#: Displays: name → function ``() → 3×3`` matrix from linear display RGB (white R=G=B=1) to XYZ, Y_white = 1.
+DISPLAYS: Registry = Registry("processing.display", "display")
+#: Chromatic adaptations: name → function ``(white_from, white_to) → 3×3`` matrix on XYZ.
+ADAPTATIONS: Registry = Registry("processing.adaptation", "chromatic adaptation")
+
 
 @dataclass(frozen=True)
-class ProcessingSpec:
+class ProcessingSpec(Spec):
+    TABLE = "processing"
+
     demosaic: str = "bilinear"
     display: str = "crt"
     adaptation: str = "xyz_scaling"
@@ -36,13 +45,28 @@ class ProcessingSpec:
     #: How the three channel SNRs combine: "power" (10·log10 Σμ²/Σσ²) or "mean_db".
     snr_combination: str = "power"
 
+    def validate(self) -> None:
+        self.choice("demosaic", DEMOSAIC_METHODS)
+        self.choice("display", DISPLAYS)
+        self.choice("adaptation", ADAPTATIONS)
+        self.boolean("gamut_clip")
+        self.choice("delta_e", DELTA_E_METHODS)
+        self.choice("snr_combination", SNR_COMBINATIONS)
 
-def display_rgb_to_xyz(display: str) -> np.ndarray:
-    """3×3 matrix from linear display RGB (white R=G=B=1) to CIE 1931 XYZ with the white's Y = 1."""
+
+@DISPLAYS.register("srgb")
+def _srgb() -> np.ndarray:
+    """IEC 61966-2-1 sRGB primaries and D65 white."""
     import colour
 
-    if display == "srgb":
-        return np.asarray(colour.RGB_COLOURSPACES["sRGB"].matrix_RGB_to_XYZ, float)
+    return np.asarray(colour.RGB_COLOURSPACES["sRGB"].matrix_RGB_to_XYZ, float)
+
+
+@DISPLAYS.register("crt")
+def _crt() -> np.ndarray:
+    """The phosphor spectra of :data:`CRT_PRIMARIES` integrated against the CIE 1931 CMFs."""
+    import colour
+
     from .spectra import cie_1931_cmfs
 
     wl, cmfs = cie_1931_cmfs()
@@ -52,45 +76,84 @@ def display_rgb_to_xyz(display: str) -> np.ndarray:
     return M / M[1].sum()
 
 
-def adaptation_matrix(white_from: np.ndarray, white_to: np.ndarray, method: str) -> np.ndarray:
-    """3×3 matrix carrying XYZ seen under ``white_from`` to the corresponding XYZ under ``white_to``."""
-    if method == "xyz_scaling":
-        return np.diag(white_to / white_from)
+def display_rgb_to_xyz(display: str) -> np.ndarray:
+    """3×3 matrix from linear display RGB (white R=G=B=1) to CIE 1931 XYZ with the white's Y = 1.
+
+    >>> round(float(display_rgb_to_xyz("srgb").sum(axis=1)[1]), 6)
+    1.0
+    """
+    return DISPLAYS[display]()
+
+
+@ADAPTATIONS.register("xyz_scaling")
+def _xyz_scaling(white_from, white_to):
+    """von Kries in XYZ: each of X, Y, Z scaled by the ratio of the whites."""
+    return np.diag(np.asarray(white_to, float) / np.asarray(white_from, float))
+
+
+@ADAPTATIONS.register("bradford")
+def _bradford(white_from, white_to):
+    """von Kries in the Bradford cone space (Lam 1985), colour-science's implementation."""
     import colour
 
     return np.asarray(colour.adaptation.matrix_chromatic_adaptation_VonKries(white_from, white_to, transform="Bradford"))
 
 
-def demosaic(mosaic: np.ndarray, pattern: str, method: str) -> np.ndarray:
-    """``(H, W, 3)`` full-colour image from a Bayer mosaic (colour-demosaicing; or ``patch``)."""
-    import colour_demosaicing as cd
+def adaptation_matrix(white_from: np.ndarray, white_to: np.ndarray, method: str) -> np.ndarray:
+    """3×3 matrix carrying XYZ seen under ``white_from`` to the corresponding XYZ under ``white_to``.
 
-    if method == "bilinear":
-        return cd.demosaicing_CFA_Bayer_bilinear(mosaic, pattern)
-    if method == "malvar2004":
-        return cd.demosaicing_CFA_Bayer_Malvar2004(mosaic, pattern)
-    if method == "menon2007":
-        return cd.demosaicing_CFA_Bayer_Menon2007(mosaic, pattern)
-    if method == "patch":
-        return tile_replicate(mosaic, pattern)
-    raise SpectracamError(f"processing.demosaic = {method!r}: must be one of {', '.join(DEMOSAIC_METHODS)}")
+    >>> adaptation_matrix(np.array([1.0, 1.0, 0.5]), np.array([1.0, 1.0, 1.0]), "xyz_scaling").diagonal().tolist()
+    [1.0, 1.0, 2.0]
+    """
+    return ADAPTATIONS[method](white_from, white_to)
 
 
-def tile_replicate(mosaic: np.ndarray, pattern: str) -> np.ndarray:
-    """The paper's reading (it ignores spatial artefacts): every pixel of a 2×2 Bayer tile gets the
-    tile's own R and B and the mean of its two G — each channel from pixels of that channel only,
-    never interpolated across tiles, so inside a patch's mask no other surface leaks in."""
+def _bayer(fn_name: str):
+    """A colour-demosaicing method, which needs a 2×2 Bayer layout."""
+
+    def method(mosaic: np.ndarray, layout: MosaicLayout) -> np.ndarray:
+        import colour_demosaicing as cd
+
+        if layout.bayer_pattern is None:
+            raise ConfigError("processing.demosaic", fn_name, f"needs a 2x2 Bayer mosaic; this capture's tile is "
+                              f"{layout.pattern} ({layout.tile_shape[0]}x{layout.tile_shape[1]}); use 'patch'")
+        return getattr(cd, fn_name)(mosaic, layout.bayer_pattern)
+
+    return method
+
+
+DEMOSAIC_METHODS.register("bilinear", _bayer("demosaicing_CFA_Bayer_bilinear"))
+DEMOSAIC_METHODS.register("malvar2004", _bayer("demosaicing_CFA_Bayer_Malvar2004"))
+DEMOSAIC_METHODS.register("menon2007", _bayer("demosaicing_CFA_Bayer_Menon2007"))
+
+
+@DEMOSAIC_METHODS.register("patch")
+def tile_replicate(mosaic: np.ndarray, layout: MosaicLayout) -> np.ndarray:
+    """The paper's reading (it ignores spatial artefacts): every pixel of a tile gets the mean of the
+    tile's own sites of each channel (for a Bayer tile: its R, B and the mean of its two G) — each
+    channel from pixels of that channel only, never interpolated across tiles, so inside a patch's
+    mask no other surface leaks in.  Pixels of a partial tile at the right/bottom edge stay 0.
+
+    >>> tile_replicate(np.array([[1.0, 2.0], [4.0, 8.0]]), MosaicLayout.bayer("RGGB"))[0, 0].tolist()
+    [1.0, 3.0, 8.0]
+    """
     h, w = mosaic.shape
-    H, W = h // 2 * 2, w // 2 * 2
+    th, tw = layout.tile_shape
+    H, W = h // th * th, w // tw * tw
     out = np.zeros((h, w, 3), dtype=np.float64)
-    acc = np.zeros((H // 2, W // 2, 3))
+    acc = np.zeros((H // th, W // tw, 3))
     cnt = np.zeros(3)
-    for dy, dx, k in bayer_sites(pattern):
-        acc[:, :, k] += mosaic[dy:H:2, dx:W:2]
+    for dy, dx, k in layout.sites():
+        acc[:, :, k] += mosaic[dy:H:th, dx:W:tw]
         cnt[k] += 1
     acc /= cnt
-    out[:H, :W] = np.repeat(np.repeat(acc, 2, axis=0), 2, axis=1)
+    out[:H, :W] = np.repeat(np.repeat(acc, th, axis=0), tw, axis=1)
     return out
+
+
+def demosaic(mosaic: np.ndarray, layout: MosaicLayout, method: str) -> np.ndarray:
+    """``(H, W, 3)`` full-colour image from a mosaic of the given layout with a registered method."""
+    return DEMOSAIC_METHODS[method](mosaic, layout)
 
 
 def fit_conversion(camera: np.ndarray, target_rgb: np.ndarray) -> np.ndarray:

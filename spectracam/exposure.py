@@ -11,24 +11,41 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import SpectracamError
+from .registry import Registry
 from .sensor import SensorSpec
 
-EXPOSURE_SCHEMES = ("single", "optimal", "balanced")
+#: Exposure schemes: name → function ``(saturation_s (3,), architecture) → times_s (3,)``, where
+#: ``saturation_s`` is each channel's time to fill the well on the white patch.
+EXPOSURE_SCHEMES: Registry = Registry("capture.exposure", "exposure scheme")
+
+
+@EXPOSURE_SCHEMES.register("single")
+def _single(saturation_s, architecture):
+    return np.full(3, saturation_s.min())
+
+
+@EXPOSURE_SCHEMES.register("optimal")
+def _optimal(saturation_s, architecture):
+    return saturation_s
+
+
+@EXPOSURE_SCHEMES.register("balanced")
+def _balanced(saturation_s, architecture):
+    # the paper (5.1): "FSC with total exposure equal to the CFA exposure duration" — one single time
+    return saturation_s * (saturation_s.min() / architecture.capture_time_s(saturation_s))
+
+
+def saturation_times_s(white_rate_e_per_s: np.ndarray, sensor: SensorSpec) -> np.ndarray:
+    """Time for each channel to fill the well on the white patch, photo + dark charge, s."""
+    return sensor.q_max_e / (np.asarray(white_rate_e_per_s, float) + sensor.dark_rate_e_per_s)
 
 
 def exposure_times_s(scheme: str, white_rate_e_per_s: np.ndarray, sensor: SensorSpec, architecture) -> np.ndarray:
-    """Per-channel exposure times ``(3,)`` in seconds for the architecture under a scheme."""
-    if scheme not in EXPOSURE_SCHEMES:
-        raise SpectracamError(f"capture.exposure = {scheme!r}: must be one of {', '.join(EXPOSURE_SCHEMES)}")
-    saturation = sensor.q_max_e / (np.asarray(white_rate_e_per_s, float) + sensor.dark_rate_e_per_s)
-    single = np.full(3, saturation.min())
-    if scheme == "single":
-        return single
-    if not architecture.independent_exposures:
-        raise SpectracamError(f"capture.exposure = {scheme!r}: the {architecture.name} architecture has one "
-                              "exposure for all channels; use 'single'")
-    if scheme == "optimal":
-        return saturation
-    # the paper (5.1): "FSC with total exposure equal to the CFA exposure duration" — one single time
-    return saturation * (saturation.min() / architecture.capture_time_s(saturation))
+    """Per-channel exposure times ``(3,)`` in seconds for the architecture under a scheme.
+
+    >>> from spectracam.architecture import make_architecture
+    >>> s = SensorSpec(q_max_e=100.0, dark_current=False)
+    >>> exposure_times_s("balanced", [100.0, 200.0, 50.0], s, make_architecture("fsc")).round(4).tolist()
+    [0.1429, 0.0714, 0.2857]
+    """
+    return EXPOSURE_SCHEMES[scheme](saturation_times_s(white_rate_e_per_s, sensor), architecture)

@@ -9,12 +9,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .registry import Registry
+from .spec import Spec
 from .spectra import WavelengthGrid, band_average, cmf_band_weights, tabulated
 
 CHANNELS = ("R", "G", "B")
-FILTER_KINDS = ("block", "gaussian", "camera", "xyz")
-QE_KINDS = ("flat", "silicon")
 CAMERAS = ("Nikon 5100 (NPL)", "Sigma SDMerill (NPL)")
+#: Filter kinds: name → function ``(spec, grid) → (3, n_bands)`` band-averaged responsivities.
+FILTER_KINDS: Registry = Registry("filters.kind", "filter kind")
+#: Quantum-efficiency models: name → function ``spec → QE(λ)`` (a vectorised spectrum).
+QE_MODELS: Registry = Registry("filters.qe", "quantum-efficiency model")
 
 #: A silicon-like external QE of a front-illuminated CMOS photodiode without IR-cut filter: low in
 #: the blue (shallow absorption, surface recombination), peaking near 550–650 nm, falling into the
@@ -27,11 +31,13 @@ SILICON_QE_SHAPE = (
 
 
 @dataclass(frozen=True)
-class FilterSpec:
+class FilterSpec(Spec):
     #: "block" (the paper, 4.3: ideal pass bands), "gaussian" (centres, FWHM), "camera", or "xyz":
     #: the CIE 1931 colour-matching functions in quantal form, x̄ȳz̄(λ)·(555 nm/λ), times the QE — with
     #: ``qe = "flat"`` a camera that meets the Luther condition exactly (its photon counts are a
     #: linear transform of XYZ).
+    TABLE = "filters"
+
     kind: str = "block"
     #: Block filter cutoffs, nm: blue below the first, green between, red above (paper: 490, 610).
     cutoffs_nm: tuple[float, float] = (490.0, 610.0)
@@ -46,12 +52,53 @@ class FilterSpec:
     #: front-illuminated CMOS photodiodes of the paper's time (0.3–0.6).
     qe_peak: float = 0.5
 
+    def validate(self) -> None:
+        self.choice("kind", FILTER_KINDS)
+        self.numbers("cutoffs_nm", 2, 0, increasing=True, unit="nm")
+        self.numbers("centres_nm", 3, 0, unit="nm")
+        self.numbers("fwhm_nm", 3, 1e-3, unit="nm")
+        self.choice("camera", CAMERAS)
+        self.choice("qe", QE_MODELS)
+        self.number("qe_peak", 0, 1, lo_open=True)
 
-def _transmittance(spec: FilterSpec, k: int):
-    """Transmittance of channel k for smooth (gaussian, camera) filters; block filters are exact above."""
-    if spec.kind == "gaussian":
-        c, sigma = spec.centres_nm[k], spec.fwhm_nm[k] / (2 * np.sqrt(2 * np.log(2)))
-        return lambda lam: np.exp(-0.5 * ((lam - c) / sigma) ** 2)
+
+@QE_MODELS.register("flat")
+def _flat_qe(spec: FilterSpec):
+    """The same QE, ``qe_peak``, at every wavelength."""
+    return lambda lam: np.full_like(np.asarray(lam, float), spec.qe_peak)
+
+
+@QE_MODELS.register("silicon")
+def _silicon_qe(spec: FilterSpec):
+    """:data:`SILICON_QE_SHAPE` scaled to ``qe_peak``."""
+    wl, shape = SILICON_QE_SHAPE
+    return tabulated(wl, np.asarray(shape) * spec.qe_peak)
+
+
+def quantum_efficiency(spec: FilterSpec):
+    """QE(λ), electrons per photon, of the registered model ``spec.qe``."""
+    return QE_MODELS[spec.qe](spec)
+
+
+def _smooth(transmittance):
+    """Responsivities of smooth filters: band average of transmittance_k(λ)·QE(λ), 400 points a band."""
+
+    def responsivity(spec: FilterSpec, grid: WavelengthGrid) -> np.ndarray:
+        qe = quantum_efficiency(spec)
+        return np.stack([band_average(lambda lam, t=transmittance(spec, k): t(lam) * qe(lam), grid, 400)
+                         for k in range(3)])
+
+    return responsivity
+
+
+def _gaussian_transmittance(spec: FilterSpec, k: int):
+    """A Gaussian of peak 1 centred on ``centres_nm[k]`` with full width ``fwhm_nm[k]`` at half maximum."""
+    c, sigma = spec.centres_nm[k], spec.fwhm_nm[k] / (2 * np.sqrt(2 * np.log(2)))
+    return lambda lam: np.exp(-0.5 * ((lam - c) / sigma) ** 2)
+
+
+def _camera_transmittance(spec: FilterSpec, k: int):
+    """colour-science's measured sensitivities of ``camera``, scaled so the largest value is 1."""
     import colour
 
     msds = colour.MSDS_CAMERA_SENSITIVITIES[spec.camera]
@@ -59,11 +106,8 @@ def _transmittance(spec: FilterSpec, k: int):
     return tabulated(msds.wavelengths, values[:, k] / values.max())
 
 
-def quantum_efficiency(spec: FilterSpec):
-    if spec.qe == "flat":
-        return lambda lam: np.full_like(np.asarray(lam, float), spec.qe_peak)
-    wl, shape = SILICON_QE_SHAPE
-    return tabulated(wl, np.asarray(shape) * spec.qe_peak)
+FILTER_KINDS.register("gaussian", _smooth(_gaussian_transmittance))
+FILTER_KINDS.register("camera", _smooth(_camera_transmittance))
 
 
 def _block_responsivity(spec: FilterSpec, grid: WavelengthGrid, k: int) -> np.ndarray:
@@ -79,16 +123,26 @@ def _block_responsivity(spec: FilterSpec, grid: WavelengthGrid, k: int) -> np.nd
     return np.where(hi > lo, mean_qe * (hi - lo) / (e[1:] - e[:-1]), 0.0)
 
 
+@FILTER_KINDS.register("block")
+def _block(spec: FilterSpec, grid: WavelengthGrid) -> np.ndarray:
+    """Ideal pass bands (paper 4.3): blue below the first cutoff, green between, red above."""
+    return np.stack([_block_responsivity(spec, grid, k) for k in range(3)])
+
+
+@FILTER_KINDS.register("xyz")
+def _xyz(spec: FilterSpec, grid: WavelengthGrid) -> np.ndarray:
+    """Quantal CIE 1931 CMFs on the band grid: photon counts Σ L_b·(λ_b/hc)·R_b·Δλ_b are then exactly
+    proportional to the X, Y, Z that cmf_band_weights gives for the same cube."""
+    avg = (cmf_band_weights(grid) / grid.widths_nm[:, None]).T  # band-averaged x̄ȳz̄, (3, B)
+    quantal = avg * (555.0 / np.asarray(grid.centres_nm, float))[None, :]
+    return quantal / quantal.max() * quantum_efficiency(spec)(np.asarray(grid.centres_nm, float))[None, :]
+
+
 def responsivities(spec: FilterSpec, grid: WavelengthGrid) -> np.ndarray:
-    """``(3, n_bands)`` band-averaged R_k(λ), electrons per photon, channels R, G, B."""
-    if spec.kind == "block":
-        return np.stack([_block_responsivity(spec, grid, k) for k in range(3)])
-    if spec.kind == "xyz":
-        # quantal CMFs on the band grid: photon counts Σ L_b·(λ_b/hc)·R_b·Δλ_b are then exactly
-        # proportional to the X, Y, Z that cmf_band_weights gives for the same cube
-        avg = (cmf_band_weights(grid) / grid.widths_nm[:, None]).T  # band-averaged x̄ȳz̄, (3, B)
-        quantal = avg * (555.0 / np.asarray(grid.centres_nm, float))[None, :]
-        return quantal / quantal.max() * quantum_efficiency(spec)(np.asarray(grid.centres_nm, float))[None, :]
-    qe = quantum_efficiency(spec)
-    return np.stack([band_average(lambda lam, t=_transmittance(spec, k): t(lam) * qe(lam), grid, 400)
-                     for k in range(3)])
+    """``(3, n_bands)`` band-averaged R_k(λ), electrons per photon, channels R, G, B (paper 3.3).
+
+    >>> R = responsivities(FilterSpec(), WavelengthGrid(np.arange(400.0, 701.0, 10.0)))
+    >>> R.shape, float(R[:, 15].sum())  # at 550 nm only green passes, with QE 0.5
+    ((3, 31), 0.5)
+    """
+    return FILTER_KINDS[spec.kind](spec, grid)

@@ -6,26 +6,62 @@ Both integrals run over the CIE 1931 range, 360–830 nm, at 1 nm.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from .errors import ConfigError
+from .registry import Registry
+from .spec import Spec
 from .spectra import K_M_LM_PER_W, Spectrum, cie_1931_cmfs, planck_radiance, tabulated
 
 #: Colour temperatures accepted for a blackbody, K: below 1000 K almost nothing is visible; above
 #: 40000 K the spectral shape no longer changes appreciably across the visible.
 TEMPERATURE_RANGE_K = (1000.0, 40000.0)
 
+#: Illuminant types: name → function of the spec giving the relative spectral shape.
+ILLUMINANTS: Registry = Registry("illuminant.type", "illuminant type")
+
+
+@ILLUMINANTS.register("blackbody")
+def _blackbody(spec: "IlluminantSpec") -> Spectrum:
+    """Planck's law at ``temperature_K``."""
+    T = float(spec.temperature_K)
+    return lambda lam: planck_radiance(lam, T)
+
+
+@ILLUMINANTS.register("cie")
+def _cie(spec: "IlluminantSpec") -> Spectrum:
+    """A tabulated CIE illuminant from colour-science (``name``: D65, D50, A, FL2, ...)."""
+    import colour
+
+    sd = colour.SDS_ILLUMINANTS[spec.name]
+    return tabulated(sd.wavelengths, sd.values)
+
 
 @dataclass(frozen=True)
-class IlluminantSpec:
-    """What the scene file's ``[illuminant]`` table describes."""
+class IlluminantSpec(Spec):
+    """What the scene file's ``[illuminant]`` table describes (``type`` there is ``kind`` here)."""
 
-    kind: str = "blackbody"  # "blackbody" or "cie"
+    TABLE = "illuminant"
+
+    kind: str = "blackbody"
     temperature_K: float | None = 5000.0
     name: str | None = None  # a key of colour.SDS_ILLUMINANTS, for kind = "cie"
     #: Luminance of a perfect white diffuser, cd/m².  100 cd/m² is a dim indoor scene.
     white_luminance_cd_m2: float = 100.0
+
+    def validate(self) -> None:
+        ILLUMINANTS.check(self.kind)  # named "type" in the file
+        if self.kind == "blackbody":
+            self.number("temperature_K", *TEMPERATURE_RANGE_K, unit="K")
+        elif self.kind == "cie":
+            import colour
+
+            if self.name not in colour.SDS_ILLUMINANTS:
+                raise self.error("name", "must be a CIE illuminant colour-science ships, e.g. D65, D50, A, FL2")
+        self.number("white_luminance_cd_m2", 0, lo_open=True, unit="cd/m²")
 
     @property
     def illuminance_lux(self) -> float:
@@ -35,16 +71,46 @@ class IlluminantSpec:
     def label(self) -> str:
         return f"{self.temperature_K:g} K blackbody" if self.kind == "blackbody" else f"CIE {self.name}"
 
+    def to_dict(self) -> dict:
+        d: dict = {"type": self.kind, "white_luminance_cd_m2": self.white_luminance_cd_m2}
+        if self.kind == "blackbody":
+            d["temperature_K"] = self.temperature_K
+        else:
+            d["name"] = self.name
+        return d
+
+    @classmethod
+    def from_dict(cls, data, source=None, base=None):
+        """The TOML table: ``type``, ``temperature_K`` or ``name``, and ``white_luminance_cd_m2`` or
+        ``illuminance_lux`` (= π × the luminance).  Keys not given keep ``base``'s values."""
+        if not isinstance(data, dict):
+            raise ConfigError("illuminant", data, "must be a table", source)
+        d = dict(data)
+        if "white_luminance_cd_m2" in d and "illuminance_lux" in d:
+            raise ConfigError("illuminant.illuminance_lux", d["illuminance_lux"],
+                              "give either white_luminance_cd_m2 or illuminance_lux, not both", source)
+        if "illuminance_lux" in d:
+            lux = d.pop("illuminance_lux")
+            if not (isinstance(lux, (int, float)) and not isinstance(lux, bool) and math.isfinite(lux) and lux > 0):
+                raise ConfigError("illuminant.illuminance_lux", lux, "must be a number > 0 lx", source)
+            d["white_luminance_cd_m2"] = lux / math.pi
+        merged = (base or cls()).to_dict()
+        if "type" in d and d["type"] != merged["type"]:  # another type: only the level carries over
+            merged = {"type": d["type"], "white_luminance_cd_m2": merged["white_luminance_cd_m2"]}
+        merged.update(d)
+        kind = merged.pop("type")
+        other = {"blackbody": "name", "cie": "temperature_K"}.get(kind)
+        if other in d:
+            raise ConfigError(f"illuminant.{other}", d[other], f"unknown key for a {kind!r} illuminant", source)
+        merged.pop(other, None)
+        if kind == "cie":
+            merged.setdefault("name", "D65")
+        return super().from_dict({"kind": kind, "temperature_K": None, **merged}, source)
+
 
 def relative_spd(spec: IlluminantSpec) -> Spectrum:
     """The illuminant's spectral shape (arbitrary scale)."""
-    if spec.kind == "blackbody":
-        T = float(spec.temperature_K)
-        return lambda lam: planck_radiance(lam, T)
-    import colour
-
-    sd = colour.SDS_ILLUMINANTS[spec.name]
-    return tabulated(sd.wavelengths, sd.values)
+    return ILLUMINANTS[spec.kind](spec)
 
 
 def irradiance_scale(spec: IlluminantSpec) -> float:
@@ -56,7 +122,13 @@ def irradiance_scale(spec: IlluminantSpec) -> float:
 
 
 def spectral_irradiance(spec: IlluminantSpec) -> Spectrum:
-    """Absolute spectral irradiance on the chart, W·m⁻²·nm⁻¹ (the chart faces the light)."""
+    """Absolute spectral irradiance on the chart, W·m⁻²·nm⁻¹ (the chart faces the light).
+
+    >>> E = spectral_irradiance(IlluminantSpec("blackbody", 5000.0, None, 100.0))
+    >>> wl = np.arange(360.0, 831.0)
+    >>> round(float(683 * np.trapezoid(E(wl) / np.pi * cie_1931_cmfs()[1][:, 1], wl)), 6)
+    100.0
+    """
     k = irradiance_scale(spec)
     shape = relative_spd(spec)
     return lambda lam: k * shape(lam)

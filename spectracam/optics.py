@@ -9,13 +9,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .registry import Registry
+from .spec import Spec
 from .spectra import energy_to_photons
 
-IRRADIANCE_FORMS = ("paraxial", "exact")
+#: Irradiance forms: name → image irradiance per unit scene radiance (sr) as a function of f-number.
+IRRADIANCE_FORMS: Registry = Registry("optics.irradiance_form", "irradiance form")
+IRRADIANCE_FORMS.register("paraxial", lambda n: np.pi / (4 * n**2))  # the paper's equation, 3.2
+IRRADIANCE_FORMS.register("exact", lambda n: np.pi / (1 + 4 * n**2))  # π·sin²θ with tanθ = 1/(2N)
 
 
 @dataclass(frozen=True)
-class OpticsSpec:
+class OpticsSpec(Spec):
+    TABLE = "optics"
+
     #: Effective f-number; the paper's section 4.2 uses 1.4.
     f_number: float = 1.4
     #: Lens transmittance T(λ), taken flat; the paper (4.2) assumes T = 1.
@@ -23,11 +30,19 @@ class OpticsSpec:
     #: "paraxial" π/(4N²) (the paper's equation) or "exact" π/(1+4N²).
     irradiance_form: str = "paraxial"
 
+    def validate(self) -> None:
+        self.number("f_number", 0.5, 64.0)
+        self.number("transmittance", 0, 1, lo_open=True)
+        self.choice("irradiance_form", IRRADIANCE_FORMS)
+
 
 def irradiance_factor(optics: OpticsSpec) -> float:
-    """Image irradiance per unit scene radiance, sr (paper, section 3.2)."""
-    n2 = optics.f_number**2
-    return float(np.pi / (4 * n2) if optics.irradiance_form == "paraxial" else np.pi / (1 + 4 * n2))
+    """Image irradiance per unit scene radiance, sr (paper, section 3.2).
+
+    >>> round(irradiance_factor(OpticsSpec(f_number=2.0)), 6)  # π/16
+    0.19635
+    """
+    return float(IRRADIANCE_FORMS[optics.irradiance_form](optics.f_number))
 
 
 def radiance_to_photon_irradiance(wavelengths_nm: np.ndarray, optics: OpticsSpec) -> np.ndarray:
@@ -35,8 +50,3 @@ def radiance_to_photon_irradiance(wavelengths_nm: np.ndarray, optics: OpticsSpec
     (photons·s⁻¹·m⁻²·nm⁻¹): :func:`irradiance_factor` × T × λ/(hc)."""
     k = irradiance_factor(optics) * optics.transmittance
     return energy_to_photons(1.0, np.asarray(wavelengths_nm, float)) * k
-
-
-def photon_irradiance(radiance: np.ndarray, wavelengths_nm: np.ndarray, optics: OpticsSpec) -> np.ndarray:
-    """Band-averaged photon irradiance at the sensor, photons·s⁻¹·m⁻²·nm⁻¹, float32, same shape."""
-    return radiance * radiance_to_photon_irradiance(wavelengths_nm, optics).astype(np.float32)

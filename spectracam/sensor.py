@@ -1,24 +1,77 @@
 """CMOS image sensor in current-integration mode (paper, sections 3.4 and 4.4).
 
-Per pixel and channel: photo-electrons ``ρ·T`` plus dark electrons ``i_d·A·T`` integrate with
-shot noise on a well that holds ``q_max`` electrons; read noise ``Q_r`` is added on readout; the
-voltage ``V = g·Q + V_FPN`` (additive fixed-pattern noise) is quantised by an n-bit uniform ADC
-whose full scale is the full well, ``g·q_max``.  Everything here is in electrons (``V/g``), so the
-conversion gain only names the voltage scale.  Each noise source switches off on its own.
+Per pixel and channel the recorded value is built by named steps, each one term of the paper's
+section 3.4: :func:`integrate_charge` (photo-electrons ``ρ·T`` plus dark electrons ``i_d·A·T``),
+:func:`add_shot_noise`, :func:`clip_to_well` (``q_max``), :func:`add_read_noise` (``Q_r``),
+:func:`add_offset_fpn` (``V_FPN``) and :func:`adc` (an n-bit uniform quantiser whose full scale is
+the full well, ``g·q_max``), with :func:`adc_inverse` beside it.  Everything is in electrons
+(``V/g``), so the conversion gain only names the voltage scale.  Each noise source switches off on
+its own.  :func:`expose` runs the steps in place, chunk by chunk, on all cores.
 """
 from __future__ import annotations
 
 import os
 from dataclasses import dataclass
+from typing import Callable, NamedTuple
 
 import numpy as np
 
-FPN_READINGS = ("std", "bound")
-SHOT_NOISE_MODELS = ("gaussian", "poisson")
+from .errors import ConfigError
+from .registry import Registry
+from .spec import Spec
+
+
+class FpnReading(NamedTuple):
+    """How a stated FPN fraction of full swing becomes per-pixel offsets."""
+
+    rms_per_swing: float  # rms offset / (fraction × full swing)
+    draw: Callable  # (rng, out float32 array, swing_e) → fills ``out`` with offsets in electrons
+
+
+def _draw_std(rng, out, swing_e):
+    rng.standard_normal(out=out, dtype=np.float32)
+    out *= np.float32(swing_e)
+
+
+def _draw_bound(rng, out, swing_e):
+    rng.random(out=out, dtype=np.float32)
+    out -= np.float32(0.5)
+    out *= np.float32(swing_e)
+
+
+#: Readings of "FPN < x % of full swing": ``std`` — the rms across pixels is that fraction (how
+#: datasheets quote FPN; the worst case the statement allows); ``bound`` — every offset lies within
+#: a spread of that fraction (uniform, rms = fraction/√12).
+FPN_READINGS: Registry = Registry("sensor.fpn_reading", "FPN reading")
+FPN_READINGS.register("std", FpnReading(1.0, _draw_std))
+FPN_READINGS.register("bound", FpnReading(1.0 / np.sqrt(12.0), _draw_bound))
+
+
+def _gaussian_shot(mean, out, rng):
+    """The paper's 3.4: Gaussian with variance = mean."""
+    rng.standard_normal(out=out, dtype=np.float32)
+    out *= np.sqrt(mean)
+    out += mean
+
+
+def _poisson_shot(mean, out, rng):
+    """Exact counting statistics."""
+    out[...] = rng.poisson(mean)
+
+
+#: Shot-noise models: name → function ``(mean_e, out, rng)`` filling ``out`` with noisy electrons.
+SHOT_NOISE_MODELS: Registry = Registry("sensor.shot_noise_model", "shot-noise model")
+SHOT_NOISE_MODELS.register("gaussian", _gaussian_shot)
+SHOT_NOISE_MODELS.register("poisson", _poisson_shot)
+
+#: The switchable error sources, in the order the paper's Figure 6 adds them.
+NOISE_SOURCES = ("shot_noise", "dark_current", "read_noise", "fpn", "quantization")
 
 
 @dataclass(frozen=True)
-class SensorSpec:
+class SensorSpec(Spec):
+    TABLE = "sensor"
+
     #: Full-well capacity, electrons (paper, 4.4).
     q_max_e: float = 131072.0
     #: Read noise σ_r, electrons rms (paper, 4.4).
@@ -51,6 +104,20 @@ class SensorSpec:
     quantization: bool = True
     clipping: bool = True
 
+    def validate(self) -> None:
+        self.number("q_max_e", 1, 1e9, unit="e-")
+        self.number("read_noise_e", 0, 1e6, unit="e-")
+        self.number("dark_current_e_per_s_um2", 0, 1e9)
+        self.integer("adc_bits", 1, 24)
+        self.number("fpn_fraction", 0, 1)
+        self.choice("fpn_reading", FPN_READINGS)
+        self.number("prnu_fraction", 0, 1)
+        self.number("pixel_pitch_um", 0.1, 1000, unit="µm")
+        self.number("fill_factor", 0, 1, lo_open=True)
+        self.number("conversion_gain_uV_per_e", 0, lo_open=True)
+        self.choice("shot_noise_model", SHOT_NOISE_MODELS)
+        self.boolean(*NOISE_SOURCES, "clipping")
+
     @property
     def pixel_area_um2(self) -> float:
         """Photosensitive area A = pitch² × fill factor, µm²."""
@@ -67,14 +134,14 @@ class SensorSpec:
 
     @property
     def fpn_rms_e(self) -> float:
-        swing = self.fpn_fraction * self.q_max_e
-        return swing if self.fpn_reading == "std" else swing / np.sqrt(12.0)
+        return self.fpn_fraction * self.q_max_e * FPN_READINGS[self.fpn_reading].rms_per_swing
 
     def off(self, *sources: str) -> "SensorSpec":
-        """A copy with the named noise sources switched off (e.g. ``off("fpn", "read_noise")``)."""
-        import dataclasses
-
-        return dataclasses.replace(self, **{s: False for s in sources})
+        """A copy with the named noise sources (or ``clipping``) switched off (e.g. ``off("fpn", "read_noise")``)."""
+        for s in sources:
+            if s not in (*NOISE_SOURCES, "clipping"):
+                raise ConfigError("sensor", s, "not a switch; one of " + ", ".join((*NOISE_SOURCES, "clipping")))
+        return self.replace(**{s: False for s in sources})
 
 
 def noise_stream(seed: int, *stream: int) -> np.random.SeedSequence:
@@ -123,17 +190,11 @@ def fixed_pattern(sensor: SensorSpec, shape: tuple[int, int], seed: int, sensor_
     if sensor.fpn and sensor.fpn_fraction > 0:
         offset = np.empty(n, np.float32)
         seq = noise_stream(seed, FPN_STREAM, sensor_index, 0)
-        swing = np.float32(sensor.fpn_fraction * sensor.q_max_e)
+        reading = FPN_READINGS[sensor.fpn_reading]
+        swing = sensor.fpn_fraction * sensor.q_max_e
 
         def draw_offset(i, sl):
-            rng = _chunk_rng(seq, i)
-            if sensor.fpn_reading == "std":
-                rng.standard_normal(out=offset[sl], dtype=np.float32)
-                offset[sl] *= np.float32(sensor.fpn_rms_e)
-            else:  # uniform over a spread of fpn_fraction of full swing
-                rng.random(out=offset[sl], dtype=np.float32)
-                offset[sl] -= np.float32(0.5)
-                offset[sl] *= swing
+            reading.draw(_chunk_rng(seq, i), offset[sl], swing)
 
         _map_chunks(draw_offset, n)
         offset = offset.reshape(shape)
@@ -149,6 +210,72 @@ def fixed_pattern(sensor: SensorSpec, shape: tuple[int, int], seed: int, sensor_
         _map_chunks(draw_gain, n)
         gain = gain.reshape(shape)
     return offset, gain
+
+
+def integrate_charge(rate_e_per_s, time_s: float, dark_e: float, gain=None, out=None):
+    """Expected charge ``ρ·T·g + i_d·A·T`` (paper 3.4; ``g`` the PRNU gain, 1 without it), e⁻."""
+    out = np.multiply(rate_e_per_s, np.float32(time_s), out=out)
+    if gain is not None:
+        out *= gain
+    out += np.float32(dark_e)
+    return out
+
+
+def add_shot_noise(mean_e, out, rng, model: str = "gaussian"):
+    """Photon and dark-current shot noise on ``mean_e`` into ``out`` (registered ``model``)."""
+    SHOT_NOISE_MODELS[model](mean_e, out, rng)
+    return out
+
+
+def clip_to_well(charge_e, q_max_e: float):
+    """The well holds 0..q_max electrons (paper 3.4)."""
+    return np.clip(charge_e, 0.0, q_max_e, out=charge_e)
+
+
+def add_read_noise(charge_e, rng, read_noise_e: float):
+    """Gaussian read noise σ_r added on readout (paper 3.4: Q_r)."""
+    r = rng.standard_normal(charge_e.size, dtype=np.float32).reshape(charge_e.shape)
+    r *= np.float32(read_noise_e)
+    charge_e += r
+    return charge_e
+
+
+def add_offset_fpn(charge_e, offset_e):
+    """The pixel's fixed offset, V_FPN/g (paper 3.4)."""
+    charge_e += offset_e
+    return charge_e
+
+
+def adc_full_scale_dn(sensor: SensorSpec) -> float:
+    """Largest output: code 2ⁿ − 1 when quantising, else the continuous full scale 2ⁿ steps."""
+    return float(2**sensor.adc_bits - 1 if sensor.quantization else 2**sensor.adc_bits)
+
+
+def adc(charge_e, sensor: SensorSpec):
+    """n-bit uniform ADC whose full scale is the full well (paper 3.4), in place: step
+    ``q_max/2ⁿ``; the top code 2ⁿ − 1 holds ``[q_max − step, q_max)``.  Without quantisation the
+    output is the continuous ``V/step``.
+
+    >>> s = SensorSpec(q_max_e=256.0, adc_bits=8)
+    >>> adc(np.array([0.4, 1.0, 254.9, 300.0], np.float32), s).tolist()
+    [0.0, 1.0, 254.0, 255.0]
+    """
+    charge_e *= np.float32(1.0 / sensor.quantization_step_e)
+    if sensor.quantization:
+        np.floor(charge_e, out=charge_e)
+    if sensor.clipping:
+        np.clip(charge_e, 0.0, np.float32(adc_full_scale_dn(sensor)), out=charge_e)
+    return charge_e
+
+
+def adc_inverse(digital, sensor: SensorSpec) -> np.ndarray:
+    """Electrons from digital numbers at mid-step, ``(DN + ½)·q_max/2ⁿ`` (or ``DN·step`` when not
+    quantised): the estimate with the least error for a uniform quantiser.
+
+    >>> adc_inverse(np.array([0.0, 10.0]), SensorSpec(q_max_e=256.0, adc_bits=8)).tolist()
+    [0.5, 10.5]
+    """
+    return (digital + (0.5 if sensor.quantization else 0.0)) * sensor.quantization_step_e
 
 
 def expose(photo_rate_e_per_s: np.ndarray, time_s: float, sensor: SensorSpec, noise: np.random.SeedSequence,
@@ -168,42 +295,23 @@ def expose(photo_rate_e_per_s: np.ndarray, time_s: float, sensor: SensorSpec, no
     n = rate.size
     mean = np.empty(n, np.float32)
     q = np.empty(n, np.float32)
-    t = np.float32(time_s)
-    dark = np.float32(sensor.dark_rate_e_per_s * time_s)
-    inv_step = np.float32(1.0 / sensor.quantization_step_e)
-    # full scale (the full well) is 2ⁿ steps: the top code 2ⁿ − 1 holds [q_max − step, q_max);
-    # without quantisation the output is the continuous V/step, clipped at full scale
-    top = np.float32(2**sensor.adc_bits - 1 if sensor.quantization else 2**sensor.adc_bits)
+    dark = sensor.dark_rate_e_per_s * time_s
 
     def run(i, sl):
         rng = _chunk_rng(noise, i)
         m, out = mean[sl], q[sl]
-        np.multiply(rate[sl], t, out=m)
-        if g is not None:
-            m *= g[sl]
-        m += dark
+        integrate_charge(rate[sl], time_s, dark, None if g is None else g[sl], out=m)
         if sensor.shot_noise:
-            if sensor.shot_noise_model == "poisson":
-                out[...] = rng.poisson(m)
-            else:  # the paper's 3.4: Gaussian with variance = mean
-                rng.standard_normal(out=out, dtype=np.float32)
-                out *= np.sqrt(m)
-                out += m
+            add_shot_noise(m, out, rng, sensor.shot_noise_model)
         else:
             out[...] = m
         if sensor.clipping:
-            np.clip(out, 0.0, sensor.q_max_e, out=out)  # the well holds 0..q_max electrons
+            clip_to_well(out, sensor.q_max_e)
         if sensor.read_noise and sensor.read_noise_e > 0:
-            r = rng.standard_normal(out.size, dtype=np.float32)
-            r *= np.float32(sensor.read_noise_e)
-            out += r
+            add_read_noise(out, rng, sensor.read_noise_e)
         if off is not None:
-            out += off[sl]
-        out *= inv_step  # V/(g·step): digital-number units
-        if sensor.quantization:
-            np.floor(out, out=out)
-        if sensor.clipping:
-            np.clip(out, 0.0, top, out=out)
+            add_offset_fpn(out, off[sl])
+        adc(out, sensor)
 
     _map_chunks(run, n)
     return q.reshape(shape), mean.reshape(shape)

@@ -31,9 +31,18 @@ Spectrum = Callable[[np.ndarray], np.ndarray]
 
 @dataclass(frozen=True)
 class WavelengthGrid:
-    """Band centres in nm, strictly increasing, with the band edges derived from them."""
+    """Band centres in nm, strictly increasing, with the band edges derived from them.
 
-    centres_nm: np.ndarray
+    Held as a tuple so that grids (and the scenes holding them) compare and hash by value.
+
+    >>> WavelengthGrid([400, 410, 420]).edges_nm.tolist()
+    [395.0, 405.0, 415.0, 425.0]
+    """
+
+    centres_nm: tuple
+
+    def __post_init__(self):
+        object.__setattr__(self, "centres_nm", tuple(float(x) for x in np.asarray(self.centres_nm, float).ravel()))
 
     @property
     def edges_nm(self) -> np.ndarray:
@@ -49,7 +58,7 @@ class WavelengthGrid:
         return np.diff(self.edges_nm)
 
     def __len__(self) -> int:
-        return int(np.asarray(self.centres_nm).size)
+        return len(self.centres_nm)
 
 
 def planck_radiance(wavelength_nm: np.ndarray, temperature_K: float) -> np.ndarray:

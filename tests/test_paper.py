@@ -61,9 +61,14 @@ def test_results_have_the_documented_shape(analytic_run):
     # optimal exposure fills every channel's well on white; single fills exactly one
     np.testing.assert_allclose(r["fig4_white_response"]["fsc/optimal"]["3000"], 1.0, rtol=1e-5)
     assert max(r["fig4_white_response"]["cfa/single"]["7000"]) == pytest.approx(1.0, rel=1e-5)
-    steps = [s for s, _ in r["fig6_budget_delta_e"]]
-    assert steps[0] == "perfect system" and steps[-1] == "+ colour conversion" and len(steps) == 5
-    assert r["fig6_budget_delta_e"][0][1] == pytest.approx(0.0, abs=1e-4)  # float32 pipeline
+    steps = {s["step"]: s["delta_e"] for s in r["fig6_budget_delta_e"]}
+    assert list(steps) == ["perfect", "shot_noise", "cmos_noise", "quantization", "conversion"]
+    assert steps["perfect"] == pytest.approx(0.0, abs=1e-4)  # float32 pipeline
+    # each step by name: noise adds to the perfect system, quantisation adds little, and the last step
+    # is the noise budget plus the conversion error of the noise-free camera (6.25 at 5000 K)
+    assert steps["shot_noise"] > steps["perfect"] + 0.1 and steps["cmos_noise"] > steps["shot_noise"] + 1.0
+    assert 0 <= steps["quantization"] - steps["cmos_noise"] < 0.2
+    assert steps["conversion"] > steps["quantization"] + 2.0
     json.dumps(r)  # serialisable as is
 
 
@@ -110,12 +115,12 @@ def test_cache_rejects_an_entry_for_another_scene(tmp_path):
     from conftest import small_scene
     from spectracam.io.exr import write_radiance_exr
     from spectracam.render import render
-    from spectracam.render.cache import cached_render, render_key
+    from spectracam.cache import cached_render, render_key
 
     a = small_scene(image={"width": 64, "height": 48})
     b = small_scene(image={"width": 64, "height": 48}, illuminant={"temperature_K": 3000})
     key, _ = render_key(a, "analytic")
-    write_radiance_exr(tmp_path / f"{key}.exr", render(b, "analytic"), b)  # a stale/foreign entry under a's key
+    write_radiance_exr(tmp_path / f"{key}.exr", render(b, "analytic"))  # a stale/foreign entry under a's key
     cube, hit = cached_render(a, "analytic", directory=tmp_path)
     assert not hit
     np.testing.assert_array_equal(cube.radiance, render(a, "analytic").radiance)
@@ -132,9 +137,9 @@ def test_claims_follow_the_numbers():
                          "fsc/balanced": {"3000": 23, "5000": 22, "7000": 23}},
         "fig5b_delta_e": {"cfa/single": {t: 7.0 for t in temps}, "fsc/optimal": {t: 6.5 for t in temps},
                           "fsc/balanced": {t: 9.0 for t in temps}, "prism/optimal": {t: 6.5 for t in temps}},
-        "fig6_budget_delta_e": [["perfect system", 0.0], ["+ photon shot noise", 0.5],
-                                ["+ CMOS noise (read, dark, FPN)", 3.0], ["+ 8-bit quantization", 3.3],
-                                ["+ colour conversion", 7.0]],
+        "fig6_budget_delta_e": [{"step": k, "label": "+ " + k, "delta_e": v} for k, v in
+                                (("perfect", 0.0), ("shot_noise", 0.5), ("cmos_noise", 3.0), ("quantization", 3.3),
+                                 ("conversion", 7.0))],
     }
     verdicts = {c["id"]: c["verdict"] for c in evaluate(paper_like)}
     assert set(verdicts.values()) == {"reproduced"}, verdicts

@@ -24,7 +24,7 @@ def test_shipped_scenes_cover_the_papers_illuminants():
 def test_scene_round_trips_through_to_dict():
     s = parse_scene({"illuminant": {"type": "cie", "name": "D65", "illuminance_lux": 1000.0}})
     again = parse_scene(s.to_dict())
-    assert again.to_json() == s.to_json()
+    assert again.to_dict() == s.to_dict()
     assert s.illuminant.white_luminance_cd_m2 == pytest.approx(1000.0 / np.pi)
 
 

@@ -4,9 +4,12 @@ import dataclasses
 import numpy as np
 import pytest
 
-from spectracam.architecture import ColourFilterArray, make_architecture
-from spectracam.capture import CameraSpec, capture, photo_electron_rates
-from spectracam.errors import SpectracamError
+from spectracam import capture
+from spectracam.architecture import MosaicLayout, make_architecture
+from spectracam.camera import CameraSpec, CaptureSpec
+from spectracam.camera import photo_electron_rates as _rates
+from spectracam.capture import capture as capture_stage
+from spectracam.errors import ConfigError
 from spectracam.exposure import exposure_times_s
 from spectracam.filters import FilterSpec, responsivities
 from spectracam.optics import OpticsSpec, irradiance_factor
@@ -16,6 +19,10 @@ from spectracam.spectra import PLANCK_H_J_S, SPEED_OF_LIGHT_M_S, WavelengthGrid
 
 GRID = np.arange(400.0, 701.0, 10.0)
 QUIET = SensorSpec().off("shot_noise", "dark_current", "read_noise", "fpn", "quantization", "clipping")
+
+
+def photo_electron_rates(cube, camera):
+    return _rates(cube.radiance, cube.grid, camera)
 
 
 def flat_cube(L=1e-3, shape=(64, 64)):
@@ -75,7 +82,7 @@ def test_dark_frame_statistics(model):
 
 
 def test_quantisation_step_is_qmax_over_2n():
-    sensor = QUIET.__class__(**{**dataclasses.asdict(QUIET), "quantization": True, "adc_bits": 8})
+    sensor = QUIET.replace(quantization=True, adc_bits=8)
     assert sensor.quantization_step_e == 512.0
     electrons = np.arange(0, 131072, 37, dtype=np.float32)
     dn, _ = expose(electrons, 1.0, sensor, noise_stream(0))
@@ -113,10 +120,10 @@ def test_fpn_fixed_across_frames_different_across_pixels(reading, rms):
 
 def test_fsc_frames_share_fpn_prism_sensors_do_not():
     cube = flat_cube(shape=(200, 200))
-    mask = np.ones((200, 200), bool)
+    everywhere = (slice(None), slice(None))
     sensor = SensorSpec(quantization=False, shot_noise=False, read_noise=False, dark_current=False)
     for arch, shared in (("fsc", True), ("prism", False)):
-        raw = capture(cube, sensor, arch, "optimal", seed=2, white_mask=mask)
+        raw = capture_stage(cube, CameraSpec(sensor=sensor, capture=CaptureSpec(arch, "optimal")), 2, everywhere)
         resid = raw.digital * sensor.quantization_step_e - raw.expected_e
         corr = np.corrcoef(resid[0].ravel(), resid[2].ravel())[0, 1]
         assert (corr > 0.999) if shared else (abs(corr) < 0.02)
@@ -136,13 +143,13 @@ def test_exposure_rules():
     bal = exposure_times_s("balanced", white, s, fsc)
     assert fsc.capture_time_s(bal) == pytest.approx(single[0]) and bal / bal[0] == pytest.approx(sat / sat[0])
     assert prism.capture_time_s(exposure_times_s("balanced", white, s, prism)) == pytest.approx(single[0])
-    with pytest.raises(SpectracamError, match="one exposure"):
-        exposure_times_s("optimal", white, s, cfa)
+    with pytest.raises(ConfigError, match="capture.exposure = 'optimal': the cfa architecture has one exposure"):
+        CaptureSpec("cfa", "optimal")
 
 
 def test_optimal_prism_and_fsc_have_identical_expected_electrons(scene_5000, analytic_5000):
-    p = capture(analytic_5000, architecture="prism", exposure="optimal", scene=scene_5000)
-    f = capture(analytic_5000, architecture="fsc", exposure="optimal", scene=scene_5000)
+    p = capture(analytic_5000, design="prism/optimal", scene=scene_5000)
+    f = capture(analytic_5000, design="fsc/optimal", scene=scene_5000)
     np.testing.assert_array_equal(p.expected_e, f.expected_e)
     from spectracam.chart import patch_masks
 
@@ -155,22 +162,27 @@ def test_optimal_prism_and_fsc_have_identical_expected_electrons(scene_5000, ana
 
 @pytest.mark.parametrize("pattern", ["RGGB", "GRBG", "GBRG", "BGGR"])
 def test_cfa_mosaic_samples_the_right_channel(pattern, scene_5000, analytic_5000):
-    cam = CameraSpec(cfa_pattern=pattern)
+    cam = CameraSpec(capture=CaptureSpec(cfa_pattern=pattern))
     raw = capture(analytic_5000, camera=cam, scene=scene_5000)
     rates = photo_electron_rates(analytic_5000, cam)
-    idx = ColourFilterArray(pattern).channel_index(rates.shape[:2])
+    idx = MosaicLayout.bayer(pattern).channel_index(rates.shape[:2])
     assert "RGB"[idx[0, 0]] == pattern[0] and "RGB"[idx[1, 1]] == pattern[3]
     expected = np.take_along_axis(rates, idx[..., None], axis=2)[..., 0] * raw.exposure_times_s[0]
     np.testing.assert_allclose(raw.expected_e, expected + SensorSpec().dark_rate_e_per_s * raw.exposure_times_s[0], rtol=1e-5)
-    assert raw.digital.shape == (120, 160) and raw.cfa_pattern == pattern
+    assert raw.digital.shape == (120, 160) and raw.layout == MosaicLayout.bayer(pattern)
 
 
 def test_camera_spec_design_is_used_unless_overridden(scene_5000, analytic_5000):
-    raw = capture(analytic_5000, camera=CameraSpec(architecture="prism", exposure="optimal"), scene=scene_5000)
-    assert raw.architecture == "prism" and raw.digital.shape == (3, 120, 160)
-    raw = capture(analytic_5000, None, "fsc", None, camera=CameraSpec(architecture="prism", exposure="optimal"),
-                  scene=scene_5000)
-    assert raw.architecture == "fsc" and raw.exposure == "optimal"
+    prism = CameraSpec(capture=CaptureSpec("prism", "optimal"))
+    raw = capture(analytic_5000, camera=prism, scene=scene_5000)
+    assert raw.design == "prism/optimal" and raw.digital.shape == (3, 120, 160)
+    raw = capture(analytic_5000, camera=prism, design="fsc/optimal", scene=scene_5000)
+    assert raw.design == "fsc/optimal" and raw.camera.sensor == prism.sensor
+    # without a camera, the camera of the scene the cube records (not the paper's default)
+    fsc_scene = scene_5000.replace(camera=CameraSpec(capture=CaptureSpec("fsc", "balanced")))
+    from spectracam.render import render
+
+    assert capture(render(fsc_scene, "analytic")).design == "fsc/balanced"
 
 
 def test_same_seed_same_capture(scene_5000, analytic_5000):
@@ -197,11 +209,11 @@ def test_chunked_noise_is_deterministic_and_independent_across_chunks():
 
 
 def test_folded_weights_equal_the_explicit_optics_path():
-    from spectracam.optics import photon_irradiance
+    from spectracam.optics import radiance_to_photon_irradiance
 
     cube = RadianceCube(np.random.default_rng(0).random((8, 9, GRID.size), dtype=np.float32) * 1e-3, GRID.copy(), {})
     cam = CameraSpec(filters=FilterSpec(qe="silicon"), optics=OpticsSpec(2.0, 0.9, "exact"))
-    Eq = photon_irradiance(cube.radiance, GRID, cam.optics).astype(np.float64)
+    Eq = cube.radiance.astype(np.float64) * radiance_to_photon_irradiance(GRID, cam.optics)
     R = responsivities(cam.filters, WavelengthGrid(GRID))
     explicit = np.einsum("hwb,kb->hwk", Eq, R * 10.0) * cam.sensor.pixel_area_um2 * 1e-12
     np.testing.assert_allclose(photo_electron_rates(cube, cam), explicit, rtol=1e-5)

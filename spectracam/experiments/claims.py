@@ -75,17 +75,19 @@ def evaluate(r: dict) -> list[dict]:
         d = np.array([de["fsc/balanced"][t] - de["fsc/optimal"][t] for t in _temps(de["fsc/optimal"])])
         add("de-balanced", "restricting FSC to the CFA's exposure raises ΔE*ab by only 2–3 units", "+2 to +3",
             f"{d.min():+.1f} to {d.max():+.1f}", np.all(d > 0), np.all((d > 1.5) & (d < 3.5)))
-    steps = r.get("fig6_budget_delta_e") or []
-    if len(steps) >= 5:
-        v = np.array([x for _, x in steps])
+    steps = {s["step"]: s for s in r.get("fig6_budget_delta_e") or []}
+    order = ("perfect", "shot_noise", "cmos_noise", "quantization", "conversion")
+    if all(k in steps for k in order):
+        v = np.array([steps[k]["delta_e"] for k in order])
         inc = np.diff(v)
         add("fig6-grows", "Figure 6: the error grows with every step", "monotonic",
             " → ".join(f"{x:.2f}" for x in v), np.all(inc >= -0.01), np.all(inc > 0.01))
-        names = [s for s, _ in steps[1:]]
-        top2 = {names[i] for i in np.argsort(inc)[-2:]}
-        want = {"+ CMOS noise (read, dark, FPN)", "+ colour conversion"}
+        added = order[1:]
+        top2 = {added[i] for i in np.argsort(inc)[-2:]}
+        want = {"cmos_noise", "conversion"}
         add("fig6-main", "Figure 6: the main sources are CMOS noise and the colour conversion",
-            "CMOS and conversion largest", ", ".join(f"{n[2:]} {x:+.2f}" for n, x in zip(names, inc)),
+            "CMOS and conversion largest",
+            ", ".join(f"{steps[k]['label'][2:]} {x:+.2f}" for k, x in zip(added, inc)),
             bool(top2 & want), top2 == want)
     return out
 

@@ -1,24 +1,15 @@
 """Figures 4, 5 and 6 drawn like the paper's: colour temperature on x, a marker per channel/design."""
 from __future__ import annotations
 
-import io
-
 import numpy as np
+
+from ..io.plots import pyplot as _plt
 
 #: The paper's markers: Fig. 4 circles R, triangles G, squares B; Fig. 5 circles CFA, triangles FSC,
 #: squares FSC balanced (the prism, not in the paper's Fig. 5, gets diamonds).
 CHANNEL_STYLE = {"R": ("o", "tab:red"), "G": ("^", "tab:green"), "B": ("s", "tab:blue")}
 DESIGN_STYLE = {"cfa/single": ("o", "black", "-"), "fsc/optimal": ("^", "tab:blue", "--"),
                 "fsc/balanced": ("s", "tab:orange", ":"), "prism/optimal": ("D", "tab:purple", "-.")}
-
-
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def fig4(results: dict):
@@ -68,7 +59,7 @@ def fig5(results: dict):
 
 def fig6(results: dict):
     plt = _plt()
-    steps = results["fig6_budget_delta_e"]
+    steps = [(s["label"], s["delta_e"]) for s in results["fig6_budget_delta_e"]]
     fig, ax = plt.subplots(figsize=(6.5, 3.6))
     names = [s.replace("+ ", "+\n").replace(" (", "\n(") for s, _ in steps]
     ax.bar(range(len(steps)), [v for _, v in steps], color="0.55", edgecolor="black")
@@ -80,9 +71,3 @@ def fig6(results: dict):
     ax.set_title(f"Figure 6: cumulative error, {p['budget_design']} under {p['budget_illuminant']}", fontsize=10)
     fig.tight_layout()
     return fig
-
-
-def render_figure(fig, fmt: str) -> bytes:
-    buf = io.BytesIO()
-    fig.savefig(buf, format=fmt, dpi=130)
-    return buf.getvalue()

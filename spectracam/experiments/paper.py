@@ -8,30 +8,67 @@ last step scores against the scene, adding the conversion error.
 """
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from ..capture import CameraSpec, capture
+from ..camera import CameraSpec
+from ..capture import capture
+from ..chart import WHITE_PATCH
 from ..color import ProcessingSpec
-from ..errors import SpectracamError
+from ..errors import ConfigError, SpectracamError
 from ..illuminant import IlluminantSpec
+from ..overrides import apply_overrides, parse_assignment
+from ..reference import ChartReference
 from ..render import RadianceCube
-from ..scene import Scene, _Table, camera_tables, load_scene, parse_camera, parse_processing, read_toml
-from ..score import score, white_patch_rates
+from ..scene import Scene, load_scene, read_toml
+from ..score import score
+from ..spec import _is_number
 
-BUDGET_STEPS = ("perfect system", "+ photon shot noise", "+ CMOS noise (read, dark, FPN)",
-                "+ 8-bit quantization", "+ colour conversion")
+
+@dataclass(frozen=True)
+class BudgetStep:
+    """One step of Figure 6: the error sources on (``sensor`` noise switches) and what ΔE is
+    measured against (``"camera"``: the same camera without noise; ``"scene"``: adds the conversion)."""
+
+    id: str
+    label: str
+    sources: tuple
+    against: str
+
+
+#: Figure 6's steps, each adding one error source to the last (paper, Fig. 6).
+BUDGET_STEPS = (
+    BudgetStep("perfect", "perfect system", (), "camera"),
+    BudgetStep("shot_noise", "+ photon shot noise", ("shot_noise",), "camera"),
+    BudgetStep("cmos_noise", "+ CMOS noise (read, dark, FPN)", ("shot_noise", "dark_current", "read_noise", "fpn"),
+               "camera"),
+    BudgetStep("quantization", "+ 8-bit quantization",
+               ("shot_noise", "dark_current", "read_noise", "fpn", "quantization"), "camera"),
+    BudgetStep("conversion", "+ colour conversion", ("shot_noise", "dark_current", "read_noise", "fpn", "quantization"),
+               "scene"),
+)
+#: Keys of an experiment file (``--set`` paths starting with one of these name the experiment;
+#: any other path names a field of the base scene).
+EXPERIMENT_KEYS = ("base_scene", "temperatures_K", "budget_illuminant", "budget_design", "designs", "light",
+                   "sensitivity")
 
 
 @dataclass(frozen=True)
 class Alternative:
+    """Another reading of a choice the paper leaves open: camera/processing tables over the base's."""
+
     name: str
     reason: str
     tables: dict = field(default_factory=dict)  # optics/filters/sensor/processing overrides
     light_scale: float = 1.0
+
+    def camera(self, base: CameraSpec, source: str | None = None) -> CameraSpec:
+        return CameraSpec.from_dict({k: v for k, v in self.tables.items() if k != "processing"}, source, base)
+
+    def processing(self, base: ProcessingSpec, source: str | None = None) -> ProcessingSpec:
+        return ProcessingSpec.from_dict(self.tables.get("processing", {}), source, base)
 
 
 @dataclass(frozen=True)
@@ -47,61 +84,82 @@ class PaperExperiment:
     alternatives: tuple = ()
 
 
-def _design(name: str, source: str) -> tuple[str, str]:
-    arch, _, scheme = name.partition("/")
-    parse_camera({"capture": {"architecture": arch, "exposure": scheme or "?"}}, source=source)
-    return arch, scheme
+def _list(data: dict, key: str, default, ok, allowed: str, source: str) -> list:
+    v = data.pop(key, default)
+    if not isinstance(v, list) or not v or not all(ok(x) for x in v):
+        raise ConfigError(key, v, allowed, source)
+    return v
 
 
-def load_experiment(path: str | Path) -> PaperExperiment:
-    """Read and validate an experiment file (see scenes/paper.toml)."""
-    p = Path(path)
-    t = _Table(read_toml(p, "experiment file"), "", str(p))
-    base = load_scene(p.parent / t.string("base_scene", "blackbody_5000K.toml"))
-    temps = t.data.pop("temperatures_K", list(PaperExperiment.temperatures_K))
-    if not isinstance(temps, list) or not temps or not all(
-            isinstance(x, (int, float)) and not isinstance(x, bool) and 1000 <= x <= 40000 for x in temps):
-        raise t.error("temperatures_K", temps, "must be a non-empty list of colour temperatures, 1000–40000 K")
-    designs = t.data.pop("designs", list(PaperExperiment.designs))
-    if not isinstance(designs, list) or not designs or not all(isinstance(d, str) for d in designs):
-        raise t.error("designs", designs, "must be a non-empty list like ['cfa/single', 'fsc/optimal']")
-    for d in designs:
-        _design(d, f"{p}: designs")
-    budget_design = t.string("budget_design", PaperExperiment.budget_design)
-    _design(budget_design, f"{p}: budget_design")
-    budget_illuminant = t.string("budget_illuminant", PaperExperiment.budget_illuminant)
+def load_experiment(path: str | Path, overrides=()) -> PaperExperiment:
+    """Read and validate an experiment file (see scenes/paper.toml).  ``overrides`` (``--set``):
+    a path whose table is an experiment key changes the experiment, any other the base scene."""
     import colour
 
+    p = Path(path)
+    src = str(p)
+    pairs = [parse_assignment(o) if isinstance(o, str) else o for o in overrides]
+    mine = [(k, v) for k, v in pairs if k.split(".")[0].split("[")[0] in EXPERIMENT_KEYS]
+    scene_overrides = [(k, v) for k, v in pairs if (k, v) not in mine]
+    t = apply_overrides(read_toml(p, "experiment file"), mine)
+    for k in t:
+        if k not in EXPERIMENT_KEYS:
+            raise ConfigError(k, t[k], "unknown key; an experiment file has " + ", ".join(EXPERIMENT_KEYS), src)
+    base_name = t.pop("base_scene", "blackbody_5000K.toml")
+    if not isinstance(base_name, str):
+        raise ConfigError("base_scene", base_name, "must be a path to a scene file", src)
+    base = load_scene(p.parent / base_name, scene_overrides)
+    temps = _list(t, "temperatures_K", list(PaperExperiment.temperatures_K),
+                  lambda x: _is_number(x) and 1000 <= x <= 40000,
+                  "must be a non-empty list of colour temperatures, 1000–40000 K", src)
+    designs = _list(t, "designs", list(PaperExperiment.designs), lambda x: isinstance(x, str),
+                    "must be a non-empty list like ['cfa/single', 'fsc/optimal']", src)
+    for d in designs + [t.get("budget_design", PaperExperiment.budget_design)]:
+        try:
+            base.camera.with_design(d)
+        except ConfigError as e:
+            raise e.with_source(src) from None
+    budget_design = t.pop("budget_design", PaperExperiment.budget_design)
+    budget_illuminant = t.pop("budget_illuminant", PaperExperiment.budget_illuminant)
     if budget_illuminant not in colour.SDS_ILLUMINANTS:
-        raise t.error("budget_illuminant", budget_illuminant, "must be a CIE illuminant colour-science ships, e.g. D65")
-    light = t.table("light")
-    level = cfa_ms = None
-    if light.has("white_luminance_cd_m2"):
-        level = light.number("white_luminance_cd_m2", None, 0, lo_open=True, unit="cd/m²")
-    else:
-        cfa_ms = light.number("cfa_exposure_ms", 28.0, 0, lo_open=True, unit="ms")
-    cal_T = light.number("at_temperature_K", 5000.0, 1000, 40000, unit="K")
-    light.done()
+        raise ConfigError("budget_illuminant", budget_illuminant,
+                          "must be a CIE illuminant colour-science ships, e.g. D65", src)
+    light = t.pop("light", {})
+    if not isinstance(light, dict):
+        raise ConfigError("light", light, "must be a table", src)
+    for k in light:
+        if k not in ("white_luminance_cd_m2", "cfa_exposure_ms", "at_temperature_K"):
+            raise ConfigError(f"light.{k}", light[k], "unknown key; allowed: white_luminance_cd_m2, cfa_exposure_ms, "
+                              "at_temperature_K", src)
+    level = light.get("white_luminance_cd_m2")
+    cfa_ms = None if level is not None else light.get("cfa_exposure_ms", 28.0)
+    cal_T = light.get("at_temperature_K", 5000.0)
+    for k, v, lo, hi in (("white_luminance_cd_m2", level, 0, None), ("cfa_exposure_ms", cfa_ms, 0, None),
+                         ("at_temperature_K", cal_T, 1000, 40000)):
+        if v is not None and not (_is_number(v) and v > lo and (hi is None or v <= hi)):
+            raise ConfigError(f"light.{k}", v, f"must be a number > {lo}" + (f" and ≤ {hi}" if hi else ""), src)
     alternatives = []
-    for i, alt in enumerate(t.data.pop("sensitivity", [])):
-        a = _Table(alt, f"sensitivity[{i}]", str(p))
-        name, reason = a.string("name", f"alternative {i}"), a.string("reason", "")
-        scale = a.number("light_scale", 1.0, 0, lo_open=True)
-        tables = {k: a.data.pop(k) for k in ("optics", "filters", "sensor", "processing") if a.has(k)}
-        a.done()
-        parse_camera({k: v for k, v in tables.items() if k != "processing"}, source=f"{p}: {name}", base=base.camera)
-        parse_processing(tables.get("processing", {}), source=f"{p}: {name}", base=base.processing)
-        alternatives.append(Alternative(name, reason, tables, scale))
-    t.done()
+    for i, alt in enumerate(t.pop("sensitivity", [])):
+        where = f"sensitivity[{i}]"
+        if not isinstance(alt, dict):
+            raise ConfigError(where, alt, "must be a table", src)
+        a = dict(alt)
+        name, reason = a.pop("name", f"alternative {i}"), a.pop("reason", "")
+        scale = a.pop("light_scale", 1.0)
+        if not (_is_number(scale) and scale > 0):
+            raise ConfigError(f"{where}.light_scale", scale, "must be a number > 0", src)
+        tables = {k: a.pop(k) for k in ("optics", "filters", "sensor", "processing") if k in a}
+        for k in a:
+            raise ConfigError(f"{where}.{k}", a[k], "unknown key; allowed: name, reason, light_scale, optics, "
+                              "filters, sensor, processing", src)
+        alternative = Alternative(str(name), str(reason), tables, float(scale))
+        alternative.camera(base.camera, f"{src}: {name}")  # validate now
+        alternative.processing(base.processing, f"{src}: {name}")
+        alternatives.append(alternative)
     return PaperExperiment(base=base, temperatures_K=tuple(float(x) for x in temps), budget_illuminant=budget_illuminant,
                            budget_design=budget_design, designs=tuple(designs), cfa_exposure_ms=cfa_ms,
-                           calibration_temperature_K=cal_T, white_luminance_cd_m2=level,
+                           calibration_temperature_K=float(cal_T), white_luminance_cd_m2=level,
                            alternatives=tuple(alternatives))
-
-
-def with_camera(camera: CameraSpec, design: str) -> CameraSpec:
-    arch, scheme = design.split("/")
-    return dataclasses.replace(camera, architecture=arch, exposure=scheme)
 
 
 def calibrated_luminance(exp: PaperExperiment, camera: CameraSpec) -> float:
@@ -110,7 +168,7 @@ def calibrated_luminance(exp: PaperExperiment, camera: CameraSpec) -> float:
     if exp.white_luminance_cd_m2 is not None:
         return exp.white_luminance_cd_m2
     ref = exp.base.replace(illuminant=IlluminantSpec("blackbody", exp.calibration_temperature_K, None, 100.0))
-    white = white_patch_rates(ref, camera)
+    white = ChartReference.of(ref).patch_rates(camera)[WHITE_PATCH]
     s = camera.sensor
     T = exp.cfa_exposure_ms * 1e-3
     need = s.q_max_e / T - s.dark_rate_e_per_s
@@ -125,43 +183,41 @@ def scaled(scene: Scene, cube: RadianceCube, factor: float) -> tuple[Scene, Radi
     scene says so too, so that scoring fits the conversion on the light the camera saw)."""
     if factor == 1.0:
         return scene, cube
-    ill = dataclasses.replace(scene.illuminant, white_luminance_cd_m2=scene.illuminant.white_luminance_cd_m2 * factor)
+    ill = scene.illuminant.replace(white_luminance_cd_m2=scene.illuminant.white_luminance_cd_m2 * factor)
     scene = scene.replace(illuminant=ill)
     return scene, RadianceCube(cube.radiance * np.float32(factor), cube.wavelengths_nm, {**cube.metadata, "scene": scene.to_dict()})
 
 
 def design_case(cube, scene: Scene, camera: CameraSpec, processing: ProcessingSpec, design: str, seed: int):
-    cam = with_camera(camera, design)
-    raw = capture(cube, seed=seed, camera=cam, scene=scene)
-    result = score(raw, scene, processing)
-    from ..capture import WHITE_PATCH
-
+    """One design under one light: its capture, score and the numbers the figures show."""
+    cam = camera.with_design(design)
+    reference = ChartReference.of(scene)
+    raw = capture(cube, cam, seed, reference.white_box)
+    result = score(raw, reference, processing)
     s = cam.sensor
-    white = (raw.patch_rates_e_per_s[WHITE_PATCH] + s.dark_rate_e_per_s) * raw.exposure_times_s / s.q_max_e
-    chart = result.report["chart"]
-    return {"exposure_ms": 1e3 * raw.capture_time_s, "channel_ms": (1e3 * raw.exposure_times_s).tolist(),
-            "white_response": white.tolist(), "snr_db": chart["snr_combined_db"], "delta_e": chart["delta_e_mean"],
-            "delta_e_of_mean": chart["delta_e_of_mean"], "delta_e_conversion": chart["delta_e_conversion"],
+    white = (raw.metered_rate_e_per_s + s.dark_rate_e_per_s) * raw.exposure_times_s / s.q_max_e
+    c = result.summary
+    return {"exposure_ms": c.capture_time_ms, "channel_ms": (1e3 * raw.exposure_times_s).tolist(),
+            "white_response": white.tolist(), "snr_db": c.snr_combined_db, "delta_e": c.delta_e_mean,
+            "delta_e_of_mean": c.delta_e_of_mean, "delta_e_conversion": c.delta_e_conversion,
             "raw": raw, "score": result}
 
 
 def error_budget(cube, scene: Scene, camera: CameraSpec, processing: ProcessingSpec, design: str, seed: int):
-    """Figure 6: ``[(step, ΔE, raw, score)]``, each step adding one error source to the last."""
-    cam = with_camera(camera, design)
+    """Figure 6: ``[(step, ΔE, raw, score)]`` for each of :data:`BUDGET_STEPS`."""
+    cam = camera.with_design(design)
+    reference = ChartReference.of(scene)
     s0 = cam.sensor
-    perfect = dataclasses.replace(s0, shot_noise=False, dark_current=False, read_noise=False, fpn=False,
-                                  quantization=False)
-    sensors = [perfect, dataclasses.replace(perfect, shot_noise=s0.shot_noise),
-               dataclasses.replace(perfect, shot_noise=s0.shot_noise, dark_current=s0.dark_current,
-                                   read_noise=s0.read_noise, fpn=s0.fpn),
-               s0]
-    out = []
-    for step, sensor in zip(BUDGET_STEPS, sensors):
-        raw = capture(cube, sensor, seed=seed, camera=cam, scene=scene)
-        res = score(raw, scene, processing, reference="camera")
-        out.append((step, res.report["chart"]["delta_e_mean"], raw, res))
-    res = score(out[-1][2], scene, processing, reference="scene")
-    out.append((BUDGET_STEPS[-1], res.report["chart"]["delta_e_mean"], out[-1][2], res))
+    out, raws = [], {}
+    for step in BUDGET_STEPS:
+        # a source the camera has switched off stays off; everything not yet added is off
+        sensor = s0.off(*(n for n in ("shot_noise", "dark_current", "read_noise", "fpn", "quantization")
+                          if n not in step.sources))
+        if sensor not in raws:
+            raws[sensor] = capture(cube, cam.replace(sensor=sensor), seed, reference.white_box)
+        raw = raws[sensor]
+        res = score(raw, reference, processing, delta_e_reference=step.against)
+        out.append((step, res.summary.delta_e_mean, raw, res))
     return out
 
 
@@ -186,7 +242,7 @@ def comparison(exp: PaperExperiment, cubes: dict, camera: CameraSpec, processing
                 cases[(key, design)] = c
     scene, cube = scaled(*cubes[exp.budget_illuminant], light_scale)
     budget = error_budget(cube, scene, camera, processing, exp.budget_design, seed)
-    res["fig6_budget_delta_e"] = [[step, de] for step, de, _, _ in budget]
+    res["fig6_budget_delta_e"] = [{"step": step.id, "label": step.label, "delta_e": de} for step, de, _, _ in budget]
     if keep_cases:
         cases[(exp.budget_illuminant, "budget")] = budget
     return res, cases
@@ -195,7 +251,7 @@ def comparison(exp: PaperExperiment, cubes: dict, camera: CameraSpec, processing
 def scenes_for(exp: PaperExperiment, level: float, quick: bool) -> dict[str, Scene]:
     base = exp.base
     if quick:  # a first look: a quarter of the pixels each way, the same physics
-        base = base.replace(image=dataclasses.replace(base.image, width=160, height=120))
+        base = base.replace(image=base.image.replace(width=160, height=120))
     out = {f"{T:g}": base.replace(illuminant=IlluminantSpec("blackbody", T, None, level)) for T in exp.temperatures_K}
     out[exp.budget_illuminant] = base.replace(illuminant=IlluminantSpec("cie", None, exp.budget_illuminant, level))
     return out
@@ -206,8 +262,8 @@ def run_paper(exp: PaperExperiment, renderer: str = "mitsuba", quick: bool = Fal
     """Run the whole experiment; returns (results, cases, cubes).  ``step`` receives one line per step."""
     import time
 
+    from ..cache import cached_render
     from ..render import render
-    from ..render.cache import cached_render
 
     timings = {}
     t0 = time.perf_counter()
@@ -233,12 +289,7 @@ def run_paper(exp: PaperExperiment, renderer: str = "mitsuba", quick: bool = Fal
     t = time.perf_counter()
     alt_results, alt_claims = {}, {}
     for alt in exp.alternatives:
-        tables = camera_tables(exp.base.camera)
-        for k, v in alt.tables.items():
-            if k != "processing":
-                tables[k].update(v)
-        camera = parse_camera(tables, source=alt.name)
-        processing = parse_processing(alt.tables.get("processing", {}), source=alt.name, base=exp.base.processing)
+        camera, processing = alt.camera(exp.base.camera, alt.name), alt.processing(exp.base.processing, alt.name)
         r, _ = comparison(exp, cubes, camera, processing, light_scale=alt.light_scale)
         alt_results[alt.name] = {"reason": alt.reason, **r}
         alt_claims[alt.name] = evaluate(r)

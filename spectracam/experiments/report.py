@@ -4,7 +4,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from ..io.report import _atomic_bytes
+from ..io.files import atomic_write
+from ..io.plots import save_figure
 from . import figures
 
 PAPER_CLAIMS_NOTE = ("Verdicts: reproduced — direction and size as the paper states; partly — the direction "
@@ -60,7 +61,7 @@ def report_markdown(results: dict, command: str) -> str:
         _per_design(results, "fig5b_delta_e_of_mean", "{:.2f}"), "",
         "![Figure 5](fig5.png)", "",
         f"## Figure 6: cumulative error budget, {p['budget_design']} under {p['budget_illuminant']}", "",
-        _table(["step", "mean ΔE*ab"], [[s, f"{v:.2f}"] for s, v in results["fig6_budget_delta_e"]]), "",
+        _table(["step", "mean ΔE*ab"], [[s["label"], f"{s['delta_e']:.2f}"] for s in results["fig6_budget_delta_e"]]), "",
         f"Method: {p['fig6_method']}.", "",
         "![Figure 6](fig6.png)", "",
         "## The paper's claims beside this run", "", PAPER_CLAIMS_NOTE, "",
@@ -111,15 +112,12 @@ def write_paper_outputs(out_dir: str | Path, results: dict, cases: dict, cubes: 
     out = Path(out_dir)
     paths = []
     for name, make in (("fig4", figures.fig4), ("fig5", figures.fig5), ("fig6", figures.fig6)):
-        fig = make(results)
-        for fmt in ("png", "svg"):
-            paths.append(_atomic_bytes(out / f"{name}.{fmt}", figures.render_figure(fig, fmt)))
-        figures._plt().close(fig)
-    paths.append(_atomic_bytes(out / "results.json", json.dumps(results, indent=1).encode()))
-    paths.append(_atomic_bytes(out / "report.md", report_markdown(results, command).encode()))
+        paths += save_figure(make(results), out / f"{name}.png", out / f"{name}.svg", dpi=130, tight=False)
+    paths.append(atomic_write(out / "results.json", json.dumps(results, indent=1, allow_nan=False).encode()))
+    paths.append(atomic_write(out / "report.md", report_markdown(results, command).encode()))
     step("figures, results.json and report.md written")
     for key, (scene, cube) in (cubes or {}).items():
-        write_radiance_exr(out / "cases" / key / "radiance.exr", cube, scene)
+        write_radiance_exr(out / "cases" / key / "radiance.exr", cube)
     for (key, design), c in cases.items():
         items = ([(design.replace("/", "-"), c["raw"], c["score"])] if design != "budget" else
                  [(f"budget-{i}", raw, res) for i, (_, _, raw, res) in enumerate(c)])

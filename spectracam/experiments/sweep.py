@@ -12,12 +12,12 @@ cells finish; ``--resume`` skips the cells already there, so none is lost or com
 """
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import itertools
 import json
 import math
 import os
-import re
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,12 +25,17 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError, SpectracamError
+from ..io.files import atomic_write
+from ..overrides import DESIGN_PATH, PATH, apply_override, apply_overrides, parse_assignment
 from ..scene import Scene, load_scene, parse_scene, read_toml
+from ..score import SUMMARY_METRICS
 
-METRICS = ("delta_e_mean", "delta_e_of_mean", "delta_e_conversion", "snr_combined_db", "snr_R_db", "snr_G_db",
-           "snr_B_db", "capture_time_ms", "exposure_R_ms", "exposure_G_ms", "exposure_B_ms")
-DESIGN_AXIS = "capture.design"  # "arch/scheme" in one value, so invalid pairs are never crossed
-_PATH = re.compile(r"^([a-z_]+)\.([A-Za-z_0-9]+)(?:\[(\d+)\])?$")
+#: What a sweep can record: every field of the chart summary.
+METRICS = SUMMARY_METRICS
+DESIGN_AXIS = DESIGN_PATH  # "arch/scheme" in one value, so invalid pairs are never crossed
+#: Keys of a sweep file (``--set`` paths starting with one of these name the sweep; any other path
+#: names a field of the base scene).
+SWEEP_KEYS = ("base_scene", "scene", "axes", "metrics", "trials", "seed", "renderer")
 
 
 @dataclass(frozen=True)
@@ -67,12 +72,17 @@ def _axis_values(t: dict | list, field: str, source: str) -> tuple:
     raise ConfigError(field, t, "must be a non-empty list of values or a table {start, stop, step}", source)
 
 
-def load_sweep(path: str | Path) -> Sweep:
-    """Read and validate a sweep file; every cell's scene is validated here, before anything runs."""
+def load_sweep(path: str | Path, overrides=()) -> Sweep:
+    """Read and validate a sweep file; every cell's scene is validated here, before anything runs.
+    ``overrides`` (``--set``): a path whose table is a sweep key changes the sweep, any other the
+    base scene."""
     p = Path(path)
-    data = read_toml(p, "sweep file")
+    pairs = [parse_assignment(o) if isinstance(o, str) else o for o in overrides]
+    mine = [(k, v) for k, v in pairs if k.split(".")[0].split("[")[0] in SWEEP_KEYS]
+    scene_overrides = [(k, v) for k, v in pairs if (k, v) not in mine]
+    data = apply_overrides(read_toml(p, "sweep file"), mine)
     src = str(p)
-    known = {"base_scene", "scene", "axes", "metrics", "trials", "seed", "renderer"}
+    known = set(SWEEP_KEYS)
     for k in data:
         if k not in known:
             raise ConfigError(k, data[k], "unknown key; a sweep file has " + ", ".join(sorted(known)), src)
@@ -80,14 +90,14 @@ def load_sweep(path: str | Path) -> Sweep:
                             ("axes", dict, "a table of axis = values")):
         if key in data and not isinstance(data[key], kind):
             raise ConfigError(key, data[key], f"must be {name}", src)
-    base = load_scene(p.parent / data.get("base_scene", "blackbody_5000K.toml")).to_dict()
+    base = load_scene(p.parent / data.get("base_scene", "blackbody_5000K.toml"), scene_overrides).to_dict()
     for table, values in data.get("scene", {}).items():
         if table not in base or not isinstance(values, dict):
             raise ConfigError(f"scene.{table}", values, "must be a table of the scene file", src)
         base[table].update(values)
     axes = []
     for field, spec in data.get("axes", {}).items():
-        if field != DESIGN_AXIS and not _PATH.match(field):
+        if field != DESIGN_AXIS and not PATH.match(field):
             raise ConfigError(f"axes.{field}", spec, "an axis is a 'table.field' or 'table.field[i]' path", src)
         axes.append((field, _axis_values(spec, f"axes.{field}", src)))
     if not axes:
@@ -102,9 +112,13 @@ def load_sweep(path: str | Path) -> Sweep:
     seed = data.get("seed", base["render"]["seed"])
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise ConfigError("seed", seed, "must be an integer ≥ 0", src)
+    from ..render import RENDERERS
+
     renderer = data.get("renderer", "mitsuba")
-    if renderer not in ("mitsuba", "analytic"):
-        raise ConfigError("renderer", renderer, "must be 'mitsuba' or 'analytic'", src)
+    try:
+        RENDERERS.check(renderer)
+    except ConfigError as e:
+        raise e.with_source(src) from None
     sweep = Sweep(base, tuple(axes), tuple(metrics), trials, seed, renderer, src)
     for i, cell in enumerate(sweep.cells()):
         cell_scene(sweep, cell, i)  # validate every combination now
@@ -112,22 +126,10 @@ def load_sweep(path: str | Path) -> Sweep:
 
 
 def cell_scene(sweep: Sweep, cell: dict, index: int) -> Scene:
-    d = json.loads(json.dumps(sweep.base))
+    """The scene of one cell: the base scene with each axis's value set (the ``--set`` path engine)."""
+    d = sweep.base
     for path, value in cell.items():
-        if path == DESIGN_AXIS:
-            arch, _, scheme = str(value).partition("/")
-            d["capture"].update(architecture=arch, exposure=scheme)
-            continue
-        table, field, idx = _PATH.match(path).groups()
-        if table not in d or not isinstance(d[table], dict):
-            raise ConfigError(f"axes.{path}", value, f"no table {table!r} in a scene", sweep.source)
-        if idx is None:
-            d[table][field] = value
-        else:
-            lst = d[table].get(field)
-            if not isinstance(lst, list) or int(idx) >= len(lst):
-                raise ConfigError(f"axes.{path}", value, f"{table}.{field} is not a list with element {idx}", sweep.source)
-            lst[int(idx)] = value
+        d = apply_override(d, path, value, source=f"{sweep.source}: axes")
     return parse_scene(d, source=f"{sweep.source}: cell {index} {cell}")
 
 
@@ -150,22 +152,17 @@ def _flatten(d: dict, prefix: str = "") -> dict:
 def run_cell(index: int, cell: dict, scene: Scene, cube, trials: int, sweep_seed: int, metrics: tuple) -> dict:
     """One cell: capture and score every trial.  Runs on a Dask worker (or in-process)."""
     from ..capture import capture
+    from ..reference import ChartReference
     from ..score import score
 
     t0 = time.perf_counter()
-    params = _flatten({k: v for k, v in scene.to_dict().items() if k != "wavelengths"})
-    params["wavelengths.centres_nm"] = json.dumps([float(x) for x in scene.grid.centres_nm])
+    params = _flatten(scene.to_dict())
+    reference = ChartReference.of(scene)
     rows = []
     for trial in range(trials):
         seed = trial_seed(sweep_seed, trial)
-        cam = scene.camera
-        raw = capture(cube, seed=seed, camera=cam, scene=scene)
-        rep = score(raw, scene, scene.processing).report
-        c = rep["chart"]
-        values = {"delta_e_mean": c["delta_e_mean"], "delta_e_of_mean": c["delta_e_of_mean"],
-                  "delta_e_conversion": c["delta_e_conversion"], "snr_combined_db": c["snr_combined_db"],
-                  **{f"snr_{k}_db": c["snr_db"][k] for k in "RGB"}, "capture_time_ms": 1e3 * raw.capture_time_s,
-                  **{f"exposure_{k}_ms": 1e3 * float(t) for k, t in zip("RGB", raw.exposure_times_s)}}
+        raw = capture(cube, scene.camera, seed, reference.white_box)
+        values = dataclasses.asdict(score(raw, reference, scene.processing).summary)
         rows.append({"cell": index, "trial": trial, "seed": seed,
                      **{f"axis:{k}": v for k, v in cell.items()}, **params, **{m: values[m] for m in metrics}})
     return {"cell": index, "rows": rows, "compute_s": time.perf_counter() - t0}
@@ -204,19 +201,17 @@ def _write_tables(out: Path, rows: list[dict]) -> None:
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    from ..io.report import _atomic_bytes
-
     rows = sorted(rows, key=lambda r: (r["cell"], r["trial"]))
     columns = list(dict.fromkeys(k for r in rows for k in r))
     table = pa.Table.from_pylist(rows)
     buf = pa.BufferOutputStream()
     pq.write_table(table, buf)
-    _atomic_bytes(out / "results.parquet", buf.getvalue().to_pybytes())
+    atomic_write(out / "results.parquet", buf.getvalue().to_pybytes())
     s = io.StringIO()
     w = csv.DictWriter(s, fieldnames=columns)
     w.writeheader()
     w.writerows(rows)
-    _atomic_bytes(out / "results.csv", s.getvalue().encode())
+    atomic_write(out / "results.csv", s.getvalue().encode())
 
 
 def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None, workers: int | None = None,
@@ -226,7 +221,7 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
     (for tests of interruption)."""
     from tqdm import tqdm
 
-    from ..render.cache import cached_render, render_key
+    from ..cache import cached_render, render_key
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -242,9 +237,7 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
         if old.get("digest") != sweep.digest:
             raise SpectracamError(f"output = {str(out)!r}: holds a different sweep (digest {old.get('digest')} ≠ "
                                   f"{sweep.digest}); choose a new directory")
-    from ..io.report import _atomic_bytes
-
-    _atomic_bytes(meta_path, json.dumps(meta, indent=1).encode())
+    atomic_write(meta_path, json.dumps(meta, indent=1).encode())
     rows = _read_journal(journal)
     if journal.exists():  # drop a partial last line, so appends start on a clean line
         with open(journal, "r+b") as f:

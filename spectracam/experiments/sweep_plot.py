@@ -22,13 +22,9 @@ def plot_sweep(out_dir: str | Path, x: str | None = None, line: str | None = Non
                metrics: list[str] | None = None) -> list[Path]:
     """Write ``plots/<metric>.png`` and ``.svg``: x = ``x`` axis, lines = ``line`` axis, one panel per
     value of ``panel``; other axes are averaged over.  Defaults: the axes in the sweep file's order."""
-    import matplotlib
+    from ..io.plots import pyplot, save_figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from ..io.report import _atomic_bytes
-    from .figures import render_figure
+    plt = pyplot()
 
     meta, rows = load_results(out_dir)
     axes = [a for a, _ in meta["axes"]]
@@ -72,7 +68,6 @@ def plot_sweep(out_dir: str | Path, x: str | None = None, line: str | None = Non
         fig.suptitle(f"{metric}: mean ± std over {meta['trials']} trial(s)"
                      + (f", averaged over {', '.join(others)}" if others else ""), fontsize=9)
         fig.tight_layout()
-        for fmt in ("png", "svg"):
-            paths.append(_atomic_bytes(Path(out_dir) / "plots" / f"{metric}.{fmt}", render_figure(fig, fmt)))
-        plt.close(fig)
+        paths += save_figure(fig, *(Path(out_dir) / "plots" / f"{metric}.{fmt}" for fmt in ("png", "svg")), dpi=130,
+                             tight=False)
     return paths

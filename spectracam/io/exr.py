@@ -8,17 +8,19 @@ Every file spectracam writes carries ``spectracam*`` attributes recording what m
 from __future__ import annotations
 
 import json
-import os
 import re
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from .. import __version__
-from ..errors import SpectracamError
+from ..architecture import MosaicLayout, PlanesLayout
+from ..camera import CameraSpec
+from ..capture import RawCapture
+from ..errors import ConfigError, SpectracamError
 from ..render import RadianceCube
 from ..spectra import K_M_LM_PER_W, WavelengthGrid, cmf_band_weights
+from .files import atomic_write
 
 SPECTRAL_CHANNEL = re.compile(r"^S0\.(\d+(?:,\d+)?)nm$")
 SPECTRAL_LAYOUT_VERSION = "1.0"
@@ -41,22 +43,12 @@ def write_exr(path: str | Path, channels: dict[str, np.ndarray], attributes: dic
     """Write float32 channels and attributes; the file appears complete or not at all (temp + rename)."""
     import OpenEXR
 
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     for k, v in attributes.items():
         header[k] = v if isinstance(v, (str, int)) else (json.dumps(v) if isinstance(v, (dict, list)) else v)
     # OpenEXR silently writes wrong pixels from non-contiguous views (DESIGN.md): always copy.
     data = {k: np.ascontiguousarray(v, dtype=np.float32) for k, v in channels.items()}
-    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".exr", dir=path.parent)
-    os.close(fd)
-    try:
-        OpenEXR.File(header, data).write(tmp)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-    return path
+    return atomic_write(path, lambda tmp: OpenEXR.File(header, data).write(tmp))
 
 
 def read_exr(path: str | Path) -> tuple[dict[str, np.ndarray], dict]:
@@ -80,8 +72,10 @@ def preview_rgb(radiance: np.ndarray, grid: WavelengthGrid, white_luminance_cd_m
     return np.tensordot(xyz, m, axes=([-1], [1]))
 
 
-def radiance_attributes(cube: RadianceCube, scene) -> dict:
+def radiance_attributes(cube: RadianceCube) -> dict:
+    """The spectral layout's attributes and everything that made the cube (its scene included)."""
     meta = {k: v for k, v in cube.metadata.items() if k != "scene"}
+    scene = cube.metadata["scene"]
     return {
         "spectralLayoutVersion": SPECTRAL_LAYOUT_VERSION,
         "emissiveUnits": EMISSIVE_UNITS,
@@ -91,19 +85,21 @@ def radiance_attributes(cube: RadianceCube, scene) -> dict:
         "spectracamRenderer": str(meta.get("renderer")),
         "spectracamVariant": str(meta.get("variant")),
         "spectracamSamplesPerPixel": int(meta["samples_per_pixel"]) if meta.get("samples_per_pixel") else 0,
-        "spectracamSeed": int(scene.render.seed),
-        "spectracamScene": scene.to_json(),
+        "spectracamSeed": int(scene["render"]["seed"]),
+        "spectracamScene": json.dumps(scene, sort_keys=True),
         "spectracamRender": json.dumps(meta, sort_keys=True, default=str),
         "spectracamPreview": PREVIEW_NOTE,
     }
 
 
-def write_radiance_exr(path: str | Path, cube: RadianceCube, scene) -> Path:
-    """Write a radiance cube as a spectral EXR with an RGB preview and the scene it came from."""
+def write_radiance_exr(path: str | Path, cube: RadianceCube) -> Path:
+    """Write a radiance cube as a spectral EXR with an RGB preview and the scene it came from
+    (``cube.metadata["scene"]``)."""
     channels = {spectral_channel_name(w): cube.radiance[:, :, i] for i, w in enumerate(cube.wavelengths_nm)}
-    rgb = preview_rgb(cube.radiance, cube.grid, scene.illuminant.white_luminance_cd_m2)
+    level = cube.metadata["scene"]["illuminant"]["white_luminance_cd_m2"]
+    rgb = preview_rgb(cube.radiance, cube.grid, level)
     channels.update({"R": rgb[..., 0], "G": rgb[..., 1], "B": rgb[..., 2]})
-    return write_exr(path, channels, radiance_attributes(cube, scene))
+    return write_exr(path, channels, radiance_attributes(cube))
 
 
 def read_radiance_exr(path: str | Path) -> tuple[RadianceCube, dict]:
@@ -145,20 +141,38 @@ def describe(path: str | Path) -> str:
     return "\n".join(lines)
 
 
-def raw_channel_names(raw) -> list[str]:
-    """One channel "Y" for a mosaic (viewers show it as a grey Bayer image), else R, G, B."""
-    return ["Y"] if raw.digital.ndim == 2 else ["R", "G", "B"]
+def layout_to_dict(layout) -> dict:
+    if isinstance(layout, MosaicLayout):
+        return {"kind": "mosaic", "tile": [list(row) for row in layout.tile], "pattern": layout.pattern}
+    return {"kind": "planes", "planes": layout.kind, "description": layout.description}
 
 
-def raw_attributes(raw) -> dict:
+def layout_from_dict(d: dict, source: str):
+    try:
+        if d["kind"] == "mosaic":
+            return MosaicLayout(tuple(tuple(int(k) for k in row) for row in d["tile"]))
+        if d["kind"] == "planes":
+            return PlanesLayout(str(d["planes"]), str(d["description"]))
+    except (KeyError, TypeError, ValueError):
+        pass
+    raise SpectracamError(f"file = {source!r}: spectracamLayout = {d!r} is not a layout spectracam wrote")
+
+
+def raw_channel_names(layout) -> list[str]:
+    """One channel "Y" for a mosaic (viewers show it as a grey mosaic), else R, G, B."""
+    return ["Y"] if isinstance(layout, MosaicLayout) else ["R", "G", "B"]
+
+
+def raw_attributes(raw: RawCapture) -> dict:
     cam = raw.camera
     attrs = {
         "spectracamVersion": __version__,
         "spectracamKind": "raw",
         "spectracamUnits": f"digital numbers, 0..{2**cam.sensor.adc_bits - 1} ({cam.sensor.adc_bits}-bit ADC; "
                            f"{cam.sensor.quantization_step_e:g} e- per DN)",
-        "spectracamArchitecture": raw.architecture,
-        "spectracamExposure": raw.exposure,
+        "spectracamArchitecture": cam.capture.architecture,
+        "spectracamExposure": cam.capture.exposure,
+        "spectracamLayout": json.dumps(layout_to_dict(raw.layout)),
         "spectracamExposureTimesS": json.dumps(dict(zip("RGB", map(float, raw.exposure_times_s)))),
         "spectracamCaptureTimeS": json.dumps(float(raw.capture_time_s)),
         "spectracamCamera": json.dumps(cam.to_dict(), sort_keys=True),
@@ -166,40 +180,47 @@ def raw_attributes(raw) -> dict:
         "spectracamFullSwingV": json.dumps(cam.sensor.conversion_gain_uV_per_e * 1e-6 * cam.sensor.q_max_e),
         "spectracamSeed": int(raw.seed),
     }
-    if raw.cfa_pattern:
-        attrs["spectracamCfaPattern"] = raw.cfa_pattern
-    if raw.architecture == "fsc":
-        attrs["spectracamFrames"] = "R, G, B: three exposures of one sensor in sequence, in this order"
-    if raw.architecture == "prism":
-        attrs["spectracamFrames"] = "R, G, B: three sensors behind a dichroic prism, exposed together"
-    if "scene" in raw.metadata:
-        attrs["spectracamScene"] = json.dumps(raw.metadata["scene"], sort_keys=True)
+    if isinstance(raw.layout, MosaicLayout):
+        attrs["spectracamCfaPattern"] = raw.layout.pattern
+    else:
+        attrs["spectracamFrames"] = raw.layout.description
+    if raw.scene is not None:
+        attrs["spectracamScene"] = json.dumps(raw.scene, sort_keys=True)
     return attrs
 
 
-def write_raw_exr(path: str | Path, raw) -> Path:
+def write_raw_exr(path: str | Path, raw: RawCapture) -> Path:
     """Write what the sensor recorded (digital numbers) with every parameter that produced it."""
-    planes = [raw.digital] if raw.digital.ndim == 2 else list(raw.digital)
-    return write_exr(path, dict(zip(raw_channel_names(raw), planes)), raw_attributes(raw))
+    planes = [raw.digital] if isinstance(raw.layout, MosaicLayout) else list(raw.digital)
+    return write_exr(path, dict(zip(raw_channel_names(raw.layout), planes)), raw_attributes(raw))
 
 
-def read_raw_exr(path: str | Path):
+def read_raw_exr(path: str | Path) -> RawCapture:
     """Read a raw EXR back into a :class:`~spectracam.capture.RawCapture` (without expected electrons)."""
-    from ..capture import RawCapture
-    from ..scene import parse_camera
-
+    src = str(path)
     channels, attrs = read_exr(path)
     if attrs.get("spectracamKind") != "raw":
-        raise SpectracamError(f"file = {str(path)!r}: not a spectracam raw capture (spectracamKind = "
+        raise SpectracamError(f"file = {src!r}: not a spectracam raw capture (spectracamKind = "
                               f"{attrs.get('spectracamKind')!r})")
-    cam = json.loads(attrs["spectracamCamera"])
-    camera = parse_camera({k: cam[k] for k in ("optics", "filters", "sensor")} |
-                          {"capture": {"architecture": cam["architecture"], "exposure": cam["exposure"],
-                                       "cfa_pattern": cam["cfa_pattern"]}}, source=str(path))
-    digital = channels["Y"] if "Y" in channels else np.stack([channels[c] for c in "RGB"])
-    times = json.loads(attrs["spectracamExposureTimesS"])
-    meta = {"scene": json.loads(attrs["spectracamScene"])} if "spectracamScene" in attrs else {}
-    return RawCapture(digital=digital, expected_e=None, exposure_times_s=np.array([times[c] for c in "RGB"]),
-                      capture_time_s=json.loads(attrs["spectracamCaptureTimeS"]), architecture=camera.architecture,
-                      exposure=camera.exposure, cfa_pattern=attrs.get("spectracamCfaPattern"), camera=camera,
-                      seed=int(attrs["spectracamSeed"]), white_rate_e_per_s=None, metadata=meta)
+    try:
+        cam = json.loads(attrs["spectracamCamera"])
+        layout = layout_from_dict(json.loads(attrs["spectracamLayout"]), src)
+        times = json.loads(attrs["spectracamExposureTimesS"])
+        times = np.array([float(times[c]) for c in "RGB"])
+        capture_time = float(json.loads(attrs["spectracamCaptureTimeS"]))
+        seed = int(attrs["spectracamSeed"])
+        scene = json.loads(attrs["spectracamScene"]) if "spectracamScene" in attrs else None
+    except (KeyError, TypeError, ValueError) as e:
+        raise SpectracamError(f"file = {src!r}: a raw capture's attribute is missing or damaged ({e})") from None
+    camera = CameraSpec.from_dict(cam, source=src)
+    names = raw_channel_names(layout)
+    if set(names) - set(channels):
+        raise SpectracamError(f"file = {src!r}: a {layout_to_dict(layout)['kind']} capture needs channels "
+                              f"{', '.join(names)}; it has {', '.join(sorted(channels))}")
+    arch_layout = camera.capture.make_architecture().layout
+    if arch_layout != layout:
+        raise ConfigError("spectracamLayout", layout_to_dict(layout), f"does not match the recorded architecture "
+                          f"{camera.capture.architecture!r} ({layout_to_dict(arch_layout)})", src)
+    digital = channels["Y"] if len(names) == 1 else np.stack([channels[c] for c in names])
+    return RawCapture(digital=digital, expected_e=None, exposure_times_s=times, capture_time_s=capture_time,
+                      layout=layout, camera=camera, seed=seed, scene=scene)

@@ -9,25 +9,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..chart import View, patch_coverage, patch_reflectances
-from ..illuminant import spectral_irradiance
-from ..spectra import band_average
+from ..chart import View, patch_coverage
+from ..reference import ChartReference
 from . import RadianceCube
 
 
-def material_radiance(scene) -> tuple[list[str], np.ndarray, np.ndarray]:
-    """Band-averaged radiance of each patch ``(24, n_bands)`` and of the surround ``(n_bands,)``."""
-    E = spectral_irradiance(scene.illuminant)
-    names, rows = [], []
-    for name, rho in patch_reflectances(scene.chart):
-        names.append(name)
-        rows.append(band_average(lambda lam, rho=rho: E(lam) * rho(lam) / np.pi, scene.grid))
-    surround = scene.chart.surround_reflectance * band_average(lambda lam: E(lam) / np.pi, scene.grid)
-    return names, np.array(rows), surround
-
-
 def render_analytic(scene) -> RadianceCube:
-    _, patches, surround = material_radiance(scene)
+    """The chart's radiance cube in closed form: each pixel mixes the surround and the patches in
+    proportion to the area of its footprint they cover."""
+    ref = ChartReference.of(scene)
+    patches, surround = ref.patch_radiance, ref.surround_radiance
     view = View.fit(scene.chart, scene.image.width, scene.image.height)
     cy, cx = patch_coverage(scene.chart, view)
     cube = np.empty((scene.image.height, scene.image.width, len(scene.grid)), dtype=np.float32)

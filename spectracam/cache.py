@@ -12,7 +12,9 @@ import json
 import os
 from pathlib import Path
 
-from .. import __version__
+from . import __version__
+from .io.exr import read_radiance_exr, write_radiance_exr
+from .render import render
 
 RENDER_TABLES = ("chart", "illuminant", "wavelengths", "image", "render")
 
@@ -33,9 +35,6 @@ def render_key(scene, renderer: str) -> tuple[str, dict]:
 
 def cached_render(scene, renderer: str = "mitsuba", progress: bool = False, log=None, directory: Path | None = None):
     """``(cube, hit)``: the cached cube for this scene and renderer, or a fresh render stored for next time."""
-    from ..io.exr import read_radiance_exr, write_radiance_exr
-    from . import render
-
     key, ident = render_key(scene, renderer)
     path = (directory or cache_dir()) / f"{key}.exr"
     if path.exists():
@@ -49,7 +48,7 @@ def cached_render(scene, renderer: str = "mitsuba", progress: bool = False, log=
             pass
     cube = render(scene, renderer=renderer, progress=progress, log=log)
     try:
-        write_radiance_exr(path, cube, scene)
+        write_radiance_exr(path, cube)
     except OSError as e:  # a read-only cache never stops a run
         if log:
             log(f"render cache not written ({e})")

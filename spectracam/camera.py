@@ -1,0 +1,126 @@
+"""The camera: optics, filters, sensor and how the channels are captured — everything between the
+scene and the digital numbers — and its spectral response (paper, sections 3.2–3.4).
+
+``ρ_k = A·∫E_q(λ)·R_k(λ)dλ`` per pixel and channel: optics, photon conversion, responsivity, band
+width and pixel area fold into one ``(n_bands, 3)`` weight matrix (:func:`band_weights`).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .architecture import ARCHITECTURES, CFA_PATTERNS, Architecture, make_architecture
+from .errors import ConfigError
+from .exposure import EXPOSURE_SCHEMES
+from .filters import FilterSpec, responsivities
+from .optics import OpticsSpec, radiance_to_photon_irradiance
+from .sensor import SensorSpec
+from .spec import Spec
+from .spectra import WavelengthGrid
+
+#: The tables of a scene or config file that describe the camera.
+CAMERA_TABLES = ("optics", "filters", "sensor", "capture")
+
+
+def split_design(design: str, field: str = "design") -> tuple[str, str]:
+    """``"arch/scheme"`` → ``(arch, scheme)``, both registered (``"cfa"`` alone means ``cfa/single``).
+
+    >>> split_design("fsc/balanced")
+    ('fsc', 'balanced')
+    """
+    if not isinstance(design, str):
+        raise ConfigError(field, design, "must be a string 'architecture/exposure', e.g. 'fsc/optimal'")
+    arch, _, scheme = design.partition("/")
+    return ARCHITECTURES.check(arch, field), EXPOSURE_SCHEMES.check(scheme or "single", field)
+
+
+@dataclass(frozen=True)
+class CaptureSpec(Spec):
+    """The ``[capture]`` table: architecture, exposure scheme, Bayer pattern."""
+
+    TABLE = "capture"
+
+    architecture: str = "cfa"
+    exposure: str = "single"
+    cfa_pattern: str = "RGGB"
+
+    def validate(self) -> None:
+        self.choice("architecture", ARCHITECTURES)
+        self.choice("exposure", EXPOSURE_SCHEMES)
+        self.choice("cfa_pattern", CFA_PATTERNS)
+        if self.exposure != "single" and not ARCHITECTURES[self.architecture].independent_exposures:
+            raise self.error("exposure", f"the {self.architecture} architecture has one exposure for all channels; "
+                                         "use 'single'")
+
+    @property
+    def design(self) -> str:
+        return f"{self.architecture}/{self.exposure}"
+
+    def make_architecture(self) -> Architecture:
+        return make_architecture(self.architecture, self.cfa_pattern)
+
+
+@dataclass(frozen=True)
+class CameraSpec(Spec):
+    """Everything between the scene and the digital numbers."""
+
+    optics: OpticsSpec = field(default_factory=OpticsSpec)
+    filters: FilterSpec = field(default_factory=FilterSpec)
+    sensor: SensorSpec = field(default_factory=SensorSpec)
+    capture: CaptureSpec = field(default_factory=CaptureSpec)
+
+    def validate(self) -> None:
+        for name, kind in (("optics", OpticsSpec), ("filters", FilterSpec), ("sensor", SensorSpec),
+                           ("capture", CaptureSpec)):
+            if not isinstance(getattr(self, name), kind):
+                raise ConfigError(name, getattr(self, name), f"must be a {kind.__name__}")
+
+    @classmethod
+    def from_dict(cls, data, source: str | None = None, base: "CameraSpec | None" = None) -> "CameraSpec":
+        """A camera from ``[optics]``/``[filters]``/``[sensor]``/``[capture]`` tables; keys not given
+        keep the values of ``base`` (default: the paper's camera)."""
+        base = base or cls()
+        if not isinstance(data, dict):
+            raise ConfigError("camera", data, "must be a table", source)
+        for k in data:
+            if k not in CAMERA_TABLES:
+                raise ConfigError(k, data[k], "unknown table; a camera has " + ", ".join(CAMERA_TABLES), source)
+        parts = {name: type(getattr(base, name)).from_dict(data.get(name, {}), source, base=getattr(base, name))
+                 for name in CAMERA_TABLES}
+        return cls(**parts)
+
+    @property
+    def design(self) -> str:
+        """``"architecture/exposure"``, e.g. ``"cfa/single"``."""
+        return self.capture.design
+
+    def with_design(self, design: str) -> "CameraSpec":
+        """This camera with another ``"arch/scheme"`` design, validated (cfa + optimal is refused)."""
+        arch, scheme = split_design(design)
+        try:
+            return self.replace(capture=self.capture.replace(architecture=arch, exposure=scheme))
+        except ConfigError as e:
+            raise ConfigError("design", design, e.allowed) from None
+
+
+def band_weights(camera: CameraSpec, grid: WavelengthGrid) -> np.ndarray:
+    """``(n_bands, 3)`` float32 weights turning band-averaged radiance into photo-electrons per
+    second per pixel: ``π/(4N²)·T·λ/(hc)·R_k(λ)·Δλ·A`` (paper 3.2–3.3).
+
+    >>> grid = WavelengthGrid(np.arange(400.0, 701.0, 10.0))
+    >>> band_weights(CameraSpec(), grid).shape
+    (31, 3)
+    """
+    to_photons = radiance_to_photon_irradiance(np.asarray(grid.centres_nm, float), camera.optics)  # (B,)
+    R = responsivities(camera.filters, grid)  # (3, B) e⁻/photon
+    area_m2 = camera.sensor.pixel_area_um2 * 1e-12
+    return (R * (to_photons * grid.widths_nm * area_m2)[None, :]).T.astype(np.float32)
+
+
+def photo_electron_rates(radiance: np.ndarray, grid: WavelengthGrid, camera: CameraSpec) -> np.ndarray:
+    """``(..., 3)`` photo-electrons per second per pixel for each channel of band-averaged radiance
+    ``(..., n_bands)``, float32; the cube is read once and never copied."""
+    weights = band_weights(camera, grid)
+    shape = radiance.shape
+    return (radiance.reshape(-1, shape[-1]) @ weights).reshape(*shape[:-1], 3)

@@ -1,0 +1,88 @@
+"""The chart reference: what the scene is, computed once, for every stage that needs the truth.
+
+From a scene's chart, illuminant, wavelength grid and image size: each patch's band-averaged
+radiance ``L = E·S/π`` (paper 3.1), its CIE 1931 XYZ (Y = 1 for a perfect white diffuser), the
+illuminant's white, the patch names and scoring boxes — and, per camera, the noise-free photo-
+electron rates of every patch.  Metering, the colour-conversion fit, the DNG matrices and scoring
+all read this one object; nothing downstream climbs back to the renderer.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import lru_cache
+
+import numpy as np
+
+from .camera import CameraSpec, photo_electron_rates
+from .chart import WHITE_PATCH, ChartSpec, patch_boxes, patch_reflectances
+from .illuminant import IlluminantSpec, spectral_irradiance
+from .spectra import K_M_LM_PER_W, WavelengthGrid, band_average, cmf_band_weights
+
+
+def material_radiance(chart: ChartSpec, illuminant: IlluminantSpec, grid: WavelengthGrid):
+    """``(names, patches (24, B), surround (B,))``: band-averaged radiance of each patch and of the
+    surround, W·m⁻²·sr⁻¹·nm⁻¹, ``L(λ) = E(λ)·S(λ)/π`` for a Lambertian surface facing the light."""
+    E = spectral_irradiance(illuminant)
+    names, rows = [], []
+    for name, rho in patch_reflectances(chart):
+        names.append(name)
+        rows.append(band_average(lambda lam, rho=rho: E(lam) * rho(lam) / np.pi, grid))
+    surround = chart.surround_reflectance * band_average(lambda lam: E(lam) / np.pi, grid)
+    return names, np.array(rows), surround
+
+
+@dataclass(frozen=True, eq=False)
+class ChartReference:
+    """The truth about one chart scene; build it with :meth:`of`."""
+
+    chart: ChartSpec
+    illuminant: IlluminantSpec
+    grid: WavelengthGrid
+    width_px: int
+    height_px: int
+    names: tuple
+    patch_radiance: np.ndarray  # (24, B)
+    surround_radiance: np.ndarray  # (B,)
+    patch_xyz: np.ndarray  # (24, 3), Y = 1 for a perfect white diffuser
+    white_xyz: np.ndarray  # (3,), the illuminant's white, Y = 1
+    boxes: tuple  # ((rows, cols) slices) of each patch's scoring mask
+    _rates: dict = field(default_factory=dict, repr=False)
+
+    @classmethod
+    def of(cls, scene) -> "ChartReference":
+        """The reference of a scene (memoised on chart, light, grid and image: sweeps and noise
+        trials score the same scene many times)."""
+        return _reference(scene.chart, scene.illuminant, scene.grid, scene.image.width, scene.image.height)
+
+    @property
+    def white_box(self) -> tuple[slice, slice]:
+        """The white patch's pixels: where exposure is metered (paper 4.5)."""
+        return self.boxes[WHITE_PATCH]
+
+    def patch_rates(self, camera: CameraSpec) -> np.ndarray:
+        """Noise-free photo-electron rates ``(24, 3)`` (e⁻/s) of the patches for a camera: the input of
+        the colour-conversion fit (paper 3.5) and of the DNG matrices."""
+        key = (camera.optics, camera.filters, camera.sensor)
+        if key not in self._rates:
+            chart = self.patch_radiance[None].astype(np.float32)
+            self._rates[key] = photo_electron_rates(chart, self.grid, camera)[0].astype(np.float64)
+        return self._rates[key]
+
+    def matches(self, scene: dict) -> str | None:
+        """``None`` if a recorded scene (a dict) has this chart, light and grid, else the first table
+        that differs."""
+        mine = {"chart": self.chart.to_dict(), "illuminant": self.illuminant.to_dict(),
+                "wavelengths": {"centres_nm": list(self.grid.centres_nm)}}
+        for table, value in mine.items():
+            if scene.get(table) != value:
+                return table
+        return None
+
+
+@lru_cache(maxsize=64)
+def _reference(chart, illuminant, grid, width_px, height_px) -> ChartReference:
+    names, patches, surround = material_radiance(chart, illuminant, grid)
+    W = cmf_band_weights(grid) * (K_M_LM_PER_W / illuminant.white_luminance_cd_m2)
+    white = band_average(lambda lam: spectral_irradiance(illuminant)(lam) / np.pi, grid) @ W
+    return ChartReference(chart, illuminant, grid, width_px, height_px, tuple(names), patches, surround, patches @ W,
+                          white / white[1], tuple(patch_boxes(chart, width_px, height_px)))
