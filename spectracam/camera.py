@@ -95,13 +95,14 @@ class CameraSpec(Spec):
         """``"architecture/exposure"``, e.g. ``"cfa/single"``."""
         return self.capture.design
 
-    def with_design(self, design: str) -> "CameraSpec":
-        """This camera with another ``"arch/scheme"`` design, validated (cfa + optimal is refused)."""
-        arch, scheme = split_design(design)
+    def with_design(self, design: str, field: str = "design") -> "CameraSpec":
+        """This camera with another ``"arch/scheme"`` design, validated (cfa + optimal is refused);
+        an error names ``field``."""
+        arch, scheme = split_design(design, field)
         try:
             return self.replace(capture=self.capture.replace(architecture=arch, exposure=scheme))
         except ConfigError as e:
-            raise ConfigError("design", design, e.allowed) from None
+            raise ConfigError(field, design, e.allowed) from None
 
 
 def band_weights(camera: CameraSpec, grid: WavelengthGrid) -> np.ndarray:

@@ -114,9 +114,9 @@ def load_experiment(path: str | Path, overrides=()) -> PaperExperiment:
                   "must be a non-empty list of colour temperatures, 1000–40000 K", src)
     designs = _list(t, "designs", list(PaperExperiment.designs), lambda x: isinstance(x, str),
                     "must be a non-empty list like ['cfa/single', 'fsc/optimal']", src)
-    for d in designs + [t.get("budget_design", PaperExperiment.budget_design)]:
+    for field_, d in [("designs", d) for d in designs] + [("budget_design", t.get("budget_design", "cfa/single"))]:
         try:
-            base.camera.with_design(d)
+            base.camera.with_design(d, field_)
         except ConfigError as e:
             raise e.with_source(src) from None
     budget_design = t.pop("budget_design", PaperExperiment.budget_design)
