@@ -1,33 +1,111 @@
 #!/usr/bin/env bash
-# Install everything spectracam needs on a fresh Debian/Ubuntu machine.
-#   bash tools/setup.sh          # the package and its runtime dependencies
-#   bash tools/setup.sh --test   # ... plus the test dependencies
+# Install spectracam on a fresh Debian/Ubuntu machine, into the project's virtual environment .venv/
+# (so it also works where pip refuses to touch the system Python, PEP 668):
+#   bash tools/setup.sh          # the package, its runtime dependencies and the "exr" extra
+#   bash tools/setup.sh --test   # ... plus the test dependencies (the "test" extra)
+# Then run .venv/bin/python -m spectracam ... (or `source .venv/bin/activate`).
+# .venv is made by `python3 -m venv` with the python3 first on PATH (Python >= 3.11); on Debian and
+# Ubuntu that needs the python3-venv package, installed here when missing and we may.
 # libLLVM 19 (Debian package libllvm19) is what Mitsuba's LLVM backend needs; without it
 # spectracam still works, on the much slower scalar variant.
+# Running it again is quick: pip runs only when pyproject.toml, the extras or the checkout's
+# path changed since the last successful run (the stamp .venv/.spectracam-setup). rm -rf .venv
+# to start over.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-extras=""
-[ "${1:-}" = "--test" ] && extras="[test]"
+extras="exr"
+case "${1:-}" in
+  "") ;;
+  --test) extras="exr,test" ;;
+  *) echo "usage: bash tools/setup.sh [--test]" >&2; exit 2 ;;
+esac
 
-have_llvm19() { ldconfig -p 2>/dev/null | grep -qE 'libLLVM(-19\.so|\.so\.19)'; }
+# May we install Debian packages? (root, or passwordless sudo, and apt-get)
+SUDO=""
+can_apt() {
+  command -v apt-get >/dev/null 2>&1 || return 1
+  [ "$(id -u)" = 0 ] && return 0
+  if command -v sudo >/dev/null 2>&1 && sudo -n true 2>/dev/null; then SUDO="sudo -n"; return 0; fi
+  return 1
+}
+apt_updated=""
+apt_update() {
+  [ -n "$apt_updated" ] && return 0
+  $SUDO env DEBIAN_FRONTEND=noninteractive apt-get update -qq
+  apt_updated=1
+}
+apt_install() {
+  apt_update
+  $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "$@" >/dev/null
+}
+
+have_llvm19() {  # (a non-root user's PATH may lack /sbin)
+  # grep reads everything (no -q): with pipefail, ldconfig killed by SIGPIPE would count as not found
+  { ldconfig -p 2>/dev/null || /sbin/ldconfig -p 2>/dev/null; } | grep -E 'libLLVM(-19\.so|\.so\.19)' >/dev/null
+}
 if ! have_llvm19; then
-  if command -v apt-get >/dev/null 2>&1; then
-    SUDO=""
-    if [ "$(id -u)" != 0 ]; then
-      if command -v sudo >/dev/null 2>&1 && sudo -n true 2>/dev/null; then SUDO="sudo -n"; fi
-    fi
-    if [ "$(id -u)" = 0 ] || [ -n "$SUDO" ]; then
-      echo "setup: installing libllvm19 (Mitsuba's LLVM backend needs it)"
-      $SUDO env DEBIAN_FRONTEND=noninteractive apt-get update -qq
-      $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libllvm19 >/dev/null
-    else
-      echo "setup: warning: libLLVM 19 is missing and this user cannot install it (apt-get install libllvm19);" \
-           "spectracam will fall back to the slow scalar_spectral variant" >&2
-    fi
-  else
+  if ! command -v apt-get >/dev/null 2>&1; then
     echo "setup: warning: no apt-get; install libLLVM 19 yourself and set DRJIT_LIBLLVM_PATH, or" \
          "spectracam falls back to the slow scalar_spectral variant" >&2
+  elif can_apt; then
+    echo "setup: installing libllvm19 (Mitsuba's LLVM backend needs it)"
+    apt_install libllvm19
+  else
+    echo "setup: warning: libLLVM 19 is missing and this user cannot install it (apt-get install libllvm19);" \
+         "spectracam will fall back to the slow scalar_spectral variant" >&2
   fi
 fi
-python3 -m pip install --disable-pip-version-check -q -e ".${extras}"
+
+# The virtual environment: kept when its python runs and has pip, made anew otherwise.
+PY=.venv/bin/python
+venv_ok() {
+  [ -x "$PY" ] && "$PY" -c 'import sys; sys.exit(sys.version_info < (3, 11))' 2>/dev/null \
+    && "$PY" -m pip --version >/dev/null 2>&1
+}
+if ! venv_ok; then
+  if ! command -v python3 >/dev/null 2>&1; then
+    echo "setup: error: no python3 on PATH; install Python >= 3.11 (Debian/Ubuntu: apt-get install python3 python3-venv)" >&2
+    exit 1
+  fi
+  pyver=$(python3 -c 'import sys; print("%d.%d" % sys.version_info[:2])')
+  if ! python3 -c 'import sys; sys.exit(sys.version_info < (3, 11))'; then
+    echo "setup: error: spectracam needs Python >= 3.11, but python3 ($(command -v python3)) is $pyver" >&2
+    exit 1
+  fi
+  rm -rf .venv
+  echo "setup: making the virtual environment .venv (python3 $pyver)"
+  err=""
+  if ! err=$(python3 -m venv .venv 2>&1) || ! venv_ok; then
+    # Debian and Ubuntu keep venv's ensurepip in python3-venv (python3.X-venv), not in python3.
+    rm -rf .venv
+    if can_apt; then
+      echo "setup: installing python3-venv (python3 -m venv needs it)"
+      apt_update
+      # the default python3's venv, and that of the python3 on PATH where apt knows it
+      pkgs="python3-venv"
+      if apt-cache show "python$pyver-venv" >/dev/null 2>&1; then pkgs="$pkgs python$pyver-venv"; fi
+      apt_install $pkgs
+      err=$(python3 -m venv .venv 2>&1) || true
+    fi
+    if ! venv_ok; then
+      rm -rf .venv
+      echo "setup: error: 'python3 -m venv .venv' failed: $(command -v python3) has no venv/ensurepip;" \
+           "install python$pyver-venv (Debian/Ubuntu: sudo apt-get install python3-venv) and run again" \
+           "(python3 said: $(printf '%s' "$err" | tr -s '\n' ' ' | cut -c1-240))" >&2
+      exit 1
+    fi
+  fi
+fi
+
+stamp=.venv/.spectracam-setup
+want="$(pwd) $(sha256sum pyproject.toml | cut -c1-64)"
+have=$(cat "$stamp" 2>/dev/null || true)
+if [ "$have" = "$want $extras" ] || [ "$have" = "$want exr,test" ]; then
+  echo "setup: done (.venv is up to date)"
+  exit 0
+fi
+rm -f "$stamp"
+echo "setup: installing spectracam[$extras] into .venv"
+"$PY" -m pip install --disable-pip-version-check -q -e ".[$extras]"
+echo "$want $extras" > "$stamp"
 echo "setup: done"
