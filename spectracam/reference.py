@@ -16,7 +16,11 @@ import numpy as np
 from .camera import CameraSpec, photo_electron_rates
 from .chart import WHITE_PATCH, ChartSpec, patch_boxes, patch_reflectances
 from .illuminant import IlluminantSpec, spectral_irradiance
-from .spectra import K_M_LM_PER_W, WavelengthGrid, band_average, cmf_band_weights
+from .spectra import K_M_LM_PER_W, WavelengthGrid, band_average, cie_1931_cmfs
+
+#: Wavelength step of the reference colorimetry, nm: fine enough that the XYZ of every patch is
+#: converged (0.1 nm and 1 nm differ by < 1e-4 ΔE*ab), whatever the scene's band width.
+XYZ_STEP_NM = 0.1
 
 
 def material_radiance(chart: ChartSpec, illuminant: IlluminantSpec, grid: WavelengthGrid):
@@ -79,10 +83,24 @@ class ChartReference:
         return None
 
 
+def colorimetry(chart: ChartSpec, illuminant: IlluminantSpec, lo_nm: float, hi_nm: float):
+    """``(patch XYZ (24, 3), white XYZ (3,))`` of the chart over ``[lo_nm, hi_nm]``: the CIE 1931
+    integrals ``683·∫(E·S/π)·x̄ȳz̄ dλ / L_w`` (Y = 1 for a perfect white diffuser; white Y = 1),
+    by the trapezoid rule at :data:`XYZ_STEP_NM` — the scene's colour, independent of its bands."""
+    lam = np.linspace(lo_nm, hi_nm, int(round((hi_nm - lo_nm) / XYZ_STEP_NM)) + 1)
+    wl, cmfs = cie_1931_cmfs()
+    xyz_bar = np.stack([np.interp(lam, wl, cmfs[:, k]) for k in range(3)], axis=-1)  # (n, 3)
+    white_radiance = spectral_irradiance(illuminant)(lam) / np.pi
+    rho = np.stack([r(lam) for _, r in patch_reflectances(chart)])  # (24, n)
+    scale = K_M_LM_PER_W / illuminant.white_luminance_cd_m2
+    patches = np.trapezoid((rho * white_radiance)[:, :, None] * xyz_bar[None], lam, axis=1) * scale
+    white = np.trapezoid(white_radiance[:, None] * xyz_bar, lam, axis=0)
+    return patches, white / white[1]
+
+
 @lru_cache(maxsize=64)
 def _reference(chart, illuminant, grid, width_px, height_px) -> ChartReference:
     names, patches, surround = material_radiance(chart, illuminant, grid)
-    W = cmf_band_weights(grid) * (K_M_LM_PER_W / illuminant.white_luminance_cd_m2)
-    white = band_average(lambda lam: spectral_irradiance(illuminant)(lam) / np.pi, grid) @ W
-    return ChartReference(chart, illuminant, grid, width_px, height_px, tuple(names), patches, surround, patches @ W,
-                          white / white[1], tuple(patch_boxes(chart, width_px, height_px)))
+    patch_xyz, white_xyz = colorimetry(chart, illuminant, float(grid.edges_nm[0]), float(grid.edges_nm[-1]))
+    return ChartReference(chart, illuminant, grid, width_px, height_px, tuple(names), patches, surround, patch_xyz,
+                          white_xyz, tuple(patch_boxes(chart, width_px, height_px)))

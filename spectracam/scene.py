@@ -71,12 +71,16 @@ def parse_grid(data: dict, source: str | None = None) -> WavelengthGrid:
                 raise ConfigError(f"wavelengths.{k}", v, "must be a number nm", source)
         if not _is_number(step) or step <= 0:
             raise ConfigError("wavelengths.step_nm", step, "must be a number > 0 nm", source)
-        if stop < start:
-            raise ConfigError("wavelengths.stop_nm", stop, f"must be ≥ start_nm ({start:g}); the grid would be empty",
+        if stop <= start:
+            raise ConfigError("wavelengths.stop_nm", stop, f"must be > start_nm ({start:g}); the range would be empty",
                               source)
-        n = int(math.floor((stop - start) / step + 1e-9)) + 1
-        arr = start + step * np.arange(n)
-    if arr.size == 1:
+        n = (stop - start) / step
+        if abs(n - round(n)) > 1e-6 * max(1.0, n):
+            raise ConfigError("wavelengths.step_nm", step, f"must divide the range {start:g}–{stop:g} nm into whole "
+                              "bands (band edges lie on the stated limits)", source)
+        # bands tile the stated range exactly: edges start, start + step, ..., stop; centres between
+        arr = start + step * (np.arange(int(round(n))) + 0.5)
+    if arr.size == 1 and "centres_nm" in data:
         raise ConfigError("wavelengths", arr.tolist(), "needs at least two wavelengths", source)
     grid = WavelengthGrid(arr)
     lo, hi = grid.edges_nm[0], grid.edges_nm[-1]
@@ -88,7 +92,8 @@ def parse_grid(data: dict, source: str | None = None) -> WavelengthGrid:
 
 
 def _default_grid() -> WavelengthGrid:
-    return WavelengthGrid(np.arange(400.0, 701.0, 10.0))
+    """400–700 nm in 10-nm bands (the paper's range, 4.1), edges on the limits: centres 405 … 695 nm."""
+    return WavelengthGrid(np.arange(405.0, 700.0, 10.0))
 
 
 @dataclass(frozen=True)

@@ -1,7 +1,8 @@
 """Wavelength grids, Planck's law, photon conversion and band averaging.
 
 A *band* is the interval between the midpoints of neighbouring grid wavelengths (the outer bands
-are symmetric about their centre).  Radiance cubes hold the band average
+are symmetric about their centre).  A scene's ``start_nm``/``stop_nm``/``step_nm`` put the band
+edges on the stated limits, so the stated range is integrated exactly at any step.  Radiance cubes hold the band average
 ``(1/Δλ)∫_band L(λ) dλ`` of the spectral radiance, so integrals over the cube are sums of
 ``value·Δλ``.
 """

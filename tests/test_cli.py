@@ -27,13 +27,13 @@ def test_render_writes_spectral_exr_and_inspect_reads_it(tmp_path):
     assert r.returncode == 0, r.stderr
     assert "Mitsuba variant" in r.stderr and "wrote" in r.stderr
     cube, attrs = read_radiance_exr(tmp_path / "out" / "radiance.exr")
-    assert cube.shape == (48, 64, 31) and attrs["spectracamRenderer"] == "mitsuba"
+    assert cube.shape == (48, 64, 30) and attrs["spectracamRenderer"] == "mitsuba"
     q = run("render", str(scene), "-o", str(tmp_path / "an"), "--renderer", "analytic", "--quiet")
     assert q.returncode == 0 and q.stderr == ""
     analytic, _ = read_radiance_exr(tmp_path / "an" / "radiance.exr")
     assert np.abs(cube.radiance.mean() / analytic.radiance.mean() - 1) < 0.005
     i = run("inspect", str(tmp_path / "out" / "radiance.exr"))
-    assert i.returncode == 0 and "S0.700,000000nm" in i.stdout and "spectracamSeed: 0" in i.stdout
+    assert i.returncode == 0 and "S0.695,000000nm" in i.stdout and "spectracamSeed: 0" in i.stdout
 
 
 def test_bad_scene_is_one_line_exit_2_and_no_output(tmp_path):

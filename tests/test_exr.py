@@ -73,8 +73,8 @@ def test_failed_write_leaves_nothing(tmp_path):
 
 def test_describe_lists_bands_and_parameters(written):
     text = describe(written)
-    assert "160 x 120 pixels, 34 channels" in text
-    assert "S0.400,000000nm" in text and "spectracamScene" in text and "mean" in text
+    assert "160 x 120 pixels, 33 channels" in text
+    assert "S0.405,000000nm" in text and "spectracamScene" in text and "mean" in text
 
 
 def test_not_an_exr_is_one_clear_error(tmp_path):

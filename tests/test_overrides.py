@@ -92,7 +92,7 @@ def test_set_on_paper_and_sweep(tmp_path):
     scenes = Path(__file__).resolve().parent.parent / "scenes"
     exp = load_experiment(scenes / "paper.toml", ["wavelengths.step_nm=20", "designs=['cfa/single']",
                                                   "light.cfa_exposure_ms=20", "sensor.read_noise_e=5"])
-    assert len(exp.base.grid) == 16 and exp.designs == ("cfa/single",) and exp.cfa_exposure_ms == 20
+    assert len(exp.base.grid) == 15 and exp.designs == ("cfa/single",) and exp.cfa_exposure_ms == 20
     assert exp.base.camera.sensor.read_noise_e == 5
     with pytest.raises(ConfigError, match="designs"):
         load_experiment(scenes / "paper.toml", ["designs=['cfa/optimal']"])

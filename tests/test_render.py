@@ -57,7 +57,7 @@ def test_radiance_is_illuminant_times_reflectance_over_pi(scene_5000, analytic_5
     from spectracam.illuminant import spectral_irradiance
 
     masks = patch_masks(scene_5000.chart, scene_5000.image.width, scene_5000.image.height)
-    lam = 550.0
+    lam = 555.0
     _, wl, r = patch_names_and_data(scene_5000.chart.dataset)[18]
     expected = spectral_irradiance(scene_5000.illuminant)(lam) * np.interp(lam, wl, r) / np.pi
     got = analytic_5000.radiance[masks[18]][:, list(scene_5000.grid.centres_nm).index(lam)].mean()

@@ -18,7 +18,8 @@ def test_shipped_scenes_cover_the_papers_illuminants():
             "d65"} <= names
     for p in SCENES:
         s = load_scene(p)
-        assert len(s.grid) == 31 and s.grid.centres_nm[0] == 400 and s.grid.centres_nm[-1] == 700
+        assert len(s.grid) == 30 and s.grid.centres_nm[0] == 405 and s.grid.centres_nm[-1] == 695
+        assert s.grid.edges_nm[0] == 400 and s.grid.edges_nm[-1] == 700  # the stated range, exactly
 
 
 def test_scene_round_trips_through_to_dict():
@@ -57,8 +58,10 @@ def test_bad_input_names_field_value_and_allowed(data, field, fragment):
 
 
 def test_ohta_dataset_allows_wider_grid():
-    s = parse_scene({"chart": {"dataset": "ColorChecker N Ohta"}, "wavelengths": {"start_nm": 385, "stop_nm": 775}})
-    assert len(s.grid) == 40
+    s = parse_scene({"chart": {"dataset": "ColorChecker N Ohta"}, "wavelengths": {"start_nm": 380, "stop_nm": 780}})
+    assert len(s.grid) == 40 and s.grid.edges_nm[0] == 380 and s.grid.edges_nm[-1] == 780
+    with pytest.raises(ConfigError, match="must divide the range 400–700 nm into whole bands"):
+        parse_scene({"wavelengths": {"step_nm": 7}})
 
 
 @pytest.mark.parametrize("spec", [IlluminantSpec("blackbody", 3000.0, None, 250.0),

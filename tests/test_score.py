@@ -19,12 +19,16 @@ from spectracam.sensor import SensorSpec
 NOISELESS = SensorSpec().off("shot_noise", "dark_current", "read_noise", "fpn", "quantization")
 
 
-def test_luther_camera_without_noise_is_perfect(scene_5000, analytic_5000):
+@pytest.mark.parametrize("step_nm, bound", [(1.0, 0.002), (10.0, 0.1)])
+def test_luther_camera_without_noise_is_perfect(step_nm, bound):
+    # the scene's colour is the exact integral over 400-700 nm; the camera integrates band averages,
+    # so a Luther camera is perfect up to the band discretisation: 0.053 at 10 nm, 5e-4 at 1 nm
+    scene = small_scene(wavelengths={"step_nm": step_nm})
     cam = CameraSpec(filters=FilterSpec(kind="xyz"), sensor=NOISELESS, capture=CaptureSpec("prism", "optimal"))
-    raw = capture(analytic_5000, camera=cam, scene=scene_5000)
-    rep = score(raw, scene_5000)
-    assert rep.summary.delta_e_conversion < 0.01
-    assert max(p.delta_e_mean for p in rep.patches) < 0.01
+    raw = capture(render(scene, "analytic"), camera=cam, scene=scene)
+    rep = score(raw, scene)
+    assert rep.summary.delta_e_conversion < bound
+    assert max(p.delta_e_mean for p in rep.patches) < 5 * bound
     assert rep.summary.snr_combined_db is None  # noise-free: infinite SNR
 
 
