@@ -20,6 +20,10 @@ from .sensor import TEMPORAL_STREAM, SensorSpec, expose, fixed_pattern, noise_st
 #: Architectures: name → :class:`Architecture` subclass.
 ARCHITECTURES: Registry = Registry("capture.architecture", "architecture")
 CFA_PATTERNS = ("RGGB", "GRBG", "GBRG", "BGGR")
+#: Whether the three channels' fixed patterns are one sensor's or three sensors': ``physical`` — as
+#: the architecture is built (the prism's three sensors differ, field-sequential frames share one
+#: sensor's); ``shared`` or ``independent`` to examine the other case.
+FIXED_PATTERN_CHOICES = ("physical", "shared", "independent")
 
 
 @dataclass(frozen=True)
@@ -89,9 +93,18 @@ class Architecture(ABC):
     name: str = ""
     #: Can each channel have its own exposure time?
     independent_exposures: bool = True
+    #: Physical sensors the channels are recorded on (1 or 3).
+    sensors: int = 1
 
-    def __init__(self, cfa_pattern: str = "RGGB"):
-        self.cfa_pattern = cfa_pattern
+    def __init__(self, cfa_pattern: str = "RGGB", fixed_pattern: str = "physical"):
+        self.cfa_pattern, self.fixed_pattern = cfa_pattern, fixed_pattern
+
+    def channel_patterns(self, sensor: SensorSpec, shape, seed: int) -> list:
+        """The fixed pattern each of the three channels is recorded with (see FIXED_PATTERN_CHOICES)."""
+        independent = self.fixed_pattern == "independent" or (self.fixed_pattern == "physical" and self.sensors > 1)
+        if independent:
+            return [fixed_pattern(sensor, shape, seed, k) for k in range(3)]
+        return [fixed_pattern(sensor, shape, seed, 0)] * 3
 
     @property
     @abstractmethod
@@ -144,14 +157,14 @@ class DichroicPrism(Architecture):
     """Three sensors behind a dichroic prism, exposed together, each with its own fixed pattern."""
 
     name = "prism"
+    sensors = 3  # three physical sensors: three fixed patterns
     layout = PlanesLayout("sensors", "R, G, B: three sensors behind a dichroic prism, exposed together")
 
     def capture_time_s(self, times_s):
         return float(np.max(times_s))
 
     def record(self, rates, times_s, sensor, seed):
-        shape = rates.shape[:2]  # three physical sensors: three fixed patterns
-        return self.record_planes(rates, times_s, sensor, seed, [fixed_pattern(sensor, shape, seed, k) for k in range(3)])
+        return self.record_planes(rates, times_s, sensor, seed, self.channel_patterns(sensor, rates.shape[:2], seed))
 
 
 @ARCHITECTURES.register("fsc")
@@ -164,11 +177,10 @@ class FieldSequential(Architecture):
     def capture_time_s(self, times_s):
         return float(np.sum(times_s))
 
-    def record(self, rates, times_s, sensor, seed):
-        pattern = fixed_pattern(sensor, rates.shape[:2], seed, 0)  # one sensor: the same FPN in every frame
-        return self.record_planes(rates, times_s, sensor, seed, [pattern] * 3)
+    def record(self, rates, times_s, sensor, seed):  # one sensor: the same FPN in every frame
+        return self.record_planes(rates, times_s, sensor, seed, self.channel_patterns(sensor, rates.shape[:2], seed))
 
 
-def make_architecture(name: str, cfa_pattern: str = "RGGB") -> Architecture:
+def make_architecture(name: str, cfa_pattern: str = "RGGB", fixed_pattern: str = "physical") -> Architecture:
     """An instance of the registered architecture ``name``."""
-    return ARCHITECTURES[name](cfa_pattern)
+    return ARCHITECTURES[name](cfa_pattern, fixed_pattern)

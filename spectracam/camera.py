@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .architecture import ARCHITECTURES, CFA_PATTERNS, Architecture, make_architecture
+from .architecture import ARCHITECTURES, CFA_PATTERNS, FIXED_PATTERN_CHOICES, Architecture, make_architecture
 from .errors import ConfigError
 from .exposure import EXPOSURE_SCHEMES
 from .filters import FilterSpec, responsivities
@@ -44,11 +44,15 @@ class CaptureSpec(Spec):
     architecture: str = "cfa"
     exposure: str = "single"
     cfa_pattern: str = "RGGB"
+    #: "physical" (prism: three sensors' patterns; field-sequential: one sensor's in all frames),
+    #: "shared" or "independent" (the paper does not say how it modelled FPN across channels).
+    fixed_pattern: str = "physical"
 
     def validate(self) -> None:
         self.choice("architecture", ARCHITECTURES)
         self.choice("exposure", EXPOSURE_SCHEMES)
         self.choice("cfa_pattern", CFA_PATTERNS)
+        self.choice("fixed_pattern", FIXED_PATTERN_CHOICES)
         if self.exposure != "single" and not ARCHITECTURES[self.architecture].independent_exposures:
             raise self.error("exposure", f"the {self.architecture} architecture has one exposure for all channels; "
                                          "use 'single'")
@@ -58,7 +62,7 @@ class CaptureSpec(Spec):
         return f"{self.architecture}/{self.exposure}"
 
     def make_architecture(self) -> Architecture:
-        return make_architecture(self.architecture, self.cfa_pattern)
+        return make_architecture(self.architecture, self.cfa_pattern, self.fixed_pattern)
 
 
 @dataclass(frozen=True)
@@ -113,7 +117,7 @@ def band_weights(camera: CameraSpec, grid: WavelengthGrid) -> np.ndarray:
     >>> band_weights(CameraSpec(), grid).shape
     (31, 3)
     """
-    to_photons = radiance_to_photon_irradiance(np.asarray(grid.centres_nm, float), camera.optics)  # (B,)
+    to_photons = radiance_to_photon_irradiance(grid, camera.optics)  # (B,)
     R = responsivities(camera.filters, grid)  # (3, B) e⁻/photon
     area_m2 = camera.sensor.pixel_area_um2 * 1e-12
     return (R * (to_photons * grid.widths_nm * area_m2)[None, :]).T.astype(np.float32)

@@ -109,8 +109,10 @@ def _scene(data: dict, source: str, config_file=None, flags=(), sets=()):
     """A Scene from a scene dict with the config file's camera tables, the flags and ``--set``."""
     from .camera import CAMERA_TABLES
     from .overrides import apply_overrides
-    from .scene import Scene, parse_scene, read_toml
+    from .scene import Scene, parse_scene, read_toml, resolve_curve_files
 
+    here = Path(source).parent if Path(source).is_file() else Path.cwd()  # where file paths are relative to
+    data = resolve_curve_files(data, here)
     if config_file is not None:
         config = read_toml(config_file, "config file")
         for k, v in config.items():
@@ -118,10 +120,11 @@ def _scene(data: dict, source: str, config_file=None, flags=(), sets=()):
                 raise ConfigError(k, v, "a config file has the camera tables " + ", ".join(CAMERA_TABLES),
                                   str(config_file))
             data = {**data, k: {**data.get(k, {}), **v}}
+        data = resolve_curve_files(data, Path(config_file).parent)
         Scene.from_dict(data, source=str(config_file))  # the config file's own errors name it
     data = apply_overrides(data, flags, source="command line")
     defaults = lambda: parse_scene(data, source).to_dict()  # noqa: E731  lists a --set element refers to
-    data = apply_overrides(data, sets, defaults=defaults)
+    data = resolve_curve_files(apply_overrides(data, sets, defaults=defaults), Path.cwd())
     return parse_scene(data, source if not (flags or sets) else f"{source} with the command line's options")
 
 

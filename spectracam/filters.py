@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .errors import ConfigError
 from .registry import Registry
 from .spec import Spec
 from .spectra import WavelengthGrid, band_average, cmf_band_weights, tabulated
@@ -51,6 +52,17 @@ class FilterSpec(Spec):
     #: Peak quantum efficiency, electrons per photon.  The paper states none; 0.5 is typical of
     #: front-illuminated CMOS photodiodes of the paper's time (0.3–0.6).
     qe_peak: float = 0.5
+    #: "photodiode" QE: depth below the surface from which carriers are collected, µm.  A CMOS
+    #: photodiode of the late 1990s (0.35–0.5 µm processes: shallow junctions, epitaxial layers of a
+    #: few µm) collects from ~2–4 µm; 3 µm by default.
+    collection_depth_um: float = 3.0
+    #: "data" QE: a measured curve (wavelength nm, QE), e.g. read from ``qe_file`` in a scene file.
+    qe_curve_nm: tuple = ()
+    qe_curve: tuple = ()
+    #: IR-cut filter: wavelength of 50 % transmittance, nm (None: no IR-cut filter, as the paper).
+    ir_cut_nm: float | None = None
+    #: IR-cut filter: width of its edge from 90 % to 10 % transmittance, nm (a logistic edge).
+    ir_cut_width_nm: float = 20.0
 
     def validate(self) -> None:
         self.choice("kind", FILTER_KINDS)
@@ -60,6 +72,62 @@ class FilterSpec(Spec):
         self.choice("camera", CAMERAS)
         self.choice("qe", QE_MODELS)
         self.number("qe_peak", 0, 1, lo_open=True)
+        self.number("collection_depth_um", 0.01, 1000, unit="µm")
+        check_curve(self, "qe_curve_nm", "qe_curve", required=self.qe == "data")
+        if self.ir_cut_nm is not None:
+            self.number("ir_cut_nm", 300, 1200, unit="nm")
+        self.number("ir_cut_width_nm", 0.1, 500, unit="nm")
+
+
+def check_curve(spec: Spec, wl_field: str, value_field: str, required: bool) -> None:
+    """A tabulated curve of a spec: increasing wavelengths and values in [0, 1], of equal length."""
+    wl, v = getattr(spec, wl_field), getattr(spec, value_field)
+    if not wl and not v:
+        if required:
+            raise spec.error(value_field, "needs a curve (wavelengths and values, or a file)", ())
+        return
+    ok = (isinstance(wl, tuple) and isinstance(v, tuple) and len(wl) == len(v) >= 2
+          and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in wl + v))
+    if not ok or np.any(np.diff(np.asarray(wl, float)) <= 0) or not np.all(np.isfinite(np.asarray(wl + v, float))):
+        raise spec.error(wl_field, "must be ≥ 2 increasing wavelengths (nm) with as many values", list(wl))
+    if min(v) < 0 or max(v) > 1:
+        raise spec.error(value_field, "values must lie in [0, 1]", [min(v), max(v)])
+    object.__setattr__(spec, wl_field, tuple(float(x) for x in wl))
+    object.__setattr__(spec, value_field, tuple(float(x) for x in v))
+
+
+def load_curve(path, what: str) -> tuple[tuple, tuple]:
+    """``(wavelengths_nm, values)`` from a CSV (two columns, ``#`` comments, an optional header) or a
+    TOML file (``wavelength_nm = [...]``, ``values = [...]``)."""
+    from pathlib import Path
+
+    p = Path(path)
+    try:
+        text = p.read_bytes().decode("utf-8")
+    except (OSError, UnicodeDecodeError) as e:
+        raise ConfigError(what, str(p), f"cannot be read as a text file ({e})") from None
+    try:
+        if p.suffix.lower() == ".toml":
+            import tomllib
+
+            d = tomllib.loads(text)
+            return tuple(d["wavelength_nm"]), tuple(d["values"])
+        rows = [r for r in text.splitlines() if r.strip() and not r.lstrip().startswith("#")]
+        if rows and not rows[0].replace(",", " ").split()[0].replace(".", "", 1).isdigit():
+            rows = rows[1:]  # a header
+        data = np.array([[float(x) for x in r.replace(",", " ").split()[:2]] for r in rows])
+        return tuple(data[:, 0].tolist()), tuple(data[:, 1].tolist())
+    except (KeyError, ValueError, IndexError, TypeError) as e:  # tomllib's errors are ValueErrors
+        raise ConfigError(what, str(p), f"is not a curve: two columns wavelength_nm, value ({e})") from None
+
+
+def ir_cut(spec: FilterSpec):
+    """Transmittance of the IR-cut filter: a logistic edge, 50 % at ``ir_cut_nm``, 90 % → 10 % over
+    ``ir_cut_width_nm``; 1 everywhere without one."""
+    if spec.ir_cut_nm is None:
+        return None
+    s = spec.ir_cut_width_nm / (2 * np.log(9.0))
+    return lambda lam: 1.0 / (1.0 + np.exp((np.asarray(lam, float) - spec.ir_cut_nm) / s))
 
 
 @QE_MODELS.register("flat")
@@ -75,9 +143,29 @@ def _silicon_qe(spec: FilterSpec):
     return tabulated(wl, np.asarray(shape) * spec.qe_peak)
 
 
+@QE_MODELS.register("photodiode")
+def _photodiode_qe(spec: FilterSpec):
+    """A silicon photodiode collecting carriers from the surface to ``collection_depth_um``:
+    (1 − R)(1 − exp(−α·d)) with Green's (2008) absorption and reflectance (spectracam.silicon),
+    scaled to a peak of ``qe_peak`` over 380–780 nm (the paper gives no QE; its shape is the point)."""
+    from .silicon import photodiode_qe
+
+    peak = photodiode_qe(np.arange(380.0, 781.0), spec.collection_depth_um).max()
+    return lambda lam: photodiode_qe(np.asarray(lam, float), spec.collection_depth_um) * (spec.qe_peak / peak)
+
+
+@QE_MODELS.register("data")
+def _data_qe(spec: FilterSpec):
+    """A measured curve (``qe_curve_nm``, ``qe_curve``), linear between samples, 0 outside."""
+    return tabulated(spec.qe_curve_nm, spec.qe_curve)
+
+
 def quantum_efficiency(spec: FilterSpec):
-    """QE(λ), electrons per photon, of the registered model ``spec.qe``."""
-    return QE_MODELS[spec.qe](spec)
+    """QE(λ) of the registered model ``spec.qe`` times the IR-cut filter's transmittance, if any:
+    electrons per photon reaching the sensor (before the colour filters)."""
+    qe = QE_MODELS[spec.qe](spec)
+    cut = ir_cut(spec)
+    return qe if cut is None else (lambda lam: qe(lam) * cut(lam))
 
 
 def _smooth(transmittance):

@@ -11,7 +11,7 @@ import numpy as np
 
 from .registry import Registry
 from .spec import Spec
-from .spectra import energy_to_photons
+from .spectra import WavelengthGrid, band_average, energy_to_photons, tabulated
 
 #: Irradiance forms: name → image irradiance per unit scene radiance (sr) as a function of f-number.
 IRRADIANCE_FORMS: Registry = Registry("optics.irradiance_form", "irradiance form")
@@ -29,11 +29,18 @@ class OpticsSpec(Spec):
     transmittance: float = 1.0
     #: "paraxial" π/(4N²) (the paper's equation) or "exact" π/(1+4N²).
     irradiance_form: str = "paraxial"
+    #: A measured T(λ) of the lens (wavelength nm, transmittance), e.g. from ``transmittance_file``
+    #: in a scene file; multiplies ``transmittance``.  Empty: flat.
+    transmittance_curve_nm: tuple = ()
+    transmittance_curve: tuple = ()
 
     def validate(self) -> None:
+        from .filters import check_curve
+
         self.number("f_number", 0.5, 64.0)
         self.number("transmittance", 0, 1, lo_open=True)
         self.choice("irradiance_form", IRRADIANCE_FORMS)
+        check_curve(self, "transmittance_curve_nm", "transmittance_curve", required=False)
 
 
 def irradiance_factor(optics: OpticsSpec) -> float:
@@ -45,8 +52,14 @@ def irradiance_factor(optics: OpticsSpec) -> float:
     return float(IRRADIANCE_FORMS[optics.irradiance_form](optics.f_number))
 
 
-def radiance_to_photon_irradiance(wavelengths_nm: np.ndarray, optics: OpticsSpec) -> np.ndarray:
+def radiance_to_photon_irradiance(grid, optics: OpticsSpec) -> np.ndarray:
     """Per-band factor from spectral radiance (W·m⁻²·sr⁻¹·nm⁻¹) to photon irradiance at the sensor
-    (photons·s⁻¹·m⁻²·nm⁻¹): :func:`irradiance_factor` × T × λ/(hc)."""
+    (photons·s⁻¹·m⁻²·nm⁻¹): :func:`irradiance_factor` × T(λ) × λ/(hc).  ``grid``: a
+    :class:`WavelengthGrid` (a measured T is averaged over each band) or wavelengths, nm."""
+    centres = np.asarray(grid.centres_nm if isinstance(grid, WavelengthGrid) else grid, float)
     k = irradiance_factor(optics) * optics.transmittance
-    return energy_to_photons(1.0, np.asarray(wavelengths_nm, float)) * k
+    factor = energy_to_photons(1.0, centres) * k
+    if optics.transmittance_curve:
+        T = tabulated(optics.transmittance_curve_nm, optics.transmittance_curve)
+        factor = factor * (band_average(T, grid) if isinstance(grid, WavelengthGrid) else T(centres))
+    return factor

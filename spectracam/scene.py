@@ -175,12 +175,37 @@ def read_toml(path: str | Path, what: str) -> dict:
         raise ConfigError(what, str(p), f"is not valid TOML ({e})") from None
 
 
+#: Curves a scene file may give as a file, relative to the scene file: (table, file key, fields).
+CURVE_FILES = (("filters", "qe_file", "qe_curve_nm", "qe_curve"),
+               ("optics", "transmittance_file", "transmittance_curve_nm", "transmittance_curve"))
+
+
+def resolve_curve_files(data: dict, base_dir: Path) -> dict:
+    """Replace ``filters.qe_file`` / ``optics.transmittance_file`` by the curves they hold, so the
+    scene (and every file made from it) records the data, not a path (``qe = "data"`` is implied)."""
+    from .filters import load_curve
+
+    data = dict(data)
+    for table, key, wl_field, value_field in CURVE_FILES:
+        t = data.get(table)
+        if isinstance(t, dict) and key in t:
+            t = dict(t)
+            path = t.pop(key)
+            if not isinstance(path, str):
+                raise ConfigError(f"{table}.{key}", path, "must be a path to a CSV or TOML file")
+            t[wl_field], t[value_field] = load_curve(Path(base_dir) / path, f"{table}.{key}")
+            if table == "filters":
+                t.setdefault("qe", "data")
+            data[table] = t
+    return data
+
+
 def load_scene(path: str | Path, overrides=()) -> Scene:
     """Read and validate a TOML scene file, with ``--set``-style overrides applied first."""
     from .overrides import apply_overrides
 
     data = apply_overrides(read_toml(path, "scene file"), overrides)
-    return parse_scene(data, source=str(path))
+    return parse_scene(resolve_curve_files(data, Path(path).parent), source=str(path))
 
 
 def load_camera_config(path: str | Path, base: CameraSpec | None = None) -> CameraSpec:

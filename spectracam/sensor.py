@@ -1,12 +1,14 @@
 """CMOS image sensor in current-integration mode (paper, sections 3.4 and 4.4).
 
 Per pixel and channel the recorded value is built by named steps, each one term of the paper's
-section 3.4: :func:`integrate_charge` (photo-electrons ``ρ·T`` plus dark electrons ``i_d·A·T``),
-:func:`add_shot_noise`, :func:`clip_to_well` (``q_max``), :func:`add_read_noise` (``Q_r``),
-:func:`add_offset_fpn` (``V_FPN``) and :func:`adc` (an n-bit uniform quantiser whose full scale is
-the full well, ``g·q_max``), with :func:`adc_inverse` beside it.  Everything is in electrons
-(``V/g``), so the conversion gain only names the voltage scale.  Each noise source switches off on
-its own.  :func:`expose` runs the steps in place, chunk by chunk, on all cores.
+section 3.4: :func:`integrate_charge` (photo-electrons ``ρ·T``, times the pixel's PRNU gain, plus
+dark electrons ``i_d·A·T``, times its DSNU factor), :func:`add_shot_noise`, :func:`clip_to_well`
+(``q_max``), :func:`add_read_noise` (``Q_r``), :func:`add_offset_fpn` (``V_FPN``, pixel and column)
+and :func:`adc`: ``DN = K·Q + black level``, an n-bit uniform quantiser clipped to its codes, with
+the system gain ``K = 2ⁿ·g / V_fs`` (EMVA 1288: DN per electron) from the conversion gain ``g`` and
+the ADC's full-scale voltage ``V_fs``; :func:`adc_inverse` sits beside it.  The well clip and the
+ADC clip are separate stages.  Each noise source switches off on its own.  :func:`expose` runs the
+steps in place, chunk by chunk, on all cores.
 """
 from __future__ import annotations
 
@@ -80,6 +82,13 @@ class SensorSpec(Spec):
     dark_current_e_per_s_um2: float = 10.0
     #: ADC resolution, bits (paper, 4.4).
     adc_bits: int = 8
+    #: Black level (pedestal) added before the ADC, DN.  The paper's ADC clips at code 0, which
+    #: truncates the negative half of the dark noise (EMVA 1288 allows ≤ 0.5 % of dark pixels at 0).
+    #: Default (None): 2ⁿ⁻⁵ DN, 1/32 of the range — 8 DN at 8 bits, 3 σ of the default offset FPN.
+    black_level_DN: float | None = None
+    #: ADC full-scale input, V.  Default (None): the full well above the pedestal,
+    #: ``g·q_max·2ⁿ/(2ⁿ − black level)``, so a full well reads the top code as in the paper.
+    adc_full_scale_V: float | None = None
     #: Offset fixed-pattern noise as a fraction of full swing (paper, 4.4: "FPN < 1 % full output swing").
     fpn_fraction: float = 0.01
     #: How to read "FPN < 1 %": "std" — the rms across pixels is that fraction (how datasheets quote
@@ -88,6 +97,15 @@ class SensorSpec(Spec):
     fpn_reading: str = "std"
     #: Gain FPN (PRNU), rms fraction of the signal; the paper ignores it (footnote §), so 0.
     prnu_fraction: float = 0.0
+    #: Dark-signal non-uniformity: rms of each pixel's dark current, fraction of the mean; the paper
+    #: has none, so 0 (typical CMOS: 0.1–0.5).
+    dsnu_fraction: float = 0.0
+    #: Column FPN: rms of per-column offsets, fraction of full swing (column amplifiers and ADCs);
+    #: the paper has none, so 0.
+    column_fpn_fraction: float = 0.0
+    #: The physical sensor: the seed of its fixed pattern.  None: the capture's seed (every capture a
+    #: new sensor, as the paper's trials); a number: one sensor, many frames.
+    pattern_seed: int | None = None
     #: Pixel pitch, µm.  The paper gives none; a full well of 131072 e⁻ at ~1300 e⁻/µm² suggests
     #: ~100 µm² of photodiode, i.e. a 10 µm pixel.
     pixel_pitch_um: float = 10.0
@@ -109,9 +127,17 @@ class SensorSpec(Spec):
         self.number("read_noise_e", 0, 1e6, unit="e-")
         self.number("dark_current_e_per_s_um2", 0, 1e9)
         self.integer("adc_bits", 1, 24)
+        if self.black_level_DN is not None:
+            self.number("black_level_DN", 0, 2 ** (self.adc_bits - 1), unit="DN")
+        if self.adc_full_scale_V is not None:
+            self.number("adc_full_scale_V", 0, 1000, lo_open=True, unit="V")
         self.number("fpn_fraction", 0, 1)
         self.choice("fpn_reading", FPN_READINGS)
         self.number("prnu_fraction", 0, 1)
+        self.number("dsnu_fraction", 0, 10)
+        self.number("column_fpn_fraction", 0, 1)
+        if self.pattern_seed is not None:
+            self.integer("pattern_seed", 0, 2**63 - 1)
         self.number("pixel_pitch_um", 0.1, 1000, unit="µm")
         self.number("fill_factor", 0, 1, lo_open=True)
         self.number("conversion_gain_uV_per_e", 0, lo_open=True)
@@ -128,9 +154,27 @@ class SensorSpec(Spec):
         return self.dark_current_e_per_s_um2 * self.pixel_area_um2 if self.dark_current else 0.0
 
     @property
+    def black_level_dn(self) -> float:
+        """The pedestal, DN (see ``black_level_DN``)."""
+        return float(2 ** (self.adc_bits - 5) if self.black_level_DN is None else self.black_level_DN)
+
+    @property
+    def adc_full_scale_v(self) -> float:
+        """The ADC's full-scale input, V (see ``adc_full_scale_V``)."""
+        if self.adc_full_scale_V is not None:
+            return self.adc_full_scale_V
+        n = 2**self.adc_bits
+        return self.conversion_gain_uV_per_e * 1e-6 * self.q_max_e * n / (n - self.black_level_dn)
+
+    @property
+    def system_gain_dn_per_e(self) -> float:
+        """K = 2ⁿ·g/V_fs, digital numbers per electron (EMVA 1288's system gain)."""
+        return 2**self.adc_bits * self.conversion_gain_uV_per_e * 1e-6 / self.adc_full_scale_v
+
+    @property
     def quantization_step_e(self) -> float:
-        """Electrons per digital number: q_max / 2ⁿ."""
-        return self.q_max_e / 2**self.adc_bits
+        """Electrons per digital number, 1/K."""
+        return 1.0 / self.system_gain_dn_per_e
 
     @property
     def fpn_rms_e(self) -> float:
@@ -182,42 +226,68 @@ def _map_chunks(fn, n: int) -> None:
             f.result()
 
 
-def fixed_pattern(sensor: SensorSpec, shape: tuple[int, int], seed: int, sensor_index: int = 0):
-    """Per-pixel offset (electrons) and gain of one physical sensor: the same for every frame and
-    capture with this seed and sensor index, different across pixels and sensors."""
-    offset = gain = None
+class FixedPattern(NamedTuple):
+    """One physical sensor's per-pixel non-uniformities (``None`` where absent): additive offset, e⁻
+    (pixel and column FPN); PRNU gain; DSNU factor on the dark current."""
+
+    offset_e: np.ndarray | None = None
+    gain: np.ndarray | None = None
+    dark_gain: np.ndarray | None = None
+
+
+def _draw(seq, n: int, fill) -> np.ndarray:
+    """``n`` float32 values, ``fill(rng, out)`` per chunk, each chunk seeded from ``seq``."""
+    out = np.empty(n, np.float32)
+    _map_chunks(lambda i, sl: fill(_chunk_rng(seq, i), out[sl]), n)
+    return out
+
+
+def _normal_around_one(rms: float):
+    def fill(rng, out):
+        rng.standard_normal(out=out, dtype=np.float32)
+        out *= np.float32(rms)
+        out += np.float32(1.0)
+
+    return fill
+
+
+def fixed_pattern(sensor: SensorSpec, shape: tuple[int, int], seed: int, sensor_index: int = 0) -> FixedPattern:
+    """The fixed pattern of one physical sensor: the same for every frame with this seed (or the
+    sensor's ``pattern_seed``) and sensor index, different across pixels and sensors."""
+    if sensor.pattern_seed is not None:
+        seed = sensor.pattern_seed
+    if not sensor.fpn:
+        return FixedPattern()
     n = int(np.prod(shape))
-    if sensor.fpn and sensor.fpn_fraction > 0:
-        offset = np.empty(n, np.float32)
-        seq = noise_stream(seed, FPN_STREAM, sensor_index, 0)
+    offset = gain = dark_gain = None
+    if sensor.fpn_fraction > 0:
         reading = FPN_READINGS[sensor.fpn_reading]
         swing = sensor.fpn_fraction * sensor.q_max_e
-
-        def draw_offset(i, sl):
-            reading.draw(_chunk_rng(seq, i), offset[sl], swing)
-
-        _map_chunks(draw_offset, n)
-        offset = offset.reshape(shape)
-    if sensor.fpn and sensor.prnu_fraction > 0:
-        gain = np.empty(n, np.float32)
-        seq = noise_stream(seed, FPN_STREAM, sensor_index, 1)
-
-        def draw_gain(i, sl):
-            _chunk_rng(seq, i).standard_normal(out=gain[sl], dtype=np.float32)
-            gain[sl] *= np.float32(sensor.prnu_fraction)
-            gain[sl] += np.float32(1.0)
-
-        _map_chunks(draw_gain, n)
-        gain = gain.reshape(shape)
-    return offset, gain
+        offset = _draw(noise_stream(seed, FPN_STREAM, sensor_index, 0), n,
+                       lambda rng, out: reading.draw(rng, out, swing)).reshape(shape)
+    if sensor.prnu_fraction > 0:
+        gain = _draw(noise_stream(seed, FPN_STREAM, sensor_index, 1), n,
+                     _normal_around_one(sensor.prnu_fraction)).reshape(shape)
+    if sensor.column_fpn_fraction > 0:
+        cols = _draw(noise_stream(seed, FPN_STREAM, sensor_index, 2), shape[-1],
+                     lambda rng, out: _draw_std(rng, out, sensor.column_fpn_fraction * sensor.q_max_e))
+        offset = np.broadcast_to(cols, shape).copy() if offset is None else offset + cols
+    if sensor.dsnu_fraction > 0 and sensor.dark_current:
+        dark_gain = _draw(noise_stream(seed, FPN_STREAM, sensor_index, 3), n, _normal_around_one(sensor.dsnu_fraction))
+        dark_gain = np.maximum(dark_gain, 0.0, out=dark_gain).reshape(shape)  # a dark current is never negative
+    return FixedPattern(offset, gain, dark_gain)
 
 
-def integrate_charge(rate_e_per_s, time_s: float, dark_e: float, gain=None, out=None):
-    """Expected charge ``ρ·T·g + i_d·A·T`` (paper 3.4; ``g`` the PRNU gain, 1 without it), e⁻."""
+def integrate_charge(rate_e_per_s, time_s: float, dark_e: float, gain=None, dark_gain=None, out=None):
+    """Expected charge ``ρ·T·g + i_d·A·T·d`` (paper 3.4; ``g`` the PRNU gain and ``d`` the DSNU
+    factor of each pixel, 1 without them), e⁻."""
     out = np.multiply(rate_e_per_s, np.float32(time_s), out=out)
     if gain is not None:
         out *= gain
-    out += np.float32(dark_e)
+    if dark_gain is None:
+        out += np.float32(dark_e)
+    else:
+        out += np.float32(dark_e) * dark_gain
     return out
 
 
@@ -247,20 +317,21 @@ def add_offset_fpn(charge_e, offset_e):
 
 
 def adc_full_scale_dn(sensor: SensorSpec) -> float:
-    """Largest output: code 2ⁿ − 1 when quantising, else the continuous full scale 2ⁿ steps."""
+    """Largest output: code 2ⁿ − 1 when quantising, else the continuous full scale 2ⁿ."""
     return float(2**sensor.adc_bits - 1 if sensor.quantization else 2**sensor.adc_bits)
 
 
 def adc(charge_e, sensor: SensorSpec):
-    """n-bit uniform ADC whose full scale is the full well (paper 3.4), in place: step
-    ``q_max/2ⁿ``; the top code 2ⁿ − 1 holds ``[q_max − step, q_max)``.  Without quantisation the
-    output is the continuous ``V/step``.
+    """n-bit uniform ADC, in place: ``DN = K·Q + black level``, floored to a code and clipped to
+    ``0 … 2ⁿ − 1`` (the ADC clip; without quantisation the output is continuous, clipped to
+    ``0 … 2ⁿ``).  With the default full scale the top code holds ``[q_max − 1/K, q_max)``.
 
-    >>> s = SensorSpec(q_max_e=256.0, adc_bits=8)
-    >>> adc(np.array([0.4, 1.0, 254.9, 300.0], np.float32), s).tolist()
-    [0.0, 1.0, 254.0, 255.0]
+    >>> s = SensorSpec(q_max_e=256.0, adc_bits=8, black_level_DN=0.0)
+    >>> adc(np.array([-3.0, 0.4, 1.0, 254.9, 300.0], np.float32), s).tolist()
+    [0.0, 0.0, 1.0, 254.0, 255.0]
     """
-    charge_e *= np.float32(1.0 / sensor.quantization_step_e)
+    charge_e *= np.float32(sensor.system_gain_dn_per_e)
+    charge_e += np.float32(sensor.black_level_dn)
     if sensor.quantization:
         np.floor(charge_e, out=charge_e)
     if sensor.clipping:
@@ -269,29 +340,32 @@ def adc(charge_e, sensor: SensorSpec):
 
 
 def adc_inverse(digital, sensor: SensorSpec) -> np.ndarray:
-    """Electrons from digital numbers at mid-step, ``(DN + ½)·q_max/2ⁿ`` (or ``DN·step`` when not
-    quantised): the estimate with the least error for a uniform quantiser.
+    """Electrons from digital numbers: the black level removed, at mid-step, ``(DN − b + ½)/K`` (or
+    ``(DN − b)/K`` when not quantised) — the least-error estimate for a uniform quantiser.
 
-    >>> adc_inverse(np.array([0.0, 10.0]), SensorSpec(q_max_e=256.0, adc_bits=8)).tolist()
+    >>> s = SensorSpec(q_max_e=256.0, adc_bits=8, black_level_DN=8.0, adc_full_scale_V=256 * 5e-6)  # K = 1
+    >>> adc_inverse(np.array([8.0, 18.0]), s).round(9).tolist()
     [0.5, 10.5]
     """
-    return (digital + (0.5 if sensor.quantization else 0.0)) * sensor.quantization_step_e
+    return (digital - sensor.black_level_dn + (0.5 if sensor.quantization else 0.0)) * sensor.quantization_step_e
 
 
 def expose(photo_rate_e_per_s: np.ndarray, time_s: float, sensor: SensorSpec, noise: np.random.SeedSequence,
-           pattern=(None, None)) -> tuple[np.ndarray, np.ndarray]:
+           pattern: FixedPattern = FixedPattern()) -> tuple[np.ndarray, np.ndarray]:
     """One exposure of one frame.  Returns (digital numbers, expected electrons without noise).
 
     ``photo_rate_e_per_s`` is ``A·∫E_q·R_k dλ`` per pixel (paper, 3.3); ``noise`` seeds this frame's
-    temporal noise; ``pattern`` is the sensor's ``(offset_e, gain)`` from :func:`fixed_pattern`.
-    Digital numbers are float32 integers in ``[0, 2ⁿ − 1]`` (or unquantised ``V/step`` in
-    ``[0, 2ⁿ]`` when quantisation is off).  Works in place, chunk by chunk, on all cores.
+    temporal noise; ``pattern`` is the sensor's :class:`FixedPattern`.  Digital numbers are
+    float32 integers in ``[0, 2ⁿ − 1]`` (or continuous in ``[0, 2ⁿ]`` when quantisation is off);
+    expected electrons are the noise-free charge, photo + dark.  Works in place, chunk by chunk, on
+    all cores.
     """
-    offset, gain = pattern
+    offset, gain, dark_gain = pattern
     shape = photo_rate_e_per_s.shape
     rate = np.ascontiguousarray(photo_rate_e_per_s, dtype=np.float32).reshape(-1)
     off = None if offset is None else offset.reshape(-1)
     g = None if gain is None else gain.reshape(-1)
+    dg = None if dark_gain is None else dark_gain.reshape(-1)
     n = rate.size
     mean = np.empty(n, np.float32)
     q = np.empty(n, np.float32)
@@ -300,7 +374,7 @@ def expose(photo_rate_e_per_s: np.ndarray, time_s: float, sensor: SensorSpec, no
     def run(i, sl):
         rng = _chunk_rng(noise, i)
         m, out = mean[sl], q[sl]
-        integrate_charge(rate[sl], time_s, dark, None if g is None else g[sl], out=m)
+        integrate_charge(rate[sl], time_s, dark, None if g is None else g[sl], None if dg is None else dg[sl], out=m)
         if sensor.shot_noise:
             add_shot_noise(m, out, rng, sensor.shot_noise_model)
         else:

@@ -114,7 +114,7 @@ def test_qe_models(qe, at_400, at_600):
 # --- sensor options ------------------------------------------------------------------------------
 
 def test_prnu_gain_has_mean_one_and_the_stated_rms():
-    _, gain = fixed_pattern(SensorSpec(prnu_fraction=0.02), (500, 500), seed=3)
+    gain = fixed_pattern(SensorSpec(prnu_fraction=0.02), (500, 500), seed=3).gain
     assert gain.mean() == pytest.approx(1.0, abs=2e-4)  # 250k samples: σ of the mean 4e-5
     assert gain.std() == pytest.approx(0.02, rel=0.01)
     assert fixed_pattern(SensorSpec(prnu_fraction=0.0), (4, 4), seed=3)[1] is None
@@ -129,7 +129,7 @@ def test_snr_combinations_closed_forms():
 def test_cfa_statistics_use_both_green_sites():
     # RGGB mosaic with the two greens at different levels: the G statistics must see both
     dn = np.tile(np.array([[50.0, 100.0], [300.0, 20.0]], np.float32), (8, 8))
-    sensor = SensorSpec(dark_current=False)
+    sensor = SensorSpec(dark_current=False, black_level_DN=0.0)
     raw = RawCapture(dn, None, np.ones(3), 1.0, MosaicLayout.bayer("RGGB"), CameraSpec(sensor=sensor), 0)
     means, stds = channel_stats(raw, [(slice(1, 15), slice(3, 13))])
     step = sensor.quantization_step_e

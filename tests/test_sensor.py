@@ -14,7 +14,7 @@ from spectracam.exposure import exposure_times_s
 from spectracam.filters import FilterSpec, responsivities
 from spectracam.optics import OpticsSpec, irradiance_factor
 from spectracam.render import RadianceCube
-from spectracam.sensor import SensorSpec, expose, fixed_pattern, noise_stream
+from spectracam.sensor import SensorSpec, adc_inverse, expose, fixed_pattern, noise_stream
 from spectracam.spectra import PLANCK_H_J_S, SPEED_OF_LIGHT_M_S, WavelengthGrid
 
 GRID = np.arange(400.0, 701.0, 10.0)
@@ -62,7 +62,7 @@ def test_mean_electrons_and_photon_transfer_variance():
     rate = np.full((400, 400), 2.0e6, np.float32)
     t = 0.01
     dn, expected = expose(rate, t, sensor, noise_stream(3, 9))
-    e = dn * sensor.quantization_step_e
+    e = adc_inverse(dn, sensor)
     mean_e = 2.0e6 * t + sensor.dark_rate_e_per_s * t
     assert expected.mean() == pytest.approx(mean_e, rel=1e-6)
     assert e.mean() == pytest.approx(mean_e, rel=1e-3)
@@ -75,20 +75,30 @@ def test_dark_frame_statistics(model):
     sensor = SensorSpec(fpn=False, quantization=False, shot_noise_model=model)
     t = 2.0
     dn, _ = expose(np.zeros((400, 400), np.float32), t, sensor, noise_stream(1, 9))
-    e = dn * sensor.quantization_step_e
+    e = adc_inverse(dn, sensor)
     dark = sensor.dark_current_e_per_s_um2 * sensor.pixel_area_um2 * t  # 2000 e⁻
     assert e.mean() == pytest.approx(dark, rel=2e-3)
     assert e.var() == pytest.approx(dark + sensor.read_noise_e**2, rel=0.02)
 
 
 def test_quantisation_step_is_qmax_over_2n():
-    sensor = QUIET.replace(quantization=True, adc_bits=8)
-    assert sensor.quantization_step_e == 512.0
+    # without a pedestal the ADC spans the full well: step q_max/2ⁿ (the paper's ADC)
+    sensor = QUIET.replace(quantization=True, adc_bits=8, black_level_DN=0.0)
+    assert sensor.quantization_step_e == 512.0 and sensor.system_gain_dn_per_e == 1 / 512
     electrons = np.arange(0, 131072, 37, dtype=np.float32)
     dn, _ = expose(electrons, 1.0, sensor, noise_stream(0))
     np.testing.assert_array_equal(dn, np.floor(electrons / 512.0))
     s12 = dataclasses.replace(sensor, adc_bits=12)
     assert expose(np.array([1000.0], np.float32), 1.0, s12, noise_stream(0))[0][0] == np.floor(1000 / 32)
+    # the default pedestal, 2ⁿ⁻⁵ DN, sits below the full well: K = (2ⁿ − b)/q_max, full well → 2ⁿ
+    d = QUIET.replace(quantization=True)
+    assert d.black_level_dn == 8 and d.system_gain_dn_per_e == pytest.approx(248 / 131072)
+    dn, _ = expose(np.array([0.0, 529.0, 131072 * 0.999], np.float32), 1.0, d, noise_stream(0))
+    np.testing.assert_array_equal(dn, [8, 9, 255])
+    # an explicit ADC range: the conversion gain reaches the digital numbers, K = 2ⁿ·g/V_fs
+    k = QUIET.replace(quantization=True, conversion_gain_uV_per_e=10.0, adc_full_scale_V=1.0, black_level_DN=0.0)
+    assert k.system_gain_dn_per_e == pytest.approx(256 * 10e-6)
+    assert expose(np.array([10000.0], np.float32), 1.0, k, noise_stream(0))[0][0] == np.floor(10000 * 256e-5)
 
 
 def test_full_well_clipping():
@@ -100,8 +110,10 @@ def test_full_well_clipping():
     # the well holds q_max: with shot noise off, 0.9·q_max passes and 1.5·q_max reads as q_max
     s16 = dataclasses.replace(sensor, adc_bits=16, shot_noise=False, dark_current=False)
     dn, _ = expose(np.array([0.9, 1.5], np.float32) * np.float32(131072), 1.0, s16, noise_stream(0))
-    np.testing.assert_allclose(dn * s16.quantization_step_e, [0.9 * 131072, 131072])
-    assert expose(np.array([2e5], np.float32), 1.0, s16.off("clipping"), noise_stream(0))[0][0] * 2 == 2e5
+    np.testing.assert_allclose(adc_inverse(dn, s16), [0.9 * 131072, 131072], rtol=1e-6)
+    unclipped = s16.off("clipping")
+    assert adc_inverse(expose(np.array([2e5], np.float32), 1.0, unclipped, noise_stream(0))[0], unclipped)[0] \
+        == pytest.approx(2e5, rel=1e-6)
     unclipped, _ = expose(np.full(10, 1e9, np.float32), 1.0, sensor.off("clipping"), noise_stream(0))
     assert unclipped.min() > 1e5
 
@@ -109,9 +121,9 @@ def test_full_well_clipping():
 @pytest.mark.parametrize("reading, rms", [("std", 0.01 * 131072), ("bound", 0.01 * 131072 / np.sqrt(12))])
 def test_fpn_fixed_across_frames_different_across_pixels(reading, rms):
     sensor = SensorSpec(fpn_reading=reading)
-    a, _ = fixed_pattern(sensor, (300, 300), seed=5, sensor_index=0)
-    b, _ = fixed_pattern(sensor, (300, 300), seed=5, sensor_index=0)
-    c, _ = fixed_pattern(sensor, (300, 300), seed=5, sensor_index=1)
+    a = fixed_pattern(sensor, (300, 300), seed=5, sensor_index=0).offset_e
+    b = fixed_pattern(sensor, (300, 300), seed=5, sensor_index=0).offset_e
+    c = fixed_pattern(sensor, (300, 300), seed=5, sensor_index=1).offset_e
     np.testing.assert_array_equal(a, b)
     assert a.std() == pytest.approx(rms, rel=0.02) and abs(np.corrcoef(a.ravel(), c.ravel())[0, 1]) < 0.01
     if reading == "bound":
@@ -124,7 +136,7 @@ def test_fsc_frames_share_fpn_prism_sensors_do_not():
     sensor = SensorSpec(quantization=False, shot_noise=False, read_noise=False, dark_current=False)
     for arch, shared in (("fsc", True), ("prism", False)):
         raw = capture_stage(cube, CameraSpec(sensor=sensor, capture=CaptureSpec(arch, "optimal")), 2, everywhere)
-        resid = raw.digital * sensor.quantization_step_e - raw.expected_e
+        resid = adc_inverse(raw.digital, sensor) - raw.expected_e
         corr = np.corrcoef(resid[0].ravel(), resid[2].ravel())[0, 1]
         assert (corr > 0.999) if shared else (abs(corr) < 0.02)
 
@@ -202,7 +214,7 @@ def test_chunked_noise_is_deterministic_and_independent_across_chunks():
     a, _ = expose(rate, 0.01, sensor, noise_stream(1, 2))
     b, _ = expose(rate, 0.01, sensor, noise_stream(1, 2))
     np.testing.assert_array_equal(a, b)
-    e = a * sensor.quantization_step_e - 1e4
+    e = adc_inverse(a, sensor) - 1e4
     first, second = e[:CHUNK_PX], e[CHUNK_PX:2 * CHUNK_PX]
     assert abs(np.corrcoef(first, second)[0, 1]) < 0.005
     assert second.var() == pytest.approx(1e4 + 400, rel=0.01)
