@@ -304,6 +304,39 @@ def paper_cmd(out_dir, experiment_file, renderer, quick, no_cache, sets, quiet):
     step(f"done: {out_dir}/report.md")
 
 
+@main.command("emva")
+@_output("Directory to write emva.json, datasheet.md and the photon-transfer, SNR and linearity plots into.")
+@click.option("--scene", "scene_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Scene file whose camera is measured [default: the paper's camera].")
+@click.option("--config", "config_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="TOML with [optics], [filters], [sensor], [capture] tables, over the scene's camera.")
+@click.option("--channel", type=click.Choice(["R", "G", "B"]), default="G", show_default=True,
+              help="Colour channel measured (its filter in front of the sensor).")
+@click.option("--wavelength", "wavelength_nm", type=click.FloatRange(300, 1100), default=540.0, show_default=True,
+              help="Wavelength of the monochromatic light, nm.")
+@click.option("--seed", type=click.IntRange(0, 2**31 - 1), default=0, show_default=True, help="Noise seed.")
+@_set_option
+@_quiet_option
+def emva_cmd(out_dir, scene_file, config_file, channel, wavelength_nm, seed, sets, quiet):
+    """Characterise the simulated camera by EMVA 1288 (Release 4.0, linear): datasheet and plots."""
+    from .experiments.emva import EmvaSetup, run_emva, write_emva_outputs
+    from .scene import read_toml
+
+    data, source = (read_toml(scene_file, "scene file"), str(scene_file)) if scene_file else ({}, "command line")
+    scene = _scene(data, source, config_file, (), sets)
+    _check_writable(out_dir)
+    result = run_emva(scene.camera, EmvaSetup(channel=channel, wavelength_nm=wavelength_nm, seed=seed))
+    command = "spectracam emva -o " + str(out_dir) + (f" --scene {scene_file}" if scene_file else "") \
+        + (f" --config {config_file}" if config_file else "") + f" --channel {channel} --wavelength {wavelength_nm:g}" \
+        + f" --seed {seed}" + "".join(f" --set {s}" for s in sets)
+    paths = write_emva_outputs(out_dir, result, command)
+    log = _log(quiet)
+    num = lambda x: "–" if x is None else f"{x:.5g}"  # noqa: E731
+    for k, v in result["measured"].items():
+        log(f"  {k:<26} configured {num(result['configured'][k]):>10}   measured {num(v):>10}")
+    log("wrote " + ", ".join(str(p) for p in paths if p.suffix != ".svg"))
+
+
 @main.command("sweep")
 @click.argument("sweep_file", type=click.Path(dir_okay=False, path_type=Path))
 @_output("Directory for results.jsonl/.parquet/.csv and sweep.json.")

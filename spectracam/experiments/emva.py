@@ -1,0 +1,213 @@
+"""EMVA 1288 (Release 4.0, linear sensors) measured on the simulated camera: a datasheet.
+
+The camera's sensor is lit uniformly by monochromatic light at one wavelength through one colour
+channel's filter (default: green, at 540 nm), and measured as the standard prescribes: a photon-
+transfer series of frame pairs from dark to beyond saturation, varying the exposure time at
+constant irradiance, with a dark pair at every exposure time; and stacks of dark and ~50 %-bright
+frames for the spatial non-uniformities.  :mod:`spectracam.emva1288` analyses them; the configured
+block holds what the standard's definitions give for the configured camera, so every measured
+quantity can be held against it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..camera import CameraSpec
+from ..emva1288 import EmvaSeries, analyse, expected
+from ..filters import CHANNELS, responsivities
+from ..sensor import expose, fixed_pattern, noise_stream
+from ..spectra import WavelengthGrid
+
+#: The quantities of the datasheet, in the order EMVA 1288 lists them.
+KEYS = ("system_gain_DN_per_e", "quantum_efficiency", "dark_noise_e", "saturation_capacity_e", "snr_max_db",
+        "dynamic_range_db", "dark_current_e_per_s", "dsnu_e", "prnu_percent", "linearity_error_percent")
+EMVA_STREAM = 10
+
+
+@dataclass(frozen=True)
+class EmvaSetup:
+    """How the measurement is taken (the standard's minimums where it sets one)."""
+
+    channel: str = "G"
+    wavelength_nm: float = 540.0
+    #: Frame size, px: 256 × 256 = 65536 pixels a frame (σ of a variance ±0.6 %).
+    width: int = 256
+    height: int = 256
+    #: Photon-transfer steps, dark to 110 % of saturation (the standard: at least 50).
+    steps: int = 60
+    #: Frames in each spatial stack (the standard recommends 100; the σ²/L correction handles fewer).
+    spatial_frames: int = 16
+    #: Time to fill the well at the chosen irradiance, s: long enough that the dark current is
+    #: measured over the series (1000 e⁻/s × 5 s = 5000 e⁻ for the default pixel).
+    saturation_time_s: float = 5.0
+    seed: int = 0
+
+
+def channel_qe(camera: CameraSpec, channel: str, wavelength_nm: float) -> float:
+    """η at one wavelength: the channel's filter × QE (electrons per photon)."""
+    grid = WavelengthGrid([wavelength_nm - 0.1, wavelength_nm, wavelength_nm + 0.1])
+    return float(responsivities(camera.filters, grid)[CHANNELS.index(channel), 1])
+
+
+def simulate_series(camera: CameraSpec, setup: EmvaSetup = EmvaSetup()) -> tuple[EmvaSeries, dict]:
+    """The frames of the measurement, taken with one physical sensor (one fixed pattern)."""
+    s = camera.sensor
+    eta = channel_qe(camera, setup.channel, setup.wavelength_nm)
+    if eta <= 0:
+        raise ValueError(f"channel {setup.channel} does not respond at {setup.wavelength_nm:g} nm")
+    shape = (setup.height, setup.width)
+    pattern = fixed_pattern(s, shape, setup.seed, 0)
+    photons_per_s = s.q_max_e / (eta * setup.saturation_time_s)  # μ_p per second at this irradiance
+    rate = np.full(shape, eta * photons_per_s, np.float32)
+    zero = np.zeros(shape, np.float32)
+    times = np.linspace(0.0, 1.1 * setup.saturation_time_s, setup.steps)
+    times[0] = 1e-6  # a dark-most step with a finite exposure
+
+    def frame(r, t, *stream):
+        return expose(r, t, s, noise_stream(setup.seed, EMVA_STREAM, *stream), pattern)[0]
+
+    bright = np.stack([[frame(rate, t, 0, i, j) for j in range(2)] for i, t in enumerate(times)])
+    dark = np.stack([[frame(zero, t, 1, i, j) for j in range(2)] for i, t in enumerate(times)])
+    t50 = 0.5 * setup.saturation_time_s
+    spatial_dark = np.stack([frame(zero, t50, 2, j) for j in range(setup.spatial_frames)])
+    spatial_bright = np.stack([frame(rate, t50, 3, j) for j in range(setup.spatial_frames)])
+    series = EmvaSeries(wavelength_nm=setup.wavelength_nm, pixel_area_um2=s.pixel_area_um2,
+                        exposure_times_s=times, mu_p=photons_per_s * times, bright_pairs=bright, dark_pairs=dark,
+                        max_dn=2.0**s.adc_bits - 1, spatial_dark=spatial_dark, spatial_bright=spatial_bright,
+                        spatial_mu_p=photons_per_s * t50, spatial_exposure_time_s=t50)
+    return series, {"eta": eta, "photons_per_s": photons_per_s}
+
+
+def configured(camera: CameraSpec, setup: EmvaSetup, photons_per_s: float, eta: float) -> dict:
+    """The standard's quantities for the configured camera (see :func:`spectracam.emva1288.expected`)."""
+    s = camera.sensor
+    t50 = 0.5 * setup.saturation_time_s
+    dark = s.dark_rate_e_per_s
+    # DSNU1288: the spatial spread of the dark signal at the spatial stack's exposure, e⁻ —
+    # offset FPN (pixel and column) and the dark current's non-uniformity
+    dsnu = np.sqrt((s.fpn_rms_e if s.fpn else 0.0) ** 2 + (s.column_fpn_fraction * s.q_max_e if s.fpn else 0.0) ** 2
+                   + (s.dsnu_fraction * dark * t50 if s.fpn else 0.0) ** 2)
+    return expected(gain_DN_per_e=s.system_gain_dn_per_e, quantum_efficiency=eta,
+                    read_noise_e=s.read_noise_e if s.read_noise else 0.0, dark_current_e_per_s=dark,
+                    dsnu_e=float(dsnu), prnu_fraction=s.prnu_fraction if s.fpn else 0.0, full_well_e=s.q_max_e,
+                    adc_bits=s.adc_bits, black_level_DN=s.black_level_dn - 0.5,  # the ADC floors: round(x − ½)
+                    series_photon_rate_per_s=photons_per_s)
+
+
+def run_emva(camera: CameraSpec, setup: EmvaSetup = EmvaSetup()) -> dict:
+    """Measure and analyse; ``{"configured", "measured", "setup", "camera", "curves"}``."""
+    series, info = simulate_series(camera, setup)
+    measured = analyse(series)
+    conf = configured(camera, setup, info["photons_per_s"], info["eta"])
+    pick = lambda d: {k: (None if d[k] is None or not np.isfinite(d[k]) else float(d[k])) for k in KEYS}  # noqa: E731
+    return {"configured": pick(conf), "measured": pick(measured),
+            "notes": {"dark_noise_is_upper_limit": bool(conf["details"]["dark_noise_is_upper_limit"]),
+                      "saturation_method": conf["details"]["saturation_method"]},
+            "fit": {"ptc_offset_DN2": float(measured["details"]["ptc_offset_DN2"])},
+            "setup": {**setup.__dict__}, "camera": camera.to_dict(),
+            "curves": {k: np.asarray(v).tolist() for k, v in measured.get("curves", {}).items()
+                       if np.ndim(v) == 1}}
+
+
+LABELS = {"system_gain_DN_per_e": ("system gain K", "DN/e⁻", "{:.5g}"),
+          "quantum_efficiency": ("quantum efficiency η", "", "{:.4f}"),
+          "dark_noise_e": ("temporal dark noise σ_d", "e⁻", "{:.2f}"),
+          "saturation_capacity_e": ("saturation capacity μ_e.sat", "e⁻", "{:.0f}"),
+          "snr_max_db": ("SNR_max", "dB", "{:.2f}"),
+          "dynamic_range_db": ("dynamic range", "dB", "{:.2f}"),
+          "dark_current_e_per_s": ("dark current", "e⁻/s", "{:.1f}"),
+          "dsnu_e": ("DSNU1288", "e⁻", "{:.1f}"),
+          "prnu_percent": ("PRNU1288", "%", "{:.3f}"),
+          "linearity_error_percent": ("linearity error LE", "%", "{:.4f}")}
+
+
+def _fmt(fmt: str, v) -> str:
+    return "–" if v is None else fmt.format(v)
+
+
+def datasheet_markdown(result: dict, command: str) -> str:
+    """The EMVA 1288 datasheet of the simulated camera: configured beside measured."""
+    c, m, st = result["configured"], result["measured"], result["setup"]
+    lines = ["# EMVA 1288 datasheet of the simulated camera", "",
+             f"Made by `{command}`. Release 4.0, linear sensors; channel {st['channel']} at {st['wavelength_nm']:g} nm, "
+             f"{st['width']}×{st['height']} px, {st['steps']} photon-transfer steps (exposure time varied, dark pair "
+             f"at each), spatial stacks of {st['spatial_frames']} frames, seed {st['seed']}.", "",
+             "| quantity | unit | configured | measured | difference |", "|---|---|---|---|---|"]
+    for k in KEYS:
+        name, unit, fmt = LABELS[k]
+        d = "–" if (c[k] in (None, 0) or m[k] is None) else f"{100 * (m[k] / c[k] - 1):+.2f} %"
+        lines.append(f"| {name} | {unit} | {_fmt(fmt, c[k])} | {_fmt(fmt, m[k])} | {d} |")
+    notes = result["notes"]
+    lines += ["", "Configured: what the standard's definitions give for the configured camera (the saturation by "
+              f"its 0.1–0.2 % rule: {notes['saturation_method']})."]
+    if notes["dark_noise_is_upper_limit"]:
+        lines.append("The dark variance is below 0.24 DN² (quantisation-limited), so the standard gives only an upper "
+                     "limit for σ_d, 0.40/K, in both columns.")
+    lines += ["", "![photon transfer](photon_transfer.png) ![SNR](snr.png) ![linearity](linearity.png)", ""]
+    return "\n".join(lines)
+
+
+def figures(result: dict):
+    """``{name: figure}``: photon transfer, SNR and linearity, as the standard draws them."""
+    from ..io.plots import pyplot
+
+    plt = pyplot()
+    cv = result["curves"]
+    mu_y, var_y = np.asarray(cv["mu_y"]), np.asarray(cv["var_y"])
+    mu_d, var_d = np.asarray(cv["mu_y_dark"]), np.asarray(cv["var_y_dark"])
+    mu_p = np.asarray(cv["mu_p"])
+    fit = np.asarray(cv["sensitivity_fit_mask"], bool)
+    K = result["measured"]["system_gain_DN_per_e"]
+    out = {}
+    fig, ax = plt.subplots(figsize=(5.5, 4))
+    ax.plot(mu_y - mu_d, var_y - var_d, "o", ms=3, mfc="none", color="0.3", label="measured")
+    ax.plot((mu_y - mu_d)[fit], (var_y - var_d)[fit], "o", ms=3, color="tab:blue", label="fit range (0–70 % sat.)")
+    x = np.array([0, (mu_y - mu_d)[fit].max()])
+    ax.plot(x, K * x + result["fit"]["ptc_offset_DN2"], "-", color="tab:red", label=f"fit: slope K = {K:.4g} DN/e⁻")
+    ax.set_xlabel("μ_y − μ_y.dark (DN)")
+    ax.set_ylabel("σ²_y − σ²_y.dark (DN²)")
+    ax.set_title("Photon transfer", fontsize=10)
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    out["photon_transfer"] = fig
+    fig, ax = plt.subplots(figsize=(5.5, 4))
+    ok = mu_p >= 0.5 * mu_p[mu_p > 0][1]  # the measured steps (the first is dark)
+    ax.loglog(mu_p[ok], np.asarray(cv["snr"])[ok], "o", ms=3, mfc="none", color="0.3", label="measured")
+    ax.loglog(mu_p[ok], np.asarray(cv["snr_model"])[ok], "-", color="tab:red", label="EMVA 1288 model")
+    ax.loglog(mu_p[ok], np.asarray(cv["snr_ideal"])[ok], "--", color="0.5", label="ideal sensor")
+    ax.set_xlabel("μ_p (photons per pixel)")
+    ax.set_ylabel("SNR")
+    ax.set_title("Signal-to-noise ratio", fontsize=10)
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3, which="both")
+    out["snr"] = fig
+    fig, ax = plt.subplots(figsize=(5.5, 4))
+    lin = np.asarray(cv["linearity_fit_mask"], bool)
+    ax.plot(mu_p[lin], np.asarray(cv["linearity_deviation_percent"])[lin], "o-", ms=3, color="tab:blue")
+    ax.axhline(0, color="0.5", lw=0.8)
+    ax.set_xlabel("μ_p (photons per pixel)")
+    ax.set_ylabel("deviation from the linear fit (%)")
+    ax.set_title("Linearity (5–95 % of saturation)", fontsize=10)
+    ax.grid(alpha=0.3)
+    out["linearity"] = fig
+    return out
+
+
+def write_emva_outputs(out_dir, result: dict, command: str) -> list:
+    """emva.json, datasheet.md and the three figures (PNG + SVG), atomically."""
+    import json
+    from pathlib import Path
+
+    from ..io.files import atomic_write
+    from ..io.plots import save_figure
+
+    out = Path(out_dir)
+    paths = []
+    for name, fig in figures(result).items():
+        paths += save_figure(fig, out / f"{name}.png", out / f"{name}.svg")
+    payload = {k: v for k, v in result.items() if k != "curves"} | {"command": command, "curves": result["curves"]}
+    paths.append(atomic_write(out / "emva.json", json.dumps(payload, indent=1, allow_nan=False).encode()))
+    paths.append(atomic_write(out / "datasheet.md", datasheet_markdown(result, command).encode()))
+    return paths
