@@ -337,6 +337,31 @@ def emva_cmd(out_dir, scene_file, config_file, channel, wavelength_nm, seed, set
     log("wrote " + ", ".join(str(p) for p in paths if p.suffix != ".svg"))
 
 
+@main.command("consistency")
+@_output("Directory to write consistency.json, consistency.md and the map (PNG, SVG) into.")
+@click.option("--experiment", "experiment_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Experiment file [default: scenes/paper.toml shipped with spectracam].")
+@_renderer_option
+@click.option("--full", is_flag=True, help="The scene's full image size instead of 160x120.")
+@_set_option
+@_quiet_option
+def consistency_cmd(out_dir, experiment_file, renderer, full, sets, quiet):
+    """Which readings of the paper's open choices reproduce which of its claims: a map and a table."""
+    from .experiments.consistency import run_consistency, write_consistency_outputs
+    from .experiments.paper import load_experiment
+
+    exp = load_experiment(experiment_file or default_experiment(), sets)
+    _check_writable(out_dir)
+    log = _log(quiet)
+    result = run_consistency(exp, renderer=renderer, quick=not full, log=log)
+    command = "spectracam consistency -o " + str(out_dir) + (f" --experiment {experiment_file}" if experiment_file
+                                                              else "") + f" --renderer {renderer}" \
+        + (" --full" if full else "") + "".join(f" --set {s}" for s in sets)
+    paths = write_consistency_outputs(out_dir, result, command)
+    log(f"{len(result['rows'])} readings in {result['seconds']:.0f} s; wrote " + ", ".join(
+        str(p) for p in paths if p.suffix != ".svg"))
+
+
 @main.command("sweep")
 @click.argument("sweep_file", type=click.Path(dir_okay=False, path_type=Path))
 @_output("Directory for results.jsonl/.parquet/.csv and sweep.json.")

@@ -51,7 +51,7 @@ BUDGET_STEPS = (
 )
 #: Keys of an experiment file (``--set`` paths starting with one of these name the experiment;
 #: any other path names a field of the base scene).
-EXPERIMENT_KEYS = ("base_scene", "temperatures_K", "budget_illuminant", "budget_design", "designs", "light",
+EXPERIMENT_KEYS = ("base_scene", "scene", "temperatures_K", "budget_illuminant", "budget_design", "designs", "light",
                    "sensitivity")
 
 
@@ -108,7 +108,11 @@ def load_experiment(path: str | Path, overrides=()) -> PaperExperiment:
     base_name = t.pop("base_scene", "blackbody_5000K.toml")
     if not isinstance(base_name, str):
         raise ConfigError("base_scene", base_name, "must be a path to a scene file", src)
-    base = load_scene(p.parent / base_name, scene_overrides)
+    scene_tables = t.pop("scene", {})
+    if not isinstance(scene_tables, dict) or not all(isinstance(v, dict) for v in scene_tables.values()):
+        raise ConfigError("scene", scene_tables, "must be a table of scene tables, e.g. [scene.sensor]", src)
+    from_file = [(f"{table}.{k}", v) for table, kv in scene_tables.items() for k, v in kv.items()]
+    base = load_scene(p.parent / base_name, from_file + scene_overrides)
     temps = _list(t, "temperatures_K", list(PaperExperiment.temperatures_K),
                   lambda x: _is_number(x) and 1000 <= x <= 40000,
                   "must be a non-empty list of colour temperatures, 1000–40000 K", src)

@@ -7,6 +7,7 @@ from pathlib import Path
 from ..io.files import atomic_write
 from ..io.plots import save_figure
 from . import figures
+from .claims import derivations
 
 PAPER_CLAIMS_NOTE = ("Verdicts: reproduced — direction and size as the paper states; partly — the direction "
                      "holds, the size does not; not — the direction does not hold.")
@@ -39,10 +40,15 @@ def report_markdown(results: dict, command: str) -> str:
              p["light_calibration"] + " (Fig. 5 caption)"],
             ["pixel", f"{cam['sensor']['pixel_pitch_um']:g} µm pitch, fill factor {cam['sensor']['fill_factor']:g}",
              "a 131072 e⁻ well at ~1300 e⁻/µm² implies ~100 µm²"],
-            ["QE", f"{cam['filters']['qe']}, peak {cam['filters']['qe_peak']:g}",
-             "typical front-illuminated CMOS photodiode of 1999"],
+            ["QE", f"{cam['filters']['qe']}"
+             + (f", collection depth {cam['filters']['collection_depth_um']:g} µm" if cam['filters']['qe'] == "photodiode"
+                else "") + f", peak {cam['filters']['qe_peak']:g}",
+             "a front-illuminated CMOS photodiode of 1999 collects from a shallow depth (silicon absorption, Green "
+             "2008); of the readings mapped by `spectracam consistency`, the physical one that reproduces most claims"],
             ["FPN < 1 %", f"{cam['sensor']['fpn_reading']} reading of {cam['sensor']['fpn_fraction']:g} × full swing",
-             "datasheets quote FPN as an rms; 1 % is the worst case the statement allows"],
+             "'std': an rms of that fraction; 'bound': a uniform spread of that width (rms /√12)"],
+            ["black level", f"{cam['sensor']['black_level_DN'] if cam['sensor']['black_level_DN'] is not None else 'default (2ⁿ⁻⁵ DN)'}",
+             "a pedestal keeps the dark noise off code 0 (EMVA 1288); the paper's ADC is not described"],
             ["display", sc["processing"]["display"], "the paper's 'simple CRT display' (Brainard 1997 phosphors)"],
             ["adaptation", sc["processing"]["adaptation"], "preserves CIELAB against each white exactly"],
             ["SNR of three channels", sc["processing"]["snr_combination"], p["snr"]],
@@ -67,6 +73,7 @@ def report_markdown(results: dict, command: str) -> str:
         "## The paper's claims beside this run", "", PAPER_CLAIMS_NOTE, "",
         _table(["claim", "paper", "this run", "verdict", "why it differs"],
                [[c["claim"], c["paper"], c["measured"], c["verdict"], c["why"]] for c in results["claims"]]), "",
+        *derivations(results),
     ]
     sens = results["sensitivity"]
     if sens["alternatives"]:
