@@ -13,25 +13,36 @@ DESIGN_STYLE = {"cfa/single": ("o", "black", "-"), "fsc/optimal": ("^", "tab:blu
 
 
 def fig4(results: dict):
+    """Figure 4: each channel's response to the white patch; a filled marker where the channel
+    fills the well (the one that ends a single exposure)."""
     plt = _plt()
     f4 = results["fig4_white_response"]
     designs = [d for d in ("cfa/single", "fsc/optimal") if d in f4] or list(f4)[:2]
-    fig, axes = plt.subplots(1, len(designs), figsize=(4.2 * len(designs), 3.6), sharey=True, squeeze=False)
+    fig, axes = plt.subplots(1, len(designs), figsize=(4.2 * len(designs) + 1.6, 3.6), sharey=True, squeeze=False)
+    names = {"R": "red", "G": "green", "B": "blue"}
     for ax, d in zip(axes[0], designs):
         T = sorted(f4[d], key=float)
         resp = np.array([f4[d][t] for t in T])
+        x = np.array([float(t) for t in T])
         for k, c in enumerate("RGB"):
             m, col = CHANNEL_STYLE[c]
-            ax.plot([float(t) for t in T], resp[:, k], marker=m, color=col, mfc="none", label=f'"{c.lower()}" channel'
-                    .replace('"r"', '"red"').replace('"g"', '"green"').replace('"b"', '"blue"'))
+            ax.plot(x, resp[:, k], marker=m, color=col, mfc="none", ls="-", label=f'"{names[c]}" channel')
+            full = resp[:, k] >= 0.999
+            ax.plot(x[full], resp[full, k], ls="none", marker=m, color=col)
+        if np.allclose(resp, 1.0, atol=1e-3):
+            ax.text(0.5, 0.55, "each channel has its own exposure:\nall three fill the well (lines coincide)",
+                    transform=ax.transAxes, ha="center", fontsize=8, color="0.3")
         ax.set_title(f"{d}", fontsize=10)
         ax.set_xlabel("colour temperature (K)")
         ax.set_ylim(0, 1.08)
         ax.grid(alpha=0.3)
     axes[0][0].set_ylabel("relative response to white (1 = full well)")
-    axes[0][-1].legend(fontsize=8, loc="lower right")
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    handles.append(plt.Line2D([], [], ls="none", marker="o", color="0.3"))
+    labels.append("filled: fills the well")
+    fig.legend(handles, labels, loc="center right", fontsize=8, frameon=False)
     fig.suptitle("Figure 4: response of the three channels to a white surface", fontsize=10)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0, 1 - 1.5 / fig.get_figwidth(), 1))
     return fig
 
 
@@ -44,16 +55,19 @@ def fig5(results: dict):
             m, col, ls = DESIGN_STYLE.get(d, ("x", "gray", "-"))
             T = sorted(per_T, key=float)
             ms = results["exposure_ms"][d]
+            at = "5000" if "5000" in ms else sorted(ms, key=float)[len(ms) // 2]
             ax.plot([float(t) for t in T], [per_T[t] for t in T], marker=m, color=col, ls=ls, mfc="none",
-                    label=f"{d} ({np.mean(list(ms.values())):.0f} ms)")
+                    label=f"{d} ({ms[at]:.0f} ms)")
         ax.set_xlabel("colour temperature (K)")
         ax.set_ylabel(ylabel)
         ax.set_title(title, fontsize=10)
         ax.grid(alpha=0.3)
     b.set_ylim(bottom=0)
-    a.legend(fontsize=7)
-    fig.suptitle("Figure 5: averages over the 24 patches (mean capture time in the legend)", fontsize=10)
-    fig.tight_layout()
+    handles, labels = a.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=8, frameon=False,
+               title="design (capture time at 5000 K, as in the paper's caption)", title_fontsize=8)
+    fig.suptitle("Figure 5: averages over the 24 patches", fontsize=10)
+    fig.tight_layout(rect=(0, 0.14, 1, 1))
     return fig
 
 
