@@ -141,11 +141,14 @@ def consistency_figure(result: dict):
     ax.set_xticks(range(len(claims)), claims, rotation=45, ha="right", fontsize=7)
     ax.set_yticks(range(len(rows)), labels, fontsize=5)
     b = result["best"]
-    ax.add_patch(plt.Rectangle((-0.5, b - 0.5), len(claims), 1, fill=False, ec="tab:red", lw=1.5))
+    ax.add_patch(plt.Rectangle((-0.5, -0.5), len(claims), 1, fill=False, ec="black", lw=1.5))
+    ax.add_patch(plt.Rectangle((-0.5, b - 0.5), len(claims), 1, fill=False, ec="tab:red", lw=1.5, ls="--"))
     handles = [plt.Rectangle((0, 0), 1, 1, color=cmap(i)) for i in (2, 1, 0)]
-    ax.legend(handles, ["reproduced", "partly", "not"], loc="upper left", bbox_to_anchor=(1.01, 1), fontsize=7,
-              title="verdict", title_fontsize=7)
-    ax.set_title("The paper's claims under each reading of its open choices (red: the most claims reproduced)\n"
+    handles += [plt.Rectangle((0, 0), 1, 1, fill=False, ec="black"), plt.Rectangle((0, 0), 1, 1, fill=False,
+                                                                                    ec="tab:red", ls="--")]
+    ax.legend(handles, ["reproduced", "partly", "not", "the experiment's reading", "most claims reproduced"],
+              loc="upper left", bbox_to_anchor=(1.01, 1), fontsize=7, title="verdict", title_fontsize=7)
+    ax.set_title("The paper's claims under each reading of its open choices\n"
                  "QE, FPN < 1 %, FPN across channels, ADC at code 0; then one choice at a time", fontsize=8)
     fig.tight_layout()
     return fig
