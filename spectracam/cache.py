@@ -1,9 +1,10 @@
 """A render cache keyed on everything that determines the radiance cube.
 
 Key: SHA-256 of the scene's render-relevant tables (chart, illuminant, wavelengths, image, render),
-the renderer, and the spectracam and Mitsuba versions.  An entry is a spectral EXR; on a hit the
-scene recorded in the file is compared with the request, so a collision or a hand-edited file can
-never serve a stale cube.  Location: ``$SPECTRACAM_CACHE`` or ``~/.cache/spectracam/renders``.
+the renderer, and the spectracam and Mitsuba versions.  An entry is a spectral EXR and, beside it, the
+SHA-256 of its pixel data; on a hit the scene recorded in the file is compared with the request and
+the pixels with their checksum, so a collision, a hand-edited file or a damaged one is rendered again,
+never served.  Location: ``$SPECTRACAM_CACHE`` or ``~/.cache/spectracam/renders``.
 """
 from __future__ import annotations
 
@@ -33,22 +34,37 @@ def render_key(scene, renderer: str) -> tuple[str, dict]:
     return hashlib.sha256(text.encode()).hexdigest()[:32], ident
 
 
+def pixel_checksum(cube) -> str:
+    """SHA-256 of a cube's float32 pixel data."""
+    import numpy as np
+
+    return hashlib.sha256(np.ascontiguousarray(cube.radiance, dtype=np.float32).tobytes()).hexdigest()
+
+
 def cached_render(scene, renderer: str = "mitsuba", progress: bool = False, log=None, directory: Path | None = None):
     """``(cube, hit)``: the cached cube for this scene and renderer, or a fresh render stored for next time."""
+    from .io.files import atomic_write
+
     key, ident = render_key(scene, renderer)
     path = (directory or cache_dir()) / f"{key}.exr"
+    checksum = path.with_suffix(".sha256")
     if path.exists():
         try:
             cube, attrs = read_radiance_exr(path)
             recorded = json.loads(attrs.get("spectracamScene", "{}"))
-            if {k: recorded.get(k) for k in ident["scene"]} == ident["scene"] and attrs.get("spectracamRenderer") == renderer:
+            if ({k: recorded.get(k) for k in ident["scene"]} == ident["scene"]
+                    and attrs.get("spectracamRenderer") == renderer
+                    and checksum.read_text().strip() == pixel_checksum(cube)):
                 cube.metadata["scene"] = scene.to_dict()
                 return cube, True
-        except Exception:  # unreadable entry: render again and overwrite it
+            if log:
+                log(f"render cache entry {path.name} does not match its scene or checksum: rendering again")
+        except Exception:  # unreadable or damaged entry: render again and overwrite it
             pass
     cube = render(scene, renderer=renderer, progress=progress, log=log)
     try:
         write_radiance_exr(path, cube)
+        atomic_write(checksum, pixel_checksum(cube).encode())
     except OSError as e:  # a read-only cache never stops a run
         if log:
             log(f"render cache not written ({e})")

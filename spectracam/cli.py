@@ -16,15 +16,59 @@ from .metrics import DELTA_E_METHODS
 from .render import RENDERERS
 
 
+def _interrupted(signum, frame):
+    """SIGINT, SIGTERM, SIGHUP (what batch schedulers send at a time limit): remove every temporary
+    file, say so in one line and exit with 128 + the signal's number, wherever the work was — in an
+    import, a Mitsuba render or a write."""
+    import os
+    import signal
+
+    from .io.files import remove_unfinished
+
+    remove_unfinished()
+    sys.stderr.write(f"spectracam: interrupted ({signal.Signals(signum).name}); nothing written\n")
+    sys.stderr.flush()
+    os._exit(128 + signum)
+
+
 class _Group(click.Group):
-    """Turns a :class:`SpectracamError` into one line on stderr and exit status 2."""
+    """Every command's outputs appear together or not at all (:func:`spectracam.io.files.staged`).
+    Bad input is one line and exit status 2; a fault of the environment (a disk full, a directory
+    not writable) one line and exit status 1; SIGINT, SIGTERM and SIGHUP remove every temporary
+    file and exit with 128 + the signal's number."""
+
+    def main(self, *args, **kwargs):
+        """A usage error (an unknown option, a value out of its range) is one line and exit 2 too."""
+        try:
+            rv = super().main(*args, standalone_mode=False, **kwargs)
+        except click.exceptions.Abort:
+            click.echo("spectracam: interrupted (SIGINT); nothing written", err=True)
+            sys.exit(130)
+        except click.ClickException as e:
+            click.echo(f"spectracam: error: {e.format_message()}", err=True)
+            sys.exit(e.exit_code)
+        sys.exit(rv if isinstance(rv, int) else 0)
 
     def invoke(self, ctx):
+        import signal
+
+        from .io.files import staged
+
+        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+            signal.signal(sig, _interrupted)
         try:
-            return super().invoke(ctx)
+            with staged():
+                return super().invoke(ctx)
         except SpectracamError as e:
             click.echo(f"spectracam: error: {e}", err=True)
             sys.exit(2)
+        except OSError as e:
+            where = f" {e.filename}" if getattr(e, "filename", None) else ""
+            click.echo(f"spectracam: error: cannot read or write{where}: {e.strerror or e}", err=True)
+            sys.exit(1)
+        except KeyboardInterrupt:  # raised by code, not by the signal (handled above)
+            click.echo("spectracam: interrupted; nothing written", err=True)
+            sys.exit(128 + signal.SIGINT)
 
 
 class RegistryChoice(click.ParamType):
@@ -157,7 +201,10 @@ def render_cmd(scene_file: Path, out_dir: Path, renderer: str, sets, quiet: bool
     from .render import render
     from .scene import read_toml
 
+    from .pipeline import check_memory
+
     scene = _scene(read_toml(scene_file, "scene file"), str(scene_file), sets=sets)  # validated before any work
+    check_memory(scene)
     _check_writable(out_dir)
     log = _log(quiet)
     t0 = time.perf_counter()
@@ -190,12 +237,16 @@ def capture_cmd(radiance_file: Path, out_dir: Path, arch, exposure, config_file,
     from .io.exr import read_radiance_exr
     from .pipeline import capture
 
+    from .pipeline import check_cube_matches
+
     cube, _ = read_radiance_exr(radiance_file)
+    cube.check(str(radiance_file))
     if "scene" not in cube.metadata:
         raise SpectracamError(f"file = {str(radiance_file)!r}: records no scene (spectracamScene), so the white "
                               "patch for exposure metering is unknown; render it with spectracam")
     scene = _scene(cube.metadata["scene"], str(radiance_file), config_file, _flag_overrides(arch=arch, exposure=exposure),
                    sets)
+    check_cube_matches(cube, scene, str(radiance_file))
     _check_writable(out_dir)
     raw = capture(cube, seed=seed, scene=scene)
     paths = _write_capture(out_dir, raw, scene)
@@ -263,7 +314,10 @@ def simulate_cmd(scene_file, out_dir, renderer, arch, exposure, config_file, see
 
     flags = _flag_overrides(arch=arch, exposure=exposure, demosaic=demosaic, display=display, adaptation=adaptation,
                             delta_e=delta_e, gamut_clip=gamut_clip)
+    from .pipeline import check_memory
+
     scene = _scene(read_toml(scene_file, "scene file"), str(scene_file), config_file, flags, sets)
+    check_memory(scene)
     _check_writable(out_dir)
     log = _log(quiet)
     cube = render(scene, renderer=renderer, progress=not quiet, log=log)
@@ -287,8 +341,11 @@ def paper_cmd(out_dir, experiment_file, renderer, quick, no_cache, sets, quiet):
     from .experiments.paper import load_experiment, run_paper
     from .experiments.report import write_paper_outputs
 
+    from .pipeline import check_memory
+
     path = experiment_file or default_experiment()
     exp = load_experiment(path, sets)
+    check_memory(exp.base)
     _check_writable(out_dir)
     log = _log(quiet)
     t0 = time.perf_counter()
@@ -370,15 +427,17 @@ def consistency_cmd(out_dir, experiment_file, renderer, full, sets, quiet):
 @click.option("--workers", type=click.IntRange(1, 1024), default=None, help="Local cluster size [default: cores].")
 @click.option("--serial", is_flag=True, help="Run the cells in this process, without Dask.")
 @click.option("--resume", is_flag=True, help="Continue an interrupted sweep in DIR, skipping finished cells.")
+@click.option("--max-cells", type=click.IntRange(1), default=100_000, show_default=True,
+              help="Refuse a sweep with more cells than this (each is validated before anything runs, ~1 ms a cell).")
 @_set_option
 @_quiet_option
-def sweep_cmd(sweep_file, out_dir, scheduler, workers, serial, resume, sets, quiet):
+def sweep_cmd(sweep_file, out_dir, scheduler, workers, serial, resume, max_cells, sets, quiet):
     """Run every cell of SWEEP_FILE on Dask; results.parquet/.csv/.jsonl in DIR, a row per cell and trial."""
     from .experiments.sweep import load_sweep, run_sweep
 
     if serial and scheduler:
         raise SpectracamError("--serial and --scheduler: choose one")
-    sweep = load_sweep(sweep_file, sets)
+    sweep = load_sweep(sweep_file, sets, max_cells=max_cells, log=_log(quiet))
     t = run_sweep(sweep, out_dir, scheduler=scheduler, workers=workers, serial=serial, resume=resume,
                   progress=not quiet, log=_log(quiet))
     _log(quiet)(f"{t['new_cells']} of {t['cells']} cells computed in {t['wall_s']:.1f} s "

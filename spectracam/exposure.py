@@ -11,8 +11,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from .errors import SpectracamError
 from .registry import Registry
 from .sensor import SensorSpec
+
+#: Smallest share of the white patch's charge at saturation that must come from light: below it the
+#: dark current fills the well and the "exposure" measures the dark current, not the scene.
+MIN_PHOTO_SHARE = 0.01
 
 #: Exposure schemes: name → function ``(saturation_s (3,), architecture) → times_s (3,)``, where
 #: ``saturation_s`` is each channel's time to fill the well on the white patch.
@@ -36,8 +41,19 @@ def _balanced(saturation_s, architecture):
 
 
 def saturation_times_s(white_rate_e_per_s: np.ndarray, sensor: SensorSpec) -> np.ndarray:
-    """Time for each channel to fill the well on the white patch, photo + dark charge, s."""
-    return sensor.q_max_e / (np.asarray(white_rate_e_per_s, float) + sensor.dark_rate_e_per_s)
+    """Time for each channel to fill the well on the white patch, photo + dark charge, s.  A channel
+    that receives no light, or whose well the dark current fills, has no meaningful exposure: one
+    clear error."""
+    white = np.asarray(white_rate_e_per_s, float)
+    for k, w in zip("RGB", white):
+        if not np.isfinite(w) or w <= 0:
+            raise SpectracamError(f"exposure: channel {k} receives no light on the white patch ({w:g} e-/s); the "
+                                  "filters or the illuminant leave it dark, so no exposure can be metered")
+        if w < MIN_PHOTO_SHARE * (w + sensor.dark_rate_e_per_s):
+            raise SpectracamError(f"exposure: channel {k}'s dark current ({sensor.dark_rate_e_per_s:g} e-/s) fills the "
+                                  f"well faster than its light ({w:g} e-/s): less than {100 * MIN_PHOTO_SHARE:g} % of "
+                                  "the charge would be signal; raise the light level or lower the dark current")
+    return sensor.q_max_e / (white + sensor.dark_rate_e_per_s)
 
 
 def exposure_times_s(scheme: str, white_rate_e_per_s: np.ndarray, sensor: SensorSpec, architecture) -> np.ndarray:

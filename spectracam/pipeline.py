@@ -7,6 +7,8 @@ result; explicit arguments win over what is recorded.  The stage functions thems
 """
 from __future__ import annotations
 
+import numpy as np
+
 from .camera import CameraSpec
 from .capture import RawCapture
 from .capture import capture as capture_stage
@@ -33,7 +35,10 @@ def capture(cube: RadianceCube, camera: CameraSpec | None = None, seed: int | No
             scene: Scene | None = None, sensor: SensorSpec | None = None, design: str | None = None) -> RawCapture:
     """Capture a cube.  The camera, seed and chart default to those of ``scene`` (default: the scene
     the cube records); ``sensor`` and ``design`` (``"arch/scheme"``) replace the camera's parts."""
+    if cube.metadata.get("renderer") is None:  # not made by a renderer here: refuse garbage first
+        cube.check()
     scene = scene or scene_of(cube)
+    check_cube_matches(cube, scene)
     camera = camera or scene.camera
     if sensor is not None:
         camera = camera.replace(sensor=sensor)
@@ -41,6 +46,37 @@ def capture(cube: RadianceCube, camera: CameraSpec | None = None, seed: int | No
         camera = camera.with_design(design)
     seed = scene.render.seed if seed is None else seed
     return capture_stage(cube, camera, seed, ChartReference.of(scene).white_box)
+
+
+def check_cube_matches(cube: RadianceCube, scene: Scene, source: str = "cube") -> None:
+    """Refuse a cube whose bands or size contradict the scene it is captured as."""
+    h, w, b = cube.radiance.shape
+    if (w, h) != (scene.image.width, scene.image.height):
+        raise SpectracamError(f"{source}: {w}x{h} pixels, but its scene says {scene.image.width}x{scene.image.height}")
+    if b != len(scene.grid) or not np.allclose(cube.wavelengths_nm, scene.grid.centres_nm, rtol=0, atol=1e-6):
+        raise SpectracamError(f"{source}: {b} bands at {float(cube.wavelengths_nm[0]):g}…"
+                              f"{float(cube.wavelengths_nm[-1]):g} nm, but its scene's grid has {len(scene.grid)} "
+                              f"bands at {scene.grid.centres_nm[0]:g}…{scene.grid.centres_nm[-1]:g} nm")
+
+
+#: How much memory a run needs beside the radiance cube itself, in cubes: the renderer's film and
+#: the capture's (H, W, 3) float32 planes and scoring's float64 images (measured: ~1.5 cubes).
+MEMORY_PER_CUBE = 2.5
+
+
+def check_memory(scene: Scene) -> None:
+    """Refuse, before any work, a scene whose cube would not fit in the memory available."""
+    need = scene.image.width * scene.image.height * len(scene.grid) * 4 * MEMORY_PER_CUBE
+    try:
+        with open("/proc/meminfo") as f:
+            info = {line.split(":")[0]: int(line.split()[1]) * 1024 for line in f}
+        avail = info.get("MemAvailable")
+    except (OSError, ValueError, IndexError):
+        return  # not Linux: no estimate
+    if avail is not None and need > avail:
+        raise SpectracamError(f"image = {scene.image.width}x{scene.image.height} with {len(scene.grid)} bands: needs "
+                              f"about {need / 2**30:.1f} GiB, {avail / 2**30:.1f} GiB available; use a smaller image "
+                              "or fewer bands")
 
 
 def score(raw: RawCapture, scene: Scene | None = None, processing: ProcessingSpec | None = None,

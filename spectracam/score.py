@@ -18,7 +18,7 @@ from .color import ProcessingSpec, adaptation_matrix, demosaic, display_rgb_to_x
 from .errors import SpectracamError
 from .metrics import SNR_COMBINATIONS, combine_snr_db, delta_e, snr_db, xyz_to_lab
 from .reference import ChartReference
-from .sensor import adc_inverse
+from .sensor import adc_full_scale_dn, adc_inverse
 
 #: What a per-pixel ΔE is measured against: the scene (the default), or the noise-free rendering of
 #: the same camera (the conversion error removed; how the paper's Figure 6 isolates the noise steps).
@@ -130,6 +130,25 @@ def channel_stats(raw: RawCapture, boxes) -> tuple[np.ndarray, np.ndarray]:
     return means, stds
 
 
+def check_raw(raw: RawCapture) -> None:
+    """Refuse a capture that no sensor could have recorded: digital numbers that are not finite or lie
+    outside the ADC's codes, a layout that does not match the array, exposure times that are not > 0."""
+    s = raw.camera.sensor
+    d = raw.digital
+    want = 2 if isinstance(raw.layout, MosaicLayout) else 3
+    if d.ndim != want or (want == 3 and d.shape[0] != 3):
+        raise SpectracamError(f"capture: a {type(raw.layout).__name__} holds "
+                              f"{'(H, W)' if want == 2 else '(3, H, W)'} digital numbers; got {d.shape}")
+    top = adc_full_scale_dn(s)
+    bad = ~np.isfinite(d) | (d < 0) | (d > top)
+    if bad.any():
+        raise SpectracamError(f"capture: {int(bad.sum())} digital numbers are not finite or outside the "
+                              f"{s.adc_bits}-bit ADC's 0…{top:g} (e.g. {d[bad].flat[0]!r})")
+    t = np.asarray(raw.exposure_times_s, float)
+    if t.shape != (3,) or not np.all(np.isfinite(t)) or np.any(t <= 0):
+        raise SpectracamError(f"capture: exposure times must be three finite times > 0 s; got {t.tolist()}")
+
+
 def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec,
           delta_e_reference: str = "scene") -> ChartScore:
     """Render a capture on the display and score it against the chart reference (see the module
@@ -139,6 +158,7 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
     if delta_e_reference not in DELTA_E_REFERENCES:
         raise SpectracamError(f"delta_e_reference = {delta_e_reference!r}: must be one of "
                               + ", ".join(map(repr, DELTA_E_REFERENCES)))
+    check_raw(raw)
     h, w = raw.digital.shape[-2:]
     if (w, h) != (reference.width_px, reference.height_px):
         raise SpectracamError(f"image = {w}x{h}: the capture does not match the scene "

@@ -33,6 +33,10 @@ from ..score import SUMMARY_METRICS
 #: What a sweep can record: every field of the chart summary.
 METRICS = SUMMARY_METRICS
 DESIGN_AXIS = DESIGN_PATH  # "arch/scheme" in one value, so invalid pairs are never crossed
+#: How long to wait for an external Dask scheduler before giving up, s.
+SCHEDULER_TIMEOUT_S = 10
+#: The most cells a sweep may have unless --max-cells raises it (validation costs ~1 ms a cell).
+MAX_CELLS = 100_000
 #: Keys of a sweep file (``--set`` paths starting with one of these name the sweep; any other path
 #: names a field of the base scene).
 SWEEP_KEYS = ("base_scene", "scene", "axes", "metrics", "trials", "seed", "renderer")
@@ -72,7 +76,7 @@ def _axis_values(t: dict | list, field: str, source: str) -> tuple:
     raise ConfigError(field, t, "must be a non-empty list of values or a table {start, stop, step}", source)
 
 
-def load_sweep(path: str | Path, overrides=()) -> Sweep:
+def load_sweep(path: str | Path, overrides=(), max_cells: int = MAX_CELLS, log=lambda m: None) -> Sweep:
     """Read and validate a sweep file; every cell's scene is validated here, before anything runs.
     ``overrides`` (``--set``): a path whose table is a sweep key changes the sweep, any other the
     base scene."""
@@ -110,8 +114,8 @@ def load_sweep(path: str | Path, overrides=()) -> Sweep:
     if isinstance(trials, bool) or not isinstance(trials, int) or not 1 <= trials <= 10000:
         raise ConfigError("trials", trials, "must be an integer between 1 and 10000", src)
     seed = data.get("seed", base["render"]["seed"])
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise ConfigError("seed", seed, "must be an integer ≥ 0", src)
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= 2**31 - 1:
+        raise ConfigError("seed", seed, "must be an integer between 0 and 2147483647", src)
     from ..render import RENDERERS
 
     renderer = data.get("renderer", "mitsuba")
@@ -120,6 +124,11 @@ def load_sweep(path: str | Path, overrides=()) -> Sweep:
     except ConfigError as e:
         raise e.with_source(src) from None
     sweep = Sweep(base, tuple(axes), tuple(metrics), trials, seed, renderer, src)
+    n = math.prod(len(v) for _, v in axes)
+    log(f"{n} cells × {trials} trial(s)")
+    if n > max_cells:
+        raise ConfigError("axes", f"{n} cells", f"more than --max-cells = {max_cells}; raise it if this is meant",
+                          src)
     for i, cell in enumerate(sweep.cells()):
         cell_scene(sweep, cell, i)  # validate every combination now
     return sweep
@@ -135,7 +144,7 @@ def cell_scene(sweep: Sweep, cell: dict, index: int) -> Scene:
 
 def trial_seed(sweep_seed: int, trial: int) -> int:
     """Noise seed of a trial, the same in every cell (common random numbers across cells)."""
-    return int(np.random.SeedSequence([sweep_seed, trial]).generate_state(1)[0] >> 1)
+    return int(np.random.SeedSequence([sweep_seed, trial]).generate_state(1)[0] >> 1)  # 0 … 2³¹ − 1
 
 
 def _flatten(d: dict, prefix: str = "") -> dict:
@@ -149,7 +158,8 @@ def _flatten(d: dict, prefix: str = "") -> dict:
     return out
 
 
-def run_cell(index: int, cell: dict, scene: Scene, cube, trials: int, sweep_seed: int, metrics: tuple) -> dict:
+def run_cell(index: int, cell: dict, scene: Scene, cube, trials: int, sweep_seed: int, metrics: tuple,
+             sweep_digest: str = "") -> dict:
     """One cell: capture and score every trial.  Runs on a Dask worker (or in-process)."""
     from ..capture import capture
     from ..reference import ChartReference
@@ -163,15 +173,15 @@ def run_cell(index: int, cell: dict, scene: Scene, cube, trials: int, sweep_seed
         seed = trial_seed(sweep_seed, trial)
         raw = capture(cube, scene.camera, seed, reference.white_box)
         values = dataclasses.asdict(score(raw, reference, scene.processing).summary)
-        rows.append({"cell": index, "trial": trial, "seed": seed,
+        rows.append({"sweep": sweep_digest, "cell": index, "trial": trial, "seed": seed,
                      **{f"axis:{k}": v for k, v in cell.items()}, **params, **{m: values[m] for m in metrics}})
     return {"cell": index, "rows": rows, "compute_s": time.perf_counter() - t0}
 
 
-def run_cells(items: list, cube, trials: int, sweep_seed: int, metrics: tuple) -> list[dict]:
+def run_cells(items: list, cube, trials: int, sweep_seed: int, metrics: tuple, sweep_digest: str = "") -> list[dict]:
     """Several cells that share a radiance cube, as one Dask task: a task costs the engine a few
     milliseconds (scheduling, transfer), which a batch of cells shares."""
-    return [run_cell(i, cell, scene, cube, trials, sweep_seed, metrics) for i, cell, scene in items]
+    return [run_cell(i, cell, scene, cube, trials, sweep_seed, metrics, sweep_digest) for i, cell, scene in items]
 
 
 def cells_per_task(n_cells: int, workers: int) -> int:
@@ -183,15 +193,30 @@ def cells_per_task(n_cells: int, workers: int) -> int:
 # the driver
 
 
-def _read_journal(path: Path) -> list[dict]:
-    rows = []
+def _read_journal(path: Path, digest: str, log=lambda m: None) -> tuple[list[dict], int]:
+    """The journal's rows of this sweep, and the byte length of its complete lines.  A line cut short
+    by a kill ends the journal; an empty, damaged or foreign line (another sweep's digest) is skipped
+    with a warning, and its cell is recomputed."""
+    rows, good_len, skipped = [], 0, 0
     if path.exists():
         with open(path, "rb") as f:
             for line in f:
                 if not line.endswith(b"\n"):
                     break  # a line cut short by a kill: that cell is not done
-                rows.append(json.loads(line))
-    return rows
+                good_len += len(line)
+                try:
+                    row = json.loads(line)
+                    ok = isinstance(row, dict) and row.get("sweep") == digest and isinstance(row.get("cell"), int)
+                except ValueError:
+                    ok = False
+                if ok:
+                    rows.append(row)
+                else:
+                    skipped += 1
+    if skipped:
+        log(f"warning: {skipped} line(s) of {path} are empty, damaged or from another sweep; their cells are "
+            "computed again")
+    return rows, good_len
 
 
 def _write_tables(out: Path, rows: list[dict]) -> None:
@@ -233,15 +258,19 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
         if not resume:
             raise SpectracamError(f"output = {str(out)!r}: already holds a sweep; pass --resume to continue it, "
                                   "or choose a new directory")
-        old = json.loads(meta_path.read_text()) if meta_path.exists() else {}
-        if old.get("digest") != sweep.digest:
-            raise SpectracamError(f"output = {str(out)!r}: holds a different sweep (digest {old.get('digest')} ≠ "
-                                  f"{sweep.digest}); choose a new directory")
-    atomic_write(meta_path, json.dumps(meta, indent=1).encode())
-    rows = _read_journal(journal)
+        try:
+            old = json.loads(meta_path.read_text()) if meta_path.exists() else {}
+        except (ValueError, UnicodeDecodeError):
+            old = {"digest": "a damaged sweep.json"}
+        if not isinstance(old, dict) or old.get("digest") not in (None, sweep.digest):
+            raise SpectracamError(f"output = {str(out)!r}: holds a different sweep (digest "
+                                  f"{old.get('digest') if isinstance(old, dict) else old!r} ≠ {sweep.digest}); "
+                                  "choose a new directory")
+    atomic_write(meta_path, json.dumps(meta, indent=1).encode(), now=True)
+    rows, good_len = _read_journal(journal, sweep.digest, log)
     if journal.exists():  # drop a partial last line, so appends start on a clean line
         with open(journal, "r+b") as f:
-            f.truncate(sum(len(json.dumps(r)) + 1 for r in rows))
+            f.truncate(good_len)
     counts: dict[int, int] = {}
     for r in rows:
         counts[r["cell"]] = counts.get(r["cell"], 0) + 1
@@ -282,7 +311,8 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
 
         if serial or not todo:
             for i, c in todo:
-                record(run_cell(i, c, scenes[i], cubes[groups[i]], sweep.trials, sweep.seed, sweep.metrics))
+                record(run_cell(i, c, scenes[i], cubes[groups[i]], sweep.trials, sweep.seed, sweep.metrics,
+                                sweep.digest))
                 if stop_after is not None and n_new >= stop_after:
                     break
         else:
@@ -290,8 +320,16 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
 
             cluster = None
             t_start = time.perf_counter()
+            import logging
+
+            for name in ("distributed", "tornado"):  # a finished run prints no heartbeat tracebacks
+                logging.getLogger(name).setLevel(logging.CRITICAL)
             if scheduler:
-                client = Client(scheduler)
+                try:
+                    client = Client(scheduler, timeout=SCHEDULER_TIMEOUT_S)
+                except (OSError, TimeoutError) as e:
+                    raise SpectracamError(f"--scheduler = {scheduler!r}: no Dask scheduler answered within "
+                                          f"{SCHEDULER_TIMEOUT_S} s ({type(e).__name__})") from None
             else:
                 import dask
 
@@ -317,8 +355,8 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
                     for a in range(0, len(items), size):
                         chunk = items[a:a + size]
                         futures.append(client.submit(run_cells, chunk, shared[key], sweep.trials, sweep.seed,
-                                                     sweep.metrics, key=f"cells-{sweep.digest}-{chunk[0][0]}",
-                                                     pure=False))
+                                                     sweep.metrics, sweep.digest,
+                                                     key=f"cells-{sweep.digest}-{chunk[0][0]}", pure=False))
                 for fut in as_completed(futures):
                     for res in fut.result():
                         record(res)

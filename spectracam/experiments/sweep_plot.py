@@ -10,12 +10,25 @@ from ..errors import SpectracamError
 
 
 def load_results(out_dir: str | Path) -> tuple[dict, list[dict]]:
+    import pyarrow as pa
     import pyarrow.parquet as pq
 
     out = Path(out_dir)
-    if not (out / "results.parquet").exists():
-        raise SpectracamError(f"directory = {str(out)!r}: has no results.parquet; run spectracam sweep into it first")
-    return json.loads((out / "sweep.json").read_text()), pq.read_table(out / "results.parquet").to_pylist()
+    for name in ("results.parquet", "sweep.json"):
+        if not (out / name).exists():
+            raise SpectracamError(f"directory = {str(out)!r}: has no {name}; run spectracam sweep into it first")
+    try:
+        meta = json.loads((out / "sweep.json").read_text())
+        if not isinstance(meta, dict) or not {"axes", "metrics", "trials"} <= meta.keys():
+            raise ValueError("keys missing")
+    except (ValueError, UnicodeDecodeError) as e:
+        raise SpectracamError(f"file = {str(out / 'sweep.json')!r}: damaged ({e}); run the sweep again") from None
+    try:
+        rows = pq.read_table(out / "results.parquet").to_pylist()
+    except (pa.ArrowException, OSError) as e:
+        raise SpectracamError(f"file = {str(out / 'results.parquet')!r}: not a readable Parquet table "
+                              f"({str(e).splitlines()[0]}); rerun with spectracam sweep --resume") from None
+    return meta, rows
 
 
 def plot_sweep(out_dir: str | Path, x: str | None = None, line: str | None = None, panel: str | None = None,

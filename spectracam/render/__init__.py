@@ -57,6 +57,29 @@ class RadianceCube:
     def shape(self) -> tuple[int, int, int]:
         return tuple(self.radiance.shape)  # type: ignore[return-value]
 
+    def check(self, source: str = "radiance") -> "RadianceCube":
+        """Refuse a cube that is not a physical radiance: wrong shape, NaN/inf or negative values
+        (one line naming where: the first bad band and how many pixels)."""
+        from ..errors import SpectracamError
+
+        r = self.radiance
+        wl = np.asarray(self.wavelengths_nm, float)
+        if r.ndim != 3 or r.shape[2] != wl.size or wl.size < 1:
+            raise SpectracamError(f"{source}: a radiance cube is (H, W, bands) with one wavelength per band; got "
+                                  f"{r.shape} and {wl.size} wavelengths")
+        if not np.all(np.isfinite(wl)) or np.any(np.diff(wl) <= 0):
+            raise SpectracamError(f"{source}: band wavelengths must be finite and increasing")
+        lo, hi = r.min(initial=0.0), r.max(initial=0.0)  # two passes; the details only on failure
+        if np.isfinite(lo) and np.isfinite(hi) and lo >= 0:
+            return self
+        for what, bad in (("not finite (NaN or inf)", ~np.isfinite(r)), ("negative", r < 0)):
+            count = np.count_nonzero(bad, axis=(0, 1))
+            if count.any():
+                b = int(np.flatnonzero(count)[0])
+                raise SpectracamError(f"{source}: radiance is {what} in {int(count.sum())} values; first in band "
+                                      f"{wl[b]:g} nm ({int(count[b])} pixels); a radiance is finite and ≥ 0")
+        return self
+
 
 @RENDERERS.register("mitsuba")
 def _mitsuba(scene, progress=False, log=None):
