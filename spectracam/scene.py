@@ -75,6 +75,9 @@ def parse_grid(data: dict, source: str | None = None) -> WavelengthGrid:
             raise ConfigError("wavelengths.stop_nm", stop, f"must be > start_nm ({start:g}); the range would be empty",
                               source)
         n = (stop - start) / step
+        if n < 1.5:
+            raise ConfigError("wavelengths.step_nm", step, f"must give at least two bands in {start:g}–{stop:g} nm",
+                              source)
         if abs(n - round(n)) > 1e-6 * max(1.0, n):
             raise ConfigError("wavelengths.step_nm", step, f"must divide the range {start:g}–{stop:g} nm into whole "
                               "bands (band edges lie on the stated limits)", source)
