@@ -215,15 +215,12 @@ def render_cmd(scene_file: Path, out_dir: Path, renderer: str, sets, quiet: bool
 
 
 def _write_capture(out_dir: Path, raw, scene) -> list[Path]:
-    from .architecture import MosaicLayout
     from .io.dng import write_dng
     from .io.exr import write_raw_exr
     from .reference import ChartReference
 
-    paths = [write_raw_exr(out_dir / "raw.exr", raw)]
-    if isinstance(raw.layout, MosaicLayout):
-        paths.append(write_dng(out_dir / "raw.dng", raw, ChartReference.of(scene)))
-    return paths
+    # every layout has a DNG: a CFA mosaic, or LinearRaw for three planes (prism, field-sequential)
+    return [write_raw_exr(out_dir / "raw.exr", raw), write_dng(out_dir / "raw.dng", raw, ChartReference.of(scene))]
 
 
 @main.command("capture")
@@ -334,9 +331,11 @@ def simulate_cmd(scene_file, out_dir, renderer, arch, exposure, config_file, see
 @_renderer_option
 @click.option("--quick", is_flag=True, help="A first look: 160x120 pixels instead of the scene's size.")
 @click.option("--no-cache", is_flag=True, help="Render again even if the render cache has the scene.")
+@click.option("--save-cubes", is_flag=True, help="Also write every light's spectral radiance cube into DIR/cases "
+              "(~37 MB each; they are in the render cache).")
 @_set_option
 @_quiet_option
-def paper_cmd(out_dir, experiment_file, renderer, quick, no_cache, sets, quiet):
+def paper_cmd(out_dir, experiment_file, renderer, quick, no_cache, save_cubes, sets, quiet):
     """Reproduce the paper's Figures 4, 5a, 5b and 6: figures, results.json, report.md, case files."""
     from .experiments.paper import load_experiment, run_paper
     from .experiments.report import write_paper_outputs
@@ -355,10 +354,11 @@ def paper_cmd(out_dir, experiment_file, renderer, quick, no_cache, sets, quiet):
     command = "spectracam paper -o " + str(out_dir) + (f" --experiment {experiment_file}" if experiment_file else "") \
         + (f" --renderer {renderer}" if renderer != "mitsuba" else "") + (" --quick" if quick else "") \
         + "".join(f" --set {s}" for s in sets)
-    write_paper_outputs(out_dir, results, cases, cubes, command, step)
+    write_paper_outputs(out_dir, results, cases, cubes, command, step, save_cubes=save_cubes)
     for c in results["claims"]:
         log(f"  {c['verdict']:<10} {c['claim']}: {c['measured']}")
-    step(f"done: {out_dir}/report.md")
+    step(f"done: {out_dir}/report.md (figures fig4-6.png/.svg, results.json, cases/ with every capture's raw.exr "
+         "and rendered.exr)")
 
 
 @main.command("emva")

@@ -79,9 +79,11 @@ def test_outputs_are_written(tmp_path, analytic_run):
         assert (tmp_path / f).stat().st_size > 0, f
     md = (tmp_path / "report.md").read_text()
     assert "## The paper's claims beside this run" in md and "Sensitivity" in md and "cd/m²" in md
-    assert (tmp_path / "cases" / "5000" / "radiance.exr").exists()
+    assert not (tmp_path / "cases" / "5000" / "radiance.exr").exists()  # in the render cache; --save-cubes copies
     assert (tmp_path / "cases" / "5000" / "fsc-balanced" / "raw.exr").exists()
     assert (tmp_path / "cases" / "D65" / "budget-4" / "rendered.exr").exists()
+    write_paper_outputs(tmp_path / "all", results, cases, cubes, "x", save_cubes=True)
+    assert (tmp_path / "all" / "cases" / "5000" / "radiance.exr").exists()
 
 
 def test_mitsuba_agrees_with_analytic_within_monte_carlo_spread(analytic_run, mitsuba_run):

@@ -88,9 +88,9 @@ def report_markdown(results: dict, command: str) -> str:
                           "ΔE fsc", "ΔE fsc bal."],
                          [[n] + _key_numbers(sens["alternatives"][n]) for n in names]
                          + [["default"] + _key_numbers(results)]), ""]
-    lines += ["## Files", "", "`results.json` holds every number above; `cases/` holds the spectral (radiance.exr), "
-              "raw (raw.exr) and rendered (rendered.exr) images of every case, each carrying the parameters "
-              "it came from.", ""]
+    lines += ["## Files", "", "`results.json` holds every number above; `cases/` holds the raw (raw.exr) and rendered "
+              "(rendered.exr) images of every case — and the spectral radiance (radiance.exr) of every light with "
+              "`--save-cubes` — each carrying the parameters it came from.", ""]
     return "\n".join(lines)
 
 
@@ -112,7 +112,9 @@ def _key_numbers(r: dict) -> list[str]:
 
 
 def write_paper_outputs(out_dir: str | Path, results: dict, cases: dict, cubes: dict | None, command: str,
-                        step=lambda msg: None) -> list[Path]:
+                        step=lambda msg: None, save_cubes: bool = False) -> list[Path]:
+    """Figures, results.json, report.md, and every case's raw and rendered EXR; the spectral radiance
+    cubes (30 bands, ~37 MB each at 640x480) only with ``save_cubes`` — they are in the render cache."""
     from ..io.exr import write_radiance_exr, write_raw_exr
     from ..io.report import write_rendered_exr
 
@@ -123,7 +125,7 @@ def write_paper_outputs(out_dir: str | Path, results: dict, cases: dict, cubes: 
     paths.append(atomic_write(out / "results.json", json.dumps(results, indent=1, allow_nan=False).encode()))
     paths.append(atomic_write(out / "report.md", report_markdown(results, command).encode()))
     step("figures, results.json and report.md written")
-    for key, (scene, cube) in (cubes or {}).items():
+    for key, (scene, cube) in (cubes or {}).items() if save_cubes else ():
         write_radiance_exr(out / "cases" / key / "radiance.exr", cube)
     for (key, design), c in cases.items():
         items = ([(design.replace("/", "-"), c["raw"], c["score"])] if design != "budget" else

@@ -293,7 +293,10 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
     t_render = time.perf_counter() - t0
 
     with open(journal, "ab") as jf:
-        bar = tqdm(total=len(cells), initial=len(done), desc="sweep cells", unit="cell", disable=not progress)
+        import sys
+
+        on_terminal = progress and sys.stderr.isatty()
+        bar = tqdm(total=len(cells), initial=len(done), desc="sweep cells", unit="cell", disable=not on_terminal)
         compute, t1, n_new, cluster_start = [], time.perf_counter(), 0, 0.0
         last_sync = [time.perf_counter()]
 

@@ -202,7 +202,9 @@ def render_mitsuba(scene, progress: bool = False, log=None) -> RadianceCube:
 
     from tqdm import tqdm
 
-    for b in tqdm(range(B), desc="render bands", unit="band", disable=not progress, leave=False):
+    # a bar on a terminal only; a log (stderr redirected) gets the one line the caller writes per stage
+    for b in tqdm(range(B), desc="render bands", unit="band", disable=not (progress and sys.stderr.isatty()),
+                  leave=False):
         params["light.irradiance.values"] = Float(E(lam[b]).astype(np.float32))
         for p, (_, rho) in enumerate(reflectances):
             params[f"patch{p:02d}.bsdf.reflectance.values"] = Float(rho(lam[b]).astype(np.float32))
