@@ -134,6 +134,16 @@ def load_sweep(path: str | Path, overrides=(), max_cells: int = MAX_CELLS, log=l
     return sweep
 
 
+def base_value(base: dict, path: str):
+    """The base scene's value at an axis path (``capture.design`` as ``"arch/scheme"``), or None."""
+    if path == DESIGN_AXIS:
+        return f"{base['capture']['architecture']}/{base['capture']['exposure']}"
+    m = PATH.match(path)
+    table, key, index = m.groups() if m else (None, None, None)
+    v = base.get(table, {}).get(key) if key else base.get(table)
+    return v[int(index)] if index is not None and isinstance(v, list) and int(index) < len(v) else v
+
+
 def cell_scene(sweep: Sweep, cell: dict, index: int) -> Scene:
     """The scene of one cell: the base scene with each axis's value set (the ``--set`` path engine)."""
     d = sweep.base
@@ -253,7 +263,8 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
     journal = out / "results.jsonl"
     meta_path = out / "sweep.json"
     meta = {"source": sweep.source, "digest": sweep.digest, "axes": [[p, list(v)] for p, v in sweep.axes],
-            "metrics": list(sweep.metrics), "trials": sweep.trials, "seed": sweep.seed, "renderer": sweep.renderer}
+            "metrics": list(sweep.metrics), "trials": sweep.trials, "seed": sweep.seed, "renderer": sweep.renderer,
+            "base_values": {p: base_value(sweep.base, p) for p, _ in sweep.axes}}
     if journal.exists() or meta_path.exists():
         if not resume:
             raise SpectracamError(f"output = {str(out)!r}: already holds a sweep; pass --resume to continue it, "
