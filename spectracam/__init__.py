@@ -13,6 +13,11 @@ from .render import RadianceCube, render  # noqa: E402
 from .scene import Scene, load_scene, parse_scene  # noqa: E402
 from .score import ChartScore  # noqa: E402
 from .sensor import SensorSpec  # noqa: E402
+from .bridges import camera_sensitivities, patch_spectra  # noqa: E402
+from .io.exr import read_radiance_exr, read_raw_exr, write_radiance_exr, write_raw_exr  # noqa: E402
+from .io.dng import write_dng  # noqa: E402
 
 __all__ = ["CameraSpec", "ChartReference", "ChartScore", "RadianceCube", "RawCapture", "Scene", "SensorSpec",
-           "__version__", "capture", "load_scene", "parse_scene", "render", "score", "simulate"]
+           "__version__", "camera_sensitivities", "capture", "load_scene", "parse_scene", "patch_spectra",
+           "read_radiance_exr", "read_raw_exr", "render", "score", "simulate", "write_dng", "write_radiance_exr",
+           "write_raw_exr"]

@@ -113,7 +113,7 @@ def test_atomic_write_gives_files_the_umask(tmp_path, mask, mode):
 
 
 @pytest.mark.parametrize("module", ["registry", "spec", "spectra", "illuminant", "optics", "filters", "sensor",
-                                    "architecture", "exposure", "camera", "color", "metrics", "overrides"])
+                                    "architecture", "exposure", "camera", "color", "metrics", "overrides", "bridges"])
 def test_doctests(module):
     m = importlib.import_module(f"spectracam.{module}")
     result = doctest.testmod(m, optionflags=doctest.ELLIPSIS)
