@@ -82,3 +82,35 @@ def test_not_an_exr_is_one_clear_error(tmp_path):
     bad.write_text("hello")
     with pytest.raises(SpectracamError, match="not a readable OpenEXR file"):
         read_exr(bad)
+
+
+def test_attributes_are_written_typed(tmp_path):
+    # numbers as EXR numbers (what OpenImageIO and exrheader show), JSON text only for nested data
+    from spectracam.io.exr import attribute_number, double
+
+    attrs = {"aFloat": 1.5, "aDouble": double(0.1), "anInt": 7, "aV3d": np.array([0.1, 0.2, 0.3]),
+             "aM33f": np.eye(3, dtype=np.float32), "aDict": {"a": [1, 2]},
+             "chromaticities": (0.64, 0.33, 0.3, 0.6, 0.15, 0.06, 0.3127, 0.329)}
+    write_exr(tmp_path / "t.exr", {"Y": np.zeros((4, 4))}, attrs)
+    _, back = read_exr(tmp_path / "t.exr")
+    assert attribute_number(back["aDouble"]) == 0.1 and back["anInt"] == 7
+    assert json.loads(back["aDict"]) == {"a": [1, 2]}
+    np.testing.assert_array_equal(back["aV3d"], [0.1, 0.2, 0.3])
+    assert attribute_number("0.25") == 0.25  # JSON text, as older files hold it
+    text = describe(tmp_path / "t.exr")
+    assert "aDouble: 0.10000000000000001" in text and "aV3d: 0.1 0.2 0.3" in text
+    oiio = pytest.importorskip("OpenImageIO")
+    spec = oiio.ImageInput.open(str(tmp_path / "t.exr")).spec()
+    types = {a.name: str(a.type) for a in spec.extra_attribs}
+    assert types["aFloat"] == "float" and types["aDouble"] == "double" and types["anInt"] == "int"
+    assert types["aV3d"] == "vectord" and types["aM33f"] == "matrix33" and types["aDict"] == "string"
+    assert types["chromaticities"] == "float[8]"
+    assert spec.getattribute("aDouble") == 0.1
+
+
+def test_radiance_attributes_are_typed_for_openimageio(written):
+    oiio = pytest.importorskip("OpenImageIO")
+    spec = oiio.ImageInput.open(str(written)).spec()
+    types = {a.name: str(a.type) for a in spec.extra_attribs}
+    assert types["spectracamSeed"] == types["spectracamSamplesPerPixel"] == "int"
+    assert types["spectracamScene"] == types["spectracamRender"] == "string"  # nested: JSON text

@@ -3,12 +3,19 @@
 Spectral layout: one float32 channel per band named ``S0.<λ>nm`` with a comma as the decimal
 separator (``S0.550,000000nm``), attributes ``spectralLayoutVersion = "1.0"`` and
 ``emissiveUnits = "W.m^-2.sr^-1"``, plus R, G, B preview channels so ordinary viewers show an image.
-Every file spectracam writes carries ``spectracam*`` attributes recording what made it.
+Every file spectracam writes carries ``spectracam*`` attributes recording what made it.  Numbers are
+typed EXR attributes (``int``, ``float``, ``double`` — a one-element float64 array —, ``v3d``), so
+OpenImageIO, ``exrheader`` and other tools read them as numbers; JSON text is kept for the nested
+structures only (scene, camera, layout, render metadata).
 """
 from __future__ import annotations
 
+import contextlib
 import json
+import os
 import re
+import sys
+import types
 from pathlib import Path
 
 import numpy as np
@@ -39,13 +46,30 @@ def parse_spectral_channel(name: str) -> float | None:
     return float(m.group(1).replace(",", ".")) if m else None
 
 
+def double(x: float) -> np.ndarray:
+    """A value the OpenEXR binding writes as a ``double`` attribute (a Python float becomes a 32-bit
+    ``float``); reading gives it back as the same one-element array."""
+    return np.array([float(x)], dtype=np.float64)
+
+
+def attribute_number(value) -> float:
+    """A numeric attribute as a Python float, whether typed (float, double, one-element array) or,
+    in files written before the attributes were typed, JSON text."""
+    if isinstance(value, str):
+        value = json.loads(value)
+    return float(np.asarray(value, dtype=np.float64).reshape(-1)[0])
+
+
 def write_exr(path: str | Path, channels: dict[str, np.ndarray], attributes: dict) -> Path:
-    """Write float32 channels and attributes; the file appears complete or not at all (temp + rename)."""
+    """Write float32 channels and attributes; the file appears complete or not at all (temp + rename).
+    A dict becomes JSON text; every other value is written as the OpenEXR binding types it (str →
+    string, int → int, float → float, :func:`double` → double, float64 (3,) → v3d, float32 (3, 3) →
+    m33f, an 8-tuple under ``chromaticities`` → chromaticities)."""
     import OpenEXR
 
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     for k, v in attributes.items():
-        header[k] = v if isinstance(v, (str, int)) else (json.dumps(v) if isinstance(v, (dict, list)) else v)
+        header[k] = json.dumps(v) if isinstance(v, dict) else v
     # OpenEXR silently writes wrong pixels from non-contiguous views (DESIGN.md): always copy.
     data = {k: np.ascontiguousarray(v, dtype=np.float32) for k, v in channels.items()}
     return atomic_write(path, lambda tmp: OpenEXR.File(header, data).write(tmp))
@@ -56,11 +80,40 @@ def read_exr(path: str | Path) -> tuple[dict[str, np.ndarray], dict]:
     import OpenEXR
 
     try:
-        f = OpenEXR.File(str(path), separate_channels=True)
-    except Exception as e:  # OpenEXR raises a bare RuntimeError/OSError with a long message
+        with _library_output_held() as held:
+            f = OpenEXR.File(str(path), separate_channels=True)
+            # a file cut short opens, then fails on its pixels (ValueError: "file has 0 parts")
+            channels = {name: np.asarray(c.pixels) for name, c in f.channels().items()}
+            header = dict(f.header())
+    except Exception as e:  # OpenEXR raises a bare RuntimeError/OSError/ValueError with a long message
         raise SpectracamError(f"file = {str(path)!r}: not a readable OpenEXR file ({str(e).splitlines()[0]})") from None
-    channels = {name: np.asarray(c.pixels) for name, c in f.channels().items()}
-    return channels, dict(f.header())
+    if held.text:  # a readable file's warnings still reach the user
+        sys.stderr.write(held.text)
+    return channels, header
+
+
+@contextlib.contextmanager
+def _library_output_held():
+    """Hold what the OpenEXR C library prints on file descriptors 1 and 2 while a file is read: a
+    damaged file then gives spectracam's one-line error instead of the library's messages as well."""
+    import tempfile
+
+    held = types.SimpleNamespace(text="")
+    for stream in (sys.stdout, sys.stderr):
+        stream.flush()
+    with tempfile.TemporaryFile() as tmp:
+        saved = [os.dup(1), os.dup(2)]
+        try:
+            os.dup2(tmp.fileno(), 1)
+            os.dup2(tmp.fileno(), 2)
+            yield held
+        finally:
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            for fd in saved:
+                os.close(fd)
+            tmp.seek(0)
+            held.text = tmp.read().decode(errors="replace")
 
 
 def preview_rgb(radiance: np.ndarray, grid: WavelengthGrid, white_luminance_cd_m2: float) -> np.ndarray:
@@ -125,6 +178,10 @@ def describe(path: str | Path) -> str:
     lines.append("  attributes:")
     for k in sorted(a for a in attrs if a not in known):
         v = attrs[k]
+        if isinstance(v, np.ndarray):  # double (one element), v3d, m33f: numbers, not an array repr
+            v = f"{v.item():.17g}" if v.size == 1 else " ".join(f"{x:.9g}" for x in v.ravel())
+        elif isinstance(v, float):
+            v = f"{v:.9g}"
         if isinstance(v, str) and v.startswith("{"):
             try:
                 v = json.dumps(json.loads(v), sort_keys=True)
@@ -163,21 +220,36 @@ def raw_channel_names(layout) -> list[str]:
     return ["Y"] if isinstance(layout, MosaicLayout) else ["R", "G", "B"]
 
 
+def dn_scale_offset(sensor) -> tuple[float, float]:
+    """``(scale, offset)`` of a raw EXR's pixels: ``value = (DN − offset)/scale`` with offset = the black
+    level and scale = ``2ⁿ − 1 − black level``, so black reads 0 and the top code 1.0 in any EXR viewer;
+    both are float32 numbers (the attributes' type), used as such to write and to read."""
+    black = float(np.float32(sensor.black_level_dn))
+    return float(np.float32(2**sensor.adc_bits - 1 - black)), black
+
+
 def raw_attributes(raw: RawCapture) -> dict:
     cam = raw.camera
+    scale, offset = dn_scale_offset(cam.sensor)
     attrs = {
         "spectracamVersion": __version__,
         "spectracamKind": "raw",
-        "spectracamUnits": f"digital numbers, 0..{2**cam.sensor.adc_bits - 1} ({cam.sensor.adc_bits}-bit ADC; "
-                           f"{cam.sensor.quantization_step_e:g} e- per DN)",
+        "spectracamUnits": f"(DN - spectracamDnOffset)/spectracamDnScale: digital numbers "
+                           f"0..{2**cam.sensor.adc_bits - 1} ({cam.sensor.adc_bits}-bit ADC; "
+                           f"{cam.sensor.quantization_step_e:g} e- per DN) with the black level ({offset:g} DN) at 0 "
+                           "and the top code at 1",
+        "spectracamDnScale": scale,
+        "spectracamDnOffset": offset,
+        "spectracamAdcBits": int(cam.sensor.adc_bits),
         "spectracamArchitecture": cam.capture.architecture,
         "spectracamExposure": cam.capture.exposure,
         "spectracamLayout": json.dumps(layout_to_dict(raw.layout)),
-        "spectracamExposureTimesS": json.dumps(dict(zip("RGB", map(float, raw.exposure_times_s)))),
-        "spectracamCaptureTimeS": json.dumps(float(raw.capture_time_s)),
+        # R, G, B exposure times and the capture time, s (double precision)
+        "spectracamExposureTimesS": np.asarray(raw.exposure_times_s, dtype=np.float64).reshape(3),
+        "spectracamCaptureTimeS": double(raw.capture_time_s),
         "spectracamCamera": json.dumps(cam.to_dict(), sort_keys=True),
         # V = g·Q + V_FPN (paper 3.4): the ADC's full scale, g·q_max, in volts
-        "spectracamFullSwingV": json.dumps(cam.sensor.conversion_gain_uV_per_e * 1e-6 * cam.sensor.q_max_e),
+        "spectracamFullSwingV": double(cam.sensor.conversion_gain_uV_per_e * 1e-6 * cam.sensor.q_max_e),
         "spectracamSeed": int(raw.seed),
     }
     if isinstance(raw.layout, MosaicLayout):
@@ -190,9 +262,38 @@ def raw_attributes(raw: RawCapture) -> dict:
 
 
 def write_raw_exr(path: str | Path, raw: RawCapture) -> Path:
-    """Write what the sensor recorded (digital numbers) with every parameter that produced it."""
-    planes = [raw.digital] if isinstance(raw.layout, MosaicLayout) else list(raw.digital)
+    """Write what the sensor recorded with every parameter that produced it: digital numbers as
+    ``(DN − black level)/(2ⁿ − 1 − black level)`` (:func:`dn_scale_offset`), so a viewer at its default
+    exposure shows the mosaic or planes from black (0) to full scale (1); :func:`read_raw_exr` gives the
+    digital numbers back exactly."""
+    scale, offset = dn_scale_offset(raw.camera.sensor)
+    digital = (np.asarray(raw.digital, dtype=np.float64) - offset) / scale
+    planes = [digital] if isinstance(raw.layout, MosaicLayout) else list(digital)
     return write_exr(path, dict(zip(raw_channel_names(raw.layout), planes)), raw_attributes(raw))
+
+
+def _exposure_times(value) -> np.ndarray:
+    """R, G, B exposure times from the typed v3d attribute or the JSON ``{"R": …}`` of older files."""
+    if isinstance(value, str):
+        value = json.loads(value)
+        return np.array([float(value[c]) for c in "RGB"])
+    times = np.asarray(value, dtype=np.float64).reshape(-1)
+    if times.shape != (3,):
+        raise ValueError(f"spectracamExposureTimesS = {value!r}: not three times")
+    return times
+
+
+def _digital_numbers(values: np.ndarray, attrs: dict, camera: CameraSpec) -> np.ndarray:
+    """Digital numbers from stored values: ``value·scale + offset``, rounded to the ADC's integer codes
+    when it quantises (which makes the round trip exact: the float32 quotient is within 2⁻²⁴ of the
+    code's); float32 like the capture's.  Files without the attributes hold the numbers themselves."""
+    if "spectracamDnScale" not in attrs:
+        return values
+    scale, offset = attribute_number(attrs["spectracamDnScale"]), attribute_number(attrs["spectracamDnOffset"])
+    dn = values.astype(np.float64) * scale + offset
+    if camera.sensor.quantization:
+        dn = np.round(dn)
+    return dn.astype(np.float32)
 
 
 def read_raw_exr(path: str | Path) -> RawCapture:
@@ -205,9 +306,8 @@ def read_raw_exr(path: str | Path) -> RawCapture:
     try:
         cam = json.loads(attrs["spectracamCamera"])
         layout = layout_from_dict(json.loads(attrs["spectracamLayout"]), src)
-        times = json.loads(attrs["spectracamExposureTimesS"])
-        times = np.array([float(times[c]) for c in "RGB"])
-        capture_time = float(json.loads(attrs["spectracamCaptureTimeS"]))
+        times = _exposure_times(attrs["spectracamExposureTimesS"])
+        capture_time = attribute_number(attrs["spectracamCaptureTimeS"])
         seed = int(attrs["spectracamSeed"])
         scene = json.loads(attrs["spectracamScene"]) if "spectracamScene" in attrs else None
     except (KeyError, TypeError, ValueError) as e:
@@ -222,5 +322,9 @@ def read_raw_exr(path: str | Path) -> RawCapture:
         raise ConfigError("spectracamLayout", layout_to_dict(layout), f"does not match the recorded architecture "
                           f"{camera.capture.architecture!r} ({layout_to_dict(arch_layout)})", src)
     digital = channels["Y"] if len(names) == 1 else np.stack([channels[c] for c in names])
+    try:
+        digital = _digital_numbers(digital, attrs, camera)
+    except (KeyError, TypeError, ValueError) as e:
+        raise SpectracamError(f"file = {src!r}: spectracamDnScale/spectracamDnOffset are damaged ({e})") from None
     return RawCapture(digital=digital, expected_e=None, exposure_times_s=times, capture_time_s=capture_time,
                       layout=layout, camera=camera, seed=seed, scene=scene)

@@ -8,10 +8,12 @@ from .files import atomic_write
 
 
 def pyplot():
-    """matplotlib.pyplot on the Agg backend (no display needed)."""
+    """matplotlib.pyplot on the Agg backend (no display needed); SVG text is written as text
+    (``svg.fonttype = "none"``: selectable, searchable, editable), not as glyph paths."""
     import matplotlib
 
     matplotlib.use("Agg")
+    matplotlib.rcParams["svg.fonttype"] = "none"
     import matplotlib.pyplot as plt
 
     return plt

@@ -1,4 +1,5 @@
-"""Scoring outputs: rendered EXR (linear display RGB), an sRGB PNG preview, a ΔE map, JSON and CSV."""
+"""Scoring outputs: rendered EXR (linear display RGB, with the display's chromaticities), an sRGB PNG
+preview (the display's white adapted to D65), a ΔE map on a fixed scale, JSON and CSV."""
 from __future__ import annotations
 
 import csv
@@ -9,41 +10,84 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__
-from ..color import display_rgb_to_xyz
+from ..color import adaptation_matrix, display_rgb_to_xyz
 from ..score import ChartScore
 from .exr import write_exr
 from .files import atomic_write
 from .plots import save_figure
 
 
-def srgb_preview(rendered_rgb: np.ndarray, display: str) -> np.ndarray:
-    """8-bit sRGB of linear display RGB: display RGB → XYZ → sRGB, clipped, sRGB-encoded."""
+#: ITU-R BT.709 / sRGB primaries and D65 white, CIE 1931 xy (IEC 61966-2-1).
+REC709_CHROMATICITIES = (0.64, 0.33, 0.30, 0.60, 0.15, 0.06, 0.3127, 0.3290)
+
+
+def display_chromaticities(display: str) -> tuple[float, ...]:
+    """The OpenEXR ``chromaticities`` of a display's linear RGB: the xy of its red, green and blue
+    primaries and of its white (R = G = B = 1); Rec. 709/D65 for "srgb", computed from the display's
+    RGB → XYZ matrix for any other (the CRT's phosphors)."""
+    if display == "srgb":
+        return REC709_CHROMATICITIES
+    M = display_rgb_to_xyz(display)
+    xy = [c[:2] / c.sum() for c in (M[:, 0], M[:, 1], M[:, 2], M.sum(axis=1))]
+    return tuple(float(v) for c in xy for v in c)
+
+
+def srgb_preview(rendered_rgb: np.ndarray, display: str, adapt_white: bool = True) -> np.ndarray:
+    """8-bit sRGB of linear display RGB: display RGB → XYZ → (``adapt_white``: Bradford from the
+    display's white to sRGB's D65, so that what is neutral on the display looks neutral on an sRGB
+    screen) → linear sRGB, clipped, sRGB-encoded.  ``adapt_white=False`` shows the display's colours
+    as they are (the CRT's white, x, y = 0.289, 0.313, about 8300 K, stays bluish)."""
     import colour
 
-    xyz = rendered_rgb @ display_rgb_to_xyz(display).T
-    lin = xyz @ np.asarray(colour.RGB_COLOURSPACES["sRGB"].matrix_XYZ_to_RGB).T
+    M = display_rgb_to_xyz(display)
+    srgb = colour.RGB_COLOURSPACES["sRGB"]
+    to_srgb = np.asarray(srgb.matrix_XYZ_to_RGB)
+    if adapt_white:
+        d65 = np.asarray(srgb.matrix_RGB_to_XYZ).sum(axis=1)
+        to_srgb = to_srgb @ adaptation_matrix(M.sum(axis=1), d65, "bradford")
+    lin = rendered_rgb @ (to_srgb @ M).T
     return (np.clip(colour.cctf_encoding(np.clip(lin, 0, 1), "sRGB"), 0, 1) * 255 + 0.5).astype(np.uint8)
 
 
 def write_png(path: Path, rgb8: np.ndarray) -> Path:
     """An 8-bit image as PNG."""
-    import matplotlib.pyplot as plt
+    from .plots import pyplot
 
+    plt = pyplot()
     buf = io.BytesIO()
     plt.imsave(buf, rgb8, format="png")
     return atomic_write(path, buf.getvalue())
 
 
-def delta_e_figure(delta_e_map: np.ndarray, title: str):
+#: The ΔE map's default colour scale, ΔE*ab: fixed, so maps of different cases compare.
+DELTA_E_VMAX = 20.0
+
+
+def delta_e_figure(delta_e_map: np.ndarray, title: str, vmax: float | None = DELTA_E_VMAX):
+    """The per-pixel ΔE map inside the patch masks (grey where nothing is scored), with a colour bar
+    as tall as the image beside it.  ``vmax``: the top of the scale (default a fixed 0–20 so that maps
+    compare across cases; values above it show the top colour, the bar's arrow); ``None``: the map's
+    own 99th percentile (at least 10)."""
+    from mpl_toolkits.axes_grid1 import make_axes_locatable
+
     from .plots import pyplot
 
     plt = pyplot()
-    fig, ax = plt.subplots(figsize=(7, 5))
-    vmax = max(10.0, float(np.nanpercentile(delta_e_map, 99)))
-    im = ax.imshow(delta_e_map, cmap="magma", vmin=0, vmax=vmax, interpolation="nearest")
+    h, w = delta_e_map.shape
+    fixed = vmax is not None
+    if not fixed:
+        finite = delta_e_map[np.isfinite(delta_e_map)]
+        vmax = max(10.0, float(np.percentile(finite, 99))) if finite.size else 10.0
+    fig, ax = plt.subplots(figsize=(7.0, 7.0 * h / w + 0.6))
+    cmap = plt.get_cmap("magma").with_extremes(bad="#d0d0d0")
+    im = ax.imshow(delta_e_map, cmap=cmap, vmin=0, vmax=vmax, interpolation="nearest")
     ax.set_axis_off()
     ax.set_title(title, fontsize=9)
-    fig.colorbar(im, ax=ax, label="ΔE*ab per pixel (patch masks only)")
+    cax = make_axes_locatable(ax).append_axes("right", size="3.5%", pad=0.1)
+    scale = f"fixed scale 0–{vmax:g}" if fixed else f"scale 0–{vmax:.3g} (this map)"
+    bar = fig.colorbar(im, cax=cax, extend="max" if np.nanmax(delta_e_map, initial=0) > vmax else "neither")
+    bar.set_label(f"ΔE*ab per pixel, patch masks only ({scale})", fontsize=8)
+    bar.ax.tick_params(labelsize=8)
     return fig
 
 
@@ -54,8 +98,11 @@ def _num(x) -> str:
 def write_rendered_exr(path: str | Path, result: ChartScore) -> Path:
     """The displayed image (linear display RGB) with every parameter of the score that made it."""
     params = result.parameters
+    display = params["processing"]["display"]
     attrs = {"spectracamVersion": __version__, "spectracamKind": "rendered",
-             "spectracamUnits": f"linear RGB of the display ({params['processing']['display']}), white = 1",
+             "spectracamUnits": f"linear RGB of the display ({display}), white = 1",
+             # the standard attribute viewers read to interpret R, G, B (primaries and white, CIE xy)
+             "chromaticities": display_chromaticities(display),
              "spectracamParameters": json.dumps(params, sort_keys=True), "spectracamSeed": int(params["seed"])}
     rgb = result.rendered_rgb
     return write_exr(path, {"R": rgb[..., 0], "G": rgb[..., 1], "B": rgb[..., 2]}, attrs)
@@ -79,19 +126,21 @@ def report_csv(result: ChartScore) -> bytes:
     return buf.getvalue().encode()
 
 
-def write_score_outputs(out_dir: str | Path, result: ChartScore) -> list[Path]:
-    """rendered.exr, rendered.png, delta_e.png, report.json and report.csv in ``out_dir``."""
+def write_score_outputs(out_dir: str | Path, result: ChartScore, adapt_white: bool = True,
+                        vmax: float | None = DELTA_E_VMAX) -> list[Path]:
+    """rendered.exr, rendered.png, delta_e.png, report.json and report.csv in ``out_dir``;
+    ``adapt_white`` and ``vmax``: see :func:`srgb_preview` and :func:`delta_e_figure`."""
     out = Path(out_dir)
     params = result.parameters
     display = params["processing"]["display"]
     paths = [write_rendered_exr(out / "rendered.exr", result),
-             write_png(out / "rendered.png", srgb_preview(result.rendered_rgb, display))]
+             write_png(out / "rendered.png", srgb_preview(result.rendered_rgb, display, adapt_white))]
     c = result.summary
     snr = "∞" if c.snr_combined_db is None else f"{c.snr_combined_db:.1f}"
     name = (params.get("scene") or {}).get("name", "")
     title = f"{params['camera']['capture']['architecture']}/{params['camera']['capture']['exposure']}, {name}: " \
             f"mean ΔE*ab {c.delta_e_mean:.2f}, SNR {snr} dB"
-    paths.append(save_figure(delta_e_figure(result.delta_e_map, title), out / "delta_e.png"))
+    paths.append(save_figure(delta_e_figure(result.delta_e_map, title, vmax), out / "delta_e.png"))
     paths.append(atomic_write(out / "report.json", json.dumps(result.to_dict(), indent=1, allow_nan=False).encode()))
     paths.append(atomic_write(out / "report.csv", report_csv(result)))
     return paths
