@@ -225,12 +225,12 @@ def _write_capture(out_dir: Path, raw, scene) -> list[Path]:
 
 @main.command("capture")
 @click.argument("radiance_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
-@_output("Directory to write raw.exr (and raw.dng for a mosaic) into.")
+@_output("Directory to write raw.exr and raw.dng into.")
 @_camera_options
 @_set_option
 @_quiet_option
 def capture_cmd(radiance_file: Path, out_dir: Path, arch, exposure, config_file, seed, sets, quiet):
-    """Capture a spectral RADIANCE_FILE with a simulated sensor; write DIR/raw.exr (+ raw.dng for a mosaic)."""
+    """Capture a spectral RADIANCE_FILE with a simulated sensor; write DIR/raw.exr and DIR/raw.dng."""
     from .io.exr import read_radiance_exr
     from .pipeline import capture
 
