@@ -1,0 +1,45 @@
+"""``spectracam spatial``: the spatial comparison of the architectures (a self-contained click command).
+
+Register it with ``main.add_command(spatial_cmd)`` in :mod:`spectracam.cli`.
+"""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import click
+
+from ..cli_options import _check_writable, _log, _output, _quiet_option, _renderer_option, _set_option
+
+
+@click.command("spatial")
+@_output("Directory to write results.json, mtf_curves.json, report.md, the figures and maps/ into.")
+@click.option("--quick", is_flag=True, help="A first look: half-size images, 20-nm bands, 2 samples per sub-pixel.")
+@_renderer_option
+@click.option("--no-maps", is_flag=True, help="Skip maps/: one S-CIELAB map PNG per design, case and target.")
+@_set_option
+@_quiet_option
+def spatial_cmd(out_dir: Path, quick: bool, renderer: str, no_maps: bool, sets, quiet: bool):
+    """Spatial comparison: slanted edge, Siemens star and tilted chart through diffraction, the pixel
+    aperture and each design (CFA + demosaicking, prism aligned/misaligned, FSC); e-SFR MTF50, false
+    colour, S-CIELAB; results.json, figures, report.md."""
+    from .experiment import load_spatial, run_spatial
+    from .report import write_outputs
+
+    spec, scene = load_spatial(sets, quick=quick)   # validated before any work
+    if renderer not in ("mitsuba", "analytic"):
+        from ..errors import ConfigError
+
+        raise ConfigError("--renderer", renderer, "spatial targets are rendered by 'mitsuba' or 'analytic'")
+    _check_writable(out_dir)
+    log = _log(quiet)
+    t0 = time.perf_counter()
+    result = run_spatial(spec, scene, renderer=renderer, log=log)
+    command = "spectracam spatial -o " + str(out_dir) + (" --quick" if quick else "") \
+        + (f" --renderer {renderer}" if renderer != "mitsuba" else "") + "".join(f" --set {s}" for s in sets)
+    paths = write_outputs(out_dir, result, command, maps=not no_maps)
+    from .report import answer
+
+    for line in answer(result):
+        log(line)
+    log(f"[{time.perf_counter() - t0:6.1f} s] wrote {len(paths)} files; report: {Path(out_dir) / 'report.md'}")
