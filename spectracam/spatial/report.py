@@ -81,7 +81,8 @@ def figure_mtf(result, out: Path) -> list[Path]:
         ax.grid(alpha=0.3)
     for ax in axes.ravel()[n:]:
         ax.axis("off")
-    axes.ravel()[0].legend(fontsize=7, loc="upper right")
+    handles, names = axes.ravel()[0].get_legend_handles_labels()
+    fig.legend(handles, names, loc="outside lower center", ncol=4, fontsize=8, frameon=False)
     fig.suptitle("Slanted edge (ISO 12233 e-SFR, 5°, 4:1): MTF per design; grey line: Nyquist", fontsize=11)
     return save_figure(fig, out / "mtf.png", out / "mtf.svg")
 
@@ -109,7 +110,8 @@ def figure_summary(result, out: Path) -> list[Path]:
         ax.set_xticks(x, [f"{p:g} µm\nf/{N:g}" for p, N in cases])
         ax.set_title(title, fontsize=10)
         ax.grid(axis="y", alpha=0.3)
-    axes[0, 0].legend(fontsize=7)
+    handles, names = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, names, loc="outside lower center", ncol=len(names), fontsize=8, frameon=False)
     return save_figure(fig, out / "summary.png", out / "summary.svg")
 
 
