@@ -392,10 +392,12 @@ def inspect_cmd(file: Path):
 
 
 def _register_plugins() -> None:
-    """Commands that live with their stage: the spatial comparison (issue 13)."""
+    """Commands that live with their stage: the spatial comparison (issue 13) and motion (issue 14)."""
+    from .motion.command import motion_cmd
     from .spatial.command import spatial_cmd
 
     main.add_command(spatial_cmd)
+    main.add_command(motion_cmd)
 
 
 _register_plugins()
