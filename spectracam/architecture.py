@@ -13,9 +13,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import kernels
 from .filters import CHANNELS
 from .registry import Registry
-from .sensor import TEMPORAL_STREAM, SensorSpec, expose, fixed_pattern, noise_stream
+from .sensor import TEMPORAL_STREAM, PatternRef, SensorSpec, expose, noise_stream
 
 #: Architectures: name → :class:`Architecture` subclass.
 ARCHITECTURES: Registry = Registry("capture.architecture", "architecture")
@@ -99,12 +100,19 @@ class Architecture(ABC):
     def __init__(self, cfa_pattern: str = "RGGB", fixed_pattern: str = "physical"):
         self.cfa_pattern, self.fixed_pattern = cfa_pattern, fixed_pattern
 
-    def channel_patterns(self, sensor: SensorSpec, shape, seed: int) -> list:
-        """The fixed pattern each of the three channels is recorded with (see FIXED_PATTERN_CHOICES)."""
+    def channel_patterns(self, sensor: SensorSpec, shape, seed: int, drawn: bool = True) -> list:
+        """The fixed pattern each of the three channels is recorded with (see FIXED_PATTERN_CHOICES);
+        ``drawn=False``: :class:`~spectracam.sensor.PatternRef` s, drawn where they are used (the
+        fused capture draws the per-pixel parts in its own pass)."""
         independent = self.fixed_pattern == "independent" or (self.fixed_pattern == "physical" and self.sensors > 1)
+        shape = tuple(shape)
         if independent:
-            return [fixed_pattern(sensor, shape, seed, k) for k in range(3)]
-        return [fixed_pattern(sensor, shape, seed, 0)] * 3
+            refs = [PatternRef(sensor, shape, seed, k) for k in range(3)]
+        else:  # one sensor: one pattern, shared by the three channels
+            refs = [PatternRef(sensor, shape, seed, 0)] * 3
+        if drawn:
+            return [r.draw() for r in refs] if independent else [refs[0].draw()] * 3
+        return refs
 
     @property
     @abstractmethod
@@ -120,17 +128,36 @@ class Architecture(ABC):
         """Returns ``(digital, expected_e)``: arrays of the architecture's layout."""
 
     def record_mosaic(self, rates, times_s, sensor, seed):
-        """One exposure of one sensor behind a colour filter array of this architecture's layout."""
+        """One exposure of one sensor behind a colour filter array of this architecture's layout.
+
+        ``rates``: ``(H, W, 3)`` — an array, or a :class:`~spectracam.kernels.SpectralRates` whose
+        cube the fused kernel reads once, weighting each pixel with its own channel only."""
+        noise, pattern = noise_stream(seed, TEMPORAL_STREAM, 0), PatternRef(sensor, tuple(rates.shape[:2]), seed, 0)
+        tile = getattr(self.layout, "tile", None)
+        if tile is not None:
+            out = kernels.record(rates, np.asarray(tile, np.int64)[None], times_s[:1], sensor, [noise], [pattern])
+            if out is not None:
+                return out[0][0], out[1][0]
         mosaic = self.layout.sample(rates)
-        return expose(mosaic, times_s[0], sensor, noise_stream(seed, TEMPORAL_STREAM, 0),
-                      fixed_pattern(sensor, mosaic.shape, seed, 0))
+        return expose(mosaic, times_s[0], sensor, noise, pattern.draw())
 
     @staticmethod
     def record_planes(rates, times_s, sensor, seed, patterns):
-        """Three full-resolution exposures, channel k with fixed pattern ``patterns[k]``;
-        returns ``(3, H, W)`` digital numbers and expected electrons."""
-        out = [expose(np.ascontiguousarray(rates[:, :, k]), times_s[k], sensor, noise_stream(seed, TEMPORAL_STREAM, k),
-                      patterns[k]) for k in range(3)]
+        """Three full-resolution exposures, channel k with fixed pattern ``patterns[k]`` (a
+        :class:`~spectracam.sensor.FixedPattern` or a :class:`~spectracam.sensor.PatternRef`);
+        returns ``(3, H, W)`` digital numbers and expected electrons.  The fused kernel records the
+        three in one pass over the cube."""
+        noises = [noise_stream(seed, TEMPORAL_STREAM, k) for k in range(3)]
+        out = kernels.record(rates, np.arange(3, dtype=np.int64).reshape(3, 1, 1), times_s, sensor, noises, patterns)
+        if out is not None:
+            return out
+        drawn = {}  # a pattern shared by channels is drawn once
+        for p in patterns:
+            if id(p) not in drawn:
+                drawn[id(p)] = p.draw() if isinstance(p, PatternRef) else p
+        rates = np.asarray(rates)
+        out = [expose(np.ascontiguousarray(rates[:, :, k]), times_s[k], sensor, noises[k], drawn[id(patterns[k])])
+               for k in range(3)]
         return np.stack([o[0] for o in out]), np.stack([o[1] for o in out])
 
 
@@ -164,7 +191,8 @@ class DichroicPrism(Architecture):
         return float(np.max(times_s))
 
     def record(self, rates, times_s, sensor, seed):
-        return self.record_planes(rates, times_s, sensor, seed, self.channel_patterns(sensor, rates.shape[:2], seed))
+        return self.record_planes(rates, times_s, sensor, seed,
+                                 self.channel_patterns(sensor, rates.shape[:2], seed, drawn=False))
 
 
 @ARCHITECTURES.register("fsc")
@@ -178,7 +206,8 @@ class FieldSequential(Architecture):
         return float(np.sum(times_s))
 
     def record(self, rates, times_s, sensor, seed):  # one sensor: the same FPN in every frame
-        return self.record_planes(rates, times_s, sensor, seed, self.channel_patterns(sensor, rates.shape[:2], seed))
+        return self.record_planes(rates, times_s, sensor, seed,
+                                 self.channel_patterns(sensor, rates.shape[:2], seed, drawn=False))
 
 
 def make_architecture(name: str, cfa_pattern: str = "RGGB", fixed_pattern: str = "physical") -> Architecture:

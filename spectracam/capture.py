@@ -1,8 +1,12 @@
 """The sensor back end in one call: radiance cube → optics → responsivities → exposure → sensor.
 
-``ρ_k = A·T_k·∫E_q(λ)·R_k(λ)dλ`` (paper, 3.3) is computed for every pixel and channel with one
-matrix product over the bands (:func:`~spectracam.camera.photo_electron_rates`); exposure is
-metered on the white patch (paper 4.5); the architecture then samples and records it.
+``ρ_k = A·T_k·∫E_q(λ)·R_k(λ)dλ`` (paper, 3.3) is the radiance times one ``(bands, 3)`` weight matrix
+(:func:`~spectracam.camera.band_weights`); exposure is metered on the white patch (paper 4.5) from
+the patch's mean spectrum; the architecture then samples and records it.  The rates are handed on
+uncomputed (:class:`~spectracam.kernels.SpectralRates`): the fused sensor pass
+(:mod:`spectracam.kernels`) reads the cube once and weights each pixel with the channel its site
+records, noise and ADC in the same loop; without it they are computed as
+:func:`~spectracam.camera.photo_electron_rates` does and recorded by the NumPy steps.
 """
 from __future__ import annotations
 
@@ -11,8 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .architecture import MosaicLayout, PlanesLayout
-from .camera import CameraSpec, photo_electron_rates
+from .camera import CameraSpec, band_weights
 from .exposure import exposure_times_s
+from .kernels import SpectralRates
 
 
 @dataclass
@@ -46,9 +51,8 @@ def capture(cube, camera: CameraSpec, seed: int, metering_box: tuple[slice, slic
     the mean rates of the pixels in ``metering_box`` (the white patch, paper 4.5); ``seed`` fixes
     every random draw (fixed pattern and temporal noise)."""
     arch = camera.capture.make_architecture()
-    rates = photo_electron_rates(cube.radiance, cube.grid, camera)
-    r, c = metering_box
-    white_rate = rates[r, c].mean(axis=(0, 1), dtype=np.float64)
+    rates = SpectralRates(cube.radiance, band_weights(camera, cube.grid))  # computed in the sensor's pass
+    white_rate = rates.mean(*metering_box)
     times = exposure_times_s(camera.capture.exposure, white_rate, camera.sensor, arch)
     digital, expected = arch.record(rates, times, camera.sensor, seed)
     return RawCapture(digital=digital, expected_e=expected, exposure_times_s=times,

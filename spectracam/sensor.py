@@ -8,7 +8,10 @@ and :func:`adc`: ``DN = K·Q + black level``, an n-bit uniform quantiser clipped
 the system gain ``K = 2ⁿ·g / V_fs`` (EMVA 1288: DN per electron) from the conversion gain ``g`` and
 the ADC's full-scale voltage ``V_fs``; :func:`adc_inverse` sits beside it.  The well clip and the
 ADC clip are separate stages.  Each noise source switches off on its own.  :func:`expose` runs the
-steps in place, chunk by chunk, on all cores.
+steps in place, chunk by chunk, on all cores: the reference implementation.  A capture normally
+runs :mod:`spectracam.kernels` instead — the same model fused into one pass over the radiance cube,
+with counter-based random numbers — and falls back to these steps where it cannot run.  The fixed
+pattern (:func:`fixed_pattern`) is a counter-based draw of each pixel on both paths.
 """
 from __future__ import annotations
 
@@ -19,6 +22,7 @@ from typing import Callable, NamedTuple
 import numpy as np
 
 from .errors import ConfigError
+from .kernels import CounterRNG
 from .registry import Registry
 from .spec import Spec
 
@@ -236,9 +240,11 @@ class FixedPattern(NamedTuple):
 
 
 def _draw(seq, n: int, fill) -> np.ndarray:
-    """``n`` float32 values, ``fill(rng, out)`` per chunk, each chunk seeded from ``seq``."""
+    """``n`` float32 values, ``fill(rng, out)`` per chunk; value ``i`` of ``rng.standard_normal`` and
+    ``rng.random`` is the counter-based draw ``i`` of ``seq`` (:class:`~spectracam.kernels.CounterRNG`),
+    the same whatever the chunking, the number of threads and the backend."""
     out = np.empty(n, np.float32)
-    _map_chunks(lambda i, sl: fill(_chunk_rng(seq, i), out[sl]), n)
+    _map_chunks(lambda i, sl: fill(CounterRNG(seq, sl.start), out[sl]), n)
     return out
 
 
@@ -253,29 +259,90 @@ def _normal_around_one(rms: float):
 
 def fixed_pattern(sensor: SensorSpec, shape: tuple[int, int], seed: int, sensor_index: int = 0) -> FixedPattern:
     """The fixed pattern of one physical sensor: the same for every frame with this seed (or the
-    sensor's ``pattern_seed``) and sensor index, different across pixels and sensors."""
+    sensor's ``pattern_seed``) and sensor index, different across pixels and sensors.  Every value
+    is a counter-based draw of its pixel (:class:`~spectracam.kernels.CounterRNG`)."""
+    return fixed_pattern_parts(sensor, shape, seed, sensor_index, defer=False)[0]
+
+
+class PixelDraw(NamedTuple):
+    """One per-pixel part of a fixed pattern as a draw, for a kernel that makes it in its own pass:
+    value ``i`` of the counter-based stream ``seq`` (N standard normal, U uniform on [0, 1)) gives
+    ``scale``·N (``kind`` "offset", FPN reading ``std``), ``scale``·(U − ½) ("offset-bound"),
+    1 + ``scale``·N ("gain", PRNU) or max(1 + ``scale``·N, 0) ("dark_gain", DSNU) — exactly the
+    float32 values :func:`fixed_pattern` draws."""
+
+    seq: np.random.SeedSequence
+    kind: str
+    scale: float
+
+
+class PatternDraws(NamedTuple):
+    """The parts of a fixed pattern left to the fused kernel (each a :class:`PixelDraw` or None)."""
+
+    offset: PixelDraw | None = None
+    gain: PixelDraw | None = None
+    dark_gain: PixelDraw | None = None
+
+
+def fixed_pattern_parts(sensor: SensorSpec, shape: tuple[int, int], seed: int, sensor_index: int = 0,
+                        defer: bool = True) -> tuple[FixedPattern, PatternDraws]:
+    """:func:`fixed_pattern` with its per-pixel parts left undrawn (``defer``; offsets only for the
+    built-in FPN readings): returns the pattern — whose ``offset_e`` then holds only the column FPN,
+    a row broadcast to ``shape``, or None — and the :class:`PatternDraws` the fused kernel makes."""
     if sensor.pattern_seed is not None:
         seed = sensor.pattern_seed
     if not sensor.fpn:
-        return FixedPattern()
+        return FixedPattern(), PatternDraws()
     n = int(np.prod(shape))
     offset = gain = dark_gain = None
+    draws = PatternDraws()
     if sensor.fpn_fraction > 0:
         reading = FPN_READINGS[sensor.fpn_reading]
         swing = sensor.fpn_fraction * sensor.q_max_e
-        offset = _draw(noise_stream(seed, FPN_STREAM, sensor_index, 0), n,
-                       lambda rng, out: reading.draw(rng, out, swing)).reshape(shape)
+        seq = noise_stream(seed, FPN_STREAM, sensor_index, 0)
+        if defer and reading.draw in (_draw_std, _draw_bound):
+            draws = draws._replace(offset=PixelDraw(seq, "offset-bound" if reading.draw is _draw_bound else "offset",
+                                                    swing))
+        else:
+            offset = _draw(seq, n, lambda rng, out: reading.draw(rng, out, swing)).reshape(shape)
     if sensor.prnu_fraction > 0:
-        gain = _draw(noise_stream(seed, FPN_STREAM, sensor_index, 1), n,
-                     _normal_around_one(sensor.prnu_fraction)).reshape(shape)
+        seq = noise_stream(seed, FPN_STREAM, sensor_index, 1)
+        if defer:
+            draws = draws._replace(gain=PixelDraw(seq, "gain", sensor.prnu_fraction))
+        else:
+            gain = _draw(seq, n, _normal_around_one(sensor.prnu_fraction)).reshape(shape)
     if sensor.column_fpn_fraction > 0:
         cols = _draw(noise_stream(seed, FPN_STREAM, sensor_index, 2), shape[-1],
                      lambda rng, out: _draw_std(rng, out, sensor.column_fpn_fraction * sensor.q_max_e))
-        offset = np.broadcast_to(cols, shape).copy() if offset is None else offset + cols
+        if offset is not None:
+            offset = offset + cols
+        else:
+            offset = np.broadcast_to(cols, shape)
+            offset = offset if draws.offset is not None else offset.copy()
     if sensor.dsnu_fraction > 0 and sensor.dark_current:
-        dark_gain = _draw(noise_stream(seed, FPN_STREAM, sensor_index, 3), n, _normal_around_one(sensor.dsnu_fraction))
-        dark_gain = np.maximum(dark_gain, 0.0, out=dark_gain).reshape(shape)  # a dark current is never negative
-    return FixedPattern(offset, gain, dark_gain)
+        seq = noise_stream(seed, FPN_STREAM, sensor_index, 3)
+        if defer:
+            draws = draws._replace(dark_gain=PixelDraw(seq, "dark_gain", sensor.dsnu_fraction))
+        else:
+            dark_gain = _draw(seq, n, _normal_around_one(sensor.dsnu_fraction))
+            dark_gain = np.maximum(dark_gain, 0.0, out=dark_gain).reshape(shape)  # a dark current is never negative
+    return FixedPattern(offset, gain, dark_gain), draws
+
+
+class PatternRef(NamedTuple):
+    """A physical sensor's fixed pattern before it is drawn: :meth:`draw` is :func:`fixed_pattern`;
+    the fused capture takes :meth:`parts` and draws the per-pixel parts in its own pass."""
+
+    sensor: SensorSpec
+    shape: tuple[int, int]
+    seed: int
+    sensor_index: int = 0
+
+    def draw(self) -> FixedPattern:
+        return fixed_pattern(self.sensor, self.shape, self.seed, self.sensor_index)
+
+    def parts(self) -> tuple[FixedPattern, PatternDraws]:
+        return fixed_pattern_parts(self.sensor, self.shape, self.seed, self.sensor_index)
 
 
 def integrate_charge(rate_e_per_s, time_s: float, dark_e: float, gain=None, dark_gain=None, out=None):
