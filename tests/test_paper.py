@@ -93,10 +93,11 @@ def test_mitsuba_agrees_with_analytic_within_monte_carlo_spread(analytic_run, mi
             # white-patch metering: ~200 px × 4 spp per band, per-pixel noise ~0.3 % → < 0.1 %
             assert m["exposure_ms"][d][t] == pytest.approx(a["exposure_ms"][d][t], rel=2e-3)
             # same noise seed; the render's Monte Carlo noise (≤ 0.35 %/px) adds to the sensor's in
-            # quadrature, so it can only lower the SNR, by at most 10·log10(1 + (0.0035·10^(SNR/20))²)
-            # (0.27 dB at 38 dB, 0.03 dB at 28 dB)
+            # quadrature, so it lowers the SNR in expectation, by at most 10·log10(1 + (0.0035·10^(SNR/20))²)
+            # (0.27 dB at 38 dB, 0.03 dB at 28 dB); one draw of it may also raise the estimated σ by
+            # chance the other way, by its sampling spread (~0.05 dB for ~100-pixel patches): 0.1 dB
             sa, sm = a["fig5a_snr_db"][d][t], m["fig5a_snr_db"][d][t]
-            assert -0.05 < sa - sm < 10 * np.log10(1 + (0.0035 * 10 ** (sa / 20)) ** 2) + 0.05
+            assert -0.1 < sa - sm < 10 * np.log10(1 + (0.0035 * 10 ** (sa / 20)) ** 2) + 0.05
             assert m["fig5b_delta_e"][d][t] == pytest.approx(a["fig5b_delta_e"][d][t], rel=0.02, abs=0.05)
 
 
