@@ -151,9 +151,29 @@ def tile_replicate(mosaic: np.ndarray, layout: MosaicLayout) -> np.ndarray:
     return out
 
 
+#: Demosaicking works on bands of this many rows (with :data:`DEMOSAIC_MARGIN` rows of context on
+#: each side, discarded), so a 12-Mpx image never holds the methods' full-size intermediates.
+DEMOSAIC_BAND_ROWS = 512
+#: Rows of context a band needs: the methods' kernels reach at most 5 rows (Menon 2007's refinement).
+DEMOSAIC_MARGIN = 8
+
+
 def demosaic(mosaic: np.ndarray, layout: MosaicLayout, method: str) -> np.ndarray:
-    """``(H, W, 3)`` full-colour image from a mosaic of the given layout with a registered method."""
-    return DEMOSAIC_METHODS[method](mosaic, layout)
+    """``(H, W, 3)`` full-colour image from a mosaic of the given layout with a registered method,
+    band by band (band edges on whole tiles): every output pixel sees exactly the neighbours it
+    would in one pass over the whole image."""
+    fn = DEMOSAIC_METHODS[method]
+    h = mosaic.shape[0]
+    step = DEMOSAIC_BAND_ROWS
+    if h <= step + 2 * DEMOSAIC_MARGIN:
+        return fn(mosaic, layout)
+    th = layout.tile_shape[0]
+    margin = -(-DEMOSAIC_MARGIN // th) * th
+    out = np.empty((*mosaic.shape, 3), dtype=np.float64)
+    for a in range(0, h, step):
+        lo, hi = max(0, a - margin), min(h, a + step + margin)
+        out[a:a + step] = fn(mosaic[lo:hi], layout)[a - lo:a - lo + min(step, h - a)]
+    return out
 
 
 def fit_conversion(camera: np.ndarray, target_rgb: np.ndarray) -> np.ndarray:

@@ -104,9 +104,11 @@ def camera_rates(raw: RawCapture, processing: ProcessingSpec) -> np.ndarray:
     e, _ = recorded_electrons(raw)
     if isinstance(raw.layout, MosaicLayout):
         rgb = demosaic(e, raw.layout, processing.demosaic)
+        del e
     else:
         rgb = np.moveaxis(e, 0, -1)
-    return rgb / np.asarray(raw.exposure_times_s)[None, None, :]
+    rgb /= np.asarray(raw.exposure_times_s)[None, None, :]  # in place: a 12-Mpx image holds 290 MB
+    return rgb
 
 
 def channel_stats(raw: RawCapture, boxes) -> tuple[np.ndarray, np.ndarray]:
@@ -175,22 +177,23 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
     target_rgb = reference.patch_xyz @ to_display_xyz.T @ np.linalg.inv(M_disp).T
     M = fit_conversion(chart_rates, target_rgb)
 
-    rgb = camera_rates(raw, processing) @ M
+    rgb = camera_rates(raw, processing)
+    for i in range(0, h, 256):  # in place, a band of rows at a time: no second full-size image
+        rgb[i:i + 256] = rgb[i:i + 256] @ M
     if processing.gamut_clip:
         np.clip(rgb, 0.0, 1.0, out=rgb)
-    lab = xyz_to_lab(rgb @ M_disp.T, display_white)
     scene_lab = xyz_to_lab(reference.patch_xyz, reference.white_xyz)
     conversion_lab = xyz_to_lab(chart_rates @ M @ M_disp.T, display_white)
     against = scene_lab if delta_e_reference == "scene" else conversion_lab
 
     boxes = reference.boxes
-    de_map = np.full((h, w), np.nan)
+    de_map = np.full((h, w), np.nan, np.float32)
     means, stds = channel_stats(raw, boxes)
     mean_labs = xyz_to_lab(np.stack([rgb[r, c].reshape(-1, 3).mean(axis=0) for r, c in boxes]) @ M_disp.T,
                            display_white)
     patches = []
-    for p, (r, c) in enumerate(boxes):
-        de = delta_e(lab[r, c], against[p], method)
+    for p, (r, c) in enumerate(boxes):  # CIELAB of the scored pixels only (memory: no full-image Lab)
+        de = delta_e(xyz_to_lab(rgb[r, c] @ M_disp.T, display_white), against[p], method)
         de_map[r, c] = de
         with np.errstate(divide="ignore"):  # a noise-free capture has infinite SNR: reported as None
             snr = snr_db(means[p], stds[p])

@@ -166,3 +166,15 @@ def test_score_and_simulate_commands(tmp_path):
     wrong = run("score", str(tmp_path / "sim" / "raw.exr"), "--scene", str(other), "-o", str(tmp_path / "y"))
     assert wrong.returncode == 2 and "taken of another scene" in wrong.stderr
     assert not (tmp_path / "y").exists()
+
+
+@pytest.mark.parametrize("method", ["bilinear", "malvar2004", "menon2007", "patch"])
+def test_demosaicking_in_bands_equals_one_pass(method, monkeypatch):
+    # bands of rows with context margins (memory) give exactly the one-pass image
+    import spectracam.color as color
+
+    mosaic = np.random.default_rng(0).random((300, 90)) * 100
+    layout = MosaicLayout.bayer("GBRG")
+    monkeypatch.setattr(color, "DEMOSAIC_BAND_ROWS", 64)
+    np.testing.assert_array_equal(color.demosaic(mosaic, layout, method),
+                                  color.DEMOSAIC_METHODS[method](mosaic, layout))

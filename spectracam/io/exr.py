@@ -60,8 +60,9 @@ def attribute_number(value) -> float:
     return float(np.asarray(value, dtype=np.float64).reshape(-1)[0])
 
 
-def write_exr(path: str | Path, channels: dict[str, np.ndarray], attributes: dict) -> Path:
-    """Write float32 channels and attributes; the file appears complete or not at all (temp + rename).
+def write_exr(path: str | Path, channels: dict[str, np.ndarray], attributes: dict, half: bool = False) -> Path:
+    """Write float32 (or, with ``half``, float16) channels and attributes; the file appears complete or
+    not at all (temp + rename).
     A dict becomes JSON text; every other value is written as the OpenEXR binding types it (str →
     string, int → int, float → float, :func:`double` → double, float64 (3,) → v3d, float32 (3, 3) →
     m33f, an 8-tuple under ``chromaticities`` → chromaticities)."""
@@ -71,7 +72,7 @@ def write_exr(path: str | Path, channels: dict[str, np.ndarray], attributes: dic
     for k, v in attributes.items():
         header[k] = json.dumps(v) if isinstance(v, dict) else v
     # OpenEXR silently writes wrong pixels from non-contiguous views (DESIGN.md): always copy.
-    data = {k: np.ascontiguousarray(v, dtype=np.float32) for k, v in channels.items()}
+    data = {k: np.ascontiguousarray(v, dtype=np.float16 if half else np.float32) for k, v in channels.items()}
     return atomic_write(path, lambda tmp: OpenEXR.File(header, data).write(tmp))
 
 

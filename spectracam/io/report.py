@@ -96,7 +96,9 @@ def _num(x) -> str:
 
 
 def write_rendered_exr(path: str | Path, result: ChartScore) -> Path:
-    """The displayed image (linear display RGB) with every parameter of the score that made it."""
+    """The displayed image (linear display RGB) with every parameter of the score that made it, in
+    half floats (11-bit mantissa: 5e-4 relative, below what a display shows; the numbers are in
+    report.json), half the size of float32."""
     params = result.parameters
     display = params["processing"]["display"]
     attrs = {"spectracamVersion": __version__, "spectracamKind": "rendered",
@@ -105,7 +107,7 @@ def write_rendered_exr(path: str | Path, result: ChartScore) -> Path:
              "chromaticities": display_chromaticities(display),
              "spectracamParameters": json.dumps(params, sort_keys=True), "spectracamSeed": int(params["seed"])}
     rgb = result.rendered_rgb
-    return write_exr(path, {"R": rgb[..., 0], "G": rgb[..., 1], "B": rgb[..., 2]}, attrs)
+    return write_exr(path, {"R": rgb[..., 0], "G": rgb[..., 1], "B": rgb[..., 2]}, attrs, half=True)
 
 
 def report_csv(result: ChartScore) -> bytes:
