@@ -261,6 +261,43 @@ def scenes_for(exp: PaperExperiment, level: float, quick: bool) -> dict[str, Sce
     return out
 
 
+_SHARED: dict = {}  # what forked workers inherit instead of receiving it pickled (the cubes are large)
+
+
+def _alternative(i: int):
+    exp, cubes = _SHARED["exp"], _SHARED["cubes"]
+    alt = exp.alternatives[i]
+    camera, processing = alt.camera(exp.base.camera, alt.name), alt.processing(exp.base.processing, alt.name)
+    return comparison(exp, cubes, camera, processing, light_scale=alt.light_scale)[0]
+
+
+def _one_thread():
+    import os
+
+    os.environ["SPECTRACAM_THREADS"] = "1"  # one process per core already
+
+
+def _alternatives(exp: PaperExperiment, cubes: dict) -> list[dict]:
+    """Every sensitivity alternative's comparison, in processes forked from this one (they share
+    the cubes; the same seeds, so the same numbers as one after the other), one per core."""
+    import multiprocessing
+    import os
+
+    _SHARED.update(exp=exp, cubes=cubes)
+    try:
+        jobs = range(len(exp.alternatives))
+        workers = min(len(jobs), int(os.environ.get("SPECTRACAM_THREADS") or os.cpu_count() or 1))
+        if workers < 2 or "fork" not in multiprocessing.get_all_start_methods():
+            return [_alternative(j) for j in jobs]
+        from concurrent.futures import ProcessPoolExecutor
+
+        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork"),
+                                 initializer=_one_thread) as ex:
+            return list(ex.map(_alternative, jobs))
+    finally:
+        _SHARED.clear()
+
+
 def run_paper(exp: PaperExperiment, renderer: str = "mitsuba", quick: bool = False, use_cache: bool = True,
               step=lambda msg: None, log=None, progress: bool = False) -> tuple[dict, dict, dict]:
     """Run the whole experiment; returns (results, cases, cubes).  ``step`` receives one line per step."""
@@ -292,9 +329,7 @@ def run_paper(exp: PaperExperiment, renderer: str = "mitsuba", quick: bool = Fal
     claims = evaluate(main)
     t = time.perf_counter()
     alt_results, alt_claims = {}, {}
-    for alt in exp.alternatives:
-        camera, processing = alt.camera(exp.base.camera, alt.name), alt.processing(exp.base.processing, alt.name)
-        r, _ = comparison(exp, cubes, camera, processing, light_scale=alt.light_scale)
+    for alt, r in zip(exp.alternatives, _alternatives(exp, cubes)):
         alt_results[alt.name] = {"reason": alt.reason, **r}
         alt_claims[alt.name] = evaluate(r)
         step(f"sensitivity: {alt.name}")
