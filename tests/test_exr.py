@@ -114,3 +114,17 @@ def test_radiance_attributes_are_typed_for_openimageio(written):
     types = {a.name: str(a.type) for a in spec.extra_attribs}
     assert types["spectracamSeed"] == types["spectracamSamplesPerPixel"] == "int"
     assert types["spectracamScene"] == types["spectracamRender"] == "string"  # nested: JSON text
+
+
+def test_inspect_lists_every_part_of_a_multi_part_file(tmp_path):
+    import OpenEXR
+
+    def header():
+        return {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+
+    parts = [OpenEXR.Part(header(), {"R": np.ones((4, 5), np.float32)}, name="first"),
+             OpenEXR.Part(header(), {"Z": np.zeros((4, 5), np.float32), "A": np.zeros((4, 5), np.float32)},
+                          name="depth")]
+    OpenEXR.File(parts).write(str(tmp_path / "mp.exr"))
+    text = describe(tmp_path / "mp.exr")
+    assert "this file has 2 parts" in text and "part 1 'depth': 5 x 4 pixels, channels A, Z" in text

@@ -196,7 +196,26 @@ def describe(path: str | Path) -> str:
     for n in order:
         c = channels[n]
         lines.append(f"  {n:<20} {c.min():>12.6g} {c.mean(dtype=np.float64):>12.6g} {c.max():>12.6g}")
+    lines += _other_parts(path)
     return "\n".join(lines)
+
+
+def _other_parts(path) -> list[str]:
+    """A multi-part file: every part after the first (shown above), by name, size and channels."""
+    import OpenEXR
+
+    try:
+        with _library_output_held():
+            parts = OpenEXR.File(str(path)).parts
+    except Exception:  # already read once above; a part list that cannot be read adds nothing
+        return []
+    if len(parts) < 2:
+        return []
+    out = [f"  this file has {len(parts)} parts; the statistics above are part 0's. The others:"]
+    for i, part in enumerate(parts[1:], start=1):
+        out.append(f"    part {i} {part.name()!r}: {part.width()} x {part.height()} pixels, channels "
+                   + ", ".join(sorted(part.channels)))
+    return out
 
 
 def layout_to_dict(layout) -> dict:
