@@ -9,7 +9,6 @@ out-of-range value raises :class:`ConfigError` naming the field, the value and w
 """
 from __future__ import annotations
 
-import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path

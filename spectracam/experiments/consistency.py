@@ -19,7 +19,6 @@ import numpy as np
 
 from ..camera import CameraSpec
 from ..color import ProcessingSpec
-from ..illuminant import IlluminantSpec
 from .claims import evaluate
 from .paper import PaperExperiment, calibrated_luminance, comparison, scenes_for
 

@@ -23,16 +23,15 @@ interpolated between the swept speeds (linearly in speed).
 """
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..camera import CAMERA_TABLES, photo_electron_rates
+from ..camera import photo_electron_rates
 from ..chart import WHITE_PATCH
-from ..errors import ConfigError, SpectracamError
+from ..errors import SpectracamError
 from ..exposure import exposure_times_s
 from ..metrics import delta_e, xyz_to_lab
 from ..reference import ChartReference
@@ -147,28 +146,11 @@ class MotionSpec(Spec):
                             zone_half_width_px=min(self.zone_half_width_px, 16.0))
 
 
-SCENE_KEYS = ("illuminant", "wavelengths", "chart", "render", *CAMERA_TABLES, "processing")
-
-
 def load_motion(sets=(), quick: bool = False):
-    """``(MotionSpec, Scene)`` from ``--set`` overrides (as :func:`spectracam.spatial.experiment.load_spatial`)."""
-    from ..overrides import apply_overrides
-    from ..scene import Scene
+    """``(MotionSpec, Scene)`` from ``--set`` overrides, as the spatial experiment reads them."""
+    from ..spatial.experiment import load_spec_and_scene
 
-    data = apply_overrides({}, sets)
-    own = {k: v for k, v in data.items() if not isinstance(v, dict)}
-    tables = {k: v for k, v in data.items() if isinstance(v, dict)}
-    for k in tables:
-        if k not in SCENE_KEYS:
-            raise ConfigError(k, tables[k], "unknown table; --set takes the experiment's keys ("
-                              + ", ".join(f.name for f in dataclasses.fields(MotionSpec)) + ") or the tables "
-                              + ", ".join(SCENE_KEYS), "--set")
-    spec = MotionSpec.from_dict(own, "--set")
-    if quick:
-        spec = spec.quick()
-        tables.setdefault("wavelengths", {"start_nm": 400, "stop_nm": 700, "step_nm": 20})
-    scene = Scene.from_dict(tables, "--set")
-    return spec, scene
+    return load_spec_and_scene(MotionSpec, sets, quick)
 
 
 def calibrated_scene(scene, spec: MotionSpec):

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..camera import CAMERA_TABLES, CameraSpec, band_weights, photo_electron_rates
-from ..color import DEMOSAIC_METHODS, ProcessingSpec
+from ..color import DEMOSAIC_METHODS
 from ..errors import ConfigError
 from ..metrics import delta_e, xyz_to_lab
 from ..reference import ChartReference
@@ -157,6 +157,13 @@ SCENE_KEYS = ("illuminant", "wavelengths", "chart", "render", *CAMERA_TABLES, "p
 def load_spatial(sets=(), quick: bool = False):
     """``(SpatialSpec, Scene)`` from ``--set`` overrides: top-level keys are the experiment's, tables
     (``illuminant``, ``wavelengths``, ``sensor``, ``optics``, ``filters``, ``processing``, …) the scene's."""
+    return load_spec_and_scene(SpatialSpec, sets, quick)
+
+
+def load_spec_and_scene(spec_cls, sets=(), quick: bool = False):
+    """``(spec_cls spec, Scene)`` from ``--set`` overrides (the spatial and the motion experiments):
+    top-level keys are the experiment's, tables the scene's; ``quick``: the spec's ``quick()`` and
+    20-nm bands."""
     from ..overrides import apply_overrides
     from ..scene import Scene
 
@@ -166,9 +173,9 @@ def load_spatial(sets=(), quick: bool = False):
     for k in tables:
         if k not in SCENE_KEYS:
             raise ConfigError(k, tables[k], "unknown table; --set takes the experiment's keys ("
-                              + ", ".join(f.name for f in dataclasses.fields(SpatialSpec)) + ") or the tables "
+                              + ", ".join(f.name for f in dataclasses.fields(spec_cls)) + ") or the tables "
                               + ", ".join(SCENE_KEYS), "--set")
-    spec = SpatialSpec.from_dict(own, "--set")
+    spec = spec_cls.from_dict(own, "--set")
     if quick:
         spec = spec.quick()
         tables.setdefault("wavelengths", {"start_nm": 400, "stop_nm": 700, "step_nm": 20})

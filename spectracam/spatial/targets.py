@@ -104,7 +104,7 @@ class SlantedEdge(Target):
         k = geometry.object_distance_mm / geometry.image_distance_mm
         s = geometry.pixel_pitch_mm / supersampling * k
         u, w = geometry.pixel_centres_mm(supersampling)
-        xa, xb = (u * k - s / 2)[None, :], (u * k + s / 2)[None, :]
+        xb = (u * k + s / 2)[None, :]
         ya, yb = (w * k - s / 2)[:, None], (w * k + s / 2)[:, None]
         width = s
 
