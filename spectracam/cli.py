@@ -46,6 +46,22 @@ class _Group(click.Group):
             sys.exit(e.exit_code)
         sys.exit(rv if isinstance(rv, int) else 0)
 
+    #: Commands that live with their stage, imported only when asked for (scipy, Mitsuba scenes):
+    #: the spatial comparison (issue 13) and motion (issue 14).
+    LAZY = {"spatial": ("spectracam.spatial.command", "spatial_cmd"),
+            "motion": ("spectracam.motion.command", "motion_cmd")}
+
+    def list_commands(self, ctx):
+        return sorted([*super().list_commands(ctx), *self.LAZY])
+
+    def get_command(self, ctx, name):
+        if name in self.LAZY:
+            import importlib
+
+            module, attr = self.LAZY[name]
+            return getattr(importlib.import_module(module), attr)
+        return super().get_command(ctx, name)
+
     def invoke(self, ctx):
         import signal
 
@@ -147,8 +163,7 @@ def capture_cmd(radiance_file: Path, out_dir: Path, arch, exposure, config_file,
 
     from .pipeline import check_cube_matches
 
-    cube, _ = read_radiance_exr(radiance_file)
-    cube.check(str(radiance_file))
+    cube, _ = read_radiance_exr(radiance_file)  # checked as it is read
     if "scene" not in cube.metadata:
         raise SpectracamError(f"file = {str(radiance_file)!r}: records no scene (spectracamScene), so the white "
                               "patch for exposure metering is unknown; render it with spectracam")
@@ -390,17 +405,6 @@ def inspect_cmd(file: Path):
 
     click.echo(describe(file))
 
-
-def _register_plugins() -> None:
-    """Commands that live with their stage: the spatial comparison (issue 13) and motion (issue 14)."""
-    from .motion.command import motion_cmd
-    from .spatial.command import spatial_cmd
-
-    main.add_command(spatial_cmd)
-    main.add_command(motion_cmd)
-
-
-_register_plugins()
 
 if __name__ == "__main__":
     main()

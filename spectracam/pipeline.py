@@ -35,7 +35,7 @@ def capture(cube: RadianceCube, camera: CameraSpec | None = None, seed: int | No
             scene: Scene | None = None, sensor: SensorSpec | None = None, design: str | None = None) -> RawCapture:
     """Capture a cube.  The camera, seed and chart default to those of ``scene`` (default: the scene
     the cube records); ``sensor`` and ``design`` (``"arch/scheme"``) replace the camera's parts."""
-    if cube.metadata.get("renderer") is None:  # not made by a renderer here: refuse garbage first
+    if cube.metadata.get("renderer") is None:  # made by hand, not rendered or read (both checked)
         cube.check()
     scene = scene or scene_of(cube)
     check_cube_matches(cube, scene)

@@ -157,16 +157,20 @@ def write_radiance_exr(path: str | Path, cube: RadianceCube) -> Path:
 
 
 def read_radiance_exr(path: str | Path) -> tuple[RadianceCube, dict]:
-    """Read a spectral EXR back into a :class:`RadianceCube` (bands sorted by wavelength) and its attributes."""
+    """Read a spectral EXR back into a :class:`RadianceCube` (bands sorted by wavelength) and its
+    attributes; a file is input from outside, so its radiance is checked (finite, ≥ 0) here."""
     channels, attrs = read_exr(path)
     bands = sorted((w, n) for n in channels if (w := parse_spectral_channel(n)) is not None)
     if not bands:
         raise SpectracamError(f"file = {str(path)!r}: has no spectral channels S0.<λ>nm; not a spectral EXR")
     cube = np.stack([channels[n] for _, n in bands], axis=-1)
-    meta = json.loads(attrs["spectracamRender"]) if "spectracamRender" in attrs else {}
-    if "spectracamScene" in attrs:
-        meta["scene"] = json.loads(attrs["spectracamScene"])
-    return RadianceCube(cube, np.array([w for w, _ in bands]), meta), attrs
+    try:
+        meta = json.loads(attrs["spectracamRender"]) if "spectracamRender" in attrs else {}
+        if "spectracamScene" in attrs:
+            meta["scene"] = json.loads(attrs["spectracamScene"])
+    except (ValueError, TypeError) as e:
+        raise SpectracamError(f"file = {str(path)!r}: a recorded attribute is damaged ({e})") from None
+    return RadianceCube(cube, np.array([w for w, _ in bands]), meta).check(str(path)), attrs
 
 
 def describe(path: str | Path) -> str:
