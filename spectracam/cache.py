@@ -18,6 +18,9 @@ from .io.exr import read_radiance_exr, write_radiance_exr
 from .render import render
 
 RENDER_TABLES = ("chart", "illuminant", "wavelengths", "image", "render")
+#: Bumped whenever a renderer's method changes what it writes for the same scene, so older entries
+#: are never served: 2 = Mitsuba renders light-weighted band-constant spectra (issue 17).
+RENDER_METHOD = 2
 
 
 def cache_dir() -> Path:
@@ -28,7 +31,7 @@ def render_key(scene, renderer: str) -> tuple[str, dict]:
     import mitsuba
 
     d = scene.to_dict()
-    ident = {"scene": {k: d[k] for k in RENDER_TABLES}, "renderer": renderer,
+    ident = {"scene": {k: d[k] for k in RENDER_TABLES}, "renderer": renderer, "method": RENDER_METHOD,
              "spectracam": __version__, "mitsuba": mitsuba.__version__ if renderer == "mitsuba" else None}
     text = json.dumps(ident, sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:32], ident

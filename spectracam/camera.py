@@ -47,12 +47,20 @@ class CaptureSpec(Spec):
     #: "physical" (prism: three sensors' patterns; field-sequential: one sensor's in all frames),
     #: "shared" or "independent" (the paper does not say how it modelled FPN across channels).
     fixed_pattern: str = "physical"
+    #: Exposure metering (paper 4.5: the white patch "near saturation"): the fraction of the full
+    #: well that the white patch's mean charge (photo + dark) reaches in the channel that meters the
+    #: exposure.  0.95: the paper's noise at the white (σ ≈ 0.4 % of q_max: shot 0.28 %, FPN bound
+    #: 0.29 %, quantisation 0.11 %) then clips no white pixel, and an FPN read as 1 % rms (σ ≈ 1.1 %)
+    #: clips fewer than 1 in 10⁴; at 1.0 (before issue 17) half the white pixels clipped, which cut
+    #: their noise and flattered SNR.  1.0 reproduces that reading.
+    white_fill: float = 0.95
 
     def validate(self) -> None:
         self.choice("architecture", ARCHITECTURES)
         self.choice("exposure", EXPOSURE_SCHEMES)
         self.choice("cfa_pattern", CFA_PATTERNS)
         self.choice("fixed_pattern", FIXED_PATTERN_CHOICES)
+        self.number("white_fill", 0.01, 1)
         if self.exposure != "single" and not ARCHITECTURES[self.architecture].independent_exposures:
             raise self.error("exposure", f"the {self.architecture} architecture has one exposure for all channels; "
                                          "use 'single'")

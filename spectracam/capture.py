@@ -53,7 +53,7 @@ def capture(cube, camera: CameraSpec, seed: int, metering_box: tuple[slice, slic
     arch = camera.capture.make_architecture()
     rates = SpectralRates(cube.radiance, band_weights(camera, cube.grid))  # computed in the sensor's pass
     white_rate = rates.mean(*metering_box)
-    times = exposure_times_s(camera.capture.exposure, white_rate, camera.sensor, arch)
+    times = exposure_times_s(camera.capture.exposure, white_rate, camera.sensor, arch, camera.capture.white_fill)
     digital, expected = arch.record(rates, times, camera.sensor, seed)
     return RawCapture(digital=digital, expected_e=expected, exposure_times_s=times,
                       capture_time_s=arch.capture_time_s(times), layout=arch.layout, camera=camera, seed=seed,

@@ -5,7 +5,9 @@
 ``optimal``  per-channel times, each channel reaches full well on the white patch;
 ``balanced`` the optimal ratios, scaled so the total capture time equals the single exposure time
              (for field-sequential: the three frames together take as long as one CFA exposure).
-"Saturate" counts dark electrons too: a channel is full when photo + dark charge = q_max.
+"Saturate" counts dark electrons too, and means "near saturation" (paper 4.5): a channel is metered
+full when its mean photo + dark charge on the white patch reaches ``white_fill·q_max`` (the
+``[capture]`` table's ``white_fill``, 0.95 by default, so the white's noise does not clip it).
 """
 from __future__ import annotations
 
@@ -40,8 +42,8 @@ def _balanced(saturation_s, architecture):
     return saturation_s * (saturation_s.min() / architecture.capture_time_s(saturation_s))
 
 
-def saturation_times_s(white_rate_e_per_s: np.ndarray, sensor: SensorSpec) -> np.ndarray:
-    """Time for each channel to fill the well on the white patch, photo + dark charge, s.  A channel
+def saturation_times_s(white_rate_e_per_s: np.ndarray, sensor: SensorSpec, white_fill: float = 1.0) -> np.ndarray:
+    """Time for each channel's mean photo + dark charge on the white patch to reach ``white_fill·q_max``, s.  A channel
     that receives no light, or whose well the dark current fills, has no meaningful exposure: one
     clear error."""
     white = np.asarray(white_rate_e_per_s, float)
@@ -53,15 +55,17 @@ def saturation_times_s(white_rate_e_per_s: np.ndarray, sensor: SensorSpec) -> np
             raise SpectracamError(f"exposure: channel {k}'s dark current ({sensor.dark_rate_e_per_s:g} e-/s) fills the "
                                   f"well faster than its light ({w:g} e-/s): less than {100 * MIN_PHOTO_SHARE:g} % of "
                                   "the charge would be signal; raise the light level or lower the dark current")
-    return sensor.q_max_e / (white + sensor.dark_rate_e_per_s)
+    return white_fill * sensor.q_max_e / (white + sensor.dark_rate_e_per_s)
 
 
-def exposure_times_s(scheme: str, white_rate_e_per_s: np.ndarray, sensor: SensorSpec, architecture) -> np.ndarray:
-    """Per-channel exposure times ``(3,)`` in seconds for the architecture under a scheme.
+def exposure_times_s(scheme: str, white_rate_e_per_s: np.ndarray, sensor: SensorSpec, architecture,
+                     white_fill: float = 1.0) -> np.ndarray:
+    """Per-channel exposure times ``(3,)`` in seconds for the architecture under a scheme, metered so
+    that the white's mean charge reaches ``white_fill`` of the full well.
 
     >>> from spectracam.architecture import make_architecture
     >>> s = SensorSpec(q_max_e=100.0, dark_current=False)
     >>> exposure_times_s("balanced", [100.0, 200.0, 50.0], s, make_architecture("fsc")).round(4).tolist()
     [0.1429, 0.0714, 0.2857]
     """
-    return EXPOSURE_SCHEMES[scheme](saturation_times_s(white_rate_e_per_s, sensor), architecture)
+    return EXPOSURE_SCHEMES[scheme](saturation_times_s(white_rate_e_per_s, sensor, white_fill), architecture)

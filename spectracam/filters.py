@@ -12,10 +12,10 @@ import numpy as np
 from .errors import ConfigError
 from .registry import Registry
 from .spec import Spec
+from .cameras import CAMERA_UNITS, CAMERAS, FROM_FILE
 from .spectra import WavelengthGrid, band_average, cmf_band_weights, tabulated
 
 CHANNELS = ("R", "G", "B")
-CAMERAS = ("Nikon 5100 (NPL)", "Sigma SDMerill (NPL)")
 #: Filter kinds: name → function ``(spec, grid) → (3, n_bands)`` band-averaged responsivities.
 FILTER_KINDS: Registry = Registry("filters.kind", "filter kind")
 #: Quantum-efficiency models: name → function ``spec → QE(λ)`` (a vectorised spectrum).
@@ -45,8 +45,17 @@ class FilterSpec(Spec):
     #: Gaussian filters: centres and full widths at half maximum for R, G, B, nm.
     centres_nm: tuple[float, float, float] = (610.0, 540.0, 460.0)
     fwhm_nm: tuple[float, float, float] = (60.0, 60.0, 60.0)
-    #: Measured camera sensitivities colour-science ships (normalised to a peak of 1).
+    #: A measured camera (``spectracam cameras`` lists them, with their gains' origin), or "file":
+    #: the curves of ``camera_file``, which a scene/config file names and which is read into
+    #: ``camera_curve_nm``/``camera_curve`` (the data are recorded, not the path).
     camera: str = "Nikon 5100 (NPL)"
+    camera_curve_nm: tuple = ()
+    #: rows of (R, G, B) sensitivities, one per wavelength of ``camera_curve_nm``
+    camera_curve: tuple = ()
+    #: Unit of ``camera_file``'s curves: "relative" (per unit radiant energy, arbitrary scale, gains
+    #: between channels as given; scaled to a peak of ``qe_peak`` electrons per photon), "A/W", or
+    #: "electrons_per_photon" (absolute: used as given).
+    camera_unit: str = "relative"
     #: "flat" or "silicon" (:data:`SILICON_QE_SHAPE`).
     qe: str = "flat"
     #: Peak quantum efficiency, electrons per photon.  The paper states none; 0.5 is typical of
@@ -69,7 +78,13 @@ class FilterSpec(Spec):
         self.numbers("cutoffs_nm", 2, 0, increasing=True, unit="nm")
         self.numbers("centres_nm", 3, 0, unit="nm")
         self.numbers("fwhm_nm", 3, 1e-3, unit="nm")
-        self.choice("camera", CAMERAS)
+        if self.camera != FROM_FILE:
+            self.choice("camera", (*CAMERAS, FROM_FILE))
+        self.choice("camera_unit", CAMERA_UNITS)
+        _check_camera_curve(self)
+        if self.kind == "camera" and self.qe != "flat":
+            raise self.error("qe", "measured camera curves already include the sensor's quantum efficiency; with "
+                                   "kind = 'camera' use qe = 'flat' (qe_peak sets the curves' peak)")
         self.choice("qe", QE_MODELS)
         self.number("qe_peak", 0, 1, lo_open=True)
         self.number("collection_depth_um", 0.01, 1000, unit="µm")
@@ -94,6 +109,37 @@ def check_curve(spec: Spec, wl_field: str, value_field: str, required: bool) -> 
         raise spec.error(value_field, "values must lie in [0, 1]", [min(v), max(v)])
     object.__setattr__(spec, wl_field, tuple(float(x) for x in wl))
     object.__setattr__(spec, value_field, tuple(float(x) for x in v))
+
+
+def _check_camera_curve(spec: FilterSpec) -> None:
+    """``camera = "file"`` needs curves (wavelengths and rows of R, G, B), and curves need it."""
+    wl, rows = spec.camera_curve_nm, spec.camera_curve
+    if spec.camera != FROM_FILE:
+        if wl or rows:
+            raise spec.error("camera_curve", f"curves are given, so filters.camera must be {FROM_FILE!r}", "…")
+        return
+    if not wl:
+        raise spec.error("camera", "needs filters.camera_file (a CSV: wavelength nm, R, G, B)")
+    try:
+        w = np.asarray(wl, float)
+        a = np.asarray(rows, float)
+        ok = w.ndim == 1 and a.shape == (w.size, 3) and w.size >= 2
+    except (TypeError, ValueError):
+        ok = False
+    if not ok or not np.all(np.isfinite(w)) or not np.all(np.isfinite(a)) or np.any(np.diff(w) <= 0) or np.any(a < 0):
+        raise spec.error("camera_curve", "must be ≥ 2 increasing wavelengths (nm), each with 3 finite "
+                                         "sensitivities ≥ 0 (R, G, B)", "…")
+    object.__setattr__(spec, "camera_curve_nm", tuple(w.tolist()))
+    object.__setattr__(spec, "camera_curve", tuple(tuple(r) for r in a.tolist()))
+    if spec.camera_unit != "relative":  # absolute curves: no photodiode gives more than 1 electron a photon
+        from .cameras import to_electrons_per_photon
+
+        qe = to_electrons_per_photon(w, a, spec.camera_unit, spec.qe_peak)
+        if qe.max() > 1.0:
+            i, k = np.unravel_index(int(np.argmax(qe)), qe.shape)
+            raise spec.error("camera_unit", f"the curves in this unit mean {qe.max():.3g} electrons per photon "
+                                            f"({'RGB'[k]} at {w[i]:g} nm); a quantum efficiency is ≤ 1 — is the unit "
+                                            "'relative'?")
 
 
 def load_curve(path, what: str) -> tuple[tuple, tuple]:
@@ -185,17 +231,21 @@ def _gaussian_transmittance(spec: FilterSpec, k: int):
     return lambda lam: np.exp(-0.5 * ((lam - c) / sigma) ** 2)
 
 
-def _camera_transmittance(spec: FilterSpec, k: int):
-    """colour-science's measured sensitivities of ``camera``, scaled so the largest value is 1."""
-    import colour
-
-    msds = colour.MSDS_CAMERA_SENSITIVITIES[spec.camera]
-    values = np.asarray(msds.values, float)
-    return tabulated(msds.wavelengths, values[:, k] / values.max())
-
-
 FILTER_KINDS.register("gaussian", _smooth(_gaussian_transmittance))
-FILTER_KINDS.register("camera", _smooth(_camera_transmittance))
+
+
+@FILTER_KINDS.register("camera")
+def _camera(spec: FilterSpec, grid: WavelengthGrid) -> np.ndarray:
+    """A measured camera's responsivities in electrons per photon with the channels' true gains
+    (:mod:`spectracam.cameras`), times the IR-cut filter if one is added; the curves must cover
+    the scene's bands."""
+    from .cameras import camera_curves_of, check_covers
+
+    wl, R, what = camera_curves_of(spec)
+    check_covers(spec, wl, float(grid.edges_nm[0]), float(grid.edges_nm[-1]), what)
+    cut = ir_cut(spec)
+    return np.stack([band_average(lambda lam, k=k: tabulated(wl, R[:, k])(lam) * (1.0 if cut is None else cut(lam)),
+                                  grid, 400) for k in range(3)])
 
 
 def _block_responsivity(spec: FilterSpec, grid: WavelengthGrid, k: int) -> np.ndarray:

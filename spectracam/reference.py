@@ -16,7 +16,7 @@ import numpy as np
 from .camera import CameraSpec, photo_electron_rates
 from .chart import WHITE_PATCH, ChartSpec, patch_boxes, patch_reflectances
 from .illuminant import IlluminantSpec, spectral_irradiance
-from .spectra import K_M_LM_PER_W, WavelengthGrid, band_average, cie_1931_cmfs
+from .spectra import WavelengthGrid, band_average, cie_1931_cmfs
 
 #: Wavelength step of the reference colorimetry, nm: fine enough that the XYZ of every patch is
 #: converged (0.1 nm and 1 nm differ by < 1e-4 ΔE*ab), whatever the scene's band width.
@@ -85,16 +85,18 @@ class ChartReference:
 
 def colorimetry(chart: ChartSpec, illuminant: IlluminantSpec, lo_nm: float, hi_nm: float):
     """``(patch XYZ (24, 3), white XYZ (3,))`` of the chart over ``[lo_nm, hi_nm]``: the CIE 1931
-    integrals ``683·∫(E·S/π)·x̄ȳz̄ dλ / L_w`` (Y = 1 for a perfect white diffuser; white Y = 1),
-    by the trapezoid rule at :data:`XYZ_STEP_NM` — the scene's colour, independent of its bands."""
+    integrals ``∫(E·S/π)·x̄ȳz̄ dλ / ∫(E/π)·ȳ dλ``, numerator and denominator over the same range, so
+    a perfect white diffuser has Y = 1 exactly (the white's Y = 1) — the scene's colour as the
+    camera sees it (it sees only the scene's range), by the trapezoid rule at :data:`XYZ_STEP_NM`,
+    independent of the bands.  (Before issue 17 the white was integrated over 360–830 nm, so a
+    perfect white read Y = 0.9989–0.9996 on a 400–700 nm scene.)"""
     lam = np.linspace(lo_nm, hi_nm, int(round((hi_nm - lo_nm) / XYZ_STEP_NM)) + 1)
     wl, cmfs = cie_1931_cmfs()
     xyz_bar = np.stack([np.interp(lam, wl, cmfs[:, k]) for k in range(3)], axis=-1)  # (n, 3)
     white_radiance = spectral_irradiance(illuminant)(lam) / np.pi
     rho = np.stack([r(lam) for _, r in patch_reflectances(chart)])  # (24, n)
-    scale = K_M_LM_PER_W / illuminant.white_luminance_cd_m2
-    patches = np.trapezoid((rho * white_radiance)[:, :, None] * xyz_bar[None], lam, axis=1) * scale
     white = np.trapezoid(white_radiance[:, None] * xyz_bar, lam, axis=0)
+    patches = np.trapezoid((rho * white_radiance)[:, :, None] * xyz_bar[None], lam, axis=1) / white[1]
     return patches, white / white[1]
 
 

@@ -183,8 +183,9 @@ CURVE_FILES = (("filters", "qe_file", "qe_curve_nm", "qe_curve"),
 
 
 def resolve_curve_files(data: dict, base_dir: Path) -> dict:
-    """Replace ``filters.qe_file`` / ``optics.transmittance_file`` by the curves they hold, so the
-    scene (and every file made from it) records the data, not a path (``qe = "data"`` is implied)."""
+    """Replace ``filters.qe_file`` / ``optics.transmittance_file`` / ``filters.camera_file`` by the
+    curves they hold, so the scene (and every file made from it) records the data, not a path
+    (``qe = "data"``, respectively ``kind = "camera"`` and ``camera = "file"``, are implied)."""
     from .filters import load_curve
 
     data = dict(data)
@@ -199,6 +200,18 @@ def resolve_curve_files(data: dict, base_dir: Path) -> dict:
             if table == "filters":
                 t.setdefault("qe", "data")
             data[table] = t
+    t = data.get("filters")
+    if isinstance(t, dict) and "camera_file" in t:  # a camera's curves: wavelength, R, G, B
+        from .cameras import FROM_FILE, load_camera_csv
+
+        t = dict(t)
+        path = t.pop("camera_file")
+        if not isinstance(path, str):
+            raise ConfigError("filters.camera_file", path, "must be a path to a CSV file (wavelength nm, R, G, B)")
+        t["camera_curve_nm"], t["camera_curve"] = load_camera_csv(Path(base_dir) / path)
+        t["camera"] = FROM_FILE
+        t.setdefault("kind", "camera")
+        data["filters"] = t
     return data
 
 
@@ -213,3 +226,16 @@ def load_scene(path: str | Path, overrides=()) -> Scene:
 def load_camera_config(path: str | Path, base: CameraSpec | None = None) -> CameraSpec:
     """Read a camera config file (the scene file's camera tables only), over ``base``."""
     return CameraSpec.from_dict(read_toml(path, "config file"), source=str(path), base=base)
+
+
+def shipped_scene_file(name: str) -> Path:
+    """A scene file shipped with spectracam (``spectracam/scenes/NAME``, or the checkout's ``scenes/``)."""
+    from importlib.resources import files
+
+    shipped = files("spectracam") / "scenes" / name
+    if shipped.is_file():
+        return Path(str(shipped))
+    here = Path(__file__).resolve().parent.parent / "scenes" / name
+    if not here.is_file():
+        raise ConfigError("scene", name, "not shipped with this installation")
+    return here

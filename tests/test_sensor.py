@@ -10,6 +10,7 @@ from spectracam.camera import CameraSpec, CaptureSpec
 from spectracam.camera import photo_electron_rates as _rates
 from spectracam.capture import capture as capture_stage
 from spectracam.errors import ConfigError
+from spectracam.reference import ChartReference
 from spectracam.exposure import exposure_times_s
 from spectracam.filters import FilterSpec, responsivities
 from spectracam.optics import OpticsSpec, irradiance_factor
@@ -157,6 +158,27 @@ def test_exposure_rules():
     assert prism.capture_time_s(exposure_times_s("balanced", white, s, prism)) == pytest.approx(single[0])
     with pytest.raises(ConfigError, match="capture.exposure = 'optimal': the cfa architecture has one exposure"):
         CaptureSpec("cfa", "optimal")
+    # "near saturation" (paper 4.5): every time scales with the metered fill
+    np.testing.assert_allclose(exposure_times_s("optimal", white, s, fsc, 0.9), 0.9 * sat)
+    for bad in (0.0, 1.01, float("nan")):
+        with pytest.raises(ConfigError, match="capture.white_fill"):
+            CaptureSpec(white_fill=bad)
+
+
+@pytest.mark.parametrize("fill, clipped_lo, clipped_hi", [(1.0, 0.4, 0.95), (0.95, 0.0, 0.0)])
+def test_white_metered_near_saturation_does_not_clip(scene_5000, analytic_5000, fill, clipped_lo, clipped_hi):
+    """With the paper's noise (FPN as a bound) the white metered at full well clips most of its
+    pixels (80 % at this seed: the flooring ADC reads a full well as the top code); metered at 95 % (the default) none."""
+    from spectracam.experiments.paper import load_experiment
+    from spectracam.scene import shipped_scene_file
+
+    paper_camera = load_experiment(shipped_scene_file("paper.toml")).base.camera
+    cam = paper_camera.replace(capture=paper_camera.capture.replace(white_fill=fill)).with_design("prism/optimal")
+    raw = capture(analytic_5000, cam, seed=3, scene=scene_5000)
+    r, c = ChartReference.of(scene_5000).white_box
+    top = 2 ** cam.sensor.adc_bits - 1
+    share = float(np.mean(raw.digital[:, r, c] >= top))
+    assert clipped_lo <= share <= clipped_hi, share
 
 
 def test_optimal_prism_and_fsc_have_identical_expected_electrons(scene_5000, analytic_5000):
@@ -166,8 +188,8 @@ def test_optimal_prism_and_fsc_have_identical_expected_electrons(scene_5000, ana
     from spectracam.chart import patch_masks
 
     white = patch_masks(scene_5000.chart, 160, 120)[18]
-    # each channel's white-patch mean reaches full well (photo + dark)
-    np.testing.assert_allclose(p.expected_e[:, white].mean(axis=1), 131072.0, rtol=1e-5)
+    # each channel's white-patch mean reaches the metered fill of the well, 95 % (photo + dark)
+    np.testing.assert_allclose(p.expected_e[:, white].mean(axis=1), 0.95 * 131072.0, rtol=1e-5)
     assert p.capture_time_s == pytest.approx(p.exposure_times_s.max())
     assert f.capture_time_s == pytest.approx(f.exposure_times_s.sum())
 

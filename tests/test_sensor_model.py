@@ -98,11 +98,12 @@ def test_qe_and_transmittance_from_files(tmp_path):
 
 
 def test_the_default_camera_recovers_its_electrons():
-    # metering ignores the black level: the white patch still fills the well
+    # metering ignores the black level: the white patch's mean charge still reaches white_fill of the well
     scene = small_scene()
     raw = capture(render(scene, "analytic"), design="prism/optimal", scene=scene)
     from spectracam import ChartReference
 
     r, c = ChartReference.of(scene).white_box
-    np.testing.assert_allclose(raw.expected_e[:, r, c].mean(axis=(1, 2)), 131072.0, rtol=1e-5)
+    assert scene.camera.capture.white_fill == 0.95
+    np.testing.assert_allclose(raw.expected_e[:, r, c].mean(axis=(1, 2)), 0.95 * 131072.0, rtol=1e-5)
     assert responsivities(FilterSpec(), GRID).shape == (3, len(GRID))

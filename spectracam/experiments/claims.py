@@ -31,7 +31,7 @@ def evaluate(r: dict) -> list[dict]:
         green_top = all(np.argmax(x) == 1 for x in resp)
         tops = ", ".join(f"{t} K: {'RGB'[int(np.argmax(x))]}" for t, x in zip(T, resp))
         add("fig4-green", "CFA, one exposure: only green responds optimally (saturates) under every illuminant",
-            "green highest from 3000 to 7000 K", f"channel at full well — {tops}", green_top, green_top,
+            "green highest from 3000 to 7000 K", f"channel that meters the exposure (reaches the metered fill first) — {tops}", green_top, green_top,
             "" if green_top else "the channel that fills the well first is not green under every illuminant: with "
             "block filters and a QE that does not fall into the red, red collects more photons than green under "
             "warm light (a shallow photodiode, whose QE falls into the red, reproduces the claim)")

@@ -168,14 +168,14 @@ def load_experiment(path: str | Path, overrides=()) -> PaperExperiment:
 
 def calibrated_luminance(exp: PaperExperiment, camera: CameraSpec) -> float:
     """White-diffuser luminance at which cfa/single needs ``cfa_exposure_ms`` at the calibration
-    temperature: rates scale with the level, so solve q_max = (level/L₁·w₁ + dark)·T in closed form."""
+    temperature: rates scale with the level, so solve white_fill·q_max = (level/L₁·w₁ + dark)·T in closed form."""
     if exp.white_luminance_cd_m2 is not None:
         return exp.white_luminance_cd_m2
     ref = exp.base.replace(illuminant=IlluminantSpec("blackbody", exp.calibration_temperature_K, None, 100.0))
     white = ChartReference.of(ref).patch_rates(camera)[WHITE_PATCH]
     s = camera.sensor
     T = exp.cfa_exposure_ms * 1e-3
-    need = s.q_max_e / T - s.dark_rate_e_per_s
+    need = camera.capture.white_fill * s.q_max_e / T - s.dark_rate_e_per_s
     if need <= 0:
         raise SpectracamError(f"light.cfa_exposure_ms = {exp.cfa_exposure_ms:g}: dark current alone fills the well "
                               "sooner; choose a shorter exposure")
