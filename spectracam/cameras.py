@@ -58,10 +58,11 @@ class PublishedMatrix:
         return n / n[1]
 
 
-#: Published matrices, ×10⁴ as tabulated (the numbers carry over; nothing else does).  Each appears
-#: identically in dcraw's ``adobe_coeff`` table (D. Coffin, dcraw.c, rev. 1.477), LibRaw's
-#: ``src/tables/colordata.cpp`` and darktable's ``src/external/adobe_coeff.c``: Adobe DNG Converter's
-#: ColorMatrix2 (D65) for the camera.
+#: Published matrices, ×10⁴ as tabulated (the numbers carry over; nothing else does).  The Canon's and
+#: the Nikon's appear identically in dcraw's ``adobe_coeff`` table (D. Coffin, dcraw.c, rev. 1.477),
+#: LibRaw's ``src/tables/colordata.cpp`` and darktable's ``src/external/adobe_coeff.c``: Adobe DNG
+#: Converter's ColorMatrix2 (D65) for the camera (the Canon's also as decimals in colour-hdri's test of
+#: a real 5D Mark II DNG; RawTherapee's camconst.json has -7799 for its fourth number since 2021).
 PUBLISHED_MATRICES = {
     "Canon EOS 5D Mark II": PublishedMatrix(
         "Canon EOS 5D Mark II", (4716, 603, -830, -7798, 15474, 2480, -1496, 1937, 6651),
@@ -71,6 +72,16 @@ PUBLISHED_MATRICES = {
         "Nikon D5100", (8198, -2239, -724, -4871, 12389, 2798, -1043, 2050, 7181),
         "Adobe DNG Converter ColorMatrix2 (D65), as tabulated ×10⁴ in dcraw's adobe_coeff, LibRaw "
         "src/tables/colordata.cpp and darktable src/external/adobe_coeff.c"),
+    # Adobe publishes no matrix for any Foveon Merrill; LibRaw's own (its colordata.cpp, "Merrills + SD1",
+    # tagged /* LibRaw */, since LibRaw 0.16, 2013: one matrix for the SD1, SD1 Merrill and DP1-3 Merrill)
+    # is the published reference used.  It puts the white's bottom (R) and middle (G) layers 1.9 and 0.8
+    # stops below the top (B), as J. Kasson measured on dpreview's DP1 Merrill raw of a white patch
+    # ("Why Foveon images are so noisy", blog.kasson.com: middle a bit less than a stop below the top,
+    # bottom about two).
+    "Sigma SD1 Merrill": PublishedMatrix(
+        "Sigma SD1 Merrill", (5133, -1895, -353, 4978, 744, 144, 3837, 3069, 2777),
+        "LibRaw's own matrix (src/tables/colordata.cpp, 'Merrills + SD1', tagged LibRaw; Adobe publishes none "
+        "for the Merrills); consistent with J. Kasson's layer ratios measured on a DP1 Merrill raw of a white"),
 }
 
 
@@ -129,7 +140,7 @@ _LIBRARY = {
     "Nikon 5100 (NPL)": (lambda: _colour_dataset("Nikon 5100 (NPL)"), _NPL, "each channel to a peak of 1",
                          "Nikon D5100", True),
     "Sigma SDMerill (NPL)": (lambda: _colour_dataset("Sigma SDMerill (NPL)"), _NPL, "each channel to a peak of 1",
-                             None, True),
+                             "Sigma SD1 Merrill", True),
     "Canon EOS 5D Mark II (rawtoaces)": (
         _rawtoaces_canon, "Academy rawtoaces, CANON_EOS_5DMark_II_RGB_Sensitivities.csv (shipped by colour-science, "
         "colour/characterisation/datasets/rawtoaces)", "relative gains kept (G peak 1)", "Canon EOS 5D Mark II",
@@ -272,11 +283,7 @@ def library_table() -> list[dict]:
     rows = []
     for name in CAMERAS:
         c = library_curves(name)
-        try:
-            gains = c.gains_note
-            usable = True
-        except ConfigError:
-            gains, usable = "lost (each channel normalised) and no published reference: refused", False
+        gains, usable = c.gains_note, not (c.per_channel and c.matrix is None)
         m = PUBLISHED_MATRICES.get(c.matrix) if c.matrix else None
         rows.append({"name": name, "range_nm": list(c.range_nm), "unit": c.unit, "normalisation": c.normalisation,
                      "gains": gains, "usable": usable, "published_matrix": m.model if m else None,

@@ -40,21 +40,29 @@ class RawCapture:
     seed: int
     metered_rate_e_per_s: np.ndarray | None = None
     scene: dict | None = None
+    #: How the white was metered when not on a chart scene's white patch (spectracam.metering).
+    metering: dict | None = None
 
     @property
     def design(self) -> str:
         return self.camera.design
 
 
-def capture(cube, camera: CameraSpec, seed: int, metering_box: tuple[slice, slice]) -> RawCapture:
+def capture(cube, camera: CameraSpec, seed: int, metering_box: tuple[slice, slice] | None = None, *,
+            white_radiance: np.ndarray | None = None, metering: dict | None = None) -> RawCapture:
     """Capture a :class:`~spectracam.render.RadianceCube` with ``camera``; exposure is metered on
-    the mean rates of the pixels in ``metering_box`` (the white patch, paper 4.5); ``seed`` fixes
-    every random draw (fixed pattern and temporal noise)."""
+    the mean rates of the pixels in ``metering_box`` (the white patch, paper 4.5) or, for any other
+    white (:mod:`spectracam.metering`), on the rates of its radiance ``white_radiance`` ``(B,)``,
+    recorded as ``metering``; ``seed`` fixes every random draw (fixed pattern and temporal noise)."""
     arch = camera.capture.make_architecture()
-    rates = SpectralRates(cube.radiance, band_weights(camera, cube.grid))  # computed in the sensor's pass
-    white_rate = rates.mean(*metering_box)
+    weights = band_weights(camera, cube.grid)
+    rates = SpectralRates(cube.radiance, weights)  # computed in the sensor's pass
+    if white_radiance is not None:
+        white_rate = np.asarray(white_radiance, np.float64) @ weights.astype(np.float64)
+    else:
+        white_rate = rates.mean(*metering_box)
     times = exposure_times_s(camera.capture.exposure, white_rate, camera.sensor, arch, camera.capture.white_fill)
     digital, expected = arch.record(rates, times, camera.sensor, seed)
     return RawCapture(digital=digital, expected_e=expected, exposure_times_s=times,
                       capture_time_s=arch.capture_time_s(times), layout=arch.layout, camera=camera, seed=seed,
-                      metered_rate_e_per_s=white_rate, scene=cube.metadata.get("scene"))
+                      metered_rate_e_per_s=white_rate, scene=cube.metadata.get("scene"), metering=metering)

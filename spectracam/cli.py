@@ -152,30 +152,83 @@ def _write_capture(out_dir: Path, raw, scene) -> list[Path]:
 
 @main.command("capture")
 @click.argument("radiance_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
-@_output("Directory to write raw.exr and raw.dng into.")
+@_output("Directory to write raw.exr and raw.dng into (and rendered.exr/.png for a spectral image from another tool).")
 @_camera_options
+@click.option("--white", default=None, metavar="patch|brightest|X0,Y0,X1,Y1|L",
+              help="Where exposure is metered: the chart's white patch (spectracam scenes' default), the brightest "
+                   "neutral (other files' default), a pixel region, or a white luminance L in cd/m² under the "
+                   "scene illuminant.")
+@click.option("--units", default=None, metavar="UNIT",
+              help="Radiance unit of a spectral EXR that states none (emissiveUnits), e.g. W.m^-2.sr^-1 (per nm).")
 @_set_option
 @_quiet_option
-def capture_cmd(radiance_file: Path, out_dir: Path, arch, exposure, config_file, seed, sets, quiet):
-    """Capture a spectral RADIANCE_FILE with a simulated sensor; write DIR/raw.exr and DIR/raw.dng."""
+def capture_cmd(radiance_file: Path, out_dir: Path, arch, exposure, config_file, seed, white, units, sets, quiet):
+    """Capture a spectral RADIANCE_FILE (spectracam's, or a Fichet-layout EXR from any tool) with a simulated
+    sensor; write DIR/raw.exr and DIR/raw.dng."""
     from .io.exr import read_radiance_exr
-    from .pipeline import capture
+    from .metering import parse_white
+    from .pipeline import capture, check_cube_matches, stand_in_scene
 
-    from .pipeline import check_cube_matches
+    white_spec = parse_white(white) if white is not None else None  # checked before the file is read
+    cube, _ = read_radiance_exr(radiance_file, units)  # checked as it is read
+    log = _log(quiet)
+    flags = _flag_overrides(arch=arch, exposure=exposure)
+    if "scene" in cube.metadata:
+        scene = _scene(cube.metadata["scene"], str(radiance_file), config_file, flags, sets)
+        check_cube_matches(cube, scene, str(radiance_file))
+    else:
+        from .pipeline import STAND_IN_SCENE
 
-    cube, _ = read_radiance_exr(radiance_file)  # checked as it is read
-    if "scene" not in cube.metadata:
-        raise SpectracamError(f"file = {str(radiance_file)!r}: records no scene (spectracamScene), so the white "
-                              "patch for exposure metering is unknown; render it with spectracam")
-    scene = _scene(cube.metadata["scene"], str(radiance_file), config_file, _flag_overrides(arch=arch, exposure=exposure),
-                   sets)
-    check_cube_matches(cube, scene, str(radiance_file))
+        scene = _scene(dict(STAND_IN_SCENE), str(radiance_file), config_file, flags, sets)
+        cube, _ = stand_in_scene(cube, {k: v for k, v in scene.to_dict().items() if k != "wavelengths"},
+                                 str(radiance_file))
+        scene = _scene({**scene.to_dict(), "wavelengths": {"centres_nm": list(cube.wavelengths_nm)}},
+                       str(radiance_file))
+        if "bands_dropped_outside_nm" in cube.metadata:
+            lo, hi = cube.metadata["bands_dropped_outside_nm"]
+            log(f"{radiance_file}: bands outside {lo:g}–{hi:g} nm dropped (the chart the conversion is fitted on has "
+                "no reflectance data there)")
     _check_writable(out_dir)
-    raw = capture(cube, seed=seed, scene=scene)
+    if "scene" in cube.metadata:
+        raw = capture(cube, seed=seed, scene=scene, white=white_spec)
+    else:
+        raw = _capture_foreign(cube, scene, seed, white_spec)
     paths = _write_capture(out_dir, raw, scene)
+    if raw.scene is None:
+        paths += _write_display(out_dir, raw, scene)
+        log(f"{radiance_file} records no spectracam chart scene: ΔE per patch and SNR are skipped (no chart truth); "
+            f"exposure metered on {raw.metering['kind']} white; rendered through the conversion fitted on the "
+            f"{scene.chart.dataset} chart under {scene.illuminant.label}")
     times = ", ".join(f"{c} {1e3 * t:.2f} ms" for c, t in zip("RGB", raw.exposure_times_s))
-    _log(quiet)(f"{raw.design}: exposures {times}; capture time {1e3 * raw.capture_time_s:.2f} ms")
-    _log(quiet)("wrote " + ", ".join(map(str, paths)))
+    log(f"{raw.design}: exposures {times}; capture time {1e3 * raw.capture_time_s:.2f} ms")
+    log("wrote " + ", ".join(map(str, paths)))
+
+
+def _capture_foreign(cube, scene, seed, white_spec):
+    """A spectral image with no spectracam scene, captured by ``scene``'s camera, metered on ``white_spec``."""
+    from .capture import capture as capture_stage
+    from .metering import metered_radiance, parse_white
+
+    white_spec = white_spec or parse_white("brightest")
+    if white_spec.kind == "patch":
+        metered_radiance(cube, white_spec, None)  # the one-line refusal: no white patch here
+    seed = scene.render.seed if seed is None else seed
+    return capture_stage(cube, scene.camera, seed, white_radiance=metered_radiance(cube, white_spec, scene),
+                         metering=white_spec.to_dict())
+
+
+def _write_display(out_dir: Path, raw, scene) -> list[Path]:
+    """rendered.exr and rendered.png of a capture without a chart truth (no score)."""
+    from .io.report import srgb_preview, write_display_exr, write_png
+    from .reference import ChartReference
+    from .score import display_rgb
+
+    rgb, M = display_rgb(raw, ChartReference.of(scene), scene.processing)
+    params = {"scene": None, "conversion_fitted_on": scene.to_dict(), "camera": raw.camera.to_dict(),
+              "processing": scene.processing.to_dict(), "seed": raw.seed, "metering": raw.metering,
+              "conversion_matrix": M.tolist()}
+    return [write_display_exr(out_dir / "rendered.exr", rgb.astype("float32"), params),
+            write_png(out_dir / "rendered.png", srgb_preview(rgb, scene.processing.display))]
 
 
 def _score_and_write(raw, scene, out_dir: Path, log):
@@ -317,6 +370,53 @@ def emva_cmd(out_dir, scene_file, config_file, channel, wavelength_nm, seed, set
     num = lambda x: "–" if x is None else f"{x:.5g}"  # noqa: E731
     for k, v in result["measured"].items():
         log(f"  {k:<26} configured {num(result['configured'][k]):>10}   measured {num(v):>10}")
+    log("wrote " + ", ".join(str(p) for p in paths if p.suffix != ".svg"))
+
+
+@main.command("cameras")
+@click.option("--json", "as_json", is_flag=True, help="Print the library as JSON instead of a table.")
+def cameras_cmd(as_json: bool):
+    """List the measured cameras filters.camera can name: range, source, normalisation and how their channels'
+    gains were obtained (filters.camera_file takes any other camera's curves)."""
+    import json
+
+    from .cameras import library_table
+
+    rows = library_table()
+    if as_json:
+        click.echo(json.dumps(rows, indent=1))
+        return
+    for r in rows:
+        click.echo(f"{r['name']}{'' if r['usable'] else '   [refused: gains unknown]'}")
+        click.echo(f"    range {r['range_nm'][0]:g}–{r['range_nm'][1]:g} nm, {r['unit']} (per unit energy); "
+                   f"{r['normalisation']}")
+        click.echo(f"    gains: {r['gains']}")
+        if r["published_matrix"]:
+            click.echo(f"    published XYZ(D65)→camera matrix: {r['published_matrix']} ({r['matrix_source']})")
+        click.echo(f"    source: {r['source']}")
+    click.echo("Own curves: filters.camera_file = \"curves.csv\" (wavelength nm, R, G, B) with filters.camera_unit = "
+               "relative | A/W | electrons_per_photon.")
+
+
+@main.command("validate")
+@_output("Directory to write validate.json, validate.md and validate.png/.svg into.")
+@_renderer_option
+@_quiet_option
+def validate_cmd(out_dir, renderer, quiet):
+    """Check every shipped camera with a published XYZ(D65)→camera matrix: the simulated white's R/G and B/G against
+    the matrix's neutral, and ΔE*ab of the published matrix on the simulated raw (beside a least-squares fit's)."""
+    from .experiments.validate import run_validate, write_validate_outputs
+
+    _check_writable(out_dir)
+    result = run_validate(renderer)
+    paths = write_validate_outputs(out_dir, result, f"spectracam validate -o {out_dir} --renderer {renderer}")
+    log = _log(quiet)
+    for r in result["cameras"]:
+        log(f"  {r['camera']}: white R/G {r['white_RG_simulated']:.3f} (published {r['white_RG_published']:.3f}, "
+            f"{r['white_RG_error_percent']:+.1f} %), B/G {r['white_BG_simulated']:.3f} (published "
+            f"{r['white_BG_published']:.3f}, {r['white_BG_error_percent']:+.1f} %); ΔE*ab with the published matrix "
+            f"{r['delta_e_published_mean']:.2f} mean / {r['delta_e_published_max']:.2f} max (LS fit, training: "
+            f"{r['delta_e_fit_mean']:.2f} / {r['delta_e_fit_max']:.2f})")
     log("wrote " + ", ".join(str(p) for p in paths if p.suffix != ".svg"))
 
 

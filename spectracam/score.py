@@ -151,6 +151,28 @@ def check_raw(raw: RawCapture) -> None:
         raise SpectracamError(f"capture: exposure times must be three finite times > 0 s; got {t.tolist()}")
 
 
+def conversion_matrix(reference: ChartReference, camera, processing: ProcessingSpec) -> np.ndarray:
+    """The 3×3 colour conversion (paper 3.5): least squares from the chart's noise-free camera rates
+    to the display RGB that shows the chart's XYZ carried to the display's white."""
+    M_disp = display_rgb_to_xyz(processing.display)
+    to_display_xyz = adaptation_matrix(reference.white_xyz, M_disp.sum(axis=1), processing.adaptation)
+    target_rgb = reference.patch_xyz @ to_display_xyz.T @ np.linalg.inv(M_disp).T
+    return fit_conversion(reference.patch_rates(camera), target_rgb)
+
+
+def display_rgb(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec) -> tuple[np.ndarray, np.ndarray]:
+    """``(rendered (H, W, 3) linear display RGB, conversion matrix)``: demosaicked, exposure-normalised
+    rates through the conversion fitted on ``reference`` (which need not be the captured scene: a
+    spectral image from another tool is shown through the chart's conversion)."""
+    M = conversion_matrix(reference, raw.camera, processing)
+    rgb = camera_rates(raw, processing)
+    for i in range(0, rgb.shape[0], 256):  # in place, a band of rows at a time: no second full-size image
+        rgb[i:i + 256] = rgb[i:i + 256] @ M
+    if processing.gamut_clip:
+        np.clip(rgb, 0.0, 1.0, out=rgb)
+    return rgb, M
+
+
 def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec,
           delta_e_reference: str = "scene") -> ChartScore:
     """Render a capture on the display and score it against the chart reference (see the module
@@ -173,15 +195,7 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
     chart_rates = reference.patch_rates(camera)
     M_disp = display_rgb_to_xyz(processing.display)
     display_white = M_disp.sum(axis=1)
-    to_display_xyz = adaptation_matrix(reference.white_xyz, display_white, processing.adaptation)
-    target_rgb = reference.patch_xyz @ to_display_xyz.T @ np.linalg.inv(M_disp).T
-    M = fit_conversion(chart_rates, target_rgb)
-
-    rgb = camera_rates(raw, processing)
-    for i in range(0, h, 256):  # in place, a band of rows at a time: no second full-size image
-        rgb[i:i + 256] = rgb[i:i + 256] @ M
-    if processing.gamut_clip:
-        np.clip(rgb, 0.0, 1.0, out=rgb)
+    rgb, M = display_rgb(raw, reference, processing)
     scene_lab = xyz_to_lab(reference.patch_xyz, reference.white_xyz)
     conversion_lab = xyz_to_lab(chart_rates @ M @ M_disp.T, display_white)
     against = scene_lab if delta_e_reference == "scene" else conversion_lab

@@ -79,20 +79,23 @@ def test_gaussian_filters_have_the_stated_centre_and_fwhm():
             assert R[k, wl == edge][0] == pytest.approx(0.25, rel=5e-3)
 
 
-def test_camera_filters_peak_at_one_and_follow_the_measured_data():
-    import colour
+def test_camera_filters_peak_at_qe_peak_and_follow_the_measured_data():
+    """A camera's relative curves are per unit energy: per photon they are S(λ)·λ⁻¹ up to one constant
+    for all channels (the gains restored), scaled so the largest responsivity is qe_peak."""
+    from spectracam.cameras import energy_sensitivities
 
     spec = FilterSpec(kind="camera", qe_peak=0.5)
     R = responsivities(spec, FINE)
-    assert R.max() == pytest.approx(0.5, rel=5e-3)  # the largest sensitivity of any channel is scaled to 1
-    data = colour.MSDS_CAMERA_SENSITIVITIES[spec.camera]
-    v = np.asarray(data.values) / np.asarray(data.values).max()
-    # between two measured samples the data are linear, so the average over a band centred between
-    # them is exact: the mean of the two samples
-    i = list(data.wavelengths).index(550.0)
-    mid = (data.wavelengths[i] + data.wavelengths[i + 1]) / 2
-    R_mid = responsivities(spec, WavelengthGrid([mid - 1, mid, mid + 1]))[:, 1]
-    np.testing.assert_allclose(R_mid, 0.25 * (v[i] + v[i + 1]), rtol=1e-6)
+    assert R.max() == pytest.approx(0.5, rel=5e-3)
+    wl, S = energy_sensitivities(spec.camera)
+    per_photon = S / wl[:, None]
+    # between two measured samples the data are linear and so is 1/λ nearly: the band average over a
+    # narrow band centred between them is the mean of the two samples' values
+    i = list(wl).index(550.0)
+    mid = (wl[i] + wl[i + 1]) / 2
+    R_mid = responsivities(spec, WavelengthGrid([mid - 0.5, mid, mid + 0.5]))[:, 1]
+    expected = 0.5 * (per_photon[i] + per_photon[i + 1]) * 0.5 / per_photon.max()
+    np.testing.assert_allclose(R_mid, expected, rtol=1e-4)
 
 
 def test_xyz_filters_are_quantal_colour_matching_functions():

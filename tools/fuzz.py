@@ -2,6 +2,10 @@
 
     python3 tools/fuzz.py [--cases 120] [--seed 0] [--jobs 2]
 
+Cases: damaged EXR files, wrong scene values, unwritable outputs, garbage TOML, camera curve files
+(issue 17: unsorted, NaN, negative, short, narrow, units), spectral EXRs from elsewhere (stripped,
+contradicting their scene, units, --white), the validate/cameras commands, and SIGTERM mid-run.
+
 Each case runs one real command in a fresh directory and is judged:
   traceback      a Python traceback on stderr (every failure must be one line);
   partial files  a failed command left something in its output directory (temporary files included);
@@ -28,13 +32,27 @@ FIELDS = ["illuminant.temperature_K", "illuminant.white_luminance_cd_m2", "image
           "render.samples_per_pixel", "sensor.q_max_e", "sensor.adc_bits", "sensor.read_noise_e",
           "sensor.black_level_DN", "sensor.adc_full_scale_V", "sensor.dsnu_fraction", "filters.cutoffs_nm",
           "filters.qe", "filters.collection_depth_um", "optics.f_number", "capture.architecture",
-          "capture.exposure", "processing.demosaic", "wavelengths.step_nm", "chart.mask_margin", "sensor.nosuch"]
+          "capture.exposure", "processing.demosaic", "wavelengths.step_nm", "chart.mask_margin", "sensor.nosuch",
+          "filters.camera", "filters.camera_unit", "capture.white_fill"]
 VALUES = ["0", "-1", "1e308", "nan", "inf", "-inf", "1.5", "true", '"text"', "[1, 2]", "[]", "{}", "3", "7",
           "2147483648", "0.001", "bilinear", "fsc", "optimal", "photodiode"]
 
 
 def run(args, cwd, timeout=300):
     return subprocess.run(CMD + [str(a) for a in args], cwd=cwd, capture_output=True, text=True, timeout=timeout)
+
+
+def run_killed(args, cwd, after_s: float):
+    """Run a command and send it SIGTERM after ``after_s`` (a scheduler's time limit); its result."""
+    import signal
+    import time
+
+    p = subprocess.Popen(CMD + [str(a) for a in args], cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         text=True)
+    time.sleep(after_s)
+    p.send_signal(signal.SIGTERM)
+    out, err = p.communicate(timeout=300)
+    return subprocess.CompletedProcess(p.args, p.returncode, out, err)
 
 
 def non_finite_outputs(out: Path) -> bool:
@@ -116,7 +134,101 @@ def case_garbage_text(rng, d: Path):
     return cmd, False, f"garbage TOML: {cmd[0]}"
 
 
-CASES = [case_damaged_file, case_scene_value, case_environment, case_garbage_text]
+#: Camera curve files (issue 17): (content, known bad).  Every bad one must be refused in one line.
+CAMERA_CSVS = [
+    ("wl,R,G,B\n380,0.1,0.2,0.3\n550,0.5,1,0.4\n780,0.2,0.1,0.05\n", False),
+    ("wl,R,G,B\n500,1,1,1\n450,1,1,1\n780,1,1,1\n", True),  # unsorted
+    ("wl,R,G,B\n380,1,1,1\n500,nan,1,1\n780,1,1,1\n", True),
+    ("wl,R,G,B\n380,1,1,1\n500,inf,1,1\n780,1,1,1\n", True),
+    ("wl,R,G,B\n380,1,1,1\n500,-0.1,1,1\n780,1,1,1\n", True),
+    ("wl,R,G,B\n380,1,1,1\n", True),  # too short
+    ("wl,R,G\n380,1,1\n780,1,1\n", True),  # three columns
+    ("wl,R,G,B\n450,1,1,1\n650,1,1,1\n", True),  # does not cover 400-700 nm
+    ("wl,R,G,B\n380,1,0,1\n780,1,0,1\n", True),  # a dark channel
+    ("", True), ("\x00\xff\xfe garbage", True), ("wl,R,G,B\n-5,1,1,1\n780,1,1,1\n", True),
+]
+
+
+def case_camera_file(rng, d: Path):
+    """A camera's curves (filters.camera_file) damaged, in a unit, or missing; or a camera name."""
+    text, bad = rng.choice(CAMERA_CSVS)
+    (d / "cam.csv").write_bytes(text.encode("latin-1"))
+    sets = ["--set", 'filters.camera_file="cam.csv"' if rng.random() < 0.9 else 'filters.camera_file="nosuch.csv"']
+    if sets[1].endswith('nosuch.csv"'):
+        bad = True
+    unit = rng.choice(["relative", "A/W", "electrons_per_photon", "W/m2", ""])
+    if unit:
+        sets += ["--set", f'filters.camera_unit="{unit}"']
+        bad = bad or unit == "W/m2"
+    if rng.random() < 0.2:
+        name = rng.choice(["Nikon 5100 (NPL)", "Sigma SDMerill (NPL)", "Canon EOS 5D Mark II (rawtoaces)", "Nokia"])
+        sets = ["--set", "filters.kind=camera", "--set", f'filters.camera="{name}"']
+        bad = name == "Nokia" or name.startswith("Sigma")  # the Sigma's curves stop at 680 nm
+    return ["simulate", "s.toml", "-o", "out", "--renderer", "analytic", "--quiet", *sets], bad, \
+        f"camera file {text[:24]!r} {' '.join(sets[1::2])}"
+
+
+def case_foreign_exr(rng, d: Path):
+    """A spectral EXR from elsewhere (spectracam attributes stripped), a contradicting one, or bad metering."""
+    import numpy as np
+
+    from spectracam.io.exr import read_exr, write_exr
+
+    ch, at = read_exr(d / "r" / "radiance.exr")
+    keep = {k: v for k, v in at.items() if k in ("spectralLayoutVersion", "emissiveUnits") or k.startswith("spectracam")}
+    bad, what = False, "stripped"
+    r = rng.random()
+    if r < 0.35:
+        keep = {k: v for k, v in keep.items() if not k.startswith("spectracam")}
+    elif r < 0.55:
+        scale = rng.choice([0.5, 1.3, 1e3])
+        ch = {k: (v * np.float32(scale) if k.startswith("S0.") else v) for k, v in ch.items()}
+        bad, what = True, f"pixels x{scale} under their recorded scene"
+    elif r < 0.7:
+        scene = json.loads(keep["spectracamScene"])
+        scene["illuminant"] = {"type": "blackbody", "temperature_K": 3000.0, "white_luminance_cd_m2": 100.0}
+        keep["spectracamScene"] = json.dumps(scene)
+        bad, what = True, "a 3000 K label"
+    units = rng.choice([None, "W.m^-2.sr^-1", "mW.m^-2.sr^-1", "photons", "", "drop"])
+    if units == "drop":
+        keep.pop("emissiveUnits", None)
+        bad, what = True, what + ", no emissiveUnits"
+    elif units is not None:
+        keep["emissiveUnits"] = units
+        bad, what = bad or units in ("photons", ""), what + f", emissiveUnits {units!r}"
+    write_exr(d / "f.exr", ch, keep)
+    cmd = ["capture", "f.exr", "-o", "out", "--quiet"]
+    white = rng.choice([None, "brightest", "patch", "100", "0", "-3", "1,2,3,4", "0,0,9999,9", "nan", "x"])
+    if white is not None:
+        cmd += ["--white", white]
+        stripped = "spectracamScene" not in keep
+        bad = bad or white in ("0", "-3", "0,0,9999,9", "nan", "x") or (white == "patch" and stripped)
+        what += f", --white {white}"
+    return cmd, bad, f"foreign EXR: {what}"
+
+
+def case_new_commands(rng, d: Path):
+    """validate and cameras (issue 17) with unwritable outputs or bad options."""
+    (d / "afile").write_text("x")
+    cmd = rng.choice([["validate", "-o", "afile/sub"], ["validate", "-o", "/proc/version/x"],
+                      ["validate", "-o", "out", "--renderer", "nosuch"], ["cameras", "--nosuch"],
+                      ["validate", "-o", "out", "--renderer", "analytic"]])
+    return cmd, False, " ".join(cmd)
+
+
+def case_signal(rng, d: Path):
+    """SIGTERM part-way through a command of issue 17 (capture of a foreign file, validate, a camera file)."""
+    (d / "cam.csv").write_text(CAMERA_CSVS[0][0])
+    cmd = rng.choice([["validate", "-o", "out", "--renderer", "analytic"],
+                      ["capture", "r/radiance.exr", "-o", "out", "--white", "brightest"],
+                      ["simulate", "s.toml", "-o", "out", "--renderer", "analytic", "--set",
+                       'filters.camera_file="cam.csv"']])
+    after = rng.choice([0.3, 0.8, 1.5, 2.5])
+    return cmd, False, f"SIGTERM after {after} s: {' '.join(cmd)}", after
+
+
+CASES = [case_damaged_file, case_scene_value, case_environment, case_garbage_text, case_camera_file, case_foreign_exr,
+         case_new_commands, case_signal]
 
 
 def one(i: int, seed: int, base: Path) -> tuple[str, dict]:
@@ -125,8 +237,8 @@ def one(i: int, seed: int, base: Path) -> tuple[str, dict]:
         d = Path(t)
         shutil.copytree(base, d, dirs_exist_ok=True)
         make = rng.choice(CASES)
-        cmd, known_bad, label = make(rng, d)
-        r = run(cmd, d)
+        cmd, known_bad, label, *kill = make(rng, d)
+        r = run_killed(cmd, d, kill[0]) if kill else run(cmd, d)
         return label, judge(r, d / "out", known_bad) | {"status": r.returncode, "stderr": r.stderr[-400:]}
 
 

@@ -31,11 +31,14 @@ SCENE_OVERRIDES = {"image": {"width": 192, "height": 144}}
 
 
 def validation_scene(camera_name: str):
-    """The shipped D65 chart scene with the camera's curves, noise-free, flat QE (the curves hold it)."""
+    """The shipped D65 chart scene with the camera's curves, noise-free, flat QE (the curves hold it), on
+    400–700 nm or the part of it the curves cover (the Sigma's stop at 680 nm)."""
     from ..scene import parse_scene, read_toml, shipped_scene_file
 
     data = read_toml(shipped_scene_file("d65.toml"), "scene file")
-    data = {**data, **SCENE_OVERRIDES,
+    lo, hi = library_curves(camera_name).range_nm  # the scene's 400-700 nm, narrowed to the curves' range
+    wavelengths = {"start_nm": max(400.0, lo), "stop_nm": min(700.0, hi), "step_nm": 10.0}
+    data = {**data, **SCENE_OVERRIDES, "wavelengths": wavelengths,
             "filters": {**data.get("filters", {}), "kind": "camera", "camera": camera_name, "qe": "flat"},
             "sensor": {**data.get("sensor", {}), "shot_noise": False, "dark_current": False, "read_noise": False,
                        "fpn": False, "quantization": False}}

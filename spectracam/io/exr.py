@@ -156,14 +156,37 @@ def write_radiance_exr(path: str | Path, cube: RadianceCube) -> Path:
     return write_exr(path, channels, radiance_attributes(cube))
 
 
-def read_radiance_exr(path: str | Path) -> tuple[RadianceCube, dict]:
-    """Read a spectral EXR back into a :class:`RadianceCube` (bands sorted by wavelength) and its
-    attributes; a file is input from outside, so its radiance is checked (finite, ≥ 0) here."""
+#: SI prefixes Fichet's ``emissiveUnits`` may carry on the watt (W.m^-2.sr^-1 per nm, the layout's unit).
+_EMISSIVE_PREFIX = {"": 1.0, "k": 1e3, "m": 1e-3, "u": 1e-6, "µ": 1e-6, "n": 1e-9}
+_EMISSIVE_UNITS = re.compile(r"^\s*(k|m|u|µ|n)?W\s*\.\s*m\^-2\s*\.\s*sr\^-1\s*$")
+
+
+def emissive_scale(units, source: str) -> float:
+    """Factor turning a spectral EXR's emissive values into W·m⁻²·sr⁻¹·nm⁻¹, from its ``emissiveUnits``
+    (Fichet 2021: ``W.m^-2.sr^-1``, per nm implied; an SI prefix on the watt is accepted).  Anything else
+    — photon units, a relative scale, no unit at all — cannot be converted: one line."""
+    m = _EMISSIVE_UNITS.match(units) if isinstance(units, str) else None
+    if m is None:
+        what = "has no emissiveUnits attribute" if units is None else f"emissiveUnits = {units!r}"
+        raise SpectracamError(f"file = {source!r}: {what}; spectracam needs spectral radiance, "
+                              f"{EMISSIVE_UNITS} per nm (an SI prefix on W allowed), to simulate absolute exposure — "
+                              "pass --units if the file's values are in such a unit")
+    return _EMISSIVE_PREFIX[m.group(1) or ""]
+
+
+def read_radiance_exr(path: str | Path, units: str | None = None) -> tuple[RadianceCube, dict]:
+    """Read a spectral EXR (Fichet 2021 layout, from spectracam or any other tool) into a
+    :class:`RadianceCube` in W·m⁻²·sr⁻¹·nm⁻¹ (bands sorted by wavelength) and its attributes; the unit is
+    the file's ``emissiveUnits`` (``units`` stands in for a file without one); a file is input from
+    outside, so its radiance is checked (finite, ≥ 0) here."""
     channels, attrs = read_exr(path)
     bands = sorted((w, n) for n in channels if (w := parse_spectral_channel(n)) is not None)
     if not bands:
         raise SpectracamError(f"file = {str(path)!r}: has no spectral channels S0.<λ>nm; not a spectral EXR")
-    cube = np.stack([channels[n] for _, n in bands], axis=-1)
+    scale = emissive_scale(attrs.get("emissiveUnits", units), str(path))
+    cube = np.stack([channels[n] for _, n in bands], axis=-1).astype(np.float32, copy=False)  # half floats too
+    if scale != 1.0:
+        cube = (cube * np.float32(scale)).astype(np.float32)
     try:
         meta = json.loads(attrs["spectracamRender"]) if "spectracamRender" in attrs else {}
         if "spectracamScene" in attrs:
@@ -282,6 +305,8 @@ def raw_attributes(raw: RawCapture) -> dict:
         attrs["spectracamFrames"] = raw.layout.description
     if raw.scene is not None:
         attrs["spectracamScene"] = json.dumps(raw.scene, sort_keys=True)
+    if raw.metering is not None:
+        attrs["spectracamMetering"] = json.dumps(raw.metering, sort_keys=True)
     return attrs
 
 
@@ -334,6 +359,7 @@ def read_raw_exr(path: str | Path) -> RawCapture:
         capture_time = attribute_number(attrs["spectracamCaptureTimeS"])
         seed = int(attrs["spectracamSeed"])
         scene = json.loads(attrs["spectracamScene"]) if "spectracamScene" in attrs else None
+        metering = json.loads(attrs["spectracamMetering"]) if "spectracamMetering" in attrs else None
     except (KeyError, TypeError, ValueError) as e:
         raise SpectracamError(f"file = {src!r}: a raw capture's attribute is missing or damaged ({e})") from None
     camera = CameraSpec.from_dict(cam, source=src)
@@ -351,4 +377,4 @@ def read_raw_exr(path: str | Path) -> RawCapture:
     except (KeyError, TypeError, ValueError) as e:
         raise SpectracamError(f"file = {src!r}: spectracamDnScale/spectracamDnOffset are damaged ({e})") from None
     return RawCapture(digital=digital, expected_e=None, exposure_times_s=times, capture_time_s=capture_time,
-                      layout=layout, camera=camera, seed=seed, scene=scene)
+                      layout=layout, camera=camera, seed=seed, scene=scene, metering=metering)

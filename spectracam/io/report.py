@@ -99,14 +99,17 @@ def write_rendered_exr(path: str | Path, result: ChartScore) -> Path:
     """The displayed image (linear display RGB) with every parameter of the score that made it, in
     half floats (11-bit mantissa: 5e-4 relative, below what a display shows; the numbers are in
     report.json), half the size of float32."""
-    params = result.parameters
+    return write_display_exr(path, result.rendered_rgb, result.parameters)
+
+
+def write_display_exr(path: str | Path, rgb: np.ndarray, params: dict) -> Path:
+    """Linear display RGB ``(H, W, 3)`` in half floats with the parameters that made it."""
     display = params["processing"]["display"]
     attrs = {"spectracamVersion": __version__, "spectracamKind": "rendered",
              "spectracamUnits": f"linear RGB of the display ({display}), white = 1",
              # the standard attribute viewers read to interpret R, G, B (primaries and white, CIE xy)
              "chromaticities": display_chromaticities(display),
              "spectracamParameters": json.dumps(params, sort_keys=True), "spectracamSeed": int(params["seed"])}
-    rgb = result.rendered_rgb
     return write_exr(path, {"R": rgb[..., 0], "G": rgb[..., 1], "B": rgb[..., 2]}, attrs, half=True)
 
 

@@ -27,8 +27,9 @@ class RenderSpec(Spec):
 
     TABLE = "render"
 
-    #: Samples per pixel per band.  Each sample carries 4 wavelengths inside its band; 4 spp gives
-    #: ~0.2 % per-pixel noise on the chart (see tools/bench_render.py).
+    #: Samples per pixel per band.  The chart's spectra are constant inside each band (light-weighted
+    #: band averages, render/mitsuba.py), so samples only anti-alias the patch edges: a patch's pixels
+    #: carry no render noise (1e-7 relative, float32; 0.28 % before issue 17; tools/bench_render.py).
     samples_per_pixel: int = 4
     variant: str = "auto"
     #: The one seed that fixes every random draw downstream of this scene.

@@ -35,7 +35,7 @@ import numpy as np
 from ..chart import View, patch_rectangles_mm, patch_reflectances
 from ..errors import SpectracamError
 from ..illuminant import spectral_irradiance
-from ..spectra import band_average
+from ..spectra import band_average, band_sample_points
 from . import RadianceCube
 
 #: Start of the reference wavelength window every band is mapped into (any visible value works).
@@ -184,7 +184,15 @@ def band_seed(seed: int, band: int) -> int:
     return int(np.random.SeedSequence([seed, band]).generate_state(1)[0])
 
 
-def render_mitsuba(scene, progress: bool = False, log=None) -> RadianceCube:
+#: How the spectra vary inside a band: "light-weighted" (constant ⟨E⟩ and ⟨E·S⟩/⟨E⟩: no sampling
+#: noise, the default) or "sampled" (E(λ) and S(λ) as they vary: each path samples one wavelength,
+#: the method before issue 17, kept for tools/bench_render.py and the tests that measure the noise).
+WITHIN_BAND = ("light-weighted", "sampled")
+
+
+def render_mitsuba(scene, progress: bool = False, log=None, within_band: str = "light-weighted") -> RadianceCube:
+    if within_band not in WITHIN_BAND:
+        raise SpectracamError(f"within_band = {within_band!r}: must be one of " + ", ".join(map(repr, WITHIN_BAND)))
     variant, reason = select_variant(scene.render.variant)
     if log:
         log(f"Mitsuba variant {variant} ({reason})")
@@ -200,6 +208,7 @@ def render_mitsuba(scene, progress: bool = False, log=None) -> RadianceCube:
 
     E = spectral_irradiance(scene.illuminant)
     reflectances = patch_reflectances(scene.chart)
+    lam = band_sample_points(grid, POINTS_PER_BAND)  # (B, N+1), for "sampled"
     light_band = band_average(E, grid)  # ⟨E⟩ per band (B,)
     # light-weighted band-average reflectances ⟨E·S⟩/⟨E⟩ (module docstring); 0 where the light is 0
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -218,13 +227,19 @@ def render_mitsuba(scene, progress: bool = False, log=None) -> RadianceCube:
     # a bar on a terminal only; a log (stderr redirected) gets the one line the caller writes per stage
     for b in tqdm(range(B), desc="render bands", unit="band", disable=not (progress and sys.stderr.isatty()),
                   leave=False):
-        params["light.irradiance.values"] = Float(np.full(POINTS_PER_BAND + 1, light_band[b], np.float32))
-        for p, rho in enumerate(rho_band):
-            params[f"patch{p:02d}.bsdf.reflectance.values"] = Float(np.full(POINTS_PER_BAND + 1, rho[b], np.float32))
+        if within_band == "sampled":
+            params["light.irradiance.values"] = Float(E(lam[b]).astype(np.float32))
+            for p, (_, rho) in enumerate(reflectances):
+                params[f"patch{p:02d}.bsdf.reflectance.values"] = Float(rho(lam[b]).astype(np.float32))
+        else:
+            params["light.irradiance.values"] = Float(np.full(POINTS_PER_BAND + 1, light_band[b], np.float32))
+            for p, rho in enumerate(rho_band):
+                params[f"patch{p:02d}.bsdf.reflectance.values"] = Float(np.full(POINTS_PER_BAND + 1, rho[b],
+                                                                                np.float32))
         params.update()
         img = mi.render(mi_scene, params, seed=band_seed(scene.render.seed, b))
         cube[:, :, b] = np.asarray(img)[:, :, 0]
     meta = {"renderer": "mitsuba", "variant": variant, "variant_reason": reason,
             "samples_per_pixel": scene.render.samples_per_pixel, "seed": scene.render.seed,
-            "mitsuba_version": mi.__version__}
+            "within_band": within_band, "mitsuba_version": mi.__version__}
     return RadianceCube(cube, np.asarray(grid.centres_nm, float), meta)
