@@ -111,8 +111,9 @@ class CameraCurves:
         if not self.per_channel:
             return "as published"
         if self.matrix:
+            g = restored_gains(self.name)
             return (f"restored: the D65 neutral of the {self.matrix} published matrix "
-                    f"(R/G {restored_gains(self.name)[0]:.3f}, B/G {restored_gains(self.name)[2]:.3f} gains)")
+                    f"(gains R {g[0]:.3f}, G 1, B {g[2]:.3f} on the per-channel-normalised curves)")
         return "lost (each channel normalised) and no published reference: refused"
 
 

@@ -35,7 +35,12 @@ class _Group(click.Group):
     file and exit with 128 + the signal's number."""
 
     def main(self, *args, **kwargs):
-        """A usage error (an unknown option, a value out of its range) is one line and exit 2 too."""
+        """A usage error (an unknown option, a value out of its range) is one line and exit 2 too.
+        The signal handlers are installed first, so a signal during the imports is handled too."""
+        import signal
+
+        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+            signal.signal(sig, _interrupted)
         try:
             rv = super().main(*args, standalone_mode=False, **kwargs)
         except click.exceptions.Abort:

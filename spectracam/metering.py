@@ -21,10 +21,10 @@ import numpy as np
 from .errors import ConfigError, SpectracamError
 from .spectra import K_M_LM_PER_W, band_average, cmf_band_weights
 
-#: u′v′ distance from the illuminant's white within which a pixel counts as neutral: about four
-#: times the radius of a 7-step MacAdam ellipse (ANSI C78.377 tolerates ~0.006 for "white" lamps),
-#: wide enough for greys under a light a little off the stated one, far inside any coloured surface
-#: of the ColorChecker (its least saturated non-grey patch is 0.03 away under D65).
+#: u′v′ distance from the illuminant's white within which a pixel counts as neutral: the
+#: ColorChecker's greys lie within 0.0032 of D65's white and its least saturated colours (light skin,
+#: bluish green) 0.045 away (measured), so 0.02 admits greys under a light somewhat off the stated one
+#: and no coloured surface of the chart.
 NEUTRAL_UV_TOLERANCE = 0.02
 #: Share of the neutral pixels, the brightest, that are averaged for ``brightest``.
 BRIGHTEST_SHARE = 0.01

@@ -211,6 +211,7 @@ def test_validate_reproduces_the_published_neutrals_and_matrices(tmp_path):
     assert rows["Nikon D5100"]["delta_e_published_mean"] == pytest.approx(1.87, abs=0.05)
     assert rows["Nikon D5100"]["delta_e_fit_mean"] == pytest.approx(1.62, abs=0.05)
     assert rows["Nikon D5100"]["white_RG_equal_gains"] > 1.3 * rows["Nikon D5100"]["white_RG_published"]
+    assert rows["Sigma SD1 Merrill"]["delta_e_published_mean"] == pytest.approx(12.92, abs=0.05)
     for f in ("validate.md", "validate.png", "validate.svg"):
         assert (tmp_path / "v" / f).stat().st_size > 1000
 

@@ -26,6 +26,8 @@ def test_rows_have_the_fields_and_fsc_breaks_up():
     assert by[("fsc/optimal", 0.0, False)]["snr_db"] > by[("cfa/single", 0.0, False)]["snr_db"]
     assert by[("fsc/balanced", 0.0, False)]["snr_db"] < by[("cfa/single", 0.0, False)]["snr_db"]
     assert "fsc/optimal" in r["answer"]
+    # the light is calibrated so the CFA needs the paper's 28 ms with the white metered to its fill
+    assert by[("cfa/single", 0.0, False)]["capture_time_ms"] == pytest.approx(28.0, rel=1e-4)
 
 
 def test_unknown_key_is_refused():

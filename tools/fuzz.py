@@ -52,7 +52,10 @@ def run_killed(args, cwd, after_s: float):
     time.sleep(after_s)
     p.send_signal(signal.SIGTERM)
     out, err = p.communicate(timeout=300)
-    return subprocess.CompletedProcess(p.args, p.returncode, out, err)
+    rc = p.returncode
+    if rc < 0 and "\nwrote " in "\n" + err:  # it had finished (files renamed) when the signal landed
+        rc = 0
+    return subprocess.CompletedProcess(p.args, rc, out, err)
 
 
 def non_finite_outputs(out: Path) -> bool:
@@ -75,6 +78,8 @@ def non_finite_outputs(out: Path) -> bool:
 
 def judge(r, out: Path, known_bad: bool) -> dict:
     err = r.stderr.strip().splitlines()
+    if r.returncode < 0 and not err:  # killed by the signal while Python itself started: no line can be written
+        err = ["(killed before spectracam ran)"]
     left = [p for p in out.rglob("*")] if out.exists() else []
     res = {"traceback": "Traceback" in r.stderr,
            "partial": r.returncode != 0 and bool(left),

@@ -14,11 +14,13 @@ DESIGN_STYLE = {"cfa/single": ("o", "black", "-"), "fsc/optimal": ("^", "tab:blu
 
 def fig4(results: dict):
     """Figure 4: each channel's response to the white patch; a filled marker where the channel
-    fills the well (the one that ends a single exposure)."""
+    reaches the metered fill of the well (the one that ends a single exposure; paper 4.5: "near
+    saturation", ``capture.white_fill``)."""
     plt = _plt()
     f4 = results["fig4_white_response"]
+    fill = (results.get("parameters", {}).get("scene") or {}).get("capture", {}).get("white_fill", 1.0)
     designs = [d for d in ("cfa/single", "fsc/optimal") if d in f4] or list(f4)[:2]
-    fig, axes = plt.subplots(1, len(designs), figsize=(4.2 * len(designs) + 1.6, 3.6), sharey=True, squeeze=False)
+    fig, axes = plt.subplots(1, len(designs), figsize=(4.2 * len(designs) + 2.1, 3.6), sharey=True, squeeze=False)
     names = {"R": "red", "G": "green", "B": "blue"}
     for ax, d in zip(axes[0], designs):
         T = sorted(f4[d], key=float)
@@ -27,10 +29,10 @@ def fig4(results: dict):
         for k, c in enumerate("RGB"):
             m, col = CHANNEL_STYLE[c]
             ax.plot(x, resp[:, k], marker=m, color=col, mfc="none", ls="-", label=f'"{names[c]}" channel')
-            full = resp[:, k] >= 0.999
+            full = resp[:, k] >= fill - 1e-3
             ax.plot(x[full], resp[full, k], ls="none", marker=m, color=col)
-        if np.allclose(resp, 1.0, atol=1e-3):
-            ax.text(0.5, 0.55, "each channel has its own exposure:\nall three fill the well (lines coincide)",
+        if np.allclose(resp, fill, atol=1e-3):
+            ax.text(0.5, 0.55, f"each channel has its own exposure:\nall three reach {fill:g} of the well\n(lines coincide)",
                     transform=ax.transAxes, ha="center", fontsize=8, color="0.3")
         ax.set_title(f"{d}", fontsize=10)
         ax.set_xlabel("colour temperature (K)")
@@ -39,10 +41,10 @@ def fig4(results: dict):
     axes[0][0].set_ylabel("relative response to white (1 = full well)")
     handles, labels = axes[0][0].get_legend_handles_labels()
     handles.append(plt.Line2D([], [], ls="none", marker="o", color="0.3"))
-    labels.append("filled: fills the well")
+    labels.append(f"filled: at the metered\nfill ({fill:g} of the well)")
     fig.legend(handles, labels, loc="center right", fontsize=8, frameon=False)
     fig.suptitle("Figure 4: response of the three channels to a white surface", fontsize=10)
-    fig.tight_layout(rect=(0, 0, 1 - 1.5 / fig.get_figwidth(), 1))
+    fig.tight_layout(rect=(0, 0, 1 - 2.0 / fig.get_figwidth(), 1))
     return fig
 
 

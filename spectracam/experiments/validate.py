@@ -159,14 +159,14 @@ def validate_figure(result: dict):
 
     plt = pyplot()
     rows = result["cameras"]
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), gridspec_kw={"width_ratios": [1, 2.2]})
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.4), gridspec_kw={"width_ratios": [1.3, 2.2]})
     x = np.arange(len(rows))
     for j, (key, label) in enumerate((("RG", "R/G"), ("BG", "B/G"))):
         axes[0].bar(x + (j - 0.5) * 0.4 - 0.1, [r[f"white_{key}_simulated"] for r in rows], 0.2,
                     label=f"{label} simulated", color=["#c0392b", "#2c6fbb"][j])
         axes[0].bar(x + (j - 0.5) * 0.4 + 0.1, [r[f"white_{key}_published"] for r in rows], 0.2,
                     label=f"{label} published M", color=["#e6a09a", "#9dbbe0"][j])
-    axes[0].set_xticks(x, [r["model"] for r in rows])
+    axes[0].set_xticks(x, [r["model"].replace(" ", "\n", 1) for r in rows], fontsize=8)
     axes[0].set_ylabel("white patch raw, relative to G")
     axes[0].set_title("neutral under D65")
     axes[0].legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2)

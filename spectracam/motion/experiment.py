@@ -161,7 +161,7 @@ def calibrated_scene(scene, spec: MotionSpec):
     ref = ChartReference.of(scene)
     white = ref.patch_rates(cam)[WHITE_PATCH]
     s = cam.sensor
-    need = s.q_max_e / (spec.cfa_exposure_ms * 1e-3) - s.dark_rate_e_per_s
+    need = cam.capture.white_fill * s.q_max_e / (spec.cfa_exposure_ms * 1e-3) - s.dark_rate_e_per_s
     if need <= 0:
         raise SpectracamError(f"cfa_exposure_ms = {spec.cfa_exposure_ms:g}: dark current alone fills the well sooner")
     level = scene.illuminant.white_luminance_cd_m2 * need / white.max()
