@@ -70,5 +70,5 @@ def cached_render(scene, renderer: str = "mitsuba", progress: bool = False, log=
         atomic_write(checksum, pixel_checksum(cube).encode())
     except OSError as e:  # a read-only cache never stops a run
         if log:
-            log(f"render cache not written ({e})")
+            log(f"render cache not written ({e.strerror or e}); the run goes on")
     return cube, False

@@ -21,7 +21,12 @@ def _interrupted(signum, frame):
     import signal
 
     from .io.files import remove_unfinished
+    from .processes import is_main, terminate_children
 
+    if not is_main():  # a forked worker: its parent cleans up and reports
+        os._exit(128 + signum)
+    signal.signal(signum, signal.SIG_IGN)  # a second signal must not interrupt the cleanup
+    terminate_children()
     remove_unfinished()
     sys.stderr.write(f"spectracam: interrupted ({signal.Signals(signum).name}); nothing written\n")
     sys.stderr.flush()
@@ -39,6 +44,9 @@ class _Group(click.Group):
         The signal handlers are installed first, so a signal during the imports is handled too."""
         import signal
 
+        from .processes import mark_main
+
+        mark_main()
         for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
             signal.signal(sig, _interrupted)
         try:

@@ -18,7 +18,8 @@ from typing import Callable, Iterable
 
 from .errors import ConfigError
 
-PATH = re.compile(r"^([a-z_]+)(?:\.([A-Za-z_0-9]+)(?:\[(\d+)\])?)?$")
+#: ``key``, ``key[i]``, ``table.field`` or ``table.field[i]``; names in either case (``temperatures_K``).
+PATH = re.compile(r"^([A-Za-z_][A-Za-z_0-9]*)(?:\.([A-Za-z_][A-Za-z_0-9]*))?(?:\[(\d+)\])?$")
 #: "arch/scheme" in one value, so an invalid pair is one error, never two half-applied fields.
 DESIGN_PATH = "capture.design"
 
@@ -36,7 +37,8 @@ def parse_assignment(text: str, source: str = "--set") -> tuple[str, object]:
     path, eq, value = text.partition("=")
     path = path.strip()
     if not eq or not PATH.match(path):
-        raise ConfigError(source, text, "must be PATH=VALUE with PATH a 'table.field', 'table.field[i]' or 'key'")
+        raise ConfigError(source, text, "must be PATH=VALUE with PATH a 'table.field', 'table.field[i]', 'key' or "
+                                        "'key[i]'")
     return path, parse_value(value.strip())
 
 
@@ -56,7 +58,16 @@ def apply_override(data: dict, path: str, value, defaults: Callable[[], dict] | 
         out.setdefault("capture", {}).update(architecture=arch, exposure=scheme)
         return out
     if key is None:
-        out[table] = value
+        if index is None:
+            out[table] = value
+            return out
+        lst = out.get(table)
+        if lst is None and defaults is not None:
+            lst = copy.deepcopy(defaults().get(table))
+        if not isinstance(lst, list) or int(index) >= len(lst):
+            raise ConfigError(path, value, f"{table} is not a list with an element {index}", source)
+        lst[int(index)] = value
+        out[table] = lst
         return out
     t = out.setdefault(table, {})
     if not isinstance(t, dict):

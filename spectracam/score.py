@@ -173,6 +173,35 @@ def display_rgb(raw: RawCapture, reference: ChartReference, processing: Processi
     return rgb, M
 
 
+#: How far a chart capture's exposure times may lie from those its scene's white patch meters (the
+#: render's patch means match the reference to 1e-6 since issue 17; older Mitsuba renders to 0.1 %).
+EXPOSURE_MATCH_TOLERANCE = 0.01
+
+
+def check_exposure_matches(raw: RawCapture, reference: ChartReference) -> None:
+    """A capture metered on its chart's white patch must have the exposure times that patch gives for
+    its camera: a recorded scene edited to another light or level, or a capture of other pixels, is
+    refused instead of being scored against the wrong truth."""
+    from .chart import WHITE_PATCH
+    from .exposure import exposure_times_s
+
+    if raw.scene is None or raw.metering is not None:
+        return
+    cam = raw.camera
+    try:
+        want = exposure_times_s(cam.capture.exposure, reference.patch_rates(cam)[WHITE_PATCH], cam.sensor,
+                                cam.capture.make_architecture(), cam.capture.white_fill)
+    except SpectracamError:
+        return  # the scene's light cannot be metered at all: other checks speak
+    got = np.asarray(raw.exposure_times_s, float)
+    worst = float(np.max(np.abs(got / want - 1)))
+    if worst > EXPOSURE_MATCH_TOLERANCE:
+        raise SpectracamError(f"capture: its exposure times ({', '.join(f'{1e3 * t:.4g}' for t in got)} ms) are not "
+                              f"those its recorded scene's white patch meters ({', '.join(f'{1e3 * t:.4g}' for t in want)}"
+                              f" ms under {reference.illuminant.label}, {reference.illuminant.white_luminance_cd_m2:g} "
+                              "cd/m²); the scene or the capture was edited, or another scene was captured")
+
+
 def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec,
           delta_e_reference: str = "scene") -> ChartScore:
     """Render a capture on the display and score it against the chart reference (see the module
@@ -190,6 +219,7 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
     if raw.scene is not None and (table := reference.matches(raw.scene)) is not None:
         raise SpectracamError(f"{table} = {str(raw.scene.get(table))[:120]}: the capture was taken of another scene "
                               f"than the one it is scored against")
+    check_exposure_matches(raw, reference)
     method = processing.delta_e
     camera = raw.camera
     chart_rates = reference.patch_rates(camera)

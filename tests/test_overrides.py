@@ -30,9 +30,15 @@ def test_paths():
     assert apply_overrides({}, ["filters.cutoffs_nm[1]=600"], defaults=lambda: {"filters": {"cutoffs_nm": [490, 610]}}) \
         == {"filters": {"cutoffs_nm": [490, 600]}}
     assert apply_overrides({"name": "a"}, ["name=b"]) == {"name": "b"}
-    for bad in ("sensor.adc_bits", "Sensor.x=1", "a.b.c=1"):
+    for bad in ("sensor.adc_bits", "1sensor.x=1", "a.b.c=1", "sensor.=1", "x[1]y=2"):
         with pytest.raises(ConfigError, match="must be PATH=VALUE"):
             parse_assignment(bad)
+    # keys in either case, and an element of a top-level list (issue 18: temperatures_K, pixel_pitches_um[1])
+    assert apply_overrides({"temperatures_K": [3000, 5000]}, ["temperatures_K[1]=6000"]) == {"temperatures_K": [3000, 6000]}
+    assert apply_overrides({}, ["pixel_pitches_um[1]=3"], defaults=lambda: {"pixel_pitches_um": [10, 2]}) \
+        == {"pixel_pitches_um": [10, 3]}
+    with pytest.raises(ConfigError, match="speeds is not a list with an element 0"):
+        apply_overrides({}, ["speeds[0]=1"])
     with pytest.raises(ConfigError, match=r"filters.cutoffs_nm is not a list with an element 5"):
         apply_overrides({"filters": {"cutoffs_nm": [1, 2]}}, ["filters.cutoffs_nm[5]=3"])
 

@@ -274,6 +274,9 @@ def _alternative(i: int):
 def _one_thread():
     import os
 
+    from ..processes import die_with_parent
+
+    die_with_parent()  # no orphan if the command is killed
     os.environ["SPECTRACAM_THREADS"] = "1"  # one process per core already
 
 

@@ -345,6 +345,43 @@ def _digital_numbers(values: np.ndarray, attrs: dict, camera: CameraSpec) -> np.
     return dn.astype(np.float32)
 
 
+def check_raw_attributes(attrs: dict, camera: CameraSpec, layout, times: np.ndarray, capture_time: float,
+                         src: str) -> None:
+    """Every redundant attribute of a raw EXR must agree with the recorded camera: the pixel scale and
+    offset, the ADC's bits, the architecture and exposure scheme, the CFA pattern; the exposure times
+    must be finite and > 0 and give the recorded capture time.  A damaged or edited file is refused
+    in one line instead of being scored as something else."""
+    def refuse(name, value, why):
+        raise SpectracamError(f"file = {src!r}: {name} = {value!r} {why}; the file is damaged or was edited")
+
+    if not (np.all(np.isfinite(times)) and np.all(times > 0)):
+        refuse("spectracamExposureTimesS", times.tolist(), "must be three finite times > 0 s")
+    arch = camera.capture.make_architecture()
+    want_capture = float(arch.capture_time_s(times))
+    if not (np.isfinite(capture_time) and abs(capture_time - want_capture) <= 1e-9 * max(want_capture, 1e-300)):
+        refuse("spectracamCaptureTimeS", capture_time, f"contradicts its exposure times ({want_capture:.9g} s for "
+               f"{camera.capture.architecture})")
+    try:
+        if "spectracamDnScale" in attrs or "spectracamDnOffset" in attrs:
+            scale, offset = dn_scale_offset(camera.sensor)
+            for name, want in (("spectracamDnScale", scale), ("spectracamDnOffset", offset)):
+                got = attribute_number(attrs[name])
+                if not got == want:
+                    refuse(name, got, f"contradicts the recorded camera ({camera.sensor.adc_bits}-bit ADC, black level "
+                           f"{camera.sensor.black_level_dn:g} DN: {want:g})")
+        checks = (("spectracamAdcBits", lambda v: int(attribute_number(v)) == camera.sensor.adc_bits,
+                   camera.sensor.adc_bits),
+                  ("spectracamArchitecture", lambda v: v == camera.capture.architecture, camera.capture.architecture),
+                  ("spectracamExposure", lambda v: v == camera.capture.exposure, camera.capture.exposure),
+                  ("spectracamCfaPattern", lambda v: isinstance(layout, MosaicLayout) and v == layout.pattern,
+                   getattr(layout, "pattern", None)))
+        for name, ok, want in checks:
+            if name in attrs and not ok(attrs[name]):
+                refuse(name, attrs[name], f"contradicts the recorded camera ({want!r})")
+    except (TypeError, ValueError, KeyError) as e:
+        raise SpectracamError(f"file = {src!r}: a raw capture's attribute is damaged ({e})") from None
+
+
 def read_raw_exr(path: str | Path) -> RawCapture:
     """Read a raw EXR back into a :class:`~spectracam.capture.RawCapture` (without expected electrons)."""
     src = str(path)
@@ -371,6 +408,7 @@ def read_raw_exr(path: str | Path) -> RawCapture:
     if arch_layout != layout:
         raise ConfigError("spectracamLayout", layout_to_dict(layout), f"does not match the recorded architecture "
                           f"{camera.capture.architecture!r} ({layout_to_dict(arch_layout)})", src)
+    check_raw_attributes(attrs, camera, layout, times, capture_time, src)
     digital = channels["Y"] if len(names) == 1 else np.stack([channels[c] for c in names])
     try:
         digital = _digital_numbers(digital, attrs, camera)

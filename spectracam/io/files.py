@@ -11,6 +11,7 @@ outputs appear together or not at all.
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import tempfile
 from pathlib import Path
@@ -38,11 +39,20 @@ def _make_parent(path: Path) -> None:
         _STAGES[-1]["dirs"].extend(reversed(missing))
 
 
+class WriteError(OSError):
+    """A file could not be written, whatever the writing library raised (OpenEXR raises RuntimeError
+    on a full disk, tifffile struct.error on a field it cannot hold): one error path for every writer,
+    which the command line reports in one line (exit 1) and the render cache survives."""
+
+
 def atomic_write(path: str | Path, content: bytes | Callable[[str], object], now: bool = False) -> Path:
     """Write ``content`` (bytes, or a function that writes a file at the path it is given) to
     ``path`` atomically; returns the path.  ``now``: rename at once even inside :func:`staged` (a
-    journal's header, which must survive an interruption)."""
+    journal's header, which must survive an interruption).  Any failure of the writer is an
+    :class:`OSError` naming the path; a target that is a directory is refused before writing."""
     path = Path(path)
+    if path.is_dir():
+        raise IsADirectoryError(21, "a directory is in the way of the output file", str(path))
     _make_parent(path)
     fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=path.suffix, dir=path.parent)
     _LIVE.add(tmp)
@@ -50,13 +60,22 @@ def atomic_write(path: str | Path, content: bytes | Callable[[str], object], now
     try:
         os.fchmod(fd, 0o666 & ~_umask())
         if isinstance(content, (bytes, bytearray)):
-            with os.fdopen(fd, "wb") as f:
-                fd = None
-                f.write(content)
+            try:
+                with os.fdopen(fd, "wb") as f:
+                    fd = None
+                    f.write(content)
+            except OSError as e:  # a full disk names no file: name the output
+                raise OSError(e.errno, e.strerror or str(e), str(path)) from None
         else:
             os.close(fd)
             fd = None
-            content(tmp)
+            try:
+                content(tmp)
+            except (OSError, KeyboardInterrupt, SystemExit):
+                raise
+            except Exception as e:  # noqa: BLE001 - a library's own error type for an I/O failure
+                first = (str(e).splitlines() or [type(e).__name__])[0].replace(tmp, str(path))
+                raise WriteError(errno.EIO, f"{type(e).__name__}: {first}", str(path)) from None
         if _STAGES and not now:
             _STAGES[-1]["files"].append((tmp, path))
         else:
@@ -103,6 +122,31 @@ def staged():
         raise
     finally:
         _STAGES.pop()
+    # all or nothing: every target is checked before the first rename; a rename that still fails
+    # removes what this stage already renamed (new files of this command) and every temporary file
     for tmp, path in stage["files"]:
-        os.replace(tmp, path)
+        if Path(path).is_dir():
+            _discard(stage, [])
+            raise IsADirectoryError(21, "a directory is in the way of the output file", str(path))
+    done = []
+    try:
+        for tmp, path in stage["files"]:
+            os.replace(tmp, path)
+            _LIVE.discard(tmp)
+            done.append(path)
+    except OSError:
+        _discard(stage, done)
+        raise
+
+
+def _discard(stage: dict, renamed: list) -> None:
+    for tmp, _ in stage["files"]:
         _LIVE.discard(tmp)
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+    for path in renamed:
+        with contextlib.suppress(OSError):
+            os.unlink(path)
+    for d in reversed(stage["dirs"]):
+        with contextlib.suppress(OSError):
+            d.rmdir()
