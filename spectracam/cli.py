@@ -159,8 +159,16 @@ def _write_capture(out_dir: Path, raw, scene) -> list[Path]:
     from .io.exr import write_raw_exr
     from .reference import ChartReference
 
-    # every layout has a DNG: a CFA mosaic, or LinearRaw for three planes (prism, field-sequential)
-    return [write_raw_exr(out_dir / "raw.exr", raw), write_dng(out_dir / "raw.dng", raw, ChartReference.of(scene))]
+    # every layout has a DNG: a CFA mosaic, or LinearRaw for three planes (prism, field-sequential); an ADC of
+    # more bits than a DNG reader takes is in raw.exr only, and the command says so
+    from .io.dng import DNG_MAX_BITS
+
+    paths = [write_raw_exr(out_dir / "raw.exr", raw)]
+    if raw.camera.sensor.adc_bits > DNG_MAX_BITS:
+        click.echo(f"raw.dng not written: a {raw.camera.sensor.adc_bits}-bit capture does not fit a DNG that raw "
+                   f"developers read (at most {DNG_MAX_BITS} bits); it is in raw.exr", err=True)
+        return paths
+    return paths + [write_dng(out_dir / "raw.dng", raw, ChartReference.of(scene))]
 
 
 @main.command("capture")

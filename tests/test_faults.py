@@ -172,3 +172,45 @@ def test_a_raw_whose_scene_was_edited_is_not_scored_against_it(tmp_path, raw_dir
     scene["illuminant"] = {"type": "cie", "name": "D65", "white_luminance_cd_m2": 50.0}  # another level
     r = run("score", damaged(raw_dir, tmp_path, spectracamScene=json.dumps(scene)), "-o", tmp_path / "o")
     one_line(r, 2, "exposure times", "50 cd/m²")
+
+
+@pytest.mark.parametrize("x, signed", [(7200.0, False), (1e-12, False), (1 / 250, False), (5e9, False),
+                                       (0.0283, False), (-123.456, True), (3.3e-9, True), (1e6 + 0.5, False)])
+def test_dng_rationals_fit_their_fields(x, signed):
+    """A 2-hour exposure, a 1e-12 s one, huge and tiny matrix entries: every (S)RATIONAL fits 32 bits
+    (31 signed) — tifffile's struct.error before — and is as close as the field allows."""
+    from spectracam.io.dng import _fraction
+
+    top = 2**31 - 1 if signed else 2**32 - 1
+    n, d = _fraction(x, signed)
+    assert 1 <= d <= top and abs(n) <= top
+    lo = 1.0 / top
+    if lo <= abs(x) <= top:
+        assert n / d == pytest.approx(x, rel=1e-6, abs=1e-6)
+    else:
+        assert n / d == pytest.approx(min(max(abs(x), lo), top) * (1 if x > 0 else -1))
+
+
+def test_long_exposures_and_wide_adcs_write_valid_files(tmp_path):
+    rawpy = pytest.importorskip("rawpy")
+    from spectracam.io.exr import read_raw_exr
+
+    # a light so dim that the exposure is ~2 hours: the DNG's ExposureTime field holds it
+    r = run("simulate", "scenes/d65.toml", "-o", tmp_path / "dim", "--renderer", "analytic", *SMALL,
+            "--set", "illuminant.white_luminance_cd_m2=1e-5", "--set", "sensor.dark_current=false", "--quiet")
+    assert r.returncode == 0, r.stderr
+    t = read_raw_exr(tmp_path / "dim" / "raw.exr").capture_time_s
+    assert t > 4295  # beyond 2^32 µs
+    with rawpy.imread(str(tmp_path / "dim" / "raw.dng")) as raw:
+        assert raw.raw_image.shape == (120, 160)
+    # a 24-bit ADC: no DNG reader takes it; raw.exr holds it, and the command says so in one line
+    r = run("simulate", "scenes/d65.toml", "-o", tmp_path / "wide", "--renderer", "analytic", *SMALL,
+            "--set", "sensor.adc_bits=24", "--quiet")
+    assert r.returncode == 0 and "raw.dng not written" in r.stderr, r.stderr
+    assert (tmp_path / "wide" / "raw.exr").exists() and not (tmp_path / "wide" / "raw.dng").exists()
+
+
+def test_emva_refuses_a_dark_channel_in_one_line(tmp_path):
+    one_line(run("emva", "-o", tmp_path / "e", "--channel", "R"), 2, "--channel = 'R'", "does not respond", "611 nm")
+    one_line(run("emva", "-o", tmp_path / "e", "--wavelength", "nan"), 2, "--wavelength = nan")
+    assert not (tmp_path / "e").exists()

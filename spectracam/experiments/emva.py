@@ -54,9 +54,20 @@ def channel_qe(camera: CameraSpec, channel: str, wavelength_nm: float) -> float:
 def simulate_series(camera: CameraSpec, setup: EmvaSetup = EmvaSetup()) -> tuple[EmvaSeries, dict]:
     """The frames of the measurement, taken with one physical sensor (one fixed pattern)."""
     s = camera.sensor
+    import math
+
+    from ..errors import SpectracamError
+
+    if not (isinstance(setup.wavelength_nm, (int, float)) and math.isfinite(setup.wavelength_nm)):
+        raise SpectracamError(f"--wavelength = {setup.wavelength_nm!r}: must be a finite wavelength in nm")
     eta = channel_qe(camera, setup.channel, setup.wavelength_nm)
-    if eta <= 0:
-        raise ValueError(f"channel {setup.channel} does not respond at {setup.wavelength_nm:g} nm")
+    if not eta > 0:
+        lam = np.arange(300.0, 1101.0)
+        R = responsivities(camera.filters, WavelengthGrid(lam))[CHANNELS.index(setup.channel)]
+        hint = (f"it responds most at {lam[int(np.argmax(R))]:g} nm; pass --wavelength there" if R.max() > 0 else
+                "it responds nowhere in 300–1100 nm; check the filters")
+        raise SpectracamError(f"--channel = {setup.channel!r}: does not respond at --wavelength {setup.wavelength_nm:g} "
+                              f"nm (filter × QE = 0 there), so EMVA 1288 cannot light it; {hint}")
     shape = (setup.height, setup.width)
     pattern = fixed_pattern(s, shape, setup.seed, 0)
     photons_per_s = s.q_max_e / (eta * setup.saturation_time_s)  # μ_p per second at this irradiance

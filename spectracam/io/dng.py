@@ -162,20 +162,42 @@ def saturation_iso(raw: RawCapture, reference) -> float:
     return ISO_SATURATION_CONSTANT / saturation_exposure_lux_s(raw, reference)
 
 
+def _fraction(x: float, signed: bool, denom: int = 1_000_000) -> tuple[int, int]:
+    """``x`` as a TIFF (S)RATIONAL: the closest fraction with denominator ≤ ``denom`` whose numerator
+    and denominator fit 32 bits (signed: 31), clamped to the largest and smallest magnitudes the type
+    holds — never a field that overflows (a 2-hour exposure, a 1e-12 s one)."""
+    from fractions import Fraction
+
+    top = 2**31 - 1 if signed else 2**32 - 1
+    x = float(x)
+    if not np.isfinite(x):
+        raise SpectracamError(f"DNG: a rational field would be {x!r}; every value written must be finite")
+    if not signed and x < 0:
+        x = 0.0
+    if abs(x) >= top:
+        return (top if x > 0 else -top), 1
+    if 0 < abs(x) < 1.0 / top:  # below the smallest non-zero rational: 1/top
+        return (1 if x > 0 else -1), top
+    d = max(1, min(top, int(top // max(abs(x), 1.0)), denom if abs(x) >= 1.0 / denom else top))
+    f = Fraction(x).limit_denominator(d)
+    return f.numerator, f.denominator
+
+
 def _srational(values, denom=1_000_000):
-    return tuple(v for x in values for v in (int(round(x * denom)), denom))
+    return tuple(v for x in values for v in _fraction(x, True, denom))
 
 
 def _rational(values, denom=1_000_000):
-    return tuple(v for x in values for v in (max(int(round(x * denom)), 0), denom))
+    return tuple(v for x in values for v in _fraction(x, False, denom))
 
 
 def _exposure_rational(t_s: float) -> tuple[int, int]:
-    """An exposure time as a RATIONAL: 1/x s when that is exact to 6 digits, else µs/10⁶."""
+    """An exposure time as a RATIONAL: 1/x s when that is exact to 6 digits, else the closest fraction
+    that fits the field (µs/10⁶ in the usual range)."""
     inv = 1.0 / t_s
-    if t_s < 1 and abs(round(inv) - inv) < 1e-6 * inv:
+    if t_s < 1 and abs(round(inv) - inv) < 1e-6 * inv and round(inv) <= 2**32 - 1:
         return 1, int(round(inv))
-    return _rational([t_s])
+    return _fraction(t_s, False)
 
 
 #: TIFF field types: (code, struct format of one value).
@@ -276,6 +298,11 @@ def exif_entries(raw: RawCapture, reference=None) -> list[tuple[int, str, tuple]
     return entries
 
 
+#: The most bits per sample a DNG is written with: LibRaw (and so darktable, RawTherapee's reader
+#: aside) refuses 32-bit samples, and nothing between 16 and 32 is an integer type.
+DNG_MAX_BITS = 16
+
+
 def write_dng(path: str | Path, raw: RawCapture, reference=None, mid_step: bool = False) -> Path:
     """Write a capture as DNG (temp file, then rename): a CFA mosaic, or LinearRaw for three planes;
     with the chart ``reference``, the colour matrix, the as-shot neutral and the ISO too.
@@ -290,6 +317,9 @@ def write_dng(path: str | Path, raw: RawCapture, reference=None, mid_step: bool 
     import tifffile
 
     bits = raw.camera.sensor.adc_bits
+    if bits > DNG_MAX_BITS:
+        raise SpectracamError(f"sensor.adc_bits = {bits}: a DNG holds at most {DNG_MAX_BITS} bits per sample for the "
+                              "raw developers that read it (LibRaw refuses more); the capture is in raw.exr")
     if mid_step and bits > 15:
         raise SpectracamError(f"sensor.adc_bits = {bits}: a mid-step LinearizationTable needs 15 bits or fewer")
     white_level = 2**bits - 1
@@ -300,7 +330,7 @@ def write_dng(path: str | Path, raw: RawCapture, reference=None, mid_step: bool 
     else:
         raise SpectracamError(f"capture.architecture = {raw.camera.capture.architecture!r}: its layout "
                               f"{type(raw.layout).__name__} has no DNG form")
-    dtype = np.uint16 if bits <= 16 else np.uint32  # DNG allows 8-32 bits per sample
+    dtype = np.uint16
     data = np.ascontiguousarray(np.clip(np.round(image), 0, white_level).astype(dtype))
     description = json.dumps({"spectracam": __version__, "design": raw.design,
                               "exposure_times_s": list(map(float, raw.exposure_times_s)),
