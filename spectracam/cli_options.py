@@ -43,8 +43,17 @@ _SET_HELP = ("Override a field of the scene (or experiment/sweep) file: PATH=VAL
              "filters.cutoffs_nm[1]=600, capture.design=fsc/optimal; VALUE is TOML, a bare word a string. Repeatable.")
 
 
+class _OutputDir(click.Path):
+    """A directory to write into; an empty name (which would write into the current directory) is refused."""
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, str) and not value.strip():
+            self.fail("must name a directory (an empty name would write into the current directory)", param, ctx)
+        return super().convert(value, param, ctx)
+
+
 def _output(help_text: str):
-    return click.option("-o", "--output", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
+    return click.option("-o", "--output", "out_dir", required=True, type=_OutputDir(file_okay=False, path_type=Path),
                         help=help_text)
 
 

@@ -214,3 +214,36 @@ def test_emva_refuses_a_dark_channel_in_one_line(tmp_path):
     one_line(run("emva", "-o", tmp_path / "e", "--channel", "R"), 2, "--channel = 'R'", "does not respond", "611 nm")
     one_line(run("emva", "-o", tmp_path / "e", "--wavelength", "nan"), 2, "--wavelength = nan")
     assert not (tmp_path / "e").exists()
+
+
+def test_set_reaches_every_documented_key_and_wins(tmp_path):
+    """--set comes last: over a sweep file's own [scene] table, over an experiment's light, and a
+    quick look keeps what --set chose; upper-case keys and top-level list elements are reachable."""
+    from spectracam.experiments.paper import load_experiment
+    from spectracam.experiments.sweep import cell_scene, load_sweep
+    from spectracam.motion.experiment import load_motion
+    from spectracam.scene import shipped_scene_file
+    from spectracam.spatial.experiment import SpatialSpec, load_spec_and_scene
+
+    sweep = load_sweep("scenes/sweeps/cfa_cutoffs.toml", ["image.width=160", "image.height=120"])
+    first = cell_scene(sweep, sweep.cells()[0], 0)
+    assert (first.image.width, first.image.height) \
+        == (160, 120)  # the sweep file's [scene] says 320x240
+    paper = shipped_scene_file("paper.toml")
+    exp = load_experiment(paper, ["temperatures_K=[3000, 6000]", "light.white_luminance_cd_m2=50"])
+    assert exp.temperatures_K == (3000.0, 6000.0) and exp.white_luminance_cd_m2 == 50 and exp.cfa_exposure_ms is None
+    assert load_experiment(paper, ["temperatures_K[1]=4500"]).temperatures_K[1] == 4500
+    with pytest.raises(Exception, match="not both"):
+        load_experiment(paper, ["light.white_luminance_cd_m2=50", "light.cfa_exposure_ms=20"])
+    spec, _ = load_motion(["speeds_px_per_ms=[0.0, 0.07]"], quick=True)
+    assert spec.speeds_px_per_ms == (0.0, 0.07)  # quick() would choose 8 speeds
+    for bad in ("[nan]", "[inf]", "[-1]"):
+        with pytest.raises(Exception, match="finite numbers ≥ 0"):
+            load_motion([f"speeds_px_per_ms={bad}"])
+    spec, _ = load_spec_and_scene(SpatialSpec, ["pixel_pitches_um[1]=3"])
+    assert spec.pixel_pitches_um[1] == 3.0
+
+
+def test_an_empty_output_name_is_refused(tmp_path):
+    r = run("render", "scenes/d65.toml", "-o", "", "--renderer", "analytic", *SMALL, cwd=None)
+    assert r.returncode == 2 and "must name a directory" in r.stderr and not os.path.exists("radiance.exr")

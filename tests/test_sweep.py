@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from spectracam.errors import ConfigError
+from spectracam.errors import ConfigError, SpectracamError
 from spectracam.experiments.sweep import load_sweep, run_sweep
 
 BASE = (Path(__file__).parent.parent / "scenes" / "blackbody_5000K.toml").resolve()
@@ -142,3 +142,70 @@ def test_plot_sweep(tmp_path):
     bad = subprocess.run([sys.executable, "-m", "spectracam", "plot-sweep", str(tmp_path / "out"), "--x", "nope"],
                          capture_output=True, text=True)
     assert bad.returncode == 2 and "must be one of the sweep's axes" in bad.stderr
+
+
+@pytest.mark.parametrize("damage", ["cell 9999", "trial 99", "duplicate", "nan metric", "text metric",
+                                    "edited parameter", "wrong seed"])
+def test_resume_drops_journal_rows_that_cannot_belong(tmp_path, damage):
+    """Issue 18: each damaged row is dropped with a warning and its cell computed again; the tables then
+    hold exactly one row per cell and trial, equal to a clean run's."""
+    from spectracam.experiments.sweep import load_sweep, run_sweep
+
+    sw_path = sweep_file(tmp_path)  # 2 temperatures × 3 cutoffs, 2 trials
+    sweep = load_sweep(sw_path)
+    clean = tmp_path / "clean"
+    run_sweep(sweep, clean, serial=True, progress=False)
+    want = read_table(clean)
+    lines = (clean / "results.jsonl").read_text().splitlines()
+    row = json.loads(lines[0])
+    edited = dict(row)
+    if damage == "cell 9999":
+        edited["cell"] = 9999
+    elif damage == "trial 99":
+        edited["trial"] = 99
+    elif damage == "nan metric":
+        edited["delta_e_mean"] = float("nan")
+    elif damage == "text metric":
+        edited["delta_e_mean"] = "five"
+    elif damage == "edited parameter":
+        edited["sensor.read_noise_e"] = 0.0
+    elif damage == "wrong seed":
+        edited["seed"] = 12345
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "sweep.json").write_text((clean / "sweep.json").read_text())
+    body = lines + [json.dumps(edited)] if damage == "duplicate" else [json.dumps(edited)] + lines[1:]
+    (run / "results.jsonl").write_text("\n".join(body) + "\n")
+    notes = []
+    t = run_sweep(sweep, run, serial=True, resume=True, progress=False, log=notes.append)
+    assert any("do not belong to this sweep" in n for n in notes), notes
+    assert t["new_cells"] == 1  # only row 0's cell is computed again
+    got = read_table(run)
+    assert len(got) == len(want) and [(r["cell"], r["trial"]) for r in got] == [(r["cell"], r["trial"]) for r in want]
+    assert [r["delta_e_mean"] for r in got] == [r["delta_e_mean"] for r in want]
+
+
+def test_a_damaged_sweep_json_is_not_called_another_sweep(tmp_path):
+    from spectracam.experiments.sweep import load_sweep, run_sweep
+
+    sweep = load_sweep(sweep_file(tmp_path))
+    (tmp_path / "run").mkdir()
+    (tmp_path / "run" / "sweep.json").write_text('{"digest": "abc", ')
+    with pytest.raises(SpectracamError, match="sweep.json is damaged"):
+        run_sweep(sweep, tmp_path / "run", serial=True, resume=True, progress=False)
+
+
+@pytest.mark.parametrize("axis, message", [
+    ("{ start = 450, stop = nan, step = 10 }", "finite numbers"),
+    ("{ start = 450, stop = inf, step = 10 }", "finite numbers"),
+    ("{ start = 450, stop = 460, step = 1e-300 }", "gives 1e+301 values, more than --max-cells"),
+])
+def test_axis_ranges_are_checked_before_any_value_is_made(tmp_path, axis, message):
+    from spectracam.experiments.sweep import load_sweep
+
+    p = sweep_file(tmp_path)
+    p.write_text(p.read_text().replace("{ start = 480, stop = 500, step = 10 }", axis))
+    t = time.perf_counter()
+    with pytest.raises(ConfigError, match=message):
+        load_sweep(p)
+    assert time.perf_counter() - t < 5

@@ -101,7 +101,13 @@ def load_experiment(path: str | Path, overrides=()) -> PaperExperiment:
     pairs = [parse_assignment(o) if isinstance(o, str) else o for o in overrides]
     mine = [(k, v) for k, v in pairs if k.split(".")[0].split("[")[0] in EXPERIMENT_KEYS]
     scene_overrides = [(k, v) for k, v in pairs if (k, v) not in mine]
-    t = apply_overrides(read_toml(p, "experiment file"), mine)
+    t = read_toml(p, "experiment file")
+    light_sets = {k.split(".", 1)[1] for k, _ in mine if k.startswith("light.")}
+    if isinstance(t.get("light"), dict) and light_sets & {"white_luminance_cd_m2", "cfa_exposure_ms"}:
+        # --set of one way to give the light replaces the file's other way (the command line comes last)
+        t["light"] = {k: v for k, v in t["light"].items()
+                      if k not in {"white_luminance_cd_m2", "cfa_exposure_ms"} - light_sets}
+    t = apply_overrides(t, mine)
     for k in t:
         if k not in EXPERIMENT_KEYS:
             raise ConfigError(k, t[k], "unknown key; an experiment file has " + ", ".join(EXPERIMENT_KEYS), src)
@@ -135,6 +141,9 @@ def load_experiment(path: str | Path, overrides=()) -> PaperExperiment:
         if k not in ("white_luminance_cd_m2", "cfa_exposure_ms", "at_temperature_K"):
             raise ConfigError(f"light.{k}", light[k], "unknown key; allowed: white_luminance_cd_m2, cfa_exposure_ms, "
                               "at_temperature_K", src)
+    if "white_luminance_cd_m2" in light and "cfa_exposure_ms" in light:
+        raise ConfigError("light", light, "give either white_luminance_cd_m2 (a fixed level) or cfa_exposure_ms (the "
+                                          "level at which cfa/single needs that time), not both", src)
     level = light.get("white_luminance_cd_m2")
     cfa_ms = None if level is not None else light.get("cfa_exposure_ms", 28.0)
     cal_T = light.get("at_temperature_K", 5000.0)

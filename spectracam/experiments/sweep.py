@@ -63,13 +63,17 @@ class Sweep:
         return [dict(zip(names, combo)) for combo in itertools.product(*(v for _, v in self.axes))]
 
 
-def _axis_values(t: dict | list, field: str, source: str) -> tuple:
+def _axis_values(t: dict | list, field: str, source: str, max_values: int = MAX_CELLS) -> tuple:
     if isinstance(t, list) and t:
         return tuple(t)
     if isinstance(t, dict) and set(t) == {"start", "stop", "step"}:
         a, b, s = (t[k] for k in ("start", "stop", "step"))
-        if not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in (a, b, s)) or s <= 0 or b < a:
-            raise ConfigError(field, t, "a range needs numbers start ≤ stop and step > 0", source)
+        if (not all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in (a, b, s))
+                or s <= 0 or b < a):
+            raise ConfigError(field, t, "a range needs finite numbers start ≤ stop and step > 0", source)
+        count = (b - a) / s + 1
+        if not count <= max_values:  # counted before a single value is made (a step of 1e-300)
+            raise ConfigError(field, t, f"gives {count:.3g} values, more than --max-cells = {max_values}", source)
         n = int(math.floor((b - a) / s + 1e-9)) + 1
         vals = [a + i * s for i in range(n)]
         return tuple(int(v) if all(isinstance(x, int) for x in (a, b, s)) else float(v) for v in vals)
@@ -94,16 +98,24 @@ def load_sweep(path: str | Path, overrides=(), max_cells: int = MAX_CELLS, log=l
                             ("axes", dict, "a table of axis = values")):
         if key in data and not isinstance(data[key], kind):
             raise ConfigError(key, data[key], f"must be {name}", src)
-    base = load_scene(p.parent / data.get("base_scene", "blackbody_5000K.toml"), scene_overrides).to_dict()
+    scene_file = p.parent / data.get("base_scene", "blackbody_5000K.toml")
+    wavelength_sets = [kv for kv in scene_overrides if kv[0].split(".")[0] == "wavelengths"]
+    base = load_scene(scene_file, wavelength_sets).to_dict()  # a grid is set in the file's own terms
     for table, values in data.get("scene", {}).items():
         if table not in base or not isinstance(values, dict):
             raise ConfigError(f"scene.{table}", values, "must be a table of the scene file", src)
         base[table].update(values)
+    others = [kv for kv in scene_overrides if kv not in wavelength_sets]
+    if others:  # --set comes last: over the base scene and the sweep's own [scene] table
+        from ..scene import parse_scene, resolve_curve_files
+
+        merged = resolve_curve_files(apply_overrides(base, others, defaults=lambda: base, source="--set"), Path.cwd())
+        base = parse_scene(merged, f"{src} with --set").to_dict()
     axes = []
     for field, spec in data.get("axes", {}).items():
         if field != DESIGN_AXIS and not PATH.match(field):
             raise ConfigError(f"axes.{field}", spec, "an axis is a 'table.field' or 'table.field[i]' path", src)
-        axes.append((field, _axis_values(spec, f"axes.{field}", src)))
+        axes.append((field, _axis_values(spec, f"axes.{field}", src, max_cells)))
     if not axes:
         raise ConfigError("axes", {}, "needs at least one axis", src)
     metrics = data.get("metrics", ["delta_e_mean", "snr_combined_db"])
@@ -229,6 +241,51 @@ def _read_journal(path: Path, digest: str, log=lambda m: None) -> tuple[list[dic
     return rows, good_len
 
 
+def finished_cells(rows: list[dict], sweep: "Sweep", cells: list[dict], log=lambda m: None) -> tuple[list[dict], set]:
+    """``(rows, done)``: the journal rows that belong to this sweep and the cells they finish.  A row
+    belongs when its cell exists, its trial is one of the sweep's with that trial's seed, its axis values
+    and every scene parameter are the cell's, and every metric is a finite number (an SNR may be null:
+    noise-free); a cell is finished by exactly one such row per trial.  Anything else — a row for cell
+    9999, trial 99 of 2, a duplicate, a NaN or text metric, edited parameters — is dropped with a
+    warning and its cell computed again."""
+    by_cell: dict[int, dict[int, list]] = {}
+    bad = 0
+    expected_params: dict[int, dict] = {}
+    for r in rows:
+        c, t = r.get("cell"), r.get("trial")
+        ok = (isinstance(c, int) and not isinstance(c, bool) and 0 <= c < len(cells) and isinstance(t, int)
+              and not isinstance(t, bool) and 0 <= t < sweep.trials and r.get("seed") == trial_seed(sweep.seed, t))
+        if ok:
+            ok = all(r.get(f"axis:{k}") == v for k, v in cells[c].items())
+        if ok:
+            for m in sweep.metrics:
+                v = r.get(m, "missing")
+                if v is None and m.startswith("snr"):
+                    continue
+                if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                    ok = False
+                    break
+        if ok:
+            if c not in expected_params:
+                expected_params[c] = _flatten(cell_scene(sweep, cells[c], c).to_dict())
+            ok = all(r.get(k) == v for k, v in expected_params[c].items())
+        if not ok:
+            bad += 1
+            continue
+        by_cell.setdefault(c, {}).setdefault(t, []).append(r)
+    done, kept = set(), []
+    for c, trials in by_cell.items():
+        if len(trials) == sweep.trials and all(len(v) == 1 for v in trials.values()):
+            done.add(c)
+            kept += [v[0] for _, v in sorted(trials.items())]
+        elif any(len(v) > 1 for v in trials.values()):
+            bad += sum(len(v) for v in trials.values())
+    if bad:
+        log(f"warning: {bad} journal row(s) do not belong to this sweep (unknown cell or trial, duplicate, "
+            "edited parameters, a metric that is not a finite number); their cells are computed again")
+    return kept, done
+
+
 def _write_tables(out: Path, rows: list[dict]) -> None:
     import csv
     import io
@@ -249,6 +306,40 @@ def _write_tables(out: Path, rows: list[dict]) -> None:
     atomic_write(out / "results.csv", s.getvalue().encode())
 
 
+#: How long a scheduler may take to send Dask's handshake after a connection opens, s.
+HANDSHAKE_TIMEOUT_S = 5.0
+
+
+def probe_scheduler(address) -> None:
+    """Refuse, in one line and within :data:`HANDSHAKE_TIMEOUT_S`, an address that is not a Dask
+    scheduler: not ``tcp://HOST:PORT``, nothing listening, or a peer that does not open with Dask's
+    handshake (an HTTP server sends nothing; another service sends something else) — before a client
+    could hang on it or read its bytes as a message length."""
+    import re
+    import socket
+
+    m = re.fullmatch(r"tcp://(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.-]+):(\d{1,5})", address) if isinstance(address, str) else None
+    if not m or not 0 < int(m.group(2)) < 65536:
+        raise SpectracamError(f"--scheduler = {address!r}: must be a Dask scheduler's address tcp://HOST:PORT")
+    host, port = m.group(1).strip("[]"), int(m.group(2))
+    try:
+        with socket.create_connection((host, port), timeout=HANDSHAKE_TIMEOUT_S) as s:
+            s.settimeout(HANDSHAKE_TIMEOUT_S)
+            data, t0 = b"", time.monotonic()
+            while b"pickle-protocol" not in data and len(data) < 4096 and time.monotonic() - t0 < HANDSHAKE_TIMEOUT_S:
+                chunk = s.recv(4096)
+                if not chunk:
+                    break
+                data += chunk
+    except socket.timeout:
+        data = b""
+    except OSError as e:
+        raise SpectracamError(f"--scheduler = {address!r}: cannot connect ({e.strerror or e})") from None
+    if b"pickle-protocol" not in data:
+        raise SpectracamError(f"--scheduler = {address!r}: the peer is not a Dask scheduler (no Dask handshake within "
+                              f"{HANDSHAKE_TIMEOUT_S:g} s: it sent {len(data)} bytes)")
+
+
 def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None, workers: int | None = None,
               serial: bool = False, resume: bool = False, progress: bool = True, log=lambda m: None,
               stop_after: int | None = None) -> dict:
@@ -258,6 +349,8 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
 
     from ..cache import cached_render, render_key
 
+    if scheduler is not None and not serial:
+        probe_scheduler(scheduler)  # before anything is written: a wrong address leaves no half-made sweep
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     journal = out / "results.jsonl"
@@ -271,8 +364,9 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
                                   "or choose a new directory")
         try:
             old = json.loads(meta_path.read_text()) if meta_path.exists() else {}
-        except (ValueError, UnicodeDecodeError):
-            old = {"digest": "a damaged sweep.json"}
+        except (ValueError, UnicodeDecodeError) as e:
+            raise SpectracamError(f"output = {str(out)!r}: its sweep.json is damaged ({e}); it cannot tell which sweep "
+                                  "the journal belongs to: choose a new directory") from None
         if not isinstance(old, dict) or old.get("digest") not in (None, sweep.digest):
             raise SpectracamError(f"output = {str(out)!r}: holds a different sweep (digest "
                                   f"{old.get('digest') if isinstance(old, dict) else old!r} ≠ {sweep.digest}); "
@@ -282,12 +376,8 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
     if journal.exists():  # drop a partial last line, so appends start on a clean line
         with open(journal, "r+b") as f:
             f.truncate(good_len)
-    counts: dict[int, int] = {}
-    for r in rows:
-        counts[r["cell"]] = counts.get(r["cell"], 0) + 1
-    done = {c for c, n in counts.items() if n == sweep.trials}
-    rows = [r for r in rows if r["cell"] in done]  # a cell with missing trials is recomputed whole
     cells = sweep.cells()
+    rows, done = finished_cells(rows, sweep, cells, log)  # a cell with missing or foreign rows is recomputed whole
     todo = [(i, c) for i, c in enumerate(cells) if i not in done]
     scenes = {i: cell_scene(sweep, c, i) for i, c in todo}
 
@@ -341,7 +431,7 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
             if scheduler:
                 try:
                     client = Client(scheduler, timeout=SCHEDULER_TIMEOUT_S)
-                except (OSError, TimeoutError) as e:
+                except (OSError, TimeoutError, ValueError, MemoryError) as e:
                     raise SpectracamError(f"--scheduler = {scheduler!r}: no Dask scheduler answered within "
                                           f"{SCHEDULER_TIMEOUT_S} s ({type(e).__name__})") from None
             else:

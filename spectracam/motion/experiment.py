@@ -97,9 +97,9 @@ class MotionSpec(Spec):
 
     def validate(self) -> None:
         v = self.speeds_px_per_ms
-        if not isinstance(v, tuple) or not v or any(not isinstance(x, (int, float)) or isinstance(x, bool) or x < 0
-                                                    for x in v):
-            raise self.error("speeds_px_per_ms", "must be a non-empty list of numbers ≥ 0 (px/ms)")
+        if not isinstance(v, tuple) or not v or any(not isinstance(x, (int, float)) or isinstance(x, bool)
+                                                    or not math.isfinite(x) or x < 0 for x in v):
+            raise self.error("speeds_px_per_ms", "must be a non-empty list of finite numbers ≥ 0 (px/ms)")
         object.__setattr__(self, "speeds_px_per_ms", tuple(sorted(float(x) for x in v)))
         from ..camera import split_design
 

@@ -167,7 +167,7 @@ def load_spec_and_scene(spec_cls, sets=(), quick: bool = False):
     from ..overrides import apply_overrides
     from ..scene import Scene
 
-    data = apply_overrides({}, sets)
+    data = apply_overrides({}, sets, defaults=lambda: spec_cls().to_dict())  # key[i] sets one element
     own = {k: v for k, v in data.items() if not isinstance(v, dict)}
     tables = {k: v for k, v in data.items() if isinstance(v, dict)}
     for k in tables:
@@ -176,8 +176,8 @@ def load_spec_and_scene(spec_cls, sets=(), quick: bool = False):
                               + ", ".join(f.name for f in dataclasses.fields(spec_cls)) + ") or the tables "
                               + ", ".join(SCENE_KEYS), "--set")
     spec = spec_cls.from_dict(own, "--set")
-    if quick:
-        spec = spec.quick()
+    if quick:  # the quick look's sizes, except what --set chose
+        spec = spec.quick().replace(**{k: getattr(spec, k) for k in own})
         tables.setdefault("wavelengths", {"start_nm": 400, "stop_nm": 700, "step_nm": 20})
     scene = Scene.from_dict(tables, "--set")
     return spec, scene
