@@ -94,6 +94,10 @@ class _Group(click.Group):
             where = f" {e.filename}" if getattr(e, "filename", None) else ""
             click.echo(f"spectracam: error: cannot read or write{where}: {e.strerror or e}", err=True)
             sys.exit(1)
+        except MemoryError:  # whatever no estimate foresaw: one line, nothing written
+            click.echo("spectracam: error: out of memory; use a smaller image, fewer bands, cells or slices (the "
+                       "estimates are in pipeline.check_memory)", err=True)
+            sys.exit(1)
         except KeyboardInterrupt:  # raised by code, not by the signal (handled above)
             click.echo("spectracam: interrupted; nothing written", err=True)
             sys.exit(128 + signal.SIGINT)
@@ -346,7 +350,8 @@ def paper_cmd(out_dir, experiment_file, renderer, quick, no_cache, save_cubes, s
 
     path = experiment_file or default_experiment()
     exp = load_experiment(path, sets)
-    check_memory(exp.base)
+    base = exp.base if not quick else exp.base.replace(image=exp.base.image.replace(width=160, height=120))
+    check_memory(base, copies=len(exp.temperatures_K) + 1, what=f", {len(exp.temperatures_K) + 1} lights held at once")
     _check_writable(out_dir)
     log = _log(quiet)
     t0 = time.perf_counter()
@@ -457,6 +462,10 @@ def consistency_cmd(out_dir, experiment_file, renderer, full, sets, quiet):
     from .experiments.paper import load_experiment
 
     exp = load_experiment(experiment_file or default_experiment(), sets)
+    from .pipeline import check_memory
+
+    if full:  # the quick map is 160x120: nothing to estimate
+        check_memory(exp.base, copies=len(exp.temperatures_K) + 1, what=f", {len(exp.temperatures_K) + 1} lights")
     _check_writable(out_dir)
     log = _log(quiet)
     result = run_consistency(exp, renderer=renderer, quick=not full, log=log)
@@ -487,6 +496,11 @@ def sweep_cmd(sweep_file, out_dir, scheduler, workers, serial, resume, max_cells
     if serial and scheduler:
         raise SpectracamError("--serial and --scheduler: choose one")
     sweep = load_sweep(sweep_file, sets, max_cells=max_cells, log=_log(quiet))
+    from .experiments.sweep import memory_scene
+    from .pipeline import check_memory
+
+    largest, renders = memory_scene(sweep)
+    check_memory(largest, copies=renders, what=f", {renders} distinct render(s) held at once")
     t = run_sweep(sweep, out_dir, scheduler=scheduler, workers=workers, serial=serial, resume=resume,
                   progress=not quiet, log=_log(quiet))
     _log(quiet)(f"{t['new_cells']} of {t['cells']} cells computed in {t['wall_s']:.1f} s "

@@ -128,24 +128,46 @@ def check_cube_matches(cube: RadianceCube, scene: Scene, source: str = "cube", r
                               "another scene is not captured as this one")
 
 
-#: How much memory a run needs beside the radiance cube itself, in cubes: the renderer's film and
-#: the capture's (H, W, 3) float32 planes and scoring's float64 images (measured: ~1.5 cubes).
-MEMORY_PER_CUBE = 2.5
+#: How much memory a run needs, in float32 radiance cubes: the cube, the renderer's film, the
+#: capture's (H, W, 3) float32 planes and scoring's float64 images.  An independent measurement of
+#: render → capture → score found a peak of 3.2 cubes (issue 18; the earlier 2.5 was too low): 3.5.
+MEMORY_PER_CUBE = 3.5
 
 
-def check_memory(scene: Scene) -> None:
-    """Refuse, before any work, a scene whose cube would not fit in the memory available."""
-    need = scene.image.width * scene.image.height * len(scene.grid) * 4 * MEMORY_PER_CUBE
+def memory_available() -> tuple[float | None, str]:
+    """Bytes this process may still allocate, and what limits it: the system's MemAvailable, or the
+    process's own address-space limit (``ulimit -v``, ``prlimit --as``) less what it has mapped."""
+    import resource
+
+    avail, why = None, "available"
     try:
         with open("/proc/meminfo") as f:
             info = {line.split(":")[0]: int(line.split()[1]) * 1024 for line in f}
         avail = info.get("MemAvailable")
     except (OSError, ValueError, IndexError):
-        return  # not Linux: no estimate
+        pass  # not Linux
+    soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    if soft != resource.RLIM_INFINITY:
+        try:
+            with open("/proc/self/status") as f:
+                vm = next(int(line.split()[1]) * 1024 for line in f if line.startswith("VmSize:"))
+        except (OSError, StopIteration, ValueError):
+            vm = 0
+        left = max(soft - vm, 0)
+        if avail is None or left < avail:
+            avail, why = left, "left under this process's address-space limit"
+    return avail, why
+
+
+def check_memory(scene: Scene, copies: float = 1.0, what: str = "") -> None:
+    """Refuse, before any work, a scene whose cubes (``copies`` of them held at once) would not fit in
+    the memory available to this process."""
+    need = scene.image.width * scene.image.height * len(scene.grid) * 4 * MEMORY_PER_CUBE * copies
+    avail, why = memory_available()
     if avail is not None and need > avail:
-        raise SpectracamError(f"image = {scene.image.width}x{scene.image.height} with {len(scene.grid)} bands: needs "
-                              f"about {need / 2**30:.1f} GiB, {avail / 2**30:.1f} GiB available; use a smaller image "
-                              "or fewer bands")
+        raise SpectracamError(f"image = {scene.image.width}x{scene.image.height} with {len(scene.grid)} bands"
+                              f"{what}: needs about {need / 2**30:.1f} GiB, {avail / 2**30:.1f} GiB {why}; use a "
+                              "smaller image or fewer bands")
 
 
 def score(raw: RawCapture, scene: Scene | None = None, processing: ProcessingSpec | None = None,

@@ -247,3 +247,51 @@ def test_set_reaches_every_documented_key_and_wins(tmp_path):
 def test_an_empty_output_name_is_refused(tmp_path):
     r = run("render", "scenes/d65.toml", "-o", "", "--renderer", "analytic", *SMALL, cwd=None)
     assert r.returncode == 2 and "must name a directory" in r.stderr and not os.path.exists("radiance.exr")
+
+
+#: Random123's published known answers for Philox4x32-10 (kat_vectors): counter c0..c3, key k0 k1 → output.
+PHILOX_KAT = [
+    ((0, 0, 0, 0), (0, 0), (0x6627E8D5, 0xE169C58D, 0xBC57AC4C, 0x9B00DBD8)),
+    ((0xFFFFFFFF,) * 4, (0xFFFFFFFF,) * 2, (0x408F276D, 0x41C83B0E, 0xA20BC7C6, 0x6D5451FD)),
+    ((0x243F6A88, 0x85A308D3, 0x13198A2E, 0x03707344), (0xA4093822, 0x299F31D0),
+     (0xD16CFE09, 0x94FDCCEB, 0x5001E420, 0x24126EA1)),
+]
+
+
+@pytest.mark.parametrize("counter, key, want", PHILOX_KAT)
+def test_philox_matches_random123s_known_answers(counter, key, want):
+    """Both Philox implementations (the numba kernel's and the NumPy twin) against the published vectors:
+    a wrong multiplier, Weyl constant, round count or word order fails here."""
+    import numpy as np
+
+    from spectracam.kernels import philox_np
+
+    nb = pytest.importorskip("numba")  # noqa: F841
+    from spectracam._numba_kernels import philox
+
+    got = philox(*(np.uint64(c) for c in counter), *(np.uint64(k) for k in key))
+    assert [int(x) for x in got] == list(want)
+    if counter[3] == 0:  # the NumPy twin's counters are (index low, index high, draw, 0)
+        index = np.array([counter[0] | (counter[1] << 32)], np.uint64)
+        assert [int(x[0]) for x in philox_np(index, key, counter[2])] == list(want)
+
+
+def test_a_memory_limit_is_met_with_one_line_before_any_work(tmp_path):
+    """The estimate reads the process's own address-space limit (prlimit --as), not only the machine's
+    free memory (issue 18: a 6000x6000 render under a 4 GiB limit died with a traceback)."""
+    def limit():
+        resource.setrlimit(resource.RLIMIT_AS, (4 * 2**30, 4 * 2**30))
+
+    r = run("render", "scenes/d65.toml", "-o", tmp_path / "o", "--renderer", "analytic",
+            "--set", "image.width=6000", "--set", "image.height=6000", preexec_fn=limit)
+    one_line(r, 2, "6000x6000", "address-space limit")
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_sweep_cell_that_cannot_be_metered_is_refused_before_it_runs(tmp_path):
+    (tmp_path / "s.toml").write_text(
+        'base_scene = "' + os.path.abspath("scenes/blackbody_5000K.toml") + '"\nrenderer = "analytic"\ntrials = 1\n'
+        '[scene]\nimage = { width = 96, height = 72 }\n[axes]\n"filters.cutoffs_nm[1]" = [600, 720]\n')
+    r = run("sweep", tmp_path / "s.toml", "-o", tmp_path / "o", "--serial", "--quiet")
+    one_line(r, 2, "cell 1", "channel R receives no light")
+    assert not (tmp_path / "o").exists()

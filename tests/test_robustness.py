@@ -227,7 +227,7 @@ def test_sweep_journal_survives_damage_and_foreign_rows(tmp_path):
     (tmp_path / "o" / "sweep.json").write_text("{damaged")
     from spectracam.errors import SpectracamError
 
-    with pytest.raises(SpectracamError, match="holds a different sweep"):
+    with pytest.raises(SpectracamError, match="sweep.json is damaged"):
         run_sweep(sweep, tmp_path / "o", serial=True, resume=True, progress=False)
 
 
@@ -278,3 +278,21 @@ def test_a_scheduler_that_is_not_dask_is_refused_within_the_handshake_timeout(tm
     assert time.perf_counter() - t < 30
     one_line(r, 2, "--scheduler", "must be a Dask scheduler's address" if peer == "address" else "not a Dask scheduler")
     assert not (tmp_path / "o").exists()
+
+
+def test_the_fault_harness_finds_nothing_in_one_case_of_every_class(capsys):
+    """tools/fuzz.py's fast subset (issue 18): one case of each fault class — damaged and foreign files,
+    wrong values, unwritable outputs, full disks, memory limits, contradicting attributes, journal
+    damage, signals to the process and its group, non-Dask schedulers — with zero tracebacks, leftovers,
+    silent wrong results, multi-line errors, orphans and hangs."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tools"))
+    import fuzz
+
+    n = len(fuzz.CASES)
+    status = fuzz.main(["--cases", str(n), "--seed", "11", "--jobs", "2"])
+    out = capsys.readouterr().out
+    assert status == 0, out
+    assert f"fuzz: {n} cases" in out and "0 tracebacks, 0 partial files, 0 silent wrong results" in out, out

@@ -38,24 +38,76 @@ VALUES = ["0", "-1", "1e308", "nan", "inf", "-inf", "1.5", "true", '"text"', "[1
           "2147483648", "0.001", "bilinear", "fsc", "optimal", "photodiode"]
 
 
-def run(args, cwd, timeout=300):
-    return subprocess.run(CMD + [str(a) for a in args], cwd=cwd, capture_output=True, text=True, timeout=timeout)
+#: A case that runs longer than this hangs (counted as such, then killed).
+HANG_S = 240
 
 
-def run_killed(args, cwd, after_s: float):
-    """Run a command and send it SIGTERM after ``after_s`` (a scheduler's time limit); its result."""
+def _limits(fsize: int | None = None, address_space: int | None = None):
+    """A preexec function setting a file-size limit (a full disk: writes fail with EFBIG, which Python
+    does not turn into SIGXFSZ) and/or an address-space limit (prlimit --as)."""
+    def apply():
+        import resource
+
+        os.setsid()  # its own process group: the harness can signal the group and find orphans
+        if fsize is not None:
+            resource.setrlimit(resource.RLIMIT_FSIZE, (fsize, fsize))
+        if address_space is not None:
+            resource.setrlimit(resource.RLIMIT_AS, (address_space, address_space))
+    return apply
+
+
+def group_members(pgid: int) -> list[int]:
+    """Live processes of a process group (Linux /proc): what is left of a command after it ended."""
+    out = []
+    for d in Path("/proc").iterdir():
+        if d.name.isdigit():
+            try:
+                stat = (d / "stat").read_text().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(stat[2]) == pgid and stat[0] != "Z":
+                out.append(int(d.name))
+    return out
+
+
+def run(args, cwd, timeout=HANG_S, opts=None):
+    """Run one command; ``opts``: ``kill`` (seconds, then SIGTERM or ``signal``; ``group``: to the whole
+    process group), ``fsize`` and ``address_space`` limits.  Returns the result and whether processes of
+    its group outlived it (orphans) or it hung."""
     import signal
     import time
 
+    opts = opts or {}
     p = subprocess.Popen(CMD + [str(a) for a in args], cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                         text=True)
-    time.sleep(after_s)
-    p.send_signal(signal.SIGTERM)
-    out, err = p.communicate(timeout=300)
+                         text=True, preexec_fn=_limits(opts.get("fsize"), opts.get("address_space")))
+    hung = False
+    if "kill" in opts:
+        time.sleep(opts["kill"])
+        sig = opts.get("signal", signal.SIGTERM)
+        try:
+            os.killpg(p.pid, sig) if opts.get("group") else p.send_signal(sig)
+        except ProcessLookupError:
+            pass
+    try:
+        out, err = p.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        hung = True
+        os.killpg(p.pid, signal.SIGKILL)
+        out, err = p.communicate()
     rc = p.returncode
     if rc < 0 and "\nwrote " in "\n" + err:  # it had finished (files renamed) when the signal landed
         rc = 0
-    return subprocess.CompletedProcess(p.args, rc, out, err)
+    deadline = time.time() + 3
+    orphans = group_members(p.pid)
+    while orphans and time.time() < deadline:
+        time.sleep(0.1)
+        orphans = group_members(p.pid)
+    for pid in orphans:
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except OSError:
+            pass
+    return subprocess.CompletedProcess(p.args, rc, out, err), bool(orphans), hung
 
 
 def non_finite_outputs(out: Path) -> bool:
@@ -76,6 +128,30 @@ def non_finite_outputs(out: Path) -> bool:
     return False
 
 
+def absurd_outputs(out: Path) -> bool:
+    """Finite but impossible numbers in a report: an SNR above the 8-24-bit ADC's reach (> 200 dB), a
+    ΔE*ab above 500, a negative ΔE or time."""
+    for p in out.rglob("*.json"):
+        try:
+            d = json.loads(p.read_text())
+        except ValueError:
+            continue
+        stack = [d]
+        while stack:
+            x = stack.pop()
+            if isinstance(x, dict):
+                for k, v in x.items():
+                    if isinstance(v, (int, float)) and not isinstance(v, bool):
+                        if ("snr" in k and v > 200) or (k.startswith("delta_e") and not 0 <= v <= 500) or \
+                                (k.endswith(("_ms", "_s")) and v < 0):
+                            return True
+                    else:
+                        stack.append(v)
+            elif isinstance(x, list):
+                stack.extend(x)
+    return False
+
+
 def judge(r, out: Path, known_bad: bool) -> dict:
     err = r.stderr.strip().splitlines()
     if r.returncode < 0 and not err:  # killed by the signal while Python itself started: no line can be written
@@ -83,17 +159,25 @@ def judge(r, out: Path, known_bad: bool) -> dict:
     left = [p for p in out.rglob("*")] if out.exists() else []
     res = {"traceback": "Traceback" in r.stderr,
            "partial": r.returncode != 0 and bool(left),
-           "silent_wrong": r.returncode == 0 and (known_bad or non_finite_outputs(out)),
+           "silent_wrong": r.returncode == 0 and (known_bad or non_finite_outputs(out) or absurd_outputs(out)),
            "multi_line": r.returncode != 0 and len(err) != 1}
     res["temporaries"] = any(p.name.startswith(".tmp") for p in left)
     res["partial"] = res["partial"] or res["temporaries"]
     return res
 
 
+SWEEP = (f'base_scene = "s.toml"\nrenderer = "analytic"\ntrials = 2\nseed = 3\n'
+         'metrics = ["delta_e_mean", "snr_combined_db"]\n[axes]\n"sensor.read_noise_e" = [10, 20, 30]\n')
+
+
 def make_base(d: Path):
     (d / "s.toml").write_text(SCENE)
-    assert run(["render", "s.toml", "-o", "r", "--renderer", "analytic", "--quiet"], d).returncode == 0
-    assert run(["capture", "r/radiance.exr", "-o", "c", "--quiet"], d).returncode == 0
+    (d / "sw.toml").write_text(SWEEP)
+    for cmd in (["render", "s.toml", "-o", "r", "--renderer", "analytic", "--quiet"],
+                ["capture", "r/radiance.exr", "-o", "c", "--quiet"],
+                ["sweep", "sw.toml", "-o", "sw", "--serial", "--quiet"]):
+        r, _, _ = run(cmd, d)
+        assert r.returncode == 0, r.stderr
 
 
 def case_damaged_file(rng, d: Path):
@@ -232,41 +316,209 @@ def case_signal(rng, d: Path):
     return cmd, False, f"SIGTERM after {after} s: {' '.join(cmd)}", after
 
 
+def case_full_disk(rng, d: Path):
+    """Every write beyond a few kB fails (RLIMIT_FSIZE: EFBIG, as a full disk), for a command that writes."""
+    cmd = rng.choice([["render", "s.toml", "-o", "out", "--renderer", "analytic"],
+                      ["simulate", "s.toml", "-o", "out", "--renderer", "analytic"],
+                      ["capture", "r/radiance.exr", "-o", "out"], ["score", "c/raw.exr", "-o", "out"],
+                      ["emva", "-o", "out"], ["validate", "-o", "out", "--renderer", "analytic"],
+                      ["paper", "--quick", "--renderer", "analytic", "-o", "out"]])
+    size = rng.choice([0, 2_000, 20_000, 200_000])
+    return cmd, False, f"full disk ({size} B files): {cmd[0]}", {"fsize": size}
+
+
+def case_memory_limit(rng, d: Path):
+    """An address-space limit (prlimit --as) under a scene or sweep too large for it."""
+    limit = rng.choice([2, 3, 4]) * 2**30
+    w = rng.choice([3000, 6000, 9000])
+    cmd = rng.choice([["render", "s.toml", "-o", "out", "--renderer", "analytic"],
+                      ["simulate", "s.toml", "-o", "out", "--renderer", "analytic"],
+                      ["paper", "-o", "out", "--renderer", "analytic"]])
+    cmd += ["--set", f"image.width={w}", "--set", f"image.height={w * 3 // 4}"]
+    return cmd, False, f"memory limit {limit >> 30} GiB, {w} px: {cmd[0]}", {"address_space": limit}
+
+
+def case_raw_attributes(rng, d: Path):
+    """A raw EXR whose attributes are damaged or contradict each other or its scene, scored."""
+    import numpy as np
+
+    from spectracam.io.exr import double, read_exr, write_exr
+
+    ch, at = read_exr(d / "c" / "raw.exr")
+    keep = {k: v for k, v in at.items() if k.startswith("spectracam")}
+    scene = json.loads(keep["spectracamScene"])
+    edit = rng.choice(["scale0", "offset", "bits", "pattern", "arch", "capture_time", "times", "scene_light",
+                       "scene_level", "camera_json", "layout_json"])
+    if edit == "scale0":
+        keep["spectracamDnScale"] = 0.0
+    elif edit == "offset":
+        keep["spectracamDnOffset"] = 3.0
+    elif edit == "bits":
+        keep["spectracamAdcBits"] = 12
+    elif edit == "pattern":
+        keep["spectracamCfaPattern"] = "BGGR"
+    elif edit == "arch":
+        keep["spectracamArchitecture"] = "fsc"
+    elif edit == "capture_time":
+        keep["spectracamCaptureTimeS"] = double(rng.choice([-1.0, 0.0, 1e9]))
+    elif edit == "times":
+        keep["spectracamExposureTimesS"] = np.array([0.01, -0.01, 0.01])
+    elif edit == "scene_light":
+        scene["illuminant"] = {"type": "blackbody", "temperature_K": 3000.0, "white_luminance_cd_m2": 100.0}
+        keep["spectracamScene"] = json.dumps(scene)
+    elif edit == "scene_level":
+        scene["illuminant"]["white_luminance_cd_m2"] = 37.0
+        keep["spectracamScene"] = json.dumps(scene)
+    elif edit == "camera_json":
+        keep["spectracamCamera"] = "{not json"
+    else:
+        keep["spectracamLayout"] = json.dumps({"kind": "mosaic", "tile": [[0, 1], [1, 2]], "pattern": "RGBG"})
+    write_exr(d / "bad.exr", ch, keep)
+    return ["score", "bad.exr", "-o", "out"], True, f"raw attribute {edit}: score"
+
+
+def case_journal(rng, d: Path):
+    """A sweep journal with rows that cannot belong, a damaged sweep.json, or a bad sweep file, resumed."""
+    shutil.copytree(d / "sw", d / "out")
+    j = d / "out" / "results.jsonl"
+    lines = j.read_text().splitlines()
+    row = json.loads(lines[0])
+    edit = rng.choice(["cell", "trial", "dup", "nan", "text", "param", "seed", "garbage", "meta", "axis_nan",
+                       "axis_tiny"])
+    cmd, bad = ["sweep", "sw.toml", "-o", "out", "--serial", "--resume", "--quiet"], False
+    if edit in ("cell", "trial", "nan", "text", "param", "seed"):
+        row.update({"cell": 9999} if edit == "cell" else {"trial": 99} if edit == "trial" else
+                   {"delta_e_mean": float("nan")} if edit == "nan" else {"delta_e_mean": "five"} if edit == "text"
+                   else {"sensor.read_noise_e": 0.0} if edit == "param" else {"seed": 1})
+        lines[0] = json.dumps(row)
+    elif edit == "dup":
+        lines.append(lines[0])
+    elif edit == "garbage":
+        lines.insert(1, "{garbage")
+    elif edit == "meta":
+        (d / "out" / "sweep.json").write_text("{damaged")
+        bad = True
+    elif edit in ("axis_nan", "axis_tiny"):
+        stop, step = ("nan", 10) if edit == "axis_nan" else (20, "1e-300")
+        (d / "sw.toml").write_text(SWEEP.replace("[10, 20, 30]", f"{{ start = 10, stop = {stop}, step = {step} }}"))
+        bad = True
+    j.write_text("\n".join(lines) + "\n")
+    return cmd, bad, f"sweep journal: {edit}"
+
+
+def case_experiment_values(rng, d: Path):
+    """Wrong values for the experiments' own keys (emva, spatial, motion, consistency, paper, sweep)."""
+    cases = [
+        (["emva", "-o", "out", "--channel", "R"], True), (["emva", "-o", "out", "--wavelength", "nan"], True),
+        (["emva", "-o", "out", "--wavelength", "1000"], True),
+        (["emva", "-o", "out", "--set", "sensor.q_max_e=1"], False),
+        (["motion", "--quick", "-o", "out", "--set", "speeds_px_per_ms=[nan]"], True),
+        (["motion", "--quick", "-o", "out", "--set", "speeds_px_per_ms=[-1]"], True),
+        (["motion", "--quick", "-o", "out", "--set", "nosuch=1"], True),
+        (["spatial", "--quick", "-o", "out", "--set", "pixel_pitches_um[7]=3"], True),
+        (["spatial", "--quick", "-o", "out", "--set", "targets=['nosuch']"], True),
+        (["consistency", "-o", "out", "--set", "temperatures_K=[]"], True),
+        (["paper", "--quick", "-o", "out", "--set", "light.white_luminance_cd_m2=-5"], True),
+        (["paper", "--quick", "-o", "out", "--set", "temperatures_K=[1e9]"], True),
+        (["sweep", "sw.toml", "-o", "out", "--scheduler", "http://127.0.0.1:9"], True),
+        (["sweep", "sw.toml", "-o", "out", "--scheduler", "tcp://127.0.0.1:1"], True),
+        (["render", "s.toml", "-o", ""], True),
+    ]
+    cmd, bad = rng.choice(cases)
+    return cmd, bad, " ".join(cmd)
+
+
+def case_group_signal(rng, d: Path):
+    """SIGTERM/SIGHUP/SIGINT to the command or to its whole process group mid-run: no leftovers, no orphans."""
+    import signal
+
+    cmd = rng.choice([["paper", "--quick", "--renderer", "analytic", "-o", "out"],
+                      ["sweep", "sw.toml", "-o", "out", "--quiet"],
+                      ["simulate", "s.toml", "-o", "out", "--renderer", "analytic"],
+                      ["validate", "-o", "out", "--renderer", "analytic"]])
+    sig = rng.choice([signal.SIGTERM, signal.SIGHUP, signal.SIGINT])
+    group = rng.random() < 0.5
+    after = rng.choice([0.5, 1.5, 3.0, 5.0])
+    return cmd, False, f"{sig.name} to {'group' if group else 'process'} after {after} s: {cmd[0]}", \
+        {"kill": after, "signal": sig, "group": group}
+
+
+def case_scheduler_peer(rng, d: Path):
+    """A --scheduler address whose peer is not Dask (an HTTP server, a peer that talks first), loopback only."""
+    import socket
+    import threading
+
+    srv = socket.socket()
+    srv.bind(("127.0.0.1", 0))
+    srv.listen(4)
+    talk = rng.random() < 0.5
+
+    def serve():
+        try:
+            c, _ = srv.accept()
+            if talk:
+                c.sendall(b"\xff" * 64 + b"SSH-2.0-OpenSSH\r\n")
+            threading.Timer(20, c.close).start()
+        except OSError:
+            pass
+        finally:
+            threading.Timer(25, srv.close).start()
+
+    threading.Thread(target=serve, daemon=True).start()
+    return (["sweep", "sw.toml", "-o", "out", "--scheduler", f"tcp://127.0.0.1:{srv.getsockname()[1]}", "--quiet"],
+            True, f"scheduler peer that {'talks' if talk else 'is silent'}")
+
+
 CASES = [case_damaged_file, case_scene_value, case_environment, case_garbage_text, case_camera_file, case_foreign_exr,
-         case_new_commands, case_signal]
+         case_new_commands, case_signal, case_full_disk, case_memory_limit, case_raw_attributes, case_journal,
+         case_experiment_values, case_group_signal, case_scheduler_peer]
 
 
-def one(i: int, seed: int, base: Path) -> tuple[str, dict]:
+def one(i: int, seed: int, base: Path, cycle: bool = False) -> tuple[str, dict]:
     rng = random.Random(seed * 100003 + i)
     with tempfile.TemporaryDirectory() as t:
         d = Path(t)
         shutil.copytree(base, d, dirs_exist_ok=True)
-        make = rng.choice(CASES)
-        cmd, known_bad, label, *kill = make(rng, d)
-        r = run_killed(cmd, d, kill[0]) if kill else run(cmd, d)
-        return label, judge(r, d / "out", known_bad) | {"status": r.returncode, "stderr": r.stderr[-400:]}
+        make = CASES[i % len(CASES)] if cycle else rng.choice(CASES)
+        cmd, known_bad, label, *extra = make(rng, d)
+        opts = extra[0] if extra and isinstance(extra[0], dict) else ({"kill": extra[0]} if extra else {})
+        r, orphans, hung = run(cmd, d, opts=opts)
+        res = judge(r, d / "out", known_bad) | {"status": r.returncode, "stderr": r.stderr[-400:]}
+        return label, res | {"orphans": orphans, "hang": hung, "command": cmd[0]}
 
 
-def main() -> None:
+KINDS = ("traceback", "partial", "silent_wrong", "multi_line", "orphans", "hang")
+
+
+def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--cases", type=int, default=120)
+    ap.add_argument("--cases", type=int, default=300)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--jobs", type=int, default=2)
-    a = ap.parse_args()
+    ap.add_argument("--random-classes", action="store_true",
+                    help="draw each case's class at random [default: every class in turn]")
+    a = ap.parse_args(argv)
     with tempfile.TemporaryDirectory() as t:
         base = Path(t)
         make_base(base)
         with ThreadPoolExecutor(a.jobs) as ex:
-            results = list(ex.map(lambda i: one(i, a.seed, base), range(a.cases)))
-    counts = {k: sum(r[k] for _, r in results) for k in ("traceback", "partial", "silent_wrong", "multi_line")}
+            results = list(ex.map(lambda i: one(i, a.seed, base, cycle=not a.random_classes), range(a.cases)))
+    counts = {k: sum(bool(r[k]) for _, r in results) for k in KINDS}
     for label, r in results:
-        if r["traceback"] or r["partial"] or r["silent_wrong"] or r["multi_line"]:
-            print(f"  {label}: status {r['status']}, " + ", ".join(k for k in counts if r[k]) + f"\n    {r['stderr']}")
+        if any(r[k] for k in KINDS):
+            print(f"  {label}: status {r['status']}, " + ", ".join(k for k in KINDS if r[k]) + f"\n    {r['stderr']}")
+    print(f"{'command':<12} {'cases':>5} {'ok':>4} {'refused':>7} " + " ".join(f"{k:>12}" for k in KINDS))
+    for cmd in sorted({r["command"] for _, r in results}):
+        rs = [r for _, r in results if r["command"] == cmd]
+        ok = sum(r["status"] == 0 for r in rs)
+        print(f"{cmd:<12} {len(rs):>5} {ok:>4} {len(rs) - ok:>7} " + " ".join(f"{sum(bool(r[k]) for r in rs):>12}"
+                                                                        for k in KINDS))
     ok = sum(r["status"] == 0 for _, r in results)
     print(f"fuzz: {len(results)} cases ({ok} succeeded, {len(results) - ok} refused), {counts['traceback']} tracebacks, "
           f"{counts['partial']} partial files, {counts['silent_wrong']} silent wrong results, "
-          f"{counts['multi_line']} multi-line errors")
+          f"{counts['multi_line']} multi-line errors, {counts['orphans']} orphans, {counts['hang']} hangs")
+    return 1 if any(counts.values()) else 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -142,8 +142,22 @@ def load_sweep(path: str | Path, overrides=(), max_cells: int = MAX_CELLS, log=l
         raise ConfigError("axes", f"{n} cells", f"more than --max-cells = {max_cells}; raise it if this is meant",
                           src)
     for i, cell in enumerate(sweep.cells()):
-        cell_scene(sweep, cell, i)  # validate every combination now
+        check_meterable(cell_scene(sweep, cell, i), cell, i, src)  # validate every combination now
     return sweep
+
+
+def check_meterable(scene: Scene, cell: dict, index: int, source: str) -> None:
+    """A cell whose white patch cannot be metered (a channel left dark, dark current filling the well)
+    is refused here, before anything runs, not midway through the sweep."""
+    from ..chart import WHITE_PATCH
+    from ..exposure import saturation_times_s
+    from ..reference import ChartReference
+
+    white = ChartReference.of(scene).patch_rates(scene.camera)[WHITE_PATCH]
+    try:
+        saturation_times_s(white, scene.camera.sensor, scene.camera.capture.white_fill)
+    except SpectracamError as e:
+        raise ConfigError(f"cell {index}", cell, str(e), source) from None
 
 
 def base_value(base: dict, path: str):
@@ -154,6 +168,17 @@ def base_value(base: dict, path: str):
     table, key, index = m.groups() if m else (None, None, None)
     v = base.get(table, {}).get(key) if key else base.get(table)
     return v[int(index)] if index is not None and isinstance(v, list) and int(index) < len(v) else v
+
+
+def memory_scene(sweep: "Sweep") -> tuple[Scene, int]:
+    """The largest cell scene and the number of distinct renders a run holds at once (for the memory
+    estimate; cells that see the same radiance share one cube)."""
+    from ..cache import render_key
+
+    scenes = [cell_scene(sweep, c, i) for i, c in enumerate(sweep.cells())]
+    keys = {render_key(s, sweep.renderer)[0] for s in scenes}
+    largest = max(scenes, key=lambda s: s.image.width * s.image.height * len(s.grid))
+    return largest, len(keys)
 
 
 def cell_scene(sweep: Sweep, cell: dict, index: int) -> Scene:
@@ -306,6 +331,8 @@ def _write_tables(out: Path, rows: list[dict]) -> None:
     atomic_write(out / "results.csv", s.getvalue().encode())
 
 
+#: How often Dask runs a task again when the worker running it dies (a killed worker mid-sweep).
+TASK_RETRIES = 2
 #: How long a scheduler may take to send Dask's handshake after a connection opens, s.
 HANDSHAKE_TIMEOUT_S = 5.0
 
@@ -460,12 +487,22 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
                         chunk = items[a:a + size]
                         futures.append(client.submit(run_cells, chunk, shared[key], sweep.trials, sweep.seed,
                                                      sweep.metrics, sweep.digest,
-                                                     key=f"cells-{sweep.digest}-{chunk[0][0]}", pure=False))
-                for fut in as_completed(futures):
-                    for res in fut.result():
-                        record(res)
-                    if stop_after is not None and n_new >= stop_after:
-                        break
+                                                     key=f"cells-{sweep.digest}-{chunk[0][0]}", pure=False,
+                                                     retries=TASK_RETRIES))
+                try:
+                    for fut in as_completed(futures):
+                        for res in fut.result():
+                            record(res)
+                        if stop_after is not None and n_new >= stop_after:
+                            break
+                except (SpectracamError, KeyboardInterrupt):
+                    raise
+                except Exception as e:  # noqa: BLE001 - a worker lost, a task cancelled: the cluster's fault
+                    first = (str(e).splitlines() or [""])[0][:200]
+                    raise SpectracamError(f"sweep: the Dask cluster failed ({type(e).__name__}: {first}) after "
+                                          f"{len(done) + n_new} of {len(cells)} cells; every finished cell is in "
+                                          f"{journal} and the renders in the render cache: run the same command with "
+                                          "--resume to continue") from None
             finally:
                 client.close()
                 if cluster is not None:

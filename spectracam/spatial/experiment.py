@@ -195,8 +195,10 @@ def make_target(name: str, spec: SpatialSpec, scene) -> tuple[Target, tuple[int,
         w, h = spec.star_size_px
         return (SiemensStar(cycles=spec.star_cycles, radius_px=0.47 * min(w, h), dataset=scene.chart.dataset), (w, h),
                 w * spec.object_pixel_mm)
-    w, h = spec.chart_size_px
-    return TiltedChart(tilt_deg=spec.chart_tilt_deg, chart=scene.chart), (w, h), spec.chart_field_mm
+    if name == "chart":
+        w, h = spec.chart_size_px
+        return TiltedChart(tilt_deg=spec.chart_tilt_deg, chart=scene.chart), (w, h), spec.chart_field_mm
+    raise ConfigError("targets", name, "must be one of " + ", ".join(map(repr, TARGETS)))  # never a silent chart
 
 
 def case_camera(scene, spec: SpatialSpec, pitch_um: float, f_number: float) -> CameraSpec:
