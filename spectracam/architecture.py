@@ -78,6 +78,10 @@ class MosaicLayout:
         return mosaic
 
 
+#: What three planes can be: sensors exposed together, or frames of one sensor in sequence.
+PLANE_KINDS = ("sensors", "frames")
+
+
 @dataclass(frozen=True)
 class PlanesLayout:
     """Three full-resolution planes R, G, B, ``(3, H, W)`` digital numbers: three sensors exposed
@@ -85,6 +89,12 @@ class PlanesLayout:
 
     kind: str
     description: str
+
+    def __post_init__(self):
+        if self.kind not in PLANE_KINDS:  # a mistyped kind would be timed and written as something else
+            from .errors import SpectracamError
+
+            raise SpectracamError(f"layout kind = {self.kind!r}: must be one of " + ", ".join(map(repr, PLANE_KINDS)))
 
 
 class Architecture(ABC):

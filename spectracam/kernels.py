@@ -89,10 +89,19 @@ def _run(kernel: str, n: int, args_for) -> bool:
         else:
             for f in [_pool().submit(fn, *args_for(a, b)) for a, b in bounds]:
                 f.result()
-    except MemoryError:
-        raise
-    except Exception:  # numba cannot compile or load the kernel here (e.g. an unsupported target)
+    except Exception as e:
+        try:
+            from numba.core.errors import NumbaError
+        except Exception:  # noqa: BLE001 - a numba too broken to import its errors cannot compile either
+            NumbaError = Exception  # noqa: N806
+        if not isinstance(e, NumbaError):
+            raise  # a fault of the data or a bug: never hidden by a silent switch to the other path
+        # numba cannot compile the kernel here (an unsupported target): the NumPy path, said once
         _STATE["module"] = None
+        import sys
+
+        sys.stderr.write(f"spectracam: the fused sensor kernels do not compile here ({type(e).__name__}: "
+                         f"{(str(e).splitlines() or [''])[0][:120]}); using the NumPy path (same numbers, slower)\n")
         return False
     return True
 

@@ -295,3 +295,48 @@ def test_a_sweep_cell_that_cannot_be_metered_is_refused_before_it_runs(tmp_path)
     r = run("sweep", tmp_path / "s.toml", "-o", tmp_path / "o", "--serial", "--quiet")
     one_line(r, 2, "cell 1", "channel R receives no light")
     assert not (tmp_path / "o").exists()
+
+
+def test_the_fused_backend_never_hides_a_fault(monkeypatch, capsys):
+    """Only numba's own compile errors switch the fused kernels off (said once on stderr); any other
+    exception in a kernel — a bug, bad data — reaches the caller (issue 18: it was swallowed and the
+    backend silently switched itself off)."""
+    numba = pytest.importorskip("numba")
+    from spectracam import kernels
+
+    mod = kernels._numba()
+    if mod is None:
+        pytest.skip("the fused backend does not run here")
+    monkeypatch.setitem(kernels._STATE, "module", mod)
+
+    def bug(*args):
+        raise IndexError("a planted bug")
+
+    monkeypatch.setattr(mod, "capture_kernel", bug)
+    with pytest.raises(IndexError, match="planted"):
+        kernels._run("capture_kernel", 4, lambda a, b: ())
+    assert kernels._STATE["module"] is mod  # still on
+
+    def no_compile(*args):
+        raise numba.core.errors.TypingError("cannot type this here")
+
+    monkeypatch.setattr(mod, "capture_kernel", no_compile)
+    assert kernels._run("capture_kernel", 4, lambda a, b: ()) is False
+    assert kernels._STATE["module"] is None and "using the NumPy path" in capsys.readouterr().err
+
+
+def test_layouts_are_what_they_say():
+    """A mistyped plane kind is refused (it was timed as simultaneous), and a layout with no raw form
+    is not written as "planes"."""
+    from spectracam.architecture import PlanesLayout
+    from spectracam.errors import SpectracamError
+    from spectracam.io.exr import layout_to_dict
+
+    with pytest.raises(SpectracamError, match="layout kind = 'frame'"):
+        PlanesLayout("frame", "three frames")
+    with pytest.raises(SpectracamError, match="no raw EXR form"):
+        layout_to_dict(object())
+    with pytest.raises(Exception, match="must be one of 'edge', 'star', 'chart'"):
+        from spectracam.spatial.experiment import SpatialSpec, make_target
+
+        make_target("nosuch", SpatialSpec(), None)

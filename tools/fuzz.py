@@ -152,15 +152,33 @@ def absurd_outputs(out: Path) -> bool:
     return False
 
 
-def judge(r, out: Path, known_bad: bool) -> dict:
-    err = r.stderr.strip().splitlines()
-    if r.returncode < 0 and not err:  # killed by the signal while Python itself started: no line can be written
-        err = ["(killed before spectracam ran)"]
+def snapshot(out: Path) -> dict:
+    """What an output directory holds before a command: path → (size, mtime)."""
+    return {p: (p.stat().st_size, p.stat().st_mtime_ns) for p in out.rglob("*")} if out.exists() else {}
+
+
+#: What an interrupted or refused sweep may leave on purpose: its journal and header, so that
+#: ``--resume`` continues it (and the same command without --resume is refused, not overwritten).
+SWEEP_JOURNAL = ("sweep.json", "results.jsonl")
+
+
+def judge(r, out: Path, known_bad: bool, before: dict | None = None, command: str = "") -> dict:
+    """Tracebacks; leftovers (files a failed command made or changed — a sweep's journal aside —
+    and temporary files); silent wrong results; an error that is not exactly one ``spectracam:`` line,
+    the last (progress lines before it are fine)."""
+    lines = r.stderr.strip().splitlines()
+    said = [x for x in lines if x.startswith(("spectracam: error:", "spectracam: interrupted"))]
+    one_line = len(said) == 1 and lines[-1] == said[0]
+    if r.returncode < 0 and not lines:  # killed by the signal while Python itself started: no line can be written
+        one_line = True
+    before = before or {}
     left = [p for p in out.rglob("*")] if out.exists() else []
+    made = [p for p in left if p.is_file() and before.get(p) != (p.stat().st_size, p.stat().st_mtime_ns)
+            and not (command == "sweep" and p.name in SWEEP_JOURNAL)]
     res = {"traceback": "Traceback" in r.stderr,
-           "partial": r.returncode != 0 and bool(left),
+           "partial": r.returncode != 0 and bool(made),
            "silent_wrong": r.returncode == 0 and (known_bad or non_finite_outputs(out) or absurd_outputs(out)),
-           "multi_line": r.returncode != 0 and len(err) != 1}
+           "multi_line": r.returncode != 0 and not one_line}
     res["temporaries"] = any(p.name.startswith(".tmp") for p in left)
     res["partial"] = res["partial"] or res["temporaries"]
     return res
@@ -482,8 +500,9 @@ def one(i: int, seed: int, base: Path, cycle: bool = False) -> tuple[str, dict]:
         make = CASES[i % len(CASES)] if cycle else rng.choice(CASES)
         cmd, known_bad, label, *extra = make(rng, d)
         opts = extra[0] if extra and isinstance(extra[0], dict) else ({"kill": extra[0]} if extra else {})
+        before = snapshot(d / "out")
         r, orphans, hung = run(cmd, d, opts=opts)
-        res = judge(r, d / "out", known_bad) | {"status": r.returncode, "stderr": r.stderr[-400:]}
+        res = judge(r, d / "out", known_bad, before, cmd[0]) | {"status": r.returncode, "stderr": r.stderr[-400:]}
         return label, res | {"orphans": orphans, "hang": hung, "command": cmd[0]}
 
 

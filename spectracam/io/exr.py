@@ -248,7 +248,10 @@ def _other_parts(path) -> list[str]:
 def layout_to_dict(layout) -> dict:
     if isinstance(layout, MosaicLayout):
         return {"kind": "mosaic", "tile": [list(row) for row in layout.tile], "pattern": layout.pattern}
-    return {"kind": "planes", "planes": layout.kind, "description": layout.description}
+    if isinstance(layout, PlanesLayout):
+        return {"kind": "planes", "planes": layout.kind, "description": layout.description}
+    raise SpectracamError(f"capture: a {type(layout).__name__} layout has no raw EXR form (a mosaic or planes); "
+                          "register its writer before writing it")  # never written as something it is not
 
 
 def layout_from_dict(d: dict, source: str):
