@@ -94,9 +94,13 @@ def _run(kernel: str, n: int, args_for) -> bool:
             from numba.core.errors import NumbaError
         except Exception:  # noqa: BLE001 - a numba too broken to import its errors cannot compile either
             NumbaError = Exception  # noqa: N806
-        if not isinstance(e, NumbaError):
+        import traceback
+
+        in_backend = any(("/numba/" in f.filename or "/llvmlite/" in f.filename)
+                         for f in traceback.extract_tb(e.__traceback__))
+        if not (isinstance(e, NumbaError) or in_backend):
             raise  # a fault of the data or a bug: never hidden by a silent switch to the other path
-        # numba cannot compile the kernel here (an unsupported target): the NumPy path, said once
+        # numba or llvmlite cannot compile or run the kernel here (an unsupported target): the NumPy path, said once
         _STATE["module"] = None
         import sys
 

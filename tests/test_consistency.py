@@ -38,3 +38,25 @@ def test_consistency_map(small_map, tmp_path):
     paths = cons.write_consistency_outputs(tmp_path, r, "test")
     assert {p.name for p in paths} == {"consistency.png", "consistency.svg", "consistency.json", "consistency.md"}
     assert json.loads((tmp_path / "consistency.json").read_text())["best"] == 0
+
+
+def test_a_reading_with_another_spectral_range_is_rendered_on_that_range(monkeypatch):
+    """Issue 18's planted slip: the cubes keyed on something other than the grid let the 380–730 nm
+    reading run silently on 400–700 nm cubes.  Every capture must see the reading's own bands."""
+    import spectracam.experiments.paper as paper
+
+    monkeypatch.setattr(cons, "FACTORS", {k: v[:1] for k, v in cons.FACTORS.items()})
+    monkeypatch.setattr(cons, "ONE_AT_A_TIME", [r for r in cons.ONE_AT_A_TIME if r[0] == "spectral range"])
+    seen = []
+    real = paper.design_case
+
+    def spy(cube, scene, *args, **kwargs):
+        seen.append((cube.grid.edges_nm[0], cube.grid.edges_nm[-1], scene.grid.edges_nm[0], scene.grid.edges_nm[-1]))
+        return real(cube, scene, *args, **kwargs)
+
+    monkeypatch.setattr(paper, "design_case", spy)
+    exp = load_experiment(cons.__file__.replace("spectracam/experiments/consistency.py", "scenes/paper.toml"))
+    cons.run_consistency(exp)
+    ranges = {(a, b) for a, b, c, d in seen}
+    assert ranges == {(400.0, 700.0), (380.0, 730.0)}, ranges
+    assert all((a, b) == (c, d) for a, b, c, d in seen)  # the cube's bands are always its scene's

@@ -340,3 +340,14 @@ def test_layouts_are_what_they_say():
         from spectracam.spatial.experiment import SpatialSpec, make_target
 
         make_target("nosuch", SpatialSpec(), None)
+
+
+def test_a_false_flag_on_the_command_line_is_applied(tmp_path):
+    """--no-gamut-clip over a scene that clips must turn clipping off (a flag whose value is False is
+    still a flag: a slip that tests `if value` instead of `is not None` drops it)."""
+    (tmp_path / "s.toml").write_text("[image]\nwidth = 160\nheight = 120\n[processing]\ngamut_clip = true\n")
+    for flag, want in (("--no-gamut-clip", False), ("--gamut-clip", True)):
+        r = run("simulate", tmp_path / "s.toml", "-o", tmp_path / flag, "--renderer", "analytic", flag, "--quiet")
+        assert r.returncode == 0, r.stderr
+        params = json.loads((tmp_path / flag / "report.json").read_text())["parameters"]
+        assert params["processing"]["gamut_clip"] is want
