@@ -209,3 +209,23 @@ def test_axis_ranges_are_checked_before_any_value_is_made(tmp_path, axis, messag
     with pytest.raises(ConfigError, match=message):
         load_sweep(p)
     assert time.perf_counter() - t < 5
+
+
+def test_two_runs_in_one_directory_at_once_are_refused(tmp_path):
+    """Issue 18: two --resume runs at once both computed the same cells; the journal is locked."""
+    import subprocess
+
+    from spectracam.experiments.sweep import _lock_journal, load_sweep, run_sweep
+
+    sw_path = sweep_file(tmp_path)
+    sweep = load_sweep(sw_path)
+    run_sweep(sweep, tmp_path / "o", serial=True, progress=False, stop_after=1)
+    held = _lock_journal(tmp_path / "o" / "results.jsonl")  # another run holds it (a separate open file)
+    try:
+        r = subprocess.run([sys.executable, "-m", "spectracam", "sweep", str(sw_path), "-o", str(tmp_path / "o"),
+                            "--serial", "--resume", "--quiet"], capture_output=True, text=True)
+        assert r.returncode == 2 and "another spectracam sweep is running" in r.stderr, r.stderr
+    finally:
+        held.close()
+    t = run_sweep(sweep, tmp_path / "o", serial=True, resume=True, progress=False)  # free again
+    assert t["new_cells"] == t["cells"] - 1

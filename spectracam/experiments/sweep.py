@@ -367,6 +367,24 @@ def probe_scheduler(address) -> None:
                               f"{HANDSHAKE_TIMEOUT_S:g} s: it sent {len(data)} bytes)")
 
 
+def _lock_journal(journal: Path):
+    """An exclusive lock on the journal (``flock``; released when the file is closed, also by a kill):
+    a second run in the same directory — two ``--resume`` at once — is refused in one line instead of
+    computing the same cells twice.  Returns the open file, to be kept while the sweep runs."""
+    f = open(journal, "ab")
+    try:
+        import fcntl
+
+        fcntl.flock(f.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except ImportError:  # not POSIX: no lock
+        pass
+    except OSError:
+        f.close()
+        raise SpectracamError(f"output = {str(journal.parent)!r}: another spectracam sweep is running in this "
+                              "directory; wait for it to finish (or stop it), then --resume") from None
+    return f
+
+
 def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None, workers: int | None = None,
               serial: bool = False, resume: bool = False, progress: bool = True, log=lambda m: None,
               stop_after: int | None = None) -> dict:
@@ -398,6 +416,7 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
             raise SpectracamError(f"output = {str(out)!r}: holds a different sweep (digest "
                                   f"{old.get('digest') if isinstance(old, dict) else old!r} ≠ {sweep.digest}); "
                                   "choose a new directory")
+    lock = _lock_journal(journal)  # held until this function returns: one run per directory at a time
     atomic_write(meta_path, json.dumps(meta, indent=1).encode(), now=True)
     rows, good_len = _read_journal(journal, sweep.digest, log)
     if journal.exists():  # drop a partial last line, so appends start on a clean line
@@ -510,5 +529,6 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
         bar.close()
         wall = time.perf_counter() - t1
     _write_tables(out, rows)
+    lock.close()
     return {"cells": len(cells), "new_cells": n_new, "render_s": t_render, "wall_s": wall,
             "cluster_start_s": cluster_start, "compute_s": float(np.sum(compute)) if compute else 0.0}
