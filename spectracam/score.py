@@ -36,7 +36,10 @@ def _mean_or_none(values) -> float | None:
 @dataclass(frozen=True)
 class PatchScore:
     """One patch: scene and rendered CIELAB, ΔE (per-pixel mean, of the mean colour, of the
-    conversion alone) and SNR per channel and combined (``None`` when noise-free)."""
+    conversion alone) and SNR per channel and combined.  An SNR is ``None`` when it has no finite
+    value: noise-free (σ = 0: infinite), or undefined — the channel's mean dark-subtracted signal is
+    ≤ 0 under noise, so 20·log10(μ/σ) has no value; ``snr_undefined`` names those channels, so the
+    two cases never read alike."""
 
     patch: int
     name: str
@@ -50,6 +53,7 @@ class PatchScore:
     snr_B_db: float | None
     snr_combined_db: float | None
     pixels: int
+    snr_undefined: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -67,6 +71,9 @@ class ChartSummary:
     exposure_R_ms: float
     exposure_G_ms: float
     exposure_B_ms: float
+    #: How many patch-channel SNRs are undefined (mean signal ≤ 0 under noise); a channel's chart SNR
+    #: above is ``None`` then, and ``None`` with a count of 0 means noise-free.
+    snr_undefined_patches: int = 0
 
 
 #: The metrics a sweep can record: every field of :class:`ChartSummary`.
@@ -253,7 +260,8 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
             delta_e_of_mean=float(delta_e(mean_labs[p], scene_lab[p], method)),
             delta_e_conversion=float(delta_e(conversion_lab[p], scene_lab[p], method)),
             snr_R_db=_finite(snr[0]), snr_G_db=_finite(snr[1]), snr_B_db=_finite(snr[2]),
-            snr_combined_db=_finite(combined), pixels=int((r.stop - r.start) * (c.stop - c.start))))
+            snr_combined_db=_finite(combined), pixels=int((r.stop - r.start) * (c.stop - c.start)),
+            snr_undefined=tuple(k for k, m, sd in zip("RGB", means[p], stds[p]) if m <= 0 and sd > 0)))
     times_ms = 1e3 * np.asarray(raw.exposure_times_s, float)
     summary = ChartSummary(
         delta_e_mean=float(np.mean([p.delta_e_mean for p in patches])),
@@ -262,7 +270,8 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
         snr_combined_db=_mean_or_none([p.snr_combined_db for p in patches]),
         **{f"snr_{k}_db": _mean_or_none([getattr(p, f"snr_{k}_db") for p in patches]) for k in "RGB"},
         capture_time_ms=1e3 * float(raw.capture_time_s),
-        **{f"exposure_{k}_ms": float(t) for k, t in zip("RGB", times_ms)})
+        **{f"exposure_{k}_ms": float(t) for k, t in zip("RGB", times_ms)},
+        snr_undefined_patches=int(sum(len(p.snr_undefined) for p in patches)))
     parameters = {
         "scene": raw.scene, "camera": camera.to_dict(), "processing": processing.to_dict(), "seed": raw.seed,
         "delta_e_reference": delta_e_reference, "conversion_matrix": M.tolist(),

@@ -351,3 +351,24 @@ def test_a_false_flag_on_the_command_line_is_applied(tmp_path):
         assert r.returncode == 0, r.stderr
         params = json.loads((tmp_path / flag / "report.json").read_text())["parameters"]
         assert params["processing"]["gamut_clip"] is want
+
+
+def test_an_undefined_snr_is_not_read_as_noise_free():
+    """Issue 18: SNR None meant both noise-free and undefined.  A dim blue under warm light leaves the
+    dark-subtracted blue mean of dark patches ≤ 0: those are counted and named; a noise-free capture
+    counts none."""
+    from conftest import small_scene
+    from spectracam.pipeline import capture, score
+    from spectracam.render import render
+
+    scene = small_scene(illuminant={"temperature_K": 2000, "white_luminance_cd_m2": 2.0},
+                        sensor={"read_noise_e": 2000.0})
+    cube = render(scene, "analytic")
+    s = score(capture(cube, seed=0, scene=scene), scene).to_dict()
+    undefined = [p for p in s["patches"] if p["snr_undefined"]]
+    assert undefined and s["chart"]["snr_undefined_patches"] == sum(len(p["snr_undefined"]) for p in undefined)
+    assert all(p["snr_B_db"] is None for p in undefined if "B" in p["snr_undefined"])
+    quiet = scene.replace(camera=scene.camera.replace(sensor=scene.camera.sensor.off(
+        "shot_noise", "dark_current", "read_noise", "fpn", "quantization")))
+    s0 = score(capture(cube, seed=0, scene=quiet), quiet).to_dict()
+    assert s0["chart"]["snr_B_db"] is None and s0["chart"]["snr_undefined_patches"] == 0
