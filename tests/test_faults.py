@@ -372,3 +372,9 @@ def test_an_undefined_snr_is_not_read_as_noise_free():
         "shot_noise", "dark_current", "read_noise", "fpn", "quantization")))
     s0 = score(capture(cube, seed=0, scene=quiet), quiet).to_dict()
     assert s0["chart"]["snr_B_db"] is None and s0["chart"]["snr_undefined_patches"] == 0
+
+
+def test_emva_refuses_an_unmeasurable_camera_in_its_own_terms(tmp_path):
+    r = run("emva", "-o", tmp_path / "e", "--set", "sensor.black_level_DN=128", "--set", "sensor.fpn_fraction=0.9")
+    one_line(r, 2, "cannot be measured as EMVA 1288 prescribes", "darkest exposure step", "[sensor]")
+    assert not (tmp_path / "e").exists()

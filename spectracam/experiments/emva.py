@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..camera import CameraSpec
+from ..errors import ConfigError, SpectracamError
 from ..emva1288 import EmvaSeries, analyse, expected
 from ..filters import CHANNELS, responsivities
 from ..sensor import expose, fixed_pattern, noise_stream
@@ -55,8 +56,6 @@ def simulate_series(camera: CameraSpec, setup: EmvaSetup = EmvaSetup()) -> tuple
     """The frames of the measurement, taken with one physical sensor (one fixed pattern)."""
     s = camera.sensor
     import math
-
-    from ..errors import SpectracamError
 
     if not (isinstance(setup.wavelength_nm, (int, float)) and math.isfinite(setup.wavelength_nm)):
         raise SpectracamError(f"--wavelength = {setup.wavelength_nm!r}: must be a finite wavelength in nm")
@@ -107,10 +106,24 @@ def configured(camera: CameraSpec, setup: EmvaSetup, photons_per_s: float, eta: 
                     series_photon_rate_per_s=photons_per_s)
 
 
+def _in_camera_terms(e) -> str:
+    """What an analysis refusal means for the simulated camera."""
+    if e.value == "first step":
+        return "even its darkest exposure step has more than 0.2 % of pixels at the top code"
+    if e.value == "saturation signal":
+        return "no exposure step rises above the dark level"
+    return "its frames do not give the photon-transfer series the standard analyses"
+
+
 def run_emva(camera: CameraSpec, setup: EmvaSetup = EmvaSetup()) -> dict:
     """Measure and analyse; ``{"configured", "measured", "setup", "camera", "curves"}``."""
     series, info = simulate_series(camera, setup)
-    measured = analyse(series)
+    try:
+        measured = analyse(series)
+    except ConfigError as e:  # the analysis's own terms ("bright_pairs = 'first step'") → the camera's
+        raise SpectracamError(f"emva: this camera cannot be measured as EMVA 1288 prescribes: {_in_camera_terms(e)} "
+                              f"(analysis: {e.field} = {e.value!r}: {e.allowed}); check the [sensor] table (black "
+                              "level, FPN, dark current, ADC range)") from None
     conf = configured(camera, setup, info["photons_per_s"], info["eta"])
     pick = lambda d: {k: (None if d[k] is None or not np.isfinite(d[k]) else float(d[k])) for k in KEYS}  # noqa: E731
     return {"configured": pick(conf), "measured": pick(measured),
