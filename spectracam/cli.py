@@ -51,8 +51,9 @@ class _Group(click.Group):
             signal.signal(sig, _interrupted)
         try:
             rv = super().main(*args, standalone_mode=False, **kwargs)
-            for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):  # done and written: a late signal
-                signal.signal(sig, signal.SIG_IGN)  # must not kill the exit (rc −15 with complete outputs)
+            if Path(sys.argv[0]).name in ("spectracam", "__main__.py"):  # the program itself, about to exit
+                for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):  # done and written: a late signal
+                    signal.signal(sig, signal.SIG_IGN)  # must not kill the exit (rc −15 with complete outputs)
         except click.exceptions.Abort:
             click.echo("spectracam: interrupted (SIGINT); nothing written", err=True)
             sys.exit(130)
