@@ -91,6 +91,11 @@ class _Group(click.Group):
         except SpectracamError as e:
             click.echo(f"spectracam: error: {e}", err=True)
             sys.exit(2)
+        except BrokenPipeError:  # the reader went away (`spectracam cameras | head`): stop quietly, as tools do
+            import os
+
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            sys.exit(141)
         except OSError as e:
             where = f" {e.filename}" if getattr(e, "filename", None) else ""
             click.echo(f"spectracam: error: cannot read or write{where}: {e.strerror or e}", err=True)
