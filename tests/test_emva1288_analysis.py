@@ -302,3 +302,21 @@ def test_series_is_checked():
 if __name__ == "__main__":  # prints the measured-vs-configured table
     s, r = make_series(CAMERA)
     print(table(emva.analyse(s), CAMERA.expected(r)))
+
+
+def test_column_and_row_parts_keep_their_axes_on_a_non_square_frame():
+    """Issue 18's planted slip: M (rows) and N (columns) swapped.  On a 40 × 200 frame with a strong
+    pixel pattern (σ 10 DN) and a weak column pattern (σ 1 DN), swapping 1/M and 1/N moves the column
+    part by 100·(1/40 − 1/200) = 2 DN² (200 %), and swapping the axes puts it in the rows."""
+    from spectracam.emva1288 import spatial_statistics
+
+    rng = np.random.default_rng(5)
+    M, N, L = 40, 200, 8
+    col = rng.normal(0, 1.0, N)
+    pix = rng.normal(0, 10.0, (M, N))
+    stack = 500 + pix[None] + col[None, None, :] + rng.normal(0, 0.5, (L, M, N))
+    s = spatial_statistics(stack)
+    # the column part: the sample variance of the column offsets, within the estimator's spread
+    # (pixel noise left in a column mean, 100/40 DN², has sd ~ 2.5·√(2/199) ≈ 0.25 DN²)
+    assert s["s2_y_col"] == pytest.approx(np.var(col, ddof=1), abs=0.6)
+    assert abs(s["s2_y_row"]) < 0.6 and s["s2_y_pixel"] == pytest.approx(100.0, rel=0.05)

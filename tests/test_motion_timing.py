@@ -48,7 +48,10 @@ def test_balanced_fsc_takes_the_cfa_time():
 def test_rolling_shutter_offsets_each_row_by_a_line_time(arch):
     rows = 10
     t = capture_timing(make_architecture(arch), T, TimingSpec(rolling_shutter=True, line_time_us=50.0), rows, -2)
-    assert np.allclose(np.diff(t.row_delay_s), 50e-6)
+    assert np.allclose(np.diff(t.row_delay_s), 50e-6)  # later rows later: the shift's sign
+    # the first row passed is image row −2 (a margin above the image): image row 0 is read at delay 0,
+    # the margin rows before it (a slip in the first row shifts every window by whole line times)
+    assert t.row_delay_s[2] == 0.0 and t.row_delay_s[0] == pytest.approx(-100e-6)
     lo, hi = np.array([-1.0]), np.array([1.0])
     for k in range(3):   # every row's window has the channel's full length
         assert np.allclose(t.overlap_s(k, lo, hi)[:, 0], T[k])
