@@ -172,13 +172,14 @@ def d65_white_xyz() -> np.ndarray:
     return xyz / xyz[1]
 
 
-def _d65_response(wl: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """Raw response ``∫S_k·E_D65 dλ`` (energy sensitivities) to a perfect white under D65, G = 1."""
+def d65_response(wl: np.ndarray, values: np.ndarray, reflectance=None) -> np.ndarray:
+    """Raw response ``∫S_k·ρ·E_D65 dλ`` (energy sensitivities ``values`` on ``wl``) to a surface of
+    reflectance ``ρ`` (a spectrum; default a perfect white) under CIE D65, at 1 nm, G = 1."""
     import colour
 
     sd = colour.SDS_ILLUMINANTS["D65"]
     lam = np.arange(np.ceil(wl[0]), np.floor(wl[-1]) + 1.0)
-    E = np.interp(lam, sd.wavelengths, sd.values)
+    E = np.interp(lam, sd.wavelengths, sd.values) * (1.0 if reflectance is None else reflectance(lam))
     S = np.stack([np.interp(lam, wl, values[:, k]) for k in range(3)], axis=-1)
     r = np.trapezoid(S * E[:, None], lam, axis=0)
     return r / r[1]
@@ -195,7 +196,7 @@ def restored_gains(name: str) -> np.ndarray:
         raise ConfigError("filters.camera", name, "its curves are normalised to a peak of 1 per channel, so the gains "
                           "between channels are lost, and no published matrix restores them; choose another "
                           "camera, or give its curves with their gains in filters.camera_file")
-    return PUBLISHED_MATRICES[c.matrix].neutral(d65_white_xyz()) / _d65_response(c.wavelengths_nm, c.values)
+    return PUBLISHED_MATRICES[c.matrix].neutral(d65_white_xyz()) / d65_response(c.wavelengths_nm, c.values)
 
 
 def energy_sensitivities(name: str) -> tuple[np.ndarray, np.ndarray]:

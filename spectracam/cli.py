@@ -200,32 +200,29 @@ def capture_cmd(radiance_file: Path, out_dir: Path, arch, exposure, config_file,
     sensor; write DIR/raw.exr and DIR/raw.dng."""
     from .io.exr import read_radiance_exr
     from .metering import parse_white
-    from .pipeline import capture, check_cube_matches, stand_in_scene
+    from .pipeline import capture, capture_spectral_image, check_cube_matches, stand_in_scene
 
     white_spec = parse_white(white) if white is not None else None  # checked before the file is read
     cube, _ = read_radiance_exr(radiance_file, units)  # checked as it is read
     log = _log(quiet)
     flags = _flag_overrides(arch=arch, exposure=exposure)
-    if "scene" in cube.metadata:
+    recorded = "scene" in cube.metadata
+    if recorded:
         scene = _scene(cube.metadata["scene"], str(radiance_file), config_file, flags, sets)
         check_cube_matches(cube, scene, str(radiance_file))
-    else:
+    else:  # a spectral image from another tool: the stand-in scene holds the camera and the conversion's chart
         from .pipeline import STAND_IN_SCENE
 
-        scene = _scene(dict(STAND_IN_SCENE), str(radiance_file), config_file, flags, sets)
-        cube, _ = stand_in_scene(cube, {k: v for k, v in scene.to_dict().items() if k != "wavelengths"},
-                                 str(radiance_file))
-        scene = _scene({**scene.to_dict(), "wavelengths": {"centres_nm": list(cube.wavelengths_nm)}},
-                       str(radiance_file))
+        data = _scene(dict(STAND_IN_SCENE), str(radiance_file), config_file, flags, sets).to_dict()
+        data.pop("wavelengths")  # the image's own bands
+        cube, scene = stand_in_scene(cube, data, str(radiance_file))
         if "bands_dropped_outside_nm" in cube.metadata:
             lo, hi = cube.metadata["bands_dropped_outside_nm"]
             log(f"{radiance_file}: bands outside {lo:g}–{hi:g} nm dropped (the chart the conversion is fitted on has "
                 "no reflectance data there)")
     _check_writable(out_dir)
-    if "scene" in cube.metadata:
-        raw = capture(cube, seed=seed, scene=scene, white=white_spec)
-    else:
-        raw = _capture_foreign(cube, scene, seed, white_spec)
+    raw = capture(cube, seed=seed, scene=scene, white=white_spec) if recorded else \
+        capture_spectral_image(cube, scene, seed, white_spec)
     paths = _write_capture(out_dir, raw, scene)
     if raw.scene is None:
         paths += _write_display(out_dir, raw, scene)
@@ -235,19 +232,6 @@ def capture_cmd(radiance_file: Path, out_dir: Path, arch, exposure, config_file,
     times = ", ".join(f"{c} {1e3 * t:.2f} ms" for c, t in zip("RGB", raw.exposure_times_s))
     log(f"{raw.design}: exposures {times}; capture time {1e3 * raw.capture_time_s:.2f} ms")
     log("wrote " + ", ".join(map(str, paths)))
-
-
-def _capture_foreign(cube, scene, seed, white_spec):
-    """A spectral image with no spectracam scene, captured by ``scene``'s camera, metered on ``white_spec``."""
-    from .capture import capture as capture_stage
-    from .metering import metered_radiance, parse_white
-
-    white_spec = white_spec or parse_white("brightest")
-    if white_spec.kind == "patch":
-        metered_radiance(cube, white_spec, None)  # the one-line refusal: no white patch here
-    seed = scene.render.seed if seed is None else seed
-    return capture_stage(cube, scene.camera, seed, white_radiance=metered_radiance(cube, white_spec, scene),
-                         metering=white_spec.to_dict())
 
 
 def _write_display(out_dir: Path, raw, scene) -> list[Path]:
@@ -502,11 +486,10 @@ def sweep_cmd(sweep_file, out_dir, scheduler, workers, serial, resume, max_cells
     if serial and scheduler:
         raise SpectracamError("--serial and --scheduler: choose one")
     sweep = load_sweep(sweep_file, sets, max_cells=max_cells, log=_log(quiet))
-    from .experiments.sweep import memory_scene
     from .pipeline import check_memory
 
-    largest, renders = memory_scene(sweep)
-    check_memory(largest, copies=renders, what=f", {renders} distinct render(s) held at once")
+    check_memory(sweep.largest_scene, copies=sweep.distinct_renders,
+                 what=f", {sweep.distinct_renders} distinct render(s) held at once")
     t = run_sweep(sweep, out_dir, scheduler=scheduler, workers=workers, serial=serial, resume=resume,
                   progress=not quiet, log=_log(quiet))
     _log(quiet)(f"{t['new_cells']} of {t['cells']} cells computed in {t['wall_s']:.1f} s "

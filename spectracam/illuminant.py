@@ -132,3 +132,12 @@ def spectral_irradiance(spec: IlluminantSpec) -> Spectrum:
     k = irradiance_scale(spec)
     shape = relative_spd(spec)
     return lambda lam: k * shape(lam)
+
+
+def white_diffuser_radiance(spec: IlluminantSpec, grid) -> np.ndarray:
+    """Band-averaged radiance ``(B,)`` of a perfect white (Lambertian, reflectance 1) diffuser facing
+    the illuminant, ``E/π``, W·m⁻²·sr⁻¹·nm⁻¹ on ``grid`` (its luminance is ``white_luminance_cd_m2``)."""
+    from .spectra import band_average
+
+    E = spectral_irradiance(spec)
+    return band_average(lambda lam: E(lam) / np.pi, grid)

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import ConfigError, SpectracamError
-from .spectra import K_M_LM_PER_W, band_average, cmf_band_weights
+from .spectra import cmf_band_weights
 
 #: u′v′ distance from the illuminant's white within which a pixel counts as neutral: the
 #: ColorChecker's greys lie within 0.0032 of D65's white and its least saturated colours (light skin,
@@ -86,11 +86,9 @@ def _uv(xyz: np.ndarray) -> np.ndarray:
 def white_radiance_of(scene, grid, luminance_cd_m2: float) -> np.ndarray:
     """Band-averaged radiance ``(B,)`` of a perfect white diffuser of the given luminance under the
     scene's illuminant, on ``grid``."""
-    from .illuminant import spectral_irradiance
+    from .illuminant import white_diffuser_radiance
 
-    E = spectral_irradiance(scene.illuminant)
-    white = band_average(lambda lam: E(lam) / np.pi, grid)
-    return white * (luminance_cd_m2 / scene.illuminant.white_luminance_cd_m2)
+    return white_diffuser_radiance(scene.illuminant, grid) * (luminance_cd_m2 / scene.illuminant.white_luminance_cd_m2)
 
 
 def metered_radiance(cube, white: WhiteSpec, scene=None) -> np.ndarray:
@@ -126,7 +124,3 @@ def metered_radiance(cube, white: WhiteSpec, scene=None) -> np.ndarray:
     chosen = neutral & (xyz[..., 1] >= np.quantile(Y, 1 - BRIGHTEST_SHARE))
     return r[chosen].mean(axis=0, dtype=np.float64)
 
-
-def luminance_of(radiance: np.ndarray, grid) -> float:
-    """Luminance of a band-averaged radiance spectrum, cd/m²."""
-    return float(K_M_LM_PER_W * radiance @ cmf_band_weights(grid)[:, 1])

@@ -56,12 +56,26 @@ def capture(cube: RadianceCube, camera: CameraSpec | None = None, seed: int | No
         camera = camera.replace(sensor=sensor)
     if design is not None:
         camera = camera.with_design(design)
+    if foreign:
+        return capture_spectral_image(cube, scene.replace(camera=camera), seed, white)
     seed = scene.render.seed if seed is None else seed
-    white = parse_white(white if white is not None else ("brightest" if foreign else "patch"), "white")
-    if white.kind == "patch" and not foreign:
+    white = parse_white(white if white is not None else "patch", "white")
+    if white.kind == "patch":
         return capture_stage(cube, camera, seed, ChartReference.of(scene).white_box)
-    white_radiance = metered_radiance(cube, white, None if foreign and white.kind == "patch" else scene)
-    return capture_stage(cube, camera, seed, white_radiance=white_radiance, metering=white.to_dict())
+    return capture_stage(cube, camera, seed, white_radiance=metered_radiance(cube, white, scene),
+                         metering=white.to_dict())
+
+
+def capture_spectral_image(cube: RadianceCube, stand_in: Scene, seed: int | None = None, white=None) -> RawCapture:
+    """Capture a spectral image that records no spectracam scene with ``stand_in``'s camera
+    (:func:`stand_in_scene`), metered on ``white`` (default: the brightest neutral; there is no white
+    patch).  The capture records no scene: there is no chart truth to score."""
+    from .metering import metered_radiance, parse_white
+
+    white = parse_white(white if white is not None else "brightest", "white")
+    white_radiance = metered_radiance(cube, white, None if white.kind == "patch" else stand_in)  # patch: refused
+    seed = stand_in.render.seed if seed is None else seed
+    return capture_stage(cube, stand_in.camera, seed, white_radiance=white_radiance, metering=white.to_dict())
 
 
 #: What a spectral image from another tool is captured as (:func:`stand_in_scene`).

@@ -251,7 +251,7 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
         lab_box = lab_all[starts[p]:starts[p + 1]].reshape(r.stop - r.start, c.stop - c.start, 3)
         de = delta_e(lab_box, against[p], method)
         de_map[r, c] = de
-        with np.errstate(divide="ignore"):  # a noise-free capture has infinite SNR: reported as None
+        with np.errstate(divide="ignore", invalid="ignore"):  # noise-free: infinite; mean ≤ 0: undefined (named)
             snr = snr_db(means[p], stds[p])
             combined = combine_snr_db(means[p], stds[p], processing.snr_combination)
         patches.append(PatchScore(

@@ -160,7 +160,7 @@ def test_a_bad_camera_file_is_one_line(tmp_path, case):
     (tmp_path / "c.csv").write_text(text)
     r = run("simulate", "scenes/d65.toml", "-o", tmp_path / "out", "--renderer", "analytic", *SMALL,
             "--set", f'filters.camera_file="{tmp_path / "c.csv"}"')
-    one_line_error(r, "filters.camera_file" if case != "narrow" else "filters.camera_file", message)
+    one_line_error(r, "filters.camera_file", message)
     assert not (tmp_path / "out").exists()
 
 
@@ -174,26 +174,32 @@ def test_unknown_unit_and_impossible_qe_are_one_line(tmp_path):
     one_line_error(r, "filters.camera_unit = 'A/W'", "electrons per photon", "≤ 1")
 
 
-def test_a_camera_file_simulates_through_every_unit(tmp_path):
-    """Relative curves and the same curves as QE give the same colour (exposure absorbs the scale)."""
+def test_the_three_units_describe_the_same_camera_when_they_should(tmp_path):
+    """The same camera written in each unit gives identical captures: relative energy curves S, the
+    electrons per photon they mean (S/λ scaled to qe_peak), and the A/W of those (QE·qλ/hc)."""
     from spectracam.pipeline import simulate
     from spectracam.scene import parse_scene, resolve_curve_files
 
-    csv = canon_csv(tmp_path / "c.csv", 0.4)  # a peak QE of 0.4 when read as electrons per photon
-    des = {}
-    for unit in ("relative", "electrons_per_photon", "A/W"):
+    wl, S = energy_sensitivities("Canon EOS 5D Mark II (rawtoaces)")
+    qe = S / wl[:, None]
+    qe *= 0.5 / qe.max()  # qe_peak's default
+    aw = qe * wl[:, None] / 1239.84198
+    files = {}
+    for unit, v in (("relative", S), ("electrons_per_photon", qe), ("A/W", aw)):
+        path = tmp_path / f"{unit.replace('/', '_')}.csv"
+        path.write_text("wl,R,G,B\n" + "\n".join(f"{w:g},{a!r},{b!r},{c!r}" for w, (a, b, c) in zip(wl, v)) + "\n")
+        files[unit] = path
+    out = {}
+    for unit, path in files.items():
         data = resolve_curve_files({"image": {"width": 160, "height": 120}, "illuminant": {"type": "cie", "name": "D65"},
-                                    "filters": {"camera_file": str(csv), "camera_unit": unit},
+                                    "filters": {"camera_file": str(path), "camera_unit": unit},
                                     "sensor": {"shot_noise": False, "read_noise": False, "fpn": False,
                                                "dark_current": False, "quantization": False}}, tmp_path)
         _, raw, score = simulate(parse_scene(data), "analytic")
-        des[unit] = score.summary.delta_e_conversion
-        if unit == "electrons_per_photon":
-            t_qe = raw.exposure_times_s[0]
-        if unit == "A/W":  # A/W at the same numbers means more electrons per photon in the blue: 1239.8/λ
-            assert raw.exposure_times_s[0] < t_qe
-    # per photon vs per energy differ by a λ weighting: the conversions differ, but both are a camera
-    assert des["relative"] == pytest.approx(1.0, abs=0.8) and all(0 < v < 5 for v in des.values())
+        out[unit] = (raw.exposure_times_s[0], score.summary.delta_e_mean)
+    for unit in ("electrons_per_photon", "A/W"):
+        assert out[unit][0] == pytest.approx(out["relative"][0], rel=1e-6), unit
+        assert out[unit][1] == pytest.approx(out["relative"][1], rel=1e-6), unit
 
 
 # ---------------------------------------------------------------- validate against published matrices

@@ -2,8 +2,6 @@
 import sys
 from pathlib import Path
 
-import numpy as np
-
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tools"))
 from spectral_convergence import compare, run  # noqa: E402
 

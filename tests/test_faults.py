@@ -266,7 +266,7 @@ def test_philox_matches_random123s_known_answers(counter, key, want):
 
     from spectracam.kernels import philox_np
 
-    nb = pytest.importorskip("numba")  # noqa: F841
+    pytest.importorskip("numba")
     from spectracam._numba_kernels import philox
 
     got = philox(*(np.uint64(c) for c in counter), *(np.uint64(k) for k in key))

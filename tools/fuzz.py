@@ -184,7 +184,7 @@ def judge(r, out: Path, known_bad: bool, before: dict | None = None, command: st
     return res
 
 
-SWEEP = (f'base_scene = "s.toml"\nrenderer = "analytic"\ntrials = 2\nseed = 3\n'
+SWEEP = ('base_scene = "s.toml"\nrenderer = "analytic"\ntrials = 2\nseed = 3\n'
          'metrics = ["delta_e_mean", "snr_combined_db"]\n[axes]\n"sensor.read_noise_e" = [10, 20, 30]\n')
 
 

@@ -51,6 +51,10 @@ class Sweep:
     seed: int
     renderer: str
     source: str
+    #: Found while every cell is validated (load_sweep): the largest cell scene and how many distinct
+    #: renders the cells need — what a run holds in memory at once.
+    largest_scene: Scene | None = dataclasses.field(default=None, compare=False)
+    distinct_renders: int = dataclasses.field(default=0, compare=False)
 
     @property
     def digest(self) -> str:
@@ -141,9 +145,21 @@ def load_sweep(path: str | Path, overrides=(), max_cells: int = MAX_CELLS, log=l
     if n > max_cells:
         raise ConfigError("axes", f"{n} cells", f"more than --max-cells = {max_cells}; raise it if this is meant",
                           src)
+    from ..cache import RENDER_TABLES
+
+    largest, renders = None, set()
     for i, cell in enumerate(sweep.cells()):
-        check_meterable(cell_scene(sweep, cell, i), cell, i, src)  # validate every combination now
-    return sweep
+        scene = cell_scene(sweep, cell, i)  # validate every combination now
+        check_meterable(scene, cell, i, src)
+        d = scene.to_dict()
+        renders.add(json.dumps({k: d[k] for k in RENDER_TABLES}, sort_keys=True))
+        if largest is None or _size(scene) > _size(largest):
+            largest = scene
+    return dataclasses.replace(sweep, largest_scene=largest, distinct_renders=len(renders))
+
+
+def _size(scene: Scene) -> int:
+    return scene.image.width * scene.image.height * len(scene.grid)
 
 
 def check_meterable(scene: Scene, cell: dict, index: int, source: str) -> None:
@@ -168,17 +184,6 @@ def base_value(base: dict, path: str):
     table, key, index = m.groups() if m else (None, None, None)
     v = base.get(table, {}).get(key) if key else base.get(table)
     return v[int(index)] if index is not None and isinstance(v, list) and int(index) < len(v) else v
-
-
-def memory_scene(sweep: "Sweep") -> tuple[Scene, int]:
-    """The largest cell scene and the number of distinct renders a run holds at once (for the memory
-    estimate; cells that see the same radiance share one cube)."""
-    from ..cache import render_key
-
-    scenes = [cell_scene(sweep, c, i) for i, c in enumerate(sweep.cells())]
-    keys = {render_key(s, sweep.renderer)[0] for s in scenes}
-    largest = max(scenes, key=lambda s: s.image.width * s.image.height * len(s.grid))
-    return largest, len(keys)
 
 
 def cell_scene(sweep: Sweep, cell: dict, index: int) -> Scene:

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..cameras import CAMERAS, PUBLISHED_MATRICES, energy_sensitivities, library_curves, library_table
+from ..cameras import CAMERAS, PUBLISHED_MATRICES, d65_response, energy_sensitivities, library_curves, library_table
 from ..chart import WHITE_PATCH
 from ..errors import ConfigError
 from ..metrics import delta_e, xyz_to_lab
@@ -85,24 +85,12 @@ def validate_camera(name: str, renderer: str = "analytic") -> dict:
            "delta_e_fit_mean": float(de_fit.mean()), "delta_e_fit_max": float(de_fit.max()),
            "delta_e_published_per_patch": de_pub.round(4).tolist(), "delta_e_fit_per_patch": de_fit.round(4).tolist(),
            "patch_names": list(ref.names)}
-    if curves.per_channel:  # what the defect gave: the channels at equal gains
-        wl, v = curves.wavelengths_nm, curves.values
-        import colour
+    if curves.per_channel:  # what the defect gave: the channels at equal gains, on the white patch
+        from ..chart import patch_reflectances
 
-        sd = colour.SDS_ILLUMINANTS["D65"]
-        lam = np.arange(wl[0], wl[-1] + 1.0)
-        refl = np.interp(lam, *_white_patch_reflectance(scene))
-        r = np.trapezoid(np.stack([np.interp(lam, wl, v[:, k]) for k in range(3)], -1)
-                         * (np.interp(lam, sd.wavelengths, sd.values) * refl)[:, None], lam, axis=0)
-        row["white_RG_equal_gains"], row["white_BG_equal_gains"] = float(r[0] / r[1]), float(r[2] / r[1])
+        r = d65_response(curves.wavelengths_nm, curves.values, patch_reflectances(scene.chart)[WHITE_PATCH][1])
+        row["white_RG_equal_gains"], row["white_BG_equal_gains"] = float(r[0]), float(r[2])
     return row
-
-
-def _white_patch_reflectance(scene):
-    from ..chart import patch_names_and_data
-
-    _, wl, rho = patch_names_and_data(scene.chart.dataset)[WHITE_PATCH]
-    return wl, rho
 
 
 def run_validate(renderer: str = "analytic") -> dict:

@@ -68,11 +68,9 @@ def camera_model(raw: RawCapture) -> str:
 
 def white_radiance(reference) -> np.ndarray:
     """Band-averaged radiance ``(B,)`` of a perfect white diffuser under the scene illuminant, E/π."""
-    from ..illuminant import spectral_irradiance
-    from ..spectra import band_average
+    from ..illuminant import white_diffuser_radiance
 
-    E = spectral_irradiance(reference.illuminant)
-    return band_average(lambda lam: E(lam) / np.pi, reference.grid)
+    return white_diffuser_radiance(reference.illuminant, reference.grid)
 
 
 def white_rates(camera, reference) -> np.ndarray:
