@@ -325,6 +325,37 @@ def test_the_fused_backend_never_hides_a_fault(monkeypatch, capsys):
     assert kernels._STATE["module"] is None and "using the NumPy path" in capsys.readouterr().err
 
 
+def test_a_forked_child_captures_with_its_own_thread_pool():
+    """A child forked after the parent used the kernels' thread pool captures the same raw (issue 18:
+    the parent's pool has no threads in the child, and a capture there hung)."""
+    import numpy as np
+    from spectracam import pipeline
+    from spectracam.scene import load_scene
+
+    scene = load_scene("scenes/blackbody_5000K.toml", ["image.width=96", "image.height=64"])
+    cube = pipeline.render(scene, "analytic")
+    parent = pipeline.capture(cube, seed=3, scene=scene).digital
+    read, write = os.pipe()
+    pid = os.fork()
+    if pid == 0:                                                     # the child: capture, report, leave
+        os.close(read)
+        try:
+            child = pipeline.capture(cube, seed=3, scene=scene).digital
+            os.write(write, b"same" if np.array_equal(child, parent) else b"differs")
+        finally:
+            os._exit(0)
+    os.close(write)
+    deadline = time.monotonic() + 60
+    while os.waitpid(pid, os.WNOHANG) == (0, 0):
+        if time.monotonic() > deadline:
+            os.kill(pid, signal.SIGKILL)
+            os.waitpid(pid, 0)
+            pytest.fail("the forked child's capture hung")
+        time.sleep(0.05)
+    assert os.read(read, 16) == b"same"
+    os.close(read)
+
+
 def test_layouts_are_what_they_say():
     """A mistyped plane kind is refused (it was timed as simultaneous), and a layout with no raw form
     is not written as "planes"."""

@@ -67,7 +67,7 @@ def test_static_capture_equals_the_spatial_optics():
     ref = sopt.pixel_rates(cube.radiance, cube.wavelengths_nm, 4, SCENE.camera, SCENE.grid, g)
     ms = MovingScene(edge, big, SCENE.illuminant, SCENE.grid, 4, "analytic")
     timing = capture_timing(make_architecture("fsc"), [0.02, 0.01, 0.03], TimingSpec(), big.height_px, -MARGIN)
-    rates = channel_rates(ms, integrate(ms, Motion(), timing), SCENE.camera)
+    rates = channel_rates(ms, integrate(ms, Motion(), timing), SCENE.camera, sopt.OpticsSettings(), MARGIN)
     assert np.abs(rates - ref).max() <= 1e-5 * ref.max()
 
 

@@ -14,7 +14,7 @@ from spectracam.spectra import WavelengthGrid
 from spectracam.spatial.esfr import esfr
 from spectracam.spatial.geometry import CameraGeometry
 from spectracam.spatial.optics import (MARGIN_PX, OpticsSettings, channel_mtf_closed_form, diffraction_otf,
-                                       pixel_rates)
+                                       margin_px, pixel_rates)
 from spectracam.spatial.render import material_radiance, render_analytic
 from spectracam.spatial.targets import SiemensStar, SlantedEdge, TiltedChart
 
@@ -22,13 +22,28 @@ GRID = WavelengthGrid(np.arange(405.0, 700.0, 10.0))
 LIGHT = IlluminantSpec()
 
 
-def edge_rates(pitch, N, w=96, h=128, fill_factor=1.0, settings=OpticsSettings(), ss=4):
+def edge_rates(pitch, N, w=96, h=128, fill_factor=1.0, settings=OpticsSettings(), ss=4, margin=None):
     g = CameraGeometry.framing(0.5 * w, 12.0, N, pitch, w, h)
     target = SlantedEdge()
-    cube = render_analytic(target, g.with_margin(MARGIN_PX), LIGHT, GRID, ss)
+    margin = margin_px(pitch, N, GRID.edges_nm[-1]) if margin is None else margin
+    cube = render_analytic(target, g.with_margin(margin), LIGHT, GRID, ss)
     cam = CameraSpec(optics=OpticsSpec(f_number=N), sensor=SensorSpec(pixel_pitch_um=pitch, fill_factor=fill_factor))
     L = material_radiance(target, LIGHT, GRID)
-    return pixel_rates(cube.radiance, cube.wavelengths_nm, ss, cam, GRID, g, settings), cam, L[1] - L[0]
+    return pixel_rates(cube.radiance, cube.wavelengths_nm, ss, cam, GRID, g, settings, margin), cam, L[1] - L[0]
+
+
+def test_margin_keeps_the_far_side_from_wrapping_round():
+    """f/32 with a 2 µm pixel: the Airy line spread reaches 70 px.  The dark column at the image's
+    border, next to the bright far side through the periodic wrap, must read what a much wider margin
+    gives within the stated tolerance (measured 0.25 % of the step; an 8-px margin: 5.0 %)."""
+    kw = dict(pitch=2.0, N=32.0, w=48, h=24, ss=2)
+    wide, _, _ = edge_rates(**kw, margin=4 * margin_px(2.0, 32.0, GRID.edges_nm[-1]))
+    ours, _, _ = edge_rates(**kw)
+    step = wide[:, -1, 1].mean() - wide[:, 0, 1].mean()
+    err = np.abs(ours[:, :2, 1] - wide[:, :2, 1]).max() / step
+    assert err < 0.01, err
+    narrow, _, _ = edge_rates(**kw, margin=MARGIN_PX)
+    assert np.abs(narrow[:, :2, 1] - wide[:, :2, 1]).max() / step > 0.03
 
 
 @pytest.mark.parametrize("pitch, N, w, fill", [(10.0, 1.4, 96, 1.0), (10.0, 8.0, 96, 1.0), (2.0, 1.4, 96, 1.0),

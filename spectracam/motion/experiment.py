@@ -196,7 +196,7 @@ def run_motion(spec: MotionSpec, scene, renderer: str = "mitsuba", log=None, kee
     w, h = spec.edge_size_px
     geometry = CameraGeometry.framing(w * spec.object_pixel_mm, spec.focal_length_mm, spec.f_number,
                                       spec.pixel_pitch_um, w, h)
-    m = sopt.MARGIN_PX
+    m = sopt.margin_px(spec.pixel_pitch_um, spec.f_number, grid.edges_nm[-1])
     big = geometry.with_margin(m)
     target = SlantedEdge(angle_deg=spec.edge_angle_deg, dataset=scene.chart.dataset)
     timings = dict.fromkeys(("render", "optics", "capture", "processing", "metrics", "snr"), 0.0)

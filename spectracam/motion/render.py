@@ -305,7 +305,7 @@ def integrate(scene: MovingScene, motion: Motion, timing: CaptureTiming, max_ste
 
 
 def channel_rates(scene: MovingScene, integrated: Integrated, camera: CameraSpec,
-                  settings: sopt.OpticsSettings = sopt.OpticsSettings(), margin_px: int = sopt.MARGIN_PX,
+                  settings: sopt.OpticsSettings, margin_px: int,
                   workers: int | None = -1) -> np.ndarray:
     """``(H, W, 3)`` time-averaged photo-electrons per second per pixel of each channel (the margin cut)."""
     Hk, fy, fx, shape = scene.transfer(camera, settings)
@@ -318,7 +318,7 @@ def channel_rates(scene: MovingScene, integrated: Integrated, camera: CameraSpec
                                 settings.shifts_px, margin_px, workers)
 
 
-def ideal_radiance(scene: MovingScene, spp: int, margin_px: int = sopt.MARGIN_PX) -> np.ndarray:
+def ideal_radiance(scene: MovingScene, spp: int, margin_px: int) -> np.ndarray:
     """``(H, W, B)``: the static target at the reference pose (t = 0), each pixel's footprint (no optics)."""
     B = scene.basis((0.0, 0.0, 0.0), spp)
     ss = scene.supersampling

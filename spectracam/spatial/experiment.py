@@ -270,6 +270,9 @@ def run_spatial(spec: SpatialSpec, scene, renderer: str = "mitsuba", log=None, k
     renders: dict = {}
     t_start = time.perf_counter()
     for pitch in spec.pixel_pitches_um:
+        # one margin per pitch (flat targets are rendered once per pitch): wide enough for the slowest lens
+        margin = max(sopt.margin_px(pitch, N, grid.edges_nm[-1], max(spec.misregistrations_px))
+                     for N in spec.f_numbers)
         for N in spec.f_numbers:
             base = case_camera(scene, spec, pitch, N)
             for tname in spec.targets:
@@ -277,7 +280,7 @@ def run_spatial(spec: SpatialSpec, scene, renderer: str = "mitsuba", log=None, k
                 geometry = CameraGeometry.framing(field_mm, spec.focal_length_mm, N, pitch, w, h)
                 if isinstance(target, TiltedChart):
                     geometry = dataclasses.replace(geometry, focus_distance_mm=geometry.object_distance_mm)
-                big = geometry.with_margin(sopt.MARGIN_PX)
+                big = geometry.with_margin(margin)
                 # -- render (flat targets in focus look the same at every f-number: one render per pitch)
                 t0 = time.perf_counter()
                 key = (tname, pitch, N if isinstance(target, TiltedChart) else None)
@@ -293,7 +296,7 @@ def run_spatial(spec: SpatialSpec, scene, renderer: str = "mitsuba", log=None, k
                 settings = sopt.OpticsSettings(defocus_um=defocus_diameter_um(target, big, cube), cos4=spec.cos4)
                 spectra, fy, fx, shape = sopt.channel_spectra(cube.radiance, cube.wavelengths_nm, ss,
                                                               base, grid, settings, workers=-1)
-                ideal = cube.pixel_average()[sopt.MARGIN_PX:-sopt.MARGIN_PX, sopt.MARGIN_PX:-sopt.MARGIN_PX]
+                ideal = cube.pixel_average()[margin:-margin, margin:-margin]
                 t2 = time.perf_counter()
                 timings[tname]["optics"] += t2 - t1
                 sampled: dict = {}
@@ -311,7 +314,7 @@ def run_spatial(spec: SpatialSpec, scene, renderer: str = "mitsuba", log=None, k
                     shifts = misregistration_shifts(d.misregistration_px)
                     if shifts not in sampled:
                         rates = sopt.sample_channels(spectra, fy, fx, shape, ss,
-                                                     base.sensor.fill_factor, shifts, sopt.MARGIN_PX, workers=-1)
+                                                     base.sensor.fill_factor, shifts, margin, workers=-1)
                         if spec.cos4:
                             rates *= geometry.off_axis_cos4()[:, :, None].astype(np.float32)
                         sampled[shifts] = rates

@@ -22,8 +22,8 @@ then
   prism's sensors: a sub-pixel shift, applied as a phase ramp before sampling);
 * optionally multiplied by the **cos⁴ fall-off** of the off-axis irradiance.
 
-Frequency-domain filtering is periodic: the renderer draws a margin around the image
-(:data:`MARGIN_PX`) that is cut away after sampling.
+Frequency-domain filtering is periodic: the renderer draws a margin around the image, wide enough
+for the optics (:func:`margin_px`), that is cut away after sampling.
 """
 from __future__ import annotations
 
@@ -36,10 +36,24 @@ from scipy.special import j1
 from ..camera import CameraSpec, band_weights
 from .geometry import CameraGeometry
 
-#: Pixels rendered around the image on each side so that the periodic filtering does not wrap the far
-#: side into it: the widest PSF here (2 µm pixel, f/8, 700 nm: Airy first zero 1.22·λN = 6.8 µm = 3.4 px)
-#: and a misregistration of up to 1 px fit with room to spare.
+#: The fewest pixels rendered around the image on each side (room for a misregistration of up to 4 px).
 MARGIN_PX = 8
+
+#: Share of a line's light that may wrap round the periodic image from its far side.  The line spread of
+#: a circular pupil falls as 1/x² far out (the kink of its OTF, 1 − (4/π)·λN·|ρ|, at ρ = 0), so the light
+#: beyond a distance x is 2·λN/(π³·x) of the whole (checked against the numerical line spread).
+WRAP_TOLERANCE = 0.01
+
+
+def margin_px(pixel_pitch_um: float, f_number: float, wavelength_max_nm: float, shift_px: float = 0.0) -> int:
+    """Pixels to render around the image on each side so that at most :data:`WRAP_TOLERANCE` of the
+    diffraction line spread wraps round from the far side (at least :data:`MARGIN_PX`).
+
+    >>> margin_px(2.0, 8.0, 700.0), margin_px(2.0, 32.0, 700.0), margin_px(10.0, 1.4, 700.0)
+    (19, 73, 8)
+    """
+    reach_um = 2 * wavelength_max_nm * 1e-3 * f_number / (np.pi ** 3 * WRAP_TOLERANCE)
+    return max(MARGIN_PX, int(np.ceil(reach_um / pixel_pitch_um + abs(shift_px))))
 
 
 def diffraction_otf(rho_cy_per_um, wavelength_nm: float, f_number: float) -> np.ndarray:
