@@ -173,15 +173,20 @@ def memory_available() -> tuple[float | None, str]:
     return avail, why
 
 
+def check_bytes(need: float, what: str, advice: str) -> None:
+    """Refuse, before any work, a run that needs ``need`` bytes when this process may not have them;
+    ``what`` names the sizes that cost them, ``advice`` what to make smaller."""
+    avail, why = memory_available()
+    if avail is not None and need > avail:
+        raise SpectracamError(f"{what}: needs about {need / 2**30:.1f} GiB, {avail / 2**30:.1f} GiB {why}; {advice}")
+
+
 def check_memory(scene: Scene, copies: float = 1.0, what: str = "") -> None:
     """Refuse, before any work, a scene whose cubes (``copies`` of them held at once) would not fit in
     the memory available to this process."""
     need = scene.image.width * scene.image.height * len(scene.grid) * 4 * MEMORY_PER_CUBE * copies
-    avail, why = memory_available()
-    if avail is not None and need > avail:
-        raise SpectracamError(f"image = {scene.image.width}x{scene.image.height} with {len(scene.grid)} bands"
-                              f"{what}: needs about {need / 2**30:.1f} GiB, {avail / 2**30:.1f} GiB {why}; use a "
-                              "smaller image or fewer bands")
+    check_bytes(need, f"image = {scene.image.width}x{scene.image.height} with {len(scene.grid)} bands{what}",
+                "use a smaller image or fewer bands")
 
 
 def score(raw: RawCapture, scene: Scene | None = None, processing: ProcessingSpec | None = None,

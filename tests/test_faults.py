@@ -286,6 +286,39 @@ def test_a_memory_limit_is_met_with_one_line_before_any_work(tmp_path):
             "--set", "image.width=6000", "--set", "image.height=6000", preexec_fn=limit)
     one_line(r, 2, "6000x6000", "address-space limit")
     assert not (tmp_path / "o").exists()
+    # motion has its own estimate (its sub-pixel renders, not the scene's image): a 1000-px edge
+    r = run("motion", "--quick", "-o", tmp_path / "m", "--renderer", "analytic", "--set", "edge_size_px=[1000, 1000]",
+            preexec_fn=limit)
+    one_line(r, 2, "edge_size_px = [1000, 1000]", "address-space limit")
+    assert not (tmp_path / "m").exists()
+
+
+def test_motion_memory_does_not_grow_with_its_slices(monkeypatch):
+    """Each slice's share of every row is found when the slice is rendered, and the rendered poses kept
+    for reuse are bounded (issue 18: a (rows × slices) table per channel group — 1.4 GB at slices =
+    100000 — and every pose's render kept died with MemoryError)."""
+    import tracemalloc
+    from spectracam.motion import render
+    from spectracam.motion.motion import Motion
+    from spectracam.motion.render import MovingScene, integrate
+    from spectracam.motion.timing import TimingSpec, capture_timing
+    from spectracam.architecture import make_architecture
+    from spectracam.scene import load_scene
+    from spectracam.spatial.geometry import CameraGeometry
+    from spectracam.spatial.targets import SlantedEdge
+
+    scene = load_scene("scenes/d65.toml")
+    g = CameraGeometry.framing(16.0, 12.0, 1.4, 10.0, 16, 16)
+    ms = MovingScene(SlantedEdge(), g, scene.illuminant, scene.grid, 2, "analytic")
+    monkeypatch.setattr(render, "BASIS_CACHE_BYTES", 50 * ms.basis((0.0, 0.0, 0.0)).nbytes)
+    timing = capture_timing(make_architecture("fsc"), [0.02, 0.01, 0.03], TimingSpec(), g.height_px)
+    peaks = []
+    for n in (100, 2000):
+        tracemalloc.start()
+        integrate(ms, Motion(velocity_mm_per_s=(1.0, 0.0)), timing, slices=n)
+        peaks.append(tracemalloc.get_traced_memory()[1])
+        tracemalloc.stop()
+    assert peaks[1] < 1.5 * peaks[0], peaks
 
 
 def test_a_sweep_cell_that_cannot_be_metered_is_refused_before_it_runs(tmp_path):

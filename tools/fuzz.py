@@ -351,8 +351,12 @@ def case_memory_limit(rng, d: Path):
     w = rng.choice([3000, 6000, 9000])
     cmd = rng.choice([["render", "s.toml", "-o", "out", "--renderer", "analytic"],
                       ["simulate", "s.toml", "-o", "out", "--renderer", "analytic"],
-                      ["paper", "-o", "out", "--renderer", "analytic"]])
-    cmd += ["--set", f"image.width={w}", "--set", f"image.height={w * 3 // 4}"]
+                      ["paper", "-o", "out", "--renderer", "analytic"], ["motion"]])
+    if cmd == ["motion"]:   # a moving edge w px wide, rendered at 4 sub-pixels a side, under the same limit
+        w //= 4
+        cmd = ["motion", "--quick", "-o", "out", "--renderer", "analytic", "--set", f"edge_size_px=[{w}, {w}]"]
+    else:
+        cmd += ["--set", f"image.width={w}", "--set", f"image.height={w * 3 // 4}"]
     return cmd, False, f"memory limit {limit >> 30} GiB, {w} px: {cmd[0]}", {"address_space": limit}
 
 

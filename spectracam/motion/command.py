@@ -23,12 +23,13 @@ def motion_cmd(out_dir: Path, quick: bool, renderer: str, sets, quiet: bool):
     fsc/optimal and fsc/balanced with a global and a rolling shutter (time slices rendered by Mitsuba);
     colour-breakup width, S-CIELAB, MTF along the motion, SNR; results.json, figures, report.md."""
     from ..errors import ConfigError
-    from .experiment import load_motion, run_motion
+    from .experiment import check_motion_memory, load_motion, run_motion
     from .report import answer, write_outputs
 
     spec, scene = load_motion(sets, quick=quick)   # validated before any work
     if renderer not in ("mitsuba", "analytic"):
         raise ConfigError("--renderer", renderer, "moving targets are rendered by 'mitsuba' or 'analytic'")
+    check_motion_memory(spec, scene)
     _check_writable(out_dir)
     log = _log(quiet)
     t0 = time.perf_counter()
