@@ -501,7 +501,8 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
                 client = Client(cluster)
             cluster_start = time.perf_counter() - t_start
             try:
-                shared = {k: client.scatter(v, broadcast=False) for k, v in cubes.items()}
+                # on every worker: a worker lost mid-sweep takes no radiance with it (its tasks run again)
+                shared = {k: client.scatter(v, broadcast=True) for k, v in cubes.items()}
                 n_workers = max(len(client.scheduler_info(n_workers=-1).get("workers", {})), 1)
                 size = cells_per_task(len(todo), n_workers)
                 futures = []
