@@ -67,7 +67,9 @@ def rates_with_extremes(shape=(120, 170), seed=1):
     DETERMINISTIC.off("quantization", "clipping"),
     DETERMINISTIC.replace(adc_bits=12, black_level_DN=0.0, conversion_gain_uV_per_e=3.0, adc_full_scale_V=0.5),
     SensorSpec().off("shot_noise", "read_noise", "fpn", "dark_current"),
-], ids=["all-fixed", "fpn-bound", "unquantised-unclipped", "12-bit-explicit-adc", "nothing"])
+    # a DSNU of 150 %: a quarter of the factors 1 + 1.5·N would be negative and are clipped at 0
+    DETERMINISTIC.replace(dsnu_fraction=1.5, dark_current_e_per_s_um2=1e3).off("quantization", "clipping"),
+], ids=["all-fixed", "fpn-bound", "unquantised-unclipped", "12-bit-explicit-adc", "nothing", "dsnu-clipped"])
 def test_noise_free_exposure_is_bit_identical(fused, sensor):
     rate = rates_with_extremes()
     pattern = fixed_pattern(sensor, rate.shape, seed=4)

@@ -101,3 +101,45 @@ def test_shake_has_the_stated_rms():
     rms = np.sqrt(((p - p.mean(axis=0)) ** 2).sum(axis=1).mean())
     assert rms == pytest.approx(1.5, rel=0.02)
     assert np.array_equal(p, Motion(shake_rms_px=1.5, seed=3).poses(t, (-0.05, 0.05), 0.5)[:, :2] / 0.5)
+
+
+@pytest.mark.parametrize("vx", [0.4, -0.4])
+def test_a_moving_edge_moves_the_way_it_is_told(vx):
+    """Field-sequential capture (R, then G, then B) of an edge moving at vx px/ms: each channel sees the
+    edge where it is at the middle of that channel's window, x0 + vx·t_k (x right, t = 0 the middle of
+    the capture) — the sign of the motion and of the time axis both show here, not in a time average."""
+    width, height = 48, 8
+    g = CameraGeometry.framing(width * 0.5, 12.0, 1.4, 10.0, width, height).with_margin(MARGIN)
+    ms = MovingScene(SlantedEdge(angle_deg=0.0, x0_px=0.3), g, SCENE.illuminant, SCENE.grid, 4, "analytic")
+    motion = Motion(velocity_mm_per_s=(vx * 1e3 * g.object_pixel_mm, 0.0))
+    timing = capture_timing(make_architecture("fsc"), [0.004] * 3, TimingSpec(), g.height_px, -MARGIN)
+    integ = integrate(ms, motion, timing, max_step_px=0.05)
+    t0, t1 = timing.span_s
+    for chans, acc in integ.groups:
+        k = chans[0]
+        px = acc.reshape(acc.shape[0], acc.shape[1] // 4, 4, acc.shape[2] // 4, 4).mean(axis=(2, 4))
+        bright = px[1, MARGIN:-MARGIN, MARGIN:-MARGIN].mean(axis=0)  # the bright material, columns left → right
+        edge = width / 2 - bright.sum()                             # where a sharp edge with this much dark lies
+        middle_ms = 1e3 * (timing.start_s[k] + timing.duration_s[k] / 2 + timing.row_delay_s[MARGIN + height // 2]
+                           - (t0 + t1) / 2)
+        assert edge == pytest.approx(0.3 + vx * middle_ms, abs=0.02), (k, middle_ms)
+
+
+def test_a_rolling_shutter_shears_a_moving_edge_the_right_way():
+    """A CFA with a rolling shutter (400 µs per line) and an edge moving right at 0.4 px/ms: row r is
+    exposed r line times later, so its edge lies 0.4·0.4·r px further right — a shear whose sign and
+    size both come from the row timing reaching the right rows through the integration."""
+    width, height, line_us, vx = 48, 16, 400.0, 0.4
+    g = CameraGeometry.framing(width * 0.5, 12.0, 1.4, 10.0, width, height).with_margin(MARGIN)
+    ms = MovingScene(SlantedEdge(angle_deg=0.0, x0_px=0.3), g, SCENE.illuminant, SCENE.grid, 4, "analytic")
+    motion = Motion(velocity_mm_per_s=(vx * 1e3 * g.object_pixel_mm, 0.0))
+    timing = capture_timing(make_architecture("cfa"), [0.002] * 3, TimingSpec(rolling_shutter=True, line_time_us=line_us),
+                            g.height_px, -MARGIN)
+    integ = integrate(ms, motion, timing, max_step_px=0.05)
+    (chans, acc), = integ.groups
+    px = acc.reshape(acc.shape[0], acc.shape[1] // 4, 4, acc.shape[2] // 4, 4).mean(axis=(2, 4))
+    edge = width / 2 - px[1, MARGIN:-MARGIN, MARGIN:-MARGIN].sum(axis=1)        # per image row
+    t0, t1 = timing.span_s
+    middle_ms = 1e3 * (timing.start_s[0] + timing.duration_s[0] / 2 + timing.row_delay_s[MARGIN:-MARGIN] - (t0 + t1) / 2)
+    assert np.abs(edge - (0.3 + vx * middle_ms)).max() < 0.02
+    assert edge[-1] - edge[0] == pytest.approx(vx * line_us * 1e-3 * (height - 1), abs=0.02)

@@ -65,6 +65,31 @@ def test_esfr_matches_closed_form_with_binning_correction(edge_5deg):
     assert res.mtf50_cy_per_px == pytest.approx(MTF50_CLOSED, rel=0.01)                    # measured: +0.08 %
 
 
+@pytest.mark.parametrize("rows, angle", [(100, 5.0), (80, 4.0), (128, 7.5)])
+def test_esfr_uses_a_whole_number_of_phase_cycles(rows, angle):
+    """ISO 12233 (and sfrmat) keep floor(rows·tanθ)/tanθ rows, so that every quarter-pixel bin is filled
+    equally often (100 rows at 5°: 8 cycles in 91.4 rows → 91)."""
+    res = esfr(slanted_edge(rows=rows, angle_deg=angle), correct_binning=True)
+    t = np.tan(np.radians(angle))
+    assert res.rows_used == round(np.floor(rows * t) / t)
+
+
+def test_esfr_window_is_centred_on_the_line_spread_and_spans_the_region():
+    """A wide blur (σ = 2 px) whose line spread reaches the window's skirts: the SFR must not depend on
+    where the edge lies in the region (the window follows the LSF's peak) and must match the closed
+    form (a window of half the width loses the tails: +0.026 at low frequency)."""
+    sigma = 2.0
+    out = []
+    for x0 in (31.7, 18.3, 44.6):
+        res = esfr(slanted_edge(sigma=sigma, x0=x0), correct_binning=True)
+        f = res.frequencies_cy_per_px
+        band = f <= 0.5
+        assert np.abs(res.sfr[band] - closed_form_mtf(f[band], sigma)).max() < 0.01   # measured: ≤ 0.0066
+        out.append(res.sfr[band])
+    for other in out[1:]:
+        assert np.abs(other - out[0]).max() < 5e-4                                     # measured: ≤ 1e-4
+
+
 def test_esfr_iso_default_is_within_the_binning_loss(edge_5deg):
     # the standard's algorithm averages the ESF over 1/4-pixel bins: sinc(f cosθ/4) = -2.5 % at 0.5 cy/px
     res = esfr(edge_5deg)
