@@ -209,6 +209,33 @@ def check_exposure_matches(raw: RawCapture, reference: ChartReference) -> None:
                               "cd/m²); the scene or the capture was edited, or another scene was captured")
 
 
+#: Pixels whose CIELAB is computed in one call: few calls (each has a fixed cost) without a
+#: full-image Lab (a 12-Mpx chart's masks in one call held 0.25 cubes more than the image).
+LAB_CHUNK_PIXELS = 1 << 20
+
+
+def _box_labs(rgb: np.ndarray, boxes, M_disp: np.ndarray, display_white: np.ndarray):
+    """CIELAB ``(h, w, 3)`` of each box's pixels in turn, computed for runs of boxes of at most
+    :data:`LAB_CHUNK_PIXELS` pixels (or one box) at a time."""
+    i = 0
+    while i < len(boxes):
+        j, n = i, 0
+        while j < len(boxes) and (j == i or n + _pixels(boxes[j]) <= LAB_CHUNK_PIXELS):
+            n += _pixels(boxes[j])
+            j += 1
+        lab = xyz_to_lab(np.concatenate([rgb[r, c].reshape(-1, 3) for r, c in boxes[i:j]]) @ M_disp.T, display_white)
+        start = 0
+        for r, c in boxes[i:j]:
+            yield lab[start:start + _pixels((r, c))].reshape(r.stop - r.start, c.stop - c.start, 3)
+            start += _pixels((r, c))
+        i = j
+
+
+def _pixels(box) -> int:
+    r, c = box
+    return (r.stop - r.start) * (c.stop - c.start)
+
+
 def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec,
           delta_e_reference: str = "scene") -> ChartScore:
     """Render a capture on the display and score it against the chart reference (see the module
@@ -243,12 +270,7 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
     mean_labs = xyz_to_lab(np.stack([rgb[r, c].reshape(-1, 3).mean(axis=0) for r, c in boxes]) @ M_disp.T,
                            display_white)
     patches = []
-    # CIELAB of the scored pixels only (memory: no full-image Lab), in one call (speed)
-    sizes = [(r.stop - r.start) * (c.stop - c.start) for r, c in boxes]
-    lab_all = xyz_to_lab(np.concatenate([rgb[r, c].reshape(-1, 3) for r, c in boxes]) @ M_disp.T, display_white)
-    starts = np.concatenate([[0], np.cumsum(sizes)])
-    for p, (r, c) in enumerate(boxes):
-        lab_box = lab_all[starts[p]:starts[p + 1]].reshape(r.stop - r.start, c.stop - c.start, 3)
+    for p, (r, c), lab_box in zip(range(len(boxes)), boxes, _box_labs(rgb, boxes, M_disp, display_white)):
         de = delta_e(lab_box, against[p], method)
         de_map[r, c] = de
         with np.errstate(divide="ignore", invalid="ignore"):  # noise-free: infinite; mean ≤ 0: undefined (named)
@@ -279,4 +301,4 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
                           "the patch mask; combined: "
                           + (SNR_COMBINATIONS[processing.snr_combination].__doc__ or processing.snr_combination),
     }
-    return ChartScore(summary, tuple(patches), parameters, rgb.astype(np.float32), de_map.astype(np.float32))
+    return ChartScore(summary, tuple(patches), parameters, rgb.astype(np.float32), de_map)
