@@ -490,6 +490,7 @@ def sweep_cmd(sweep_file, out_dir, scheduler, workers, serial, resume, max_cells
 
     check_memory(sweep.largest_scene, copies=sweep.distinct_renders,
                  what=f", {sweep.distinct_renders} distinct render(s) held at once")
+    _check_writable(Path(out_dir))
     t = run_sweep(sweep, out_dir, scheduler=scheduler, workers=workers, serial=serial, resume=resume,
                   progress=not quiet, log=_log(quiet))
     _log(quiet)(f"{t['new_cells']} of {t['cells']} cells computed in {t['wall_s']:.1f} s "

@@ -282,7 +282,7 @@ def test_a_scheduler_that_is_not_dask_is_refused_within_the_handshake_timeout(tm
 
 def test_the_fault_harness_finds_nothing_in_one_case_of_every_class(capsys):
     """tools/fuzz.py's fast subset (issue 18): one case of each fault class — damaged and foreign files,
-    wrong values, unwritable outputs, full disks, memory limits, contradicting attributes, journal
+    wrong values, unwritable and read-only outputs (capabilities dropped), full disks, memory limits, contradicting attributes, journal
     damage, signals to the process and its group, non-Dask schedulers — with zero tracebacks, leftovers,
     silent wrong results, multi-line errors, orphans and hangs."""
     import sys

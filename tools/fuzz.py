@@ -72,14 +72,21 @@ def group_members(pgid: int) -> list[int]:
 
 def run(args, cwd, timeout=HANG_S, opts=None):
     """Run one command; ``opts``: ``kill`` (seconds, then SIGTERM or ``signal``; ``group``: to the whole
-    process group), ``fsize`` and ``address_space`` limits.  Returns the result and whether processes of
+    process group), ``fsize`` and ``address_space`` limits, ``drop_caps`` (run without capabilities
+    when root), ``env`` (variables to set).  Returns the result and whether processes of
     its group outlived it (orphans) or it hung."""
     import signal
     import time
 
     opts = opts or {}
-    p = subprocess.Popen(CMD + [str(a) for a in args], cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                         text=True, preexec_fn=_limits(opts.get("fsize"), opts.get("address_space")))
+    prefix = []
+    if opts.get("drop_caps") and os.geteuid() == 0 and shutil.which("setpriv"):
+        # root writes anywhere (CAP_DAC_OVERRIDE): without capabilities the permission bits hold for it too
+        prefix = ["setpriv", "--bounding-set=-all", "--inh-caps=-all"]
+    env = {**os.environ, **opts["env"]} if "env" in opts else None
+    p = subprocess.Popen(prefix + CMD + [str(a) for a in args], cwd=cwd, stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True, env=env,
+                         preexec_fn=_limits(opts.get("fsize"), opts.get("address_space")))
     hung = False
     if "kill" in opts:
         time.sleep(opts["kill"])
@@ -229,6 +236,25 @@ def case_environment(rng, d: Path):
     (d / "afile").write_text("x")
     target = rng.choice(["afile/sub", "/dev/null", "/proc/version/x"])
     return ["simulate", "s.toml", "-o", target, "--renderer", "analytic"], False, f"-o {target}"
+
+
+def case_read_only(rng, d: Path):
+    """A read-only output directory (written into, or a new one made inside it), or a read-only render
+    cache (documented never to stop a run), with root's capabilities dropped so that the permission
+    bits hold as for any user."""
+    cmd = rng.choice([["render", "s.toml", "--renderer", "analytic"], ["simulate", "s.toml", "--renderer", "analytic"],
+                      ["capture", "r/radiance.exr"], ["score", "c/raw.exr"], ["emva"],
+                      ["paper", "--quick", "--renderer", "analytic"], ["sweep", "sw.toml", "--serial"],
+                      ["validate", "--renderer", "analytic"], ["motion", "--quick", "--renderer", "analytic"]])
+    where = rng.choice(["out", "out/new", "cache"])
+    if where == "cache":
+        (d / "cache").mkdir(mode=0o555)
+        os.chmod(d / "cache", 0o555)
+        return ([cmd[0], "-o", "out", *cmd[1:], "--quiet"], False, f"read-only render cache: {cmd[0]}",
+                {"drop_caps": True, "env": {"SPECTRACAM_CACHE": str(d / "cache" / "renders")}})
+    (d / "out").mkdir()
+    os.chmod(d / "out", 0o555)
+    return [cmd[0], "-o", where, *cmd[1:]], False, f"read-only -o {where}: {cmd[0]}", {"drop_caps": True}
 
 
 def case_garbage_text(rng, d: Path):
@@ -493,7 +519,7 @@ def case_scheduler_peer(rng, d: Path):
 
 CASES = [case_damaged_file, case_scene_value, case_environment, case_garbage_text, case_camera_file, case_foreign_exr,
          case_new_commands, case_signal, case_full_disk, case_memory_limit, case_raw_attributes, case_journal,
-         case_experiment_values, case_group_signal, case_scheduler_peer]
+         case_experiment_values, case_group_signal, case_scheduler_peer, case_read_only]
 
 
 def one(i: int, seed: int, base: Path, cycle: bool = False) -> tuple[str, dict]:
