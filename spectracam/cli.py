@@ -258,6 +258,11 @@ def _score_and_write(raw, scene, out_dir: Path, log):
     log(f"{raw.design}: mean ΔE*ab {c.delta_e_mean:.2f} per pixel, {c.delta_e_of_mean:.2f} of patch means "
         f"({c.delta_e_conversion:.2f} from the conversion alone); SNR "
         + ("∞ (noise-free)" if c.snr_combined_db is None else f"{c.snr_combined_db:.1f} dB"))
+    if result.held_out is not None:
+        h = result.held_out
+        log(f"conversion on colours it was not fitted on ({h['library']}, {h['samples']} samples): mean ΔE "
+            f"{h['delta_e_mean']:.2f}, 95th percentile {h['delta_e_p95']:.2f} (on the chart it was fitted on: "
+            f"{result.training['delta_e_mean']:.2f}, {result.training['delta_e_p95']:.2f})")
     log("wrote " + ", ".join(map(str, paths)))
 
 

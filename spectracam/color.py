@@ -44,14 +44,27 @@ class ProcessingSpec(Spec):
     delta_e: str = "cie1976"
     #: How the three channel SNRs combine: "power" (10·log10 Σμ²/Σσ²) or "mean_db".
     snr_combination: str = "power"
+    #: The colours the conversion is also judged on, not fitted on (spectracam.heldout): a library of
+    #: spectracam.reflectances, "file:PATH" (a CSV of spectra), or "none".  CIE 224:2017's 99 samples
+    #: span natural and manufactured colours evenly and ship with colour-science.
+    held_out: str = "cfi99"
 
     def validate(self) -> None:
+        from .reflectances import LIBRARIES
+
         self.choice("demosaic", DEMOSAIC_METHODS)
         self.choice("display", DISPLAYS)
         self.choice("adaptation", ADAPTATIONS)
         self.boolean("gamut_clip")
         self.choice("delta_e", DELTA_E_METHODS)
         self.choice("snr_combination", SNR_COMBINATIONS)
+        if not isinstance(self.held_out, str) or not (self.held_out in LIBRARIES or self.held_out == "none"
+                                                      or (self.held_out.startswith("file:") and len(self.held_out) > 5)):
+            raise self.error("held_out", "must be one of " + ", ".join(LIBRARIES) + ", 'file:PATH' or 'none'")
+        from .reflectances import check_available
+
+        if self.held_out != "none":
+            check_available(self.held_out, "processing.held_out")   # before any work: a missing file or luxpy
 
 
 @DISPLAYS.register("srgb")

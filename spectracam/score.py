@@ -89,11 +89,20 @@ class ChartScore:
     parameters: dict  # scene, camera, processing, seed, definitions, conversion matrix
     rendered_rgb: np.ndarray  # (H, W, 3) linear display RGB
     delta_e_map: np.ndarray  # (H, W), NaN outside the patches' masks
+    #: The conversion's noise-free error on the 24 patches it was fitted on (spectracam.heldout.summary).
+    training: dict | None = None
+    #: The same on colours it was not fitted on (processing.held_out), or None.
+    held_out: dict | None = None
 
     def to_dict(self) -> dict:
         """The strict-JSON report (report.json)."""
-        return {"parameters": self.parameters, "patches": [dataclasses.asdict(p) for p in self.patches],
-                "chart": dataclasses.asdict(self.summary)}
+        out = {"parameters": self.parameters, "patches": [dataclasses.asdict(p) for p in self.patches],
+               "chart": dataclasses.asdict(self.summary)}
+        if self.training is not None:
+            out["training"] = self.training
+        if self.held_out is not None:
+            out["held_out"] = self.held_out
+        return out
 
 
 def recorded_electrons(raw: RawCapture) -> tuple[np.ndarray, np.ndarray]:
@@ -301,4 +310,12 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
                           "the patch mask; combined: "
                           + (SNR_COMBINATIONS[processing.snr_combination].__doc__ or processing.snr_combination),
     }
-    return ChartScore(summary, tuple(patches), parameters, rgb.astype(np.float32), de_map)
+    training = held_out = None
+    if processing.held_out != "none":
+        from .heldout import held_out_block
+        from .heldout import summary as error_summary
+
+        training = error_summary([p.delta_e_conversion for p in patches], "the chart (training: the conversion is "
+                                 "fitted on it)")
+        held_out = held_out_block(processing.held_out, reference.illuminant, reference.grid, camera, M, processing)
+    return ChartScore(summary, tuple(patches), parameters, rgb.astype(np.float32), de_map, training, held_out)

@@ -213,7 +213,7 @@ def design_case(cube, scene: Scene, camera: CameraSpec, processing: ProcessingSp
     return {"exposure_ms": c.capture_time_ms, "channel_ms": (1e3 * raw.exposure_times_s).tolist(),
             "white_response": white.tolist(), "snr_db": c.snr_combined_db, "delta_e": c.delta_e_mean,
             "delta_e_of_mean": c.delta_e_of_mean, "delta_e_conversion": c.delta_e_conversion,
-            "raw": raw, "score": result}
+            "held_out": result.held_out, "training": result.training, "raw": raw, "score": result}
 
 
 def error_budget(cube, scene: Scene, camera: CameraSpec, processing: ProcessingSpec, design: str, seed: int):
@@ -239,7 +239,8 @@ def comparison(exp: PaperExperiment, cubes: dict, camera: CameraSpec, processing
     """Every design under every blackbody, and Figure 6.  ``cubes``: label → (scene, cube)."""
     seed = exp.base.render.seed
     res = {"exposure_ms": {}, "channel_exposure_ms": {}, "fig4_white_response": {}, "fig5a_snr_db": {},
-           "fig5b_delta_e": {}, "fig5b_delta_e_of_mean": {}, "delta_e_conversion": {}}
+           "fig5b_delta_e": {}, "fig5b_delta_e_of_mean": {}, "delta_e_conversion": {}, "delta_e_conversion_p95": {},
+           "held_out_delta_e": {}, "held_out_delta_e_p95": {}}
     cases = {}
     for T in exp.temperatures_K:
         key = f"{T:g}"
@@ -251,6 +252,12 @@ def comparison(exp: PaperExperiment, cubes: dict, camera: CameraSpec, processing
                                   ("fig5b_delta_e", c["delta_e"]), ("fig5b_delta_e_of_mean", c["delta_e_of_mean"]),
                                   ("delta_e_conversion", c["delta_e_conversion"])):
                 res[field_].setdefault(design, {})[key] = value
+            if c["held_out"] is not None:   # the conversion on colours it was not fitted on (spectracam.heldout)
+                for field_, value in (("delta_e_conversion_p95", c["training"]["delta_e_p95"]),
+                                      ("held_out_delta_e", c["held_out"]["delta_e_mean"]),
+                                      ("held_out_delta_e_p95", c["held_out"]["delta_e_p95"])):
+                    res[field_].setdefault(design, {})[key] = value
+                res["held_out_library"] = {k: c["held_out"][k] for k in ("library", "samples")}
             if keep_cases:
                 cases[(key, design)] = c
     scene, cube = scaled(*cubes[exp.budget_illuminant], light_scale)

@@ -66,6 +66,7 @@ def report_markdown(results: dict, command: str) -> str:
         "ΔE*ab of each patch's mean colour (noise averaged out, mostly the conversion):", "",
         _per_design(results, "fig5b_delta_e_of_mean", "{:.2f}"), "",
         "![Figure 5](fig5.png)", "",
+        *_held_out_lines(results),
         f"## Figure 6: cumulative error budget, {p['budget_design']} under {p['budget_illuminant']}", "",
         _table(["step", "mean ΔE*ab"], [[s["label"], f"{s['delta_e']:.2f}"] for s in results["fig6_budget_delta_e"]]), "",
         f"Method: {p['fig6_method']}.", "",
@@ -109,6 +110,23 @@ def _key_numbers(r: dict) -> list[str]:
             g("fig5a_snr_db", "cfa/single", "{:.1f}"), g("fig5a_snr_db", "fsc/optimal", "{:.1f}"),
             g("fig5a_snr_db", "fsc/balanced", "{:.1f}"), g("fig5b_delta_e", "cfa/single", "{:.2f}"),
             g("fig5b_delta_e", "fsc/optimal", "{:.2f}"), g("fig5b_delta_e", "fsc/balanced", "{:.2f}")]
+
+
+def _held_out_lines(results: dict) -> list:
+    """The conversion's noise-free error on the 24 patches it is fitted on (training) beside the error
+    on a library it never saw (held out), per design and light (spectracam.heldout)."""
+    lib = results.get("held_out_library")
+    if not lib or not results.get("held_out_delta_e"):
+        return []
+    temps = list(next(iter(results["held_out_delta_e"].values())))
+    rows = [[d] + [f"{results['delta_e_conversion'][d][t]:.2f} / {results['held_out_delta_e'][d][t]:.2f} "
+                   f"(p95 {results['delta_e_conversion_p95'][d][t]:.1f} / {results['held_out_delta_e_p95'][d][t]:.1f})"
+                   for t in temps] for d in results["held_out_delta_e"]]
+    return ["## The conversion on colours it was not fitted on", "",
+            f"Noise-free ΔE of the conversion alone: on the 24 chart patches it is fitted on (training) / on the "
+            f"{lib['samples']} samples of `{lib['library']}` under the same light (held out); mean (95th percentile). "
+            "The paper scores only the training set.", "",
+            _table(["design"] + [f"{t} K" for t in temps], rows), ""]
 
 
 def write_paper_outputs(out_dir: str | Path, results: dict, cases: dict, cubes: dict | None, command: str,
