@@ -152,14 +152,15 @@ def read_csv(path: str | Path) -> ReflectanceSet:
         raise SpectracamError(f"reflectances file {str(path)!r}: needs a header row (wavelength_nm, then sample names) "
                               "and at least two rows of numbers")
     header = [c.strip() for c in rows[0]]
+    for i, r in enumerate(rows[1:], 2):
+        if len(r) != len(header):
+            raise SpectracamError(f"reflectances file {str(path)!r}: line {i} has {len(r)} cells; every row must have "
+                                  f"{len(header)} cells, like the header")
     try:
         table = np.array([[float(c) for c in r] for r in rows[1:]], float)
     except ValueError as e:
         raise SpectracamError(f"reflectances file {str(path)!r}: {e}; every cell below the header must be a "
                               "number") from None
-    if table.ndim != 2 or table.shape[1] != len(header):
-        raise SpectracamError(f"reflectances file {str(path)!r}: every row must have {len(header)} cells, "
-                              "like the header")
     return _checked(name, header[1:], table[:, 0], table[:, 1:].T, f"the file {path}")
 
 
@@ -172,6 +173,7 @@ def check_available(name: str, what: str = "held_out") -> None:
         if not Path(name[5:]).is_file():
             raise SpectracamError(f"{what} = {name!r}: no such file (a CSV of spectra: wavelength_nm, then one "
                                   "column per sample)")
+        read_csv(name[5:])   # small: every fault in it is found now, not after the render
     elif name in LUXPY_LIBRARIES:
         _luxpy_file("Munsell1269.dat")
 

@@ -231,6 +231,25 @@ def case_scene_value(rng, d: Path):
             False, f"--set {field}={value}")
 
 
+def case_reflectances(rng, d: Path):
+    """The held-out library (issue 19): a wrong name, a missing file, or a CSV of spectra that is cut,
+    ragged, binary, in percent, non-finite, decreasing or short of the scene's range."""
+    kind = rng.choice(["name", "missing", "cut", "ragged", "binary", "percent", "nan", "decreasing", "short", "good"])
+    rows = "wavelength_nm,a,b\n380,0.1,0.2\n580,0.3,0.4\n780,0.5,0.6\n"
+    text = {"cut": rows[: rng.randrange(1, len(rows))], "ragged": rows + "790,0.1\n",
+            "percent": rows.replace("0.", "9"), "nan": rows.replace("0.4", "nan"),
+            "decreasing": "wavelength_nm,a\n780,0.1\n380,0.2\n", "short": "wavelength_nm,a\n450,0.1\n650,0.2\n",
+            "good": rows}.get(kind)
+    if kind == "binary":
+        (d / "r.csv").write_bytes(os.urandom(rng.randrange(1, 3000)))
+    elif text is not None:
+        (d / "r.csv").write_text(text)
+    value = {"name": rng.choice(["CFI99", "munsell", "", "file:"]), "missing": "file:nope.csv"}.get(kind, "file:r.csv")
+    cmd = ["simulate", "s.toml", "-o", "out", "--renderer", "analytic", "--quiet", "--set",
+           f"processing.held_out={value}"]
+    return cmd, False, f"held_out {kind}: {value}"
+
+
 def case_environment(rng, d: Path):
     """Outputs that cannot be written."""
     (d / "afile").write_text("x")
@@ -519,7 +538,7 @@ def case_scheduler_peer(rng, d: Path):
 
 CASES = [case_damaged_file, case_scene_value, case_environment, case_garbage_text, case_camera_file, case_foreign_exr,
          case_new_commands, case_signal, case_full_disk, case_memory_limit, case_raw_attributes, case_journal,
-         case_experiment_values, case_group_signal, case_scheduler_peer, case_read_only]
+         case_experiment_values, case_group_signal, case_scheduler_peer, case_read_only, case_reflectances]
 
 
 def one(i: int, seed: int, base: Path, cycle: bool = False) -> tuple[str, dict]:

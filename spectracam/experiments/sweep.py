@@ -30,8 +30,11 @@ from ..overrides import DESIGN_PATH, PATH, apply_override, apply_overrides, pars
 from ..scene import Scene, load_scene, parse_scene, read_toml
 from ..score import SUMMARY_METRICS
 
-#: What a sweep can record: every field of the chart summary.
-METRICS = SUMMARY_METRICS
+#: Held-out metrics (spectracam.heldout): the conversion's noise-free error on processing.held_out's
+#: colours, which it was not fitted on, and the 95th percentile of its error on the chart it was.
+HELD_OUT_METRICS = ("held_out_delta_e_mean", "held_out_delta_e_p95", "held_out_delta_e_max", "delta_e_conversion_p95")
+#: What a sweep can record: every field of the chart summary, and the held-out scores.
+METRICS = SUMMARY_METRICS + HELD_OUT_METRICS
 DESIGN_AXIS = DESIGN_PATH  # "arch/scheme" in one value, so invalid pairs are never crossed
 #: How long to wait for an external Dask scheduler before giving up, s.
 SCHEDULER_TIMEOUT_S = 10
@@ -224,7 +227,14 @@ def run_cell(index: int, cell: dict, scene: Scene, cube, trials: int, sweep_seed
     for trial in range(trials):
         seed = trial_seed(sweep_seed, trial)
         raw = capture(cube, scene.camera, seed, reference.white_box)
-        values = dataclasses.asdict(score(raw, reference, scene.processing).summary)
+        result = score(raw, reference, scene.processing)
+        values = dataclasses.asdict(result.summary)
+        if result.held_out is not None:
+            values.update({f"held_out_{k}": result.held_out[k] for k in ("delta_e_mean", "delta_e_p95", "delta_e_max")},
+                          delta_e_conversion_p95=result.training["delta_e_p95"])
+        missing = [m for m in metrics if m not in values]
+        if missing:
+            raise SpectracamError(f"metrics = {missing}: need processing.held_out (it is 'none' in cell {index})")
         rows.append({"sweep": sweep_digest, "cell": index, "trial": trial, "seed": seed,
                      **{f"axis:{k}": v for k, v in cell.items()}, **params, **{m: values[m] for m in metrics}})
     return {"cell": index, "rows": rows, "compute_s": time.perf_counter() - t0}
@@ -479,6 +489,14 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
 
             for name in ("distributed", "tornado"):  # a finished run prints no heartbeat tracebacks
                 logging.getLogger(name).setLevel(logging.CRITICAL)
+            # an interrupted run ends its workers: their semaphores are then "leaked" and the resource
+            # tracker (its own process, started with this interpreter's -W options) warns after the
+            # one line that says so
+            import warnings
+
+            warnings.filterwarnings("ignore", category=UserWarning, module="multiprocessing.resource_tracker")
+            if "ignore::UserWarning:multiprocessing.resource_tracker" not in sys.warnoptions:
+                sys.warnoptions.append("ignore::UserWarning:multiprocessing.resource_tracker")
             if scheduler:
                 try:
                     client = Client(scheduler, timeout=SCHEDULER_TIMEOUT_S)

@@ -257,7 +257,11 @@ def layout_to_dict(layout) -> dict:
 def layout_from_dict(d: dict, source: str):
     try:
         if d["kind"] == "mosaic":
-            return MosaicLayout(tuple(tuple(int(k) for k in row) for row in d["tile"]))
+            layout = MosaicLayout(tuple(tuple(int(k) for k in row) for row in d["tile"]))
+            if d.get("pattern", layout.pattern) != layout.pattern:   # redundant: it must agree with the tile
+                raise SpectracamError(f"file = {source!r}: spectracamLayout's pattern {d['pattern']!r} contradicts "
+                                      f"its tile {d['tile']!r} ({layout.pattern}); the file is damaged or was edited")
+            return layout
         if d["kind"] == "planes":
             return PlanesLayout(str(d["planes"]), str(d["description"]))
     except (KeyError, TypeError, ValueError):
