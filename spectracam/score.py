@@ -142,9 +142,12 @@ def channel_stats(raw: RawCapture, boxes) -> tuple[np.ndarray, np.ndarray]:
                 pix = np.concatenate([e[r, c][(dy - r.start) % th::th, (dx - c.start) % tw::tw].ravel()
                                       for dy, dx, kk in sites if kk == k])
                 means[p, k], stds[p, k] = pix.mean(), pix.std()
+                if pix.max() == pix.min():   # one code everywhere (a coarse ADC): no noise, not rounding's 1e-13
+                    stds[p, k] = 0.0
         else:
             block = e[:, r, c].reshape(3, -1)
             means[p], stds[p] = block.mean(axis=1), block.std(axis=1)
+            stds[p][block.max(axis=1) == block.min(axis=1)] = 0.0
     return means, stds
 
 

@@ -476,3 +476,14 @@ def test_a_dask_worker_killed_mid_sweep_is_retried_by_the_cluster(tmp_path):
     assert proc.returncode == 0, err
     rows = [json.loads(line) for line in journal.read_text().splitlines()]
     assert sorted((r["cell"], r["trial"]) for r in rows) == [(c, t) for c in range(81) for t in range(2)]
+
+
+def test_a_patch_on_one_code_has_no_noise_not_300_db(tmp_path):
+    """A 3-bit ADC puts every pixel of most patches on one code: their SNR is that of a noise-free
+    signal (None, "∞"), not 20·log10(mean / rounding's 1e-13) = 315 dB (found by the fault harness)."""
+    r = run("simulate", "scenes/d65.toml", "-o", tmp_path / "o", "--renderer", "analytic", *SMALL,
+            "--set", "sensor.adc_bits=3", "--quiet")
+    assert r.returncode == 0, r.stderr
+    report = json.loads((tmp_path / "o" / "report.json").read_text())
+    snrs = [v for p in report["patches"] for k, v in p.items() if k.startswith("snr_") and isinstance(v, float)]
+    assert snrs and max(snrs) < 200, max(snrs)
