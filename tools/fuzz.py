@@ -328,7 +328,7 @@ def case_foreign_exr(rng, d: Path):
 
     ch, at = read_exr(d / "r" / "radiance.exr")
     keep = {k: v for k, v in at.items() if k in ("spectralLayoutVersion", "emissiveUnits") or k.startswith("spectracam")}
-    bad, what = False, "stripped"
+    bad, what, scale = False, "stripped", None
     r = rng.random()
     if r < 0.35:
         keep = {k: v for k, v in keep.items() if not k.startswith("spectracam")}
@@ -348,6 +348,8 @@ def case_foreign_exr(rng, d: Path):
     elif units is not None:
         keep["emissiveUnits"] = units
         bad, what = bad or units in ("photons", ""), what + f", emissiveUnits {units!r}"
+        if scale == 1e3 and units == "mW.m^-2.sr^-1":   # ×1000 in milliwatts is the recorded radiance: right
+            bad = False
     write_exr(d / "f.exr", ch, keep)
     cmd = ["capture", "f.exr", "-o", "out", "--quiet"]
     white = rng.choice([None, "brightest", "patch", "100", "0", "-3", "1,2,3,4", "0,0,9999,9", "nan", "x"])
