@@ -18,8 +18,8 @@ Every set is a table of measured spectral reflectance factors (0-1), one row per
   - ``munsell1269`` — the 1269 Munsell matte chips (Univ. of Eastern Finland), 380-780 nm, 5 nm.
   - ``tm30_4880`` — the IES TM-30-15 library of 4880 measured samples (David et al. 2015),
     380-780 nm, 1 nm.
-  - ``capbone100k`` — 114 120 measured reflectances compiled by Smet et al. (2017?) for the CIE
-    colour-rendering work; 400-700 nm, 10 nm.
+  - ``capbone100k`` — 114 120 measured reflectances as luxpy ships them (``capbone_100k_rfls``);
+    400-700 nm, 10 nm.
 
 * a user's CSV: ``file:PATH`` — first column wavelength (nm, increasing), one column per sample,
   a header row with the names.
@@ -54,7 +54,7 @@ CITATIONS = {
     "vs15": "NIST colour quality scale v9.0 samples VS1-VS15 (colour-science's copy)",
     "munsell1269": "Munsell Book of Color, matte, 1269 chips (Univ. of Eastern Finland; luxpy's copy, GPLv3)",
     "tm30_4880": "IES TM-30-15 4880-sample library (David et al., Opt. Express 23, 2015; luxpy's copy, GPLv3)",
-    "capbone100k": "114 120 measured reflectances (Smet et al.; luxpy's capbone_100k_rfls, GPLv3)",
+    "capbone100k": "114 120 measured reflectances (luxpy's data file capbone_100k_rfls.npz, GPLv3)",
 }
 LIBRARIES = tuple(CITATIONS)
 
