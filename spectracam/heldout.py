@@ -25,8 +25,8 @@ from .color import ProcessingSpec, display_rgb_to_xyz
 from .illuminant import IlluminantSpec, spectral_irradiance
 from .metrics import delta_e, xyz_to_lab
 from .reflectances import load
-from .reference import XYZ_STEP_NM
-from .spectra import WavelengthGrid, band_sample_points, cie_1931_cmfs
+from .reference import observer_grid
+from .spectra import WavelengthGrid, band_sample_points
 
 #: Points per band of the band averages (0.5 nm in a 10-nm band): the chart's 200 give the same
 #: conversion error within 7e-5 ΔE*ab on the chart's own patches.
@@ -57,9 +57,7 @@ def held_out_colours(library: str, illuminant: IlluminantSpec, grid: WavelengthG
     e_b = E(lam_b) / np.pi
     # the chart's colorimetry (spectracam.reference.colorimetry): trapezoids at its 0.1 nm (1 nm moved
     # the chart's conversion error by up to 0.008 ΔE*ab), as one (n, L) @ (L, 3) product per chunk
-    lam = np.linspace(lo, hi, int(round((hi - lo) / XYZ_STEP_NM)) + 1)
-    wl, cmfs = cie_1931_cmfs()
-    xyz_bar = np.stack([np.interp(lam, wl, cmfs[:, k]) for k in range(3)], axis=-1)
+    lam, xyz_bar = observer_grid(lo, hi)
     trapezoid = np.full(lam.size, lam[1] - lam[0])
     trapezoid[[0, -1]] *= 0.5
     weights = (E(lam) / np.pi)[:, None] * xyz_bar * trapezoid[:, None]          # (L, 3)
@@ -68,10 +66,9 @@ def held_out_colours(library: str, illuminant: IlluminantSpec, grid: WavelengthG
     xyz = np.empty((len(rset), 3))
     for a in range(0, len(rset), CHUNK):
         sl = slice(a, a + CHUNK)
-        sub = type(rset)(rset.name, (), rset.wavelengths_nm, rset.values[sl], rset.citation)
-        y = sub.at(lam_b.ravel()).reshape(-1, *lam_b.shape) * e_b[None]
+        y = rset.at(lam_b.ravel(), sl).reshape(-1, *lam_b.shape) * e_b[None]
         radiance[sl] = 0.5 * (y[..., 1:] + y[..., :-1]).mean(axis=-1)
-        xyz[sl] = sub.at(lam) @ weights
+        xyz[sl] = rset.at(lam, sl) @ weights
     return HeldOutColours(library, rset.sample_names, radiance, xyz / white[1], white / white[1])
 
 

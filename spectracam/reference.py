@@ -83,6 +83,14 @@ class ChartReference:
         return None
 
 
+def observer_grid(lo_nm: float, hi_nm: float) -> tuple[np.ndarray, np.ndarray]:
+    """``(λ (n,), x̄ȳz̄ (n, 3))``: the CIE 1931 observer on the reference colorimetry's grid over
+    ``[lo_nm, hi_nm]`` (:data:`XYZ_STEP_NM`), shared by the chart and any other reflectances."""
+    lam = np.linspace(lo_nm, hi_nm, int(round((hi_nm - lo_nm) / XYZ_STEP_NM)) + 1)
+    wl, cmfs = cie_1931_cmfs()
+    return lam, np.stack([np.interp(lam, wl, cmfs[:, k]) for k in range(3)], axis=-1)
+
+
 def colorimetry(chart: ChartSpec, illuminant: IlluminantSpec, lo_nm: float, hi_nm: float):
     """``(patch XYZ (24, 3), white XYZ (3,))`` of the chart over ``[lo_nm, hi_nm]``: the CIE 1931
     integrals ``∫(E·S/π)·x̄ȳz̄ dλ / ∫(E/π)·ȳ dλ``, numerator and denominator over the same range, so
@@ -90,9 +98,7 @@ def colorimetry(chart: ChartSpec, illuminant: IlluminantSpec, lo_nm: float, hi_n
     camera sees it (it sees only the scene's range), by the trapezoid rule at :data:`XYZ_STEP_NM`,
     independent of the bands.  (Before issue 17 the white was integrated over 360–830 nm, so a
     perfect white read Y = 0.9989–0.9996 on a 400–700 nm scene.)"""
-    lam = np.linspace(lo_nm, hi_nm, int(round((hi_nm - lo_nm) / XYZ_STEP_NM)) + 1)
-    wl, cmfs = cie_1931_cmfs()
-    xyz_bar = np.stack([np.interp(lam, wl, cmfs[:, k]) for k in range(3)], axis=-1)  # (n, 3)
+    lam, xyz_bar = observer_grid(lo_nm, hi_nm)
     white_radiance = spectral_irradiance(illuminant)(lam) / np.pi
     rho = np.stack([r(lam) for _, r in patch_reflectances(chart)])  # (24, n)
     white = np.trapezoid(white_radiance[:, None] * xyz_bar, lam, axis=0)

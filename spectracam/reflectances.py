@@ -72,14 +72,15 @@ class ReflectanceSet:
     def __len__(self) -> int:
         return self.values.shape[0]
 
-    def at(self, lam_nm: np.ndarray) -> np.ndarray:
-        """``(n, len(lam))`` reflectances, linear between the measured wavelengths (the set must cover
-        ``lam``: see :func:`check_covers`)."""
+    def at(self, lam_nm: np.ndarray, rows: slice = slice(None)) -> np.ndarray:
+        """``(n, len(lam))`` reflectances of the samples ``rows``, linear between the measured
+        wavelengths (the set must cover ``lam``: see :func:`check_covers`)."""
         lam = np.asarray(lam_nm, float)
         j = np.clip(np.searchsorted(self.wavelengths_nm, lam) - 1, 0, self.wavelengths_nm.size - 2)
         w0, w1 = self.wavelengths_nm[j], self.wavelengths_nm[j + 1]
         t = (lam - w0) / (w1 - w0)
-        return self.values[:, j] * (1 - t) + self.values[:, j + 1] * t
+        v = self.values[rows]
+        return v[:, j] * (1 - t) + v[:, j + 1] * t
 
     def check_covers(self, lo_nm: float, hi_nm: float, what: str = "held_out") -> None:
         w = self.wavelengths_nm
@@ -138,6 +139,17 @@ def _luxpy_table(name: str, filename: str, key: str | None = None) -> Reflectanc
 
 
 def read_csv(path: str | Path) -> ReflectanceSet:
+    """:func:`_read_csv`, read once per version of the file (every sweep cell validates its scene)."""
+    try:
+        st = Path(path).stat()
+        version = (st.st_mtime_ns, st.st_size)
+    except OSError:
+        version = None   # _read_csv says what is wrong
+    return _read_csv(str(path), version)
+
+
+@lru_cache(maxsize=8)
+def _read_csv(path: str, version) -> ReflectanceSet:
     """A user's reflectances: a header row (``wavelength_nm, name1, name2, ...``), then one row per
     wavelength; values are reflectance factors 0-1 (percentages are refused)."""
     p = Path(path)

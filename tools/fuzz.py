@@ -234,7 +234,13 @@ def case_scene_value(rng, d: Path):
 def case_reflectances(rng, d: Path):
     """The held-out library (issue 19): a wrong name, a missing file, or a CSV of spectra that is cut,
     ragged, binary, in percent, non-finite, decreasing or short of the scene's range."""
-    kind = rng.choice(["name", "missing", "cut", "ragged", "binary", "percent", "nan", "decreasing", "short", "good"])
+    kind = rng.choice(["name", "missing", "cut", "ragged", "binary", "percent", "nan", "decreasing", "short", "good",
+                       "sweep_none"])
+    if kind == "sweep_none":   # a sweep asking for held-out metrics with the held-out library switched off
+        (d / "ho.toml").write_text(SWEEP.replace('metrics = ["delta_e_mean", "snr_combined_db"]',
+                                                 'metrics = ["held_out_delta_e_mean"]'))
+        return (["sweep", "ho.toml", "-o", "out", "--serial", "--quiet", "--set", "processing.held_out=none"], False,
+                "held_out sweep_none")
     rows = "wavelength_nm,a,b\n380,0.1,0.2\n580,0.3,0.4\n780,0.5,0.6\n"
     text = {"cut": rows[: rng.randrange(1, len(rows))], "ragged": rows + "790,0.1\n",
             "percent": rows.replace("0.", "9"), "nan": rows.replace("0.4", "nan"),

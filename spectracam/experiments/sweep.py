@@ -154,6 +154,9 @@ def load_sweep(path: str | Path, overrides=(), max_cells: int = MAX_CELLS, log=l
     for i, cell in enumerate(sweep.cells()):
         scene = cell_scene(sweep, cell, i)  # validate every combination now
         check_meterable(scene, cell, i, src)
+        wanted = [m for m in metrics if m in HELD_OUT_METRICS]
+        if wanted and scene.processing.held_out == "none":
+            raise ConfigError("metrics", wanted, f"need processing.held_out (it is 'none' in cell {i})", src)
         d = scene.to_dict()
         renders.add(json.dumps({k: d[k] for k in RENDER_TABLES}, sort_keys=True))
         if largest is None or _size(scene) > _size(largest):
@@ -232,9 +235,6 @@ def run_cell(index: int, cell: dict, scene: Scene, cube, trials: int, sweep_seed
         if result.held_out is not None:
             values.update({f"held_out_{k}": result.held_out[k] for k in ("delta_e_mean", "delta_e_p95", "delta_e_max")},
                           delta_e_conversion_p95=result.training["delta_e_p95"])
-        missing = [m for m in metrics if m not in values]
-        if missing:
-            raise SpectracamError(f"metrics = {missing}: need processing.held_out (it is 'none' in cell {index})")
         rows.append({"sweep": sweep_digest, "cell": index, "trial": trial, "seed": seed,
                      **{f"axis:{k}": v for k, v in cell.items()}, **params, **{m: values[m] for m in metrics}})
     return {"cell": index, "rows": rows, "compute_s": time.perf_counter() - t0}
