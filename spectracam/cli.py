@@ -253,6 +253,17 @@ def _score_and_write(raw, scene, out_dir: Path, log):
     from .pipeline import score
 
     result = score(raw, scene)
+    if scene.target.textured:
+        from .io.report import write_target_outputs
+
+        paths = write_target_outputs(out_dir, result)
+        h, t = result.held_out, result.training
+        what = "colours it was fitted on" if h["fitted_on_these"] else "colours it was not fitted on"
+        log(f"{raw.design}: {h['kind']} of {h['library']} ({what}), {h['pixels']} pixels, {h['samples']} samples: "
+            f"ΔE*ab per pixel mean {h['delta_e_mean']:.2f}, 95th percentile {h['delta_e_p95']:.2f}; S-CIELAB mean "
+            f"{h['s_cielab_mean']:.2f} (the conversion on the chart it was fitted on: {t['delta_e_mean']:.2f})")
+        log("wrote " + ", ".join(map(str, paths)))
+        return
     paths = write_score_outputs(out_dir, result)
     c = result.summary
     log(f"{raw.design}: mean ΔE*ab {c.delta_e_mean:.2f} per pixel, {c.delta_e_of_mean:.2f} of patch means "

@@ -15,64 +15,21 @@ reach; the noise's own error is in the chart scores.  Reported: mean, 95th perce
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-from functools import lru_cache
-
 import numpy as np
 
 from .camera import CameraSpec, photo_electron_rates
 from .color import ProcessingSpec, display_rgb_to_xyz
-from .illuminant import IlluminantSpec, spectral_irradiance
+from .illuminant import IlluminantSpec
 from .metrics import delta_e, xyz_to_lab
-from .reflectances import load
-from .reference import observer_grid
-from .spectra import WavelengthGrid, band_sample_points
+from .reference import LibraryColours, library_colours
+from .spectra import WavelengthGrid
 
-#: Points per band of the band averages (0.5 nm in a 10-nm band): the chart's 200 give the same
-#: conversion error within 7e-5 ΔE*ab on the chart's own patches.
-POINTS_PER_BAND = 20
-#: Samples handled at once (memory: ~100 MB of reflectances on the 0.1-nm colorimetry grid).
-CHUNK = 4096
+#: The library's colours under a light: moved to :mod:`spectracam.reference` (the truth of a scene),
+#: where a textured target (:mod:`spectracam.target`) finds them too.
+HeldOutColours, held_out_colours = LibraryColours, library_colours
 
 
-@dataclass(frozen=True, eq=False)
-class HeldOutColours:
-    """A library under one light on one wavelength grid: what a camera is shown and the truth."""
-
-    library: str
-    names: tuple
-    radiance: np.ndarray     # (n, B) band-averaged, W·m⁻²·sr⁻¹·nm⁻¹
-    xyz: np.ndarray          # (n, 3), Y = 1 for a perfect white diffuser
-    white_xyz: np.ndarray    # (3,), the light's white, Y = 1
-
-
-@lru_cache(maxsize=16)
-def held_out_colours(library: str, illuminant: IlluminantSpec, grid: WavelengthGrid) -> HeldOutColours:
-    """Band radiance and CIE 1931 XYZ of every sample of ``library`` under ``illuminant`` (memoised)."""
-    lo, hi = float(grid.edges_nm[0]), float(grid.edges_nm[-1])
-    rset = load(library)
-    rset.check_covers(lo, hi)
-    E = spectral_irradiance(illuminant)
-    lam_b = band_sample_points(grid, POINTS_PER_BAND)                 # (B, P + 1)
-    e_b = E(lam_b) / np.pi
-    # the chart's colorimetry (spectracam.reference.colorimetry): trapezoids at its 0.1 nm (1 nm moved
-    # the chart's conversion error by up to 0.008 ΔE*ab), as one (n, L) @ (L, 3) product per chunk
-    lam, xyz_bar = observer_grid(lo, hi)
-    trapezoid = np.full(lam.size, lam[1] - lam[0])
-    trapezoid[[0, -1]] *= 0.5
-    weights = (E(lam) / np.pi)[:, None] * xyz_bar * trapezoid[:, None]          # (L, 3)
-    white = weights.sum(axis=0)
-    radiance = np.empty((len(rset), len(grid.centres_nm)))
-    xyz = np.empty((len(rset), 3))
-    for a in range(0, len(rset), CHUNK):
-        sl = slice(a, a + CHUNK)
-        y = rset.at(lam_b.ravel(), sl).reshape(-1, *lam_b.shape) * e_b[None]
-        radiance[sl] = 0.5 * (y[..., 1:] + y[..., :-1]).mean(axis=-1)
-        xyz[sl] = rset.at(lam, sl) @ weights
-    return HeldOutColours(library, rset.sample_names, radiance, xyz / white[1], white / white[1])
-
-
-def conversion_errors(colours: HeldOutColours, camera: CameraSpec, grid: WavelengthGrid, conversion: np.ndarray,
+def conversion_errors(colours: LibraryColours, camera: CameraSpec, grid: WavelengthGrid, conversion: np.ndarray,
                       processing: ProcessingSpec) -> np.ndarray:
     """``(n,)`` ΔE of each sample through the fitted 3×3 ``conversion`` (see the module)."""
     rates = photo_electron_rates(colours.radiance.astype(np.float32), grid, camera).astype(np.float64)

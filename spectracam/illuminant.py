@@ -1,4 +1,5 @@
-"""The scene illuminant: a blackbody or a CIE illuminant at an absolute level.
+"""The scene illuminant: a blackbody, any illuminant colour-science ships (CIE A, D series, FL1–FL12,
+FL3.x, HP1–5, LED-B1…V2, ...) or a measured SPD, at an absolute level.
 
 The level is the luminance of a perfect white (Lambertian, reflectance 1) diffuser under the
 illuminant, L_w = 683·∫(E(λ)/π)·ȳ(λ)dλ in cd/m², or equivalently the illuminance E_v = π·L_w in lux.
@@ -13,7 +14,7 @@ import numpy as np
 
 from .errors import ConfigError
 from .registry import Registry
-from .spec import Spec
+from .spec import Spec, _is_number
 from .spectra import K_M_LM_PER_W, Spectrum, cie_1931_cmfs, planck_radiance, tabulated
 
 #: Colour temperatures accepted for a blackbody, K: below 1000 K almost nothing is visible; above
@@ -40,6 +41,17 @@ def _cie(spec: "IlluminantSpec") -> Spectrum:
     return tabulated(sd.wavelengths, sd.values)
 
 
+@ILLUMINANTS.register("measured")
+def _measured(spec: "IlluminantSpec") -> Spectrum:
+    """A measured SPD (``wavelengths_nm``, ``values``; ``file`` in a scene file), linear between the
+    samples and zero outside them."""
+    return tabulated(spec.wavelengths_nm, spec.values)
+
+
+#: Fewest samples of a measured SPD.
+MIN_SPD_SAMPLES = 3
+
+
 @dataclass(frozen=True)
 class IlluminantSpec(Spec):
     """What the scene file's ``[illuminant]`` table describes (``type`` there is ``kind`` here)."""
@@ -51,6 +63,9 @@ class IlluminantSpec(Spec):
     name: str | None = None  # a key of colour.SDS_ILLUMINANTS, for kind = "cie"
     #: Luminance of a perfect white diffuser, cd/m².  100 cd/m² is a dim indoor scene.
     white_luminance_cd_m2: float = 100.0
+    #: kind = "measured": the SPD (any scale: it is set by the luminance), and where it came from.
+    wavelengths_nm: tuple = ()
+    values: tuple = ()
 
     def validate(self) -> None:
         ILLUMINANTS.check(self.kind)  # named "type" in the file
@@ -60,7 +75,25 @@ class IlluminantSpec(Spec):
             import colour
 
             if self.name not in colour.SDS_ILLUMINANTS:
-                raise self.error("name", "must be a CIE illuminant colour-science ships, e.g. D65, D50, A, FL2")
+                raise self.error("name", "must be a CIE illuminant or another light colour-science ships, e.g. D65, A, FL2, LED-B1 "
+                                 f"({len(colour.SDS_ILLUMINANTS)} names: colour.SDS_ILLUMINANTS)")
+        elif self.kind == "measured":
+            self.string("name")
+            wl, v = self.wavelengths_nm, self.values
+            if not isinstance(wl, tuple) or len(wl) < MIN_SPD_SAMPLES or not all(_is_number(x) for x in wl) \
+                    or any(b <= a for a, b in zip(wl, wl[1:])):
+                raise self.error("wavelengths_nm", f"must be at least {MIN_SPD_SAMPLES} increasing wavelengths in nm",
+                                 list(wl) if isinstance(wl, tuple) else wl)
+            if not isinstance(v, tuple) or len(v) != len(wl) or not all(_is_number(x) and x >= 0 for x in v):
+                raise self.error("values", f"must be {len(wl)} spectral power values ≥ 0 (one per wavelength)",
+                                 (list(v)[:8] if isinstance(v, tuple) else v))
+            if not any(x > 0 for x in v):
+                raise self.error("values", "must not all be 0 (a light that gives no light)", list(v)[:8])
+            if wl[0] < 300 or wl[-1] > 1100:
+                raise self.error("wavelengths_nm", "must lie within 300–1100 nm (an SPD in nm, not µm or m)",
+                                 [wl[0], wl[-1]])
+            object.__setattr__(self, "wavelengths_nm", tuple(float(x) for x in wl))
+            object.__setattr__(self, "values", tuple(float(x) for x in v))
         self.number("white_luminance_cd_m2", 0, lo_open=True, unit="cd/m²")
 
     @property
@@ -69,6 +102,8 @@ class IlluminantSpec(Spec):
 
     @property
     def label(self) -> str:
+        if self.kind == "measured":
+            return f"measured SPD {self.name}"
         return f"{self.temperature_K:g} K blackbody" if self.kind == "blackbody" else f"CIE {self.name}"
 
     def to_dict(self) -> dict:
@@ -77,6 +112,8 @@ class IlluminantSpec(Spec):
             d["temperature_K"] = self.temperature_K
         else:
             d["name"] = self.name
+        if self.kind == "measured":
+            d["wavelengths_nm"], d["values"] = list(self.wavelengths_nm), list(self.values)
         return d
 
     @classmethod
@@ -99,12 +136,17 @@ class IlluminantSpec(Spec):
             merged = {"type": d["type"], "white_luminance_cd_m2": merged["white_luminance_cd_m2"]}
         merged.update(d)
         kind = merged.pop("type")
-        other = {"blackbody": "name", "cie": "temperature_K"}.get(kind)
-        if other in d:
-            raise ConfigError(f"illuminant.{other}", d[other], f"unknown key for a {kind!r} illuminant", source)
-        merged.pop(other, None)
+        others = {"blackbody": ("name", "wavelengths_nm", "values"), "cie": ("temperature_K", "wavelengths_nm",
+                                                                             "values"),
+                  "measured": ("temperature_K",)}.get(kind, ())
+        for other in others:
+            if other in d:
+                raise ConfigError(f"illuminant.{other}", d[other], f"unknown key for a {kind!r} illuminant", source)
+            merged.pop(other, None)
         if kind == "cie":
             merged.setdefault("name", "D65")
+        if kind == "measured":
+            merged.setdefault("name", "(from the scene file)")
         return super().from_dict({"kind": kind, "temperature_K": None, **merged}, source)
 
 

@@ -60,6 +60,10 @@ def capture(cube: RadianceCube, camera: CameraSpec | None = None, seed: int | No
         return capture_spectral_image(cube, scene.replace(camera=camera), seed, white)
     seed = scene.render.seed if seed is None else seed
     white = parse_white(white if white is not None else "patch", "white")
+    if white.kind == "patch" and scene.target.textured:   # the chart's white patch under the same light
+        from .chart import WHITE_PATCH
+
+        return capture_stage(cube, camera, seed, white_radiance=ChartReference.of(scene).patch_radiance[WHITE_PATCH])
     if white.kind == "patch":
         return capture_stage(cube, camera, seed, ChartReference.of(scene).white_box)
     return capture_stage(cube, camera, seed, white_radiance=metered_radiance(cube, white, scene),
@@ -126,6 +130,19 @@ def check_cube_matches(cube: RadianceCube, scene: Scene, source: str = "cube", r
                               f"bands at {scene.grid.centres_nm[0]:g}…{scene.grid.centres_nm[-1]:g} nm")
     if not radiance:
         return
+    if scene.target.textured:
+        from .reference import TargetReference
+
+        want = TargetReference.of(scene).mean_radiance()
+        mean = cube.radiance.mean(axis=(0, 1), dtype=np.float64)
+        err = float(np.sqrt(np.mean((mean - want) ** 2) / np.mean(want ** 2)))
+        if err > RADIANCE_MATCH_TOLERANCE:
+            raise SpectracamError(f"{source}: its pixels contradict the scene it records ({scene.target.kind} of "
+                                  f"{scene.target.library} under {scene.illuminant.label}, "
+                                  f"{scene.illuminant.white_luminance_cd_m2:g} cd/m²): the mean spectrum differs by "
+                                  f"{100 * err:.1f} % rms from the target's, at most {100 * RADIANCE_MATCH_TOLERANCE:g} % "
+                                  "is allowed; a file edited or from another scene is not captured as this one")
+        return
     ref = ChartReference.of(scene)
     worst, patch = 0.0, 0
     for p, (r, c) in enumerate(ref.boxes):
@@ -190,10 +207,20 @@ def check_memory(scene: Scene, copies: float = 1.0, what: str = "") -> None:
 
 
 def score(raw: RawCapture, scene: Scene | None = None, processing: ProcessingSpec | None = None,
-          delta_e_reference: str = "scene") -> ChartScore:
+          delta_e_reference: str = "scene"):
     """Score a capture against its scene (default: the scene it records), with ``processing``
-    (default: the scene's)."""
+    (default: the scene's): a :class:`ChartScore`, or for a textured target a
+    :class:`~spectracam.target_score.TargetScore` (per pixel against its known spectra)."""
     scene = scene or scene_of(raw, "capture")
+    if scene.target.textured:
+        from .reference import TargetReference
+        from .target_score import score_target
+
+        if delta_e_reference != "scene":
+            raise SpectracamError(f"delta_e_reference = {delta_e_reference!r}: a textured target is scored against "
+                                  "its scene only")
+        return score_target(raw, ChartReference.of(scene), TargetReference.of(scene), scene.target,
+                            processing or scene.processing)
     return score_stage(raw, ChartReference.of(scene), processing or scene.processing, delta_e_reference)
 
 

@@ -1,6 +1,7 @@
 """The scene file: assembles every stage's spec from one TOML document.
 
-A scene file has the tables ``[chart]``, ``[illuminant]``, ``[wavelengths]``, ``[image]``,
+A scene file has the tables ``[target]`` (what the camera looks at: the chart, or a textured target of
+measured reflectances, :mod:`spectracam.target`), ``[chart]``, ``[wavelengths]``, ``[image]``,
 ``[render]``, the camera's ``[optics]``, ``[filters]``, ``[sensor]``, ``[capture]`` and
 ``[processing]`` (all optional, defaults in each stage's spec) and an optional top-level ``name``.
 Each stage validates its own table; this module holds only the rules that tie stages together
@@ -21,13 +22,14 @@ from .color import ProcessingSpec
 from .errors import ConfigError
 from .illuminant import IlluminantSpec
 from .render import RenderSpec
+from .target import TargetSpec, resolve_target_files
 from .spec import Spec, _is_number
 from .spectra import CIE_RANGE_NM, WavelengthGrid
 
 #: Fewest pixels across a patch's mask: a 4×4 mask still holds 4 pixels of each Bayer colour.
 MIN_PATCH_PX = 4
 #: The tables of a scene file, in order.
-SCENE_TABLES = ("chart", "illuminant", "wavelengths", "image", "render", *CAMERA_TABLES, "processing")
+SCENE_TABLES = ("target", "chart", "illuminant", "wavelengths", "image", "render", *CAMERA_TABLES, "processing")
 
 
 @dataclass(frozen=True)
@@ -104,6 +106,9 @@ class Scene(Spec):
     processing.  Frozen, comparable and hashable."""
 
     name: str = "Macbeth ColorChecker"
+    #: What the camera looks at; the chart (``[chart]``) is also what the conversion is fitted on and
+    #: the exposure metered on (its white patch under the same light), whatever the target.
+    target: TargetSpec = field(default_factory=TargetSpec)
     chart: ChartSpec = field(default_factory=ChartSpec)
     illuminant: IlluminantSpec = field(default_factory=IlluminantSpec)
     grid: WavelengthGrid = field(default_factory=_default_grid)
@@ -115,11 +120,27 @@ class Scene(Spec):
     def validate(self) -> None:
         self.string("name")
         chart, image, grid = self.chart, self.image, self.grid
+        if self.target.textured:
+            self.target.check_size(image.width, image.height)
+            from .reflectances import check_available
+
+            check_available(self.target.library, "target.library")
         smallest = min(min(r.stop - r.start, c.stop - c.start) for r, c in patch_boxes(chart, image.width, image.height))
-        if smallest < MIN_PATCH_PX:
+        if smallest < MIN_PATCH_PX and not self.target.textured:
             raise ConfigError("image", f"{image.width}x{image.height}",
                               f"too small: the smallest patch mask is {smallest} px across, at least {MIN_PATCH_PX} "
                               "are needed to meter and score a patch")
+        light = self.illuminant
+        if light.kind == "measured" and (light.wavelengths_nm[0] > grid.edges_nm[0] + 1e-9
+                                         or light.wavelengths_nm[-1] < grid.edges_nm[-1] - 1e-9):
+            raise ConfigError("illuminant.wavelengths_nm", f"{light.wavelengths_nm[0]:g}–{light.wavelengths_nm[-1]:g} nm",
+                              f"the measured SPD must cover the scene's bands, {grid.edges_nm[0]:g}–"
+                              f"{grid.edges_nm[-1]:g} nm")
+        if self.target.textured:
+            from .reflectances import load
+
+            load(self.target.library, "target.library").check_covers(float(grid.edges_nm[0]),
+                                                                       float(grid.edges_nm[-1]), "target.library")
         d_lo, d_hi = dataset_range_nm(chart.dataset)
         if grid.edges_nm[0] < d_lo or grid.edges_nm[-1] > d_hi:
             raise ConfigError("wavelengths", f"{grid.centres_nm[0]:g}–{grid.centres_nm[-1]:g} nm",
@@ -128,7 +149,8 @@ class Scene(Spec):
 
     def to_dict(self) -> dict:
         """A plain, JSON-serialisable description that round-trips through :meth:`from_dict`."""
-        return {"name": self.name, "chart": self.chart.to_dict(), "illuminant": self.illuminant.to_dict(),
+        target = {"target": self.target.to_dict()} if self.target.textured else {}
+        return {"name": self.name, **target, "chart": self.chart.to_dict(), "illuminant": self.illuminant.to_dict(),
                 "wavelengths": {"centres_nm": list(self.grid.centres_nm)}, "image": self.image.to_dict(),
                 "render": self.render.to_dict(), **self.camera.to_dict(), "processing": self.processing.to_dict()}
 
@@ -145,6 +167,7 @@ class Scene(Spec):
         try:
             grid = parse_grid(data["wavelengths"], source) if "wavelengths" in data else base.grid
             return cls(name=data.get("name", base.name),
+                       target=TargetSpec.from_dict(data.get("target", {}), source, base.target),
                        chart=ChartSpec.from_dict(data.get("chart", {}), source, base.chart),
                        illuminant=IlluminantSpec.from_dict(data.get("illuminant", {}), source, base.illuminant),
                        grid=grid,
@@ -178,17 +201,21 @@ def read_toml(path: str | Path, what: str) -> dict:
 
 
 #: Curves a scene file may give as a file, relative to the scene file: (table, file key, fields).
-CURVE_FILES = (("filters", "qe_file", "qe_curve_nm", "qe_curve"),
+CURVE_FILES = (("illuminant", "file", "wavelengths_nm", "values"),
+               ("filters", "qe_file", "qe_curve_nm", "qe_curve"),
                ("optics", "transmittance_file", "transmittance_curve_nm", "transmittance_curve"))
 
 
 def resolve_curve_files(data: dict, base_dir: Path) -> dict:
-    """Replace ``filters.qe_file`` / ``optics.transmittance_file`` / ``filters.camera_file`` by the
-    curves they hold, so the scene (and every file made from it) records the data, not a path
-    (``qe = "data"``, respectively ``kind = "camera"`` and ``camera = "file"``, are implied)."""
+    """Replace ``illuminant.file`` / ``filters.qe_file`` / ``optics.transmittance_file`` /
+    ``filters.camera_file`` by the curves they hold, so the scene (and every file made from it) records
+    the data, not a path (``type = "measured"``, ``qe = "data"``, respectively ``kind = "camera"`` and
+    ``camera = "file"``, are implied), and a target's files by absolute paths (:mod:`spectracam.target`)."""
     from .filters import load_curve
 
     data = dict(data)
+    if isinstance(data.get("target"), dict):
+        data["target"] = resolve_target_files(data["target"], base_dir)
     for table, key, wl_field, value_field in CURVE_FILES:
         t = data.get(table)
         if isinstance(t, dict) and key in t:
@@ -197,6 +224,9 @@ def resolve_curve_files(data: dict, base_dir: Path) -> dict:
             if not isinstance(path, str):
                 raise ConfigError(f"{table}.{key}", path, "must be a path to a CSV or TOML file")
             t[wl_field], t[value_field] = load_curve(Path(base_dir) / path, f"{table}.{key}")
+            if table == "illuminant":   # a measured SPD, named after its file
+                t.setdefault("type", "measured")
+                t.setdefault("name", Path(path).name)
             if table == "filters":
                 t.setdefault("qe", "data")
             data[table] = t

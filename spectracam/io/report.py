@@ -149,3 +149,41 @@ def write_score_outputs(out_dir: str | Path, result: ChartScore, adapt_white: bo
     paths.append(atomic_write(out / "report.json", json.dumps(result.to_dict(), indent=1, allow_nan=False).encode()))
     paths.append(atomic_write(out / "report.csv", report_csv(result)))
     return paths
+
+
+def target_csv(result) -> bytes:
+    """One row per scored sample of a textured target (interior pixels), then the per-pixel summary."""
+    buf = io.StringIO()
+    wr = csv.writer(buf)
+    wr.writerow(["sample", "name", "pixels", "scene_L", "scene_a", "scene_b", "rendered_L", "rendered_a",
+                 "rendered_b", "delta_e_of_mean", "delta_e_mean", "delta_e_conversion"])
+    for s in result.samples:
+        wr.writerow([s.label, s.name, s.pixels, *s.scene_lab, *s.rendered_lab, f"{s.delta_e_of_mean:.4f}",
+                     f"{s.delta_e_mean:.4f}", f"{s.delta_e_conversion:.4f}"])
+    h = result.held_out
+    wr.writerow(["all pixels", h["kind"], h["pixels"], "", "", "", "", "", "", "", f"{h['delta_e_mean']:.4f}", ""])
+    return buf.getvalue().encode()
+
+
+def write_target_outputs(out_dir: str | Path, result, adapt_white: bool = True) -> list[Path]:
+    """A textured target's score (:class:`~spectracam.target_score.TargetScore`): rendered.exr/.png,
+    delta_e.png and s_cielab.png (per pixel, fixed 0–20 scale), report.json and report.csv."""
+    out = Path(out_dir)
+    params = result.parameters
+    display = params["processing"]["display"]
+    paths = [write_display_exr(out / "rendered.exr", result.rendered_rgb, params),
+             write_png(out / "rendered.png", srgb_preview(result.rendered_rgb, display, adapt_white))]
+    h = result.held_out
+    design = f"{params['camera']['capture']['architecture']}/{params['camera']['capture']['exposure']}"
+    name = (params.get("scene") or {}).get("name", "")
+    for fname, image, what in (("delta_e.png", result.delta_e_map, "ΔE*ab"),
+                               ("s_cielab.png", result.scielab_map, "S-CIELAB ΔE")):
+        key = "delta_e" if fname == "delta_e.png" else "s_cielab"
+        title = f"{design}, {name}: {what} per pixel, mean {h[key + '_mean']:.2f}, 95th percentile {h[key + '_p95']:.2f}"
+        fig = delta_e_figure(image, title)
+        fig.axes[-1].set_ylabel(f"{what} per pixel against the known spectra (fixed scale 0–{DELTA_E_VMAX:g})",
+                                fontsize=8)
+        paths.append(save_figure(fig, out / fname))
+    paths.append(atomic_write(out / "report.json", json.dumps(result.to_dict(), indent=1, allow_nan=False).encode()))
+    paths.append(atomic_write(out / "report.csv", target_csv(result)))
+    return paths

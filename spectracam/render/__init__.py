@@ -86,6 +86,10 @@ class RadianceCube:
 def _mitsuba(scene, progress=False, log=None):
     from .mitsuba import render_mitsuba
 
+    if scene.target.textured:
+        from .target import render_target_mitsuba
+
+        return render_target_mitsuba(scene, progress=progress, log=log)
     return render_mitsuba(scene, progress=progress, log=log)
 
 
@@ -93,6 +97,10 @@ def _mitsuba(scene, progress=False, log=None):
 def _analytic(scene, progress=False, log=None):
     from .analytic import render_analytic
 
+    if scene.target.textured:
+        from .target import render_target_analytic
+
+        return render_target_analytic(scene)
     return render_analytic(scene)
 
 
