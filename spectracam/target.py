@@ -10,15 +10,16 @@ and the truth of every pixel is the area-weighted mix of the samples it shows.  
 * ``samples`` — a chart of the library's samples (all, or those listed in ``samples``), row by row,
   ``columns`` across (0: as square as the image allows), each a square of ``1 − gap`` of its cell on
   the surround (``chart.surround_reflectance``).
-* ``mondrian`` — up to ``count`` axis-aligned rectangles, sides uniform in ``[size_min_px,
+* ``mondrian`` — axis-aligned rectangles (at most ``count``; 0: until every texel is covered), sides uniform in ``[size_min_px,
   size_max_px]``, centres uniform over the image widened by ``size_max_px``, each a sample drawn
   uniformly from the library; the first drawn lies on top (E. H. Land, "The retinex theory of color
   vision", Sci. Am. 237(6), 1977: the "colour Mondrian").
-* ``dead_leaves`` — up to ``count`` occluding discs, the first drawn on top, radii of density ∝
+* ``dead_leaves`` — occluding discs (at most ``count``; 0: until every texel is covered), the first drawn on top, radii of density ∝
   ``r^-exponent`` on ``[size_min_px, size_max_px]`` (exponent 3: scale invariant, as natural images;
   A. B. Lee, D. Mumford, J. Huang, Int. J. Comput. Vis. 41, 2001; F. Cao, F. Guichard, H. Hornung,
   Proc. SPIE 7537, 2010, the texture chart ISO 19567-2 builds on), centres uniform, each disc a sample
-  drawn uniformly from the library, drawn until every texel is covered.
+  drawn uniformly from the library.  Texels still bare after ``count`` shapes show one more sample
+  drawn for the background.
 * ``photo`` — an RGB photograph (``photo``: a file, or ``grace_hopper``, a public-domain portrait
   shipped with the package) centre-cropped to the image's aspect, box-averaged in linear light to the
   texel grid, each texel the library sample whose CIELAB under CIE D65 is nearest (ΔE*ab) to the
@@ -47,6 +48,9 @@ SHIPPED_PHOTOS = {"grace_hopper": "grace_hopper_160.png"}
 MAX_TEXELS = 1 << 26
 #: Shapes drawn per compiled call while a dead-leaves or Mondrian target is painted.
 BATCH = 8192
+#: Most shapes a target may draw (a 4096² texel dead-leaves target with the default 2-px smallest
+#: radius is covered after about 200 000).
+MAX_SHAPES = 100_000_000
 
 
 @dataclass(frozen=True)
@@ -67,14 +71,15 @@ class TargetSpec(Spec):
     samples: tuple = ()
     columns: int = 0
     gap: float = 0.2
-    #: ``mondrian`` / ``dead_leaves``: most shapes, their size range (rectangle sides, disc radii) in
-    #: pixels, and the dead leaves' radius exponent.
-    count: int = 200000
+    #: ``mondrian`` / ``dead_leaves``: most shapes (0: as many as it takes to cover every texel, at
+    #: most :data:`MAX_SHAPES`), their size range (rectangle sides, disc radii) in pixels, and the dead
+    #: leaves' radius exponent.
+    count: int = 0
     size_min_px: float = 2.0
     size_max_px: float = 100.0
     exponent: float = 3.0
     #: ``photo``: a shipped photograph's name or ``file:PATH`` (relative to the scene file), and the
-    #: file's SHA-256 (recorded when the scene is read; a changed file is refused).
+    #: file's SHA-256 (recorded when the spec is made; a file that no longer has it is refused).
     photo: str = "grace_hopper"
     photo_sha256: str = ""
     #: How the image is looked at, for S-CIELAB: one image pixel per display pixel of 120 dpi seen from
@@ -100,7 +105,7 @@ class TargetSpec(Spec):
                              list(self.samples) if isinstance(self.samples, tuple) else self.samples)
         self.integer("columns", 0, 4096)
         self.number("gap", 0.0, 0.9)
-        self.integer("count", 1, 10_000_000)
+        self.integer("count", 0, MAX_SHAPES)
         self.number("size_min_px", 0.0, 4096.0, lo_open=True, unit="px")
         self.number("size_max_px", 0.0, 4096.0, lo_open=True, unit="px")
         if self.size_max_px < self.size_min_px:
@@ -111,6 +116,13 @@ class TargetSpec(Spec):
             raise self.error("photo", "must be " + ", ".join(map(repr, SHIPPED_PHOTOS)) + " or 'file:PATH' (an "
                              "image file: PNG, JPEG, TIFF...)")
         self.string("photo_sha256")
+        if self.kind == "photo":   # the file the target is made from: recorded, and a changed one refused
+            path = photo_path(self.photo)
+            digest = file_sha256(path, "target.photo")
+            if self.photo_sha256 and self.photo_sha256 != digest:
+                raise self.error("photo", f"{path} has changed since the scene was recorded (SHA-256 {digest[:12]}…, "
+                                 f"the scene says {self.photo_sha256[:12]}…)")
+            object.__setattr__(self, "photo_sha256", digest)
         self.number("viewing_distance_m", 0.0, 100.0, lo_open=True, unit="m")
         self.number("display_pixel_pitch_mm", 0.0, 100.0, lo_open=True, unit="mm")
         self.integer("interior_margin_px", 0, 64)
@@ -148,21 +160,12 @@ def file_sha256(path: Path, what: str) -> str:
 
 
 def resolve_target_files(table: dict, base_dir: Path) -> dict:
-    """A ``[target]`` table with its ``file:`` paths made absolute against the scene file's directory and
-    the photograph's SHA-256 recorded (a recorded one must match: the file the scene was made from)."""
+    """A ``[target]`` table with its ``file:`` paths made absolute against the scene file's directory."""
     t = dict(table)
     for key in ("library", "photo"):
         v = t.get(key)
         if isinstance(v, str) and v.startswith("file:") and len(v) > 5 and not Path(v[5:]).is_absolute():
             t[key] = "file:" + str((Path(base_dir) / v[5:]).resolve())
-    if t.get("kind") == "photo":
-        photo = t.get("photo", TargetSpec.photo)
-        if isinstance(photo, str) and (photo in SHIPPED_PHOTOS or photo.startswith("file:")):
-            digest = file_sha256(photo_path(photo), "target.photo")
-            if t.get("photo_sha256") and t["photo_sha256"] != digest:
-                raise ConfigError("target.photo", photo, f"has changed since the scene was recorded (SHA-256 "
-                                  f"{digest[:12]}…, the scene says {str(t['photo_sha256'])[:12]}…)")
-            t["photo_sha256"] = digest
     return t
 
 
@@ -209,8 +212,9 @@ def _paint(kind: str, spec: TargetSpec, n: int, shape: tuple[int, int]) -> np.nd
     labels = np.full(shape, -1, np.int32)
     lo, hi = spec.size_min_px * s, spec.size_max_px * s
     bare, drawn = h * w, 0
-    while bare and drawn < spec.count:
-        m = min(BATCH, spec.count - drawn)
+    most = spec.count or MAX_SHAPES
+    while bare and drawn < most:
+        m = min(BATCH, most - drawn)
         cx = rng.uniform(-hi, w + hi, m)
         cy = rng.uniform(-hi, h + hi, m)
         if kind == "dead_leaves":

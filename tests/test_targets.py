@@ -97,7 +97,7 @@ def test_a_photograph_of_library_colours_gets_their_spectra_back(tmp_path):
             assert np.all(labels[:, 8 * j + 2: 8 * j + 6] == i)
 
 
-def test_a_damaged_or_changed_photograph_is_one_line(tmp_path):
+def test_a_damaged_missing_or_changed_photograph_is_one_line(tmp_path):
     from spectracam.target import resolve_target_files
 
     (tmp_path / "bad.png").write_bytes(b"\x89PNG\r\n\x1a\n not really")
@@ -106,12 +106,14 @@ def test_a_damaged_or_changed_photograph_is_one_line(tmp_path):
     with pytest.raises(SpectracamError, match="not an image file"):
         TargetReference.of(scene)
     with pytest.raises(ConfigError, match="cannot be read"):
-        resolve_target_files({"kind": "photo", "photo": "file:missing.png"}, tmp_path)
+        TargetSpec(kind="photo", photo=f"file:{tmp_path / 'missing.png'}")
     t = resolve_target_files({"kind": "photo", "photo": "file:bad.png"}, tmp_path)
-    assert t["photo"] == f"file:{tmp_path / 'bad.png'}" and len(t["photo_sha256"]) == 64
+    assert t["photo"] == f"file:{tmp_path / 'bad.png'}"
+    recorded = scene.to_dict()["target"]
+    assert len(recorded["photo_sha256"]) == 64                  # the scene records the file it was made from
     (tmp_path / "bad.png").write_bytes(b"changed")
     with pytest.raises(ConfigError, match="has changed since the scene was recorded"):
-        resolve_target_files(t, tmp_path)
+        Scene.from_dict({"target": recorded, "image": {"width": 16, "height": 16}})
 
 
 # -- renderers --------------------------------------------------------------------------------------------

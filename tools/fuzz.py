@@ -4,7 +4,8 @@
 
 Cases: damaged EXR files, wrong scene values, unwritable outputs, garbage TOML, camera curve files
 (issue 17: unsorted, NaN, negative, short, narrow, units), spectral EXRs from elsewhere (stripped,
-contradicting their scene, units, --white), the validate/cameras commands, and SIGTERM mid-run.
+contradicting their scene, units, --white), the validate/cameras commands, SIGTERM mid-run, and textured
+targets (issue 19: their values, damaged photographs and measured SPD files).
 
 Each case runs one real command in a fresh directory and is judged:
   traceback      a Python traceback on stderr (every failure must be one line);
@@ -544,9 +545,75 @@ def case_scheduler_peer(rng, d: Path):
             True, f"scheduler peer that {'talks' if talk else 'is silent'}")
 
 
+TARGET_FIELDS = ["kind", "library", "supersampling", "seed", "samples", "columns", "gap", "count", "size_min_px",
+                 "size_max_px", "exponent", "photo", "photo_sha256", "viewing_distance_m", "display_pixel_pitch_mm",
+                 "interior_margin_px", "nosuch"]
+TARGET_VALUES = VALUES + ['"dead_leaves"', '"mondrian"', '"samples"', '"photo"', '"chart"', '"cfi99"', '"file:r.csv"',
+                          '"grace_hopper"', '"file:p.png"', "[0, 98]", "[99]", "16", "17", "100000000"]
+
+
+def case_target(rng, d: Path):
+    """A textured target (issue 19): a wrong [target] value, a damaged photograph, a damaged measured SPD
+    file, SIGTERM or a full disk part-way through, or a capture scored against another target."""
+    kind = rng.choice(["dead_leaves", "mondrian", "samples", "photo"])
+    (d / "t.toml").write_text(SCENE + f'[target]\nkind = "{kind}"\nsize_max_px = 20\n')
+    base = ["simulate", "t.toml", "-o", "out", "--quiet"] + (["--renderer", "analytic"] if rng.random() < 0.7 else [])
+    how = rng.choice(["value", "value", "photo", "spd", "signal", "full_disk", "other_target"])
+    if how == "value":
+        field, value = rng.choice(TARGET_FIELDS), rng.choice(TARGET_VALUES)
+        (d / "p.png").write_bytes((d / "r.csv").read_bytes() if (d / "r.csv").exists() else b"not an image")
+        return base + ["--set", f"target.{field}={value}"], False, f"{kind}: --set target.{field}={value}"
+    if how == "photo":
+        import io
+
+        import numpy as np
+        from PIL import Image
+
+        buf = io.BytesIO()
+        pixels = np.full((rng.choice([1, 4, 40]), 30, 3), rng.randrange(256), np.uint8)
+        Image.fromarray(pixels).save(buf, format=rng.choice(["PNG", "JPEG", "TIFF"]))
+        data = bytearray(buf.getvalue())
+        damage = rng.choice(["truncated", "flipped", "empty", "text", "whole"])
+        if damage == "truncated":
+            data = data[: rng.randrange(0, len(data))]
+        elif damage == "flipped":
+            for _ in range(rng.choice([1, 8, 64])):
+                data[rng.randrange(len(data))] = rng.randrange(256)
+        elif damage == "empty":
+            data = bytearray()
+        elif damage == "text":
+            data = bytearray(b"P3\n# not what it says\n")
+        (d / "p.png").write_bytes(bytes(data))
+        return (["simulate", "t.toml", "-o", "out", "--quiet", "--renderer", "analytic", "--set", 'target.kind="photo"',
+                 "--set", 'target.photo="file:p.png"'], False, f"photo {damage}")
+    if how == "spd":
+        rows = "wavelength_nm,power\n380,1\n550,2\n780,1.5\n"
+        damage = rng.choice(["cut", "negative", "nan", "decreasing", "micrometres", "binary", "zeros", "short", "good"])
+        text = {"cut": rows[: rng.randrange(1, len(rows))], "negative": rows.replace("2", "-2"),
+                "nan": rows.replace("2", "nan"), "decreasing": "780,1\n550,1\n380,1\n",
+                "micrometres": "0.38,1\n0.55,1\n0.78,1\n", "zeros": "380,0\n550,0\n780,0\n",
+                "short": "450,1\n550,1\n650,1\n", "good": rows}.get(damage)
+        if text is None:
+            (d / "l.csv").write_bytes(os.urandom(rng.randrange(1, 2000)))
+        else:
+            (d / "l.csv").write_text(text)
+        return base + ["--set", 'illuminant.file="l.csv"'], False, f"{kind} under a measured SPD ({damage})"
+    if how == "signal":
+        after = rng.choice([0.5, 1.5, 3.0])
+        return base, False, f"{kind}: SIGTERM after {after} s", after
+    if how == "full_disk":
+        size = rng.choice([0, 2_000, 20_000, 200_000])
+        return base, False, f"{kind}: full disk ({size} B files)", {"fsize": size}
+    r, _, _ = run(["simulate", "t.toml", "-o", "first", "--renderer", "analytic", "--quiet"], d)
+    assert r.returncode == 0, r.stderr
+    return (["score", "first/raw.exr", "-o", "out", "--set", f"target.seed={rng.randrange(1, 9)}"], True,
+            f"{kind} scored as another target")
+
+
 CASES = [case_damaged_file, case_scene_value, case_environment, case_garbage_text, case_camera_file, case_foreign_exr,
          case_new_commands, case_signal, case_full_disk, case_memory_limit, case_raw_attributes, case_journal,
-         case_experiment_values, case_group_signal, case_scheduler_peer, case_read_only, case_reflectances]
+         case_experiment_values, case_group_signal, case_scheduler_peer, case_read_only, case_reflectances,
+         case_target]
 
 
 def one(i: int, seed: int, base: Path, cycle: bool = False) -> tuple[str, dict]:
