@@ -232,6 +232,18 @@ def test_bad_target_values_are_one_line(tmp_path, bad, what):
     assert r.returncode == 2 and what in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
 
 
+def test_the_sweep_and_the_paper_refuse_a_textured_target_in_one_line(tmp_path):
+    sweep = tmp_path / "sw.toml"
+    sweep.write_text(f'base_scene = "{__import__("pathlib").Path("scenes/dead_leaves.toml").resolve()}"\n'
+                     'metrics = ["delta_e_mean"]\n[axes]\n"sensor.read_noise_e" = [10, 20]\n')
+    r = subprocess.run([sys.executable, "-m", "spectracam", "sweep", str(sweep), "-o", str(tmp_path / "o"), "--serial"],
+                       capture_output=True, text=True)
+    assert r.returncode == 2 and "a sweep scores the ColorChecker" in r.stderr, r.stderr
+    r = subprocess.run([sys.executable, "-m", "spectracam", "paper", "--quick", "-o", str(tmp_path / "p"), "--set",
+                        'target.kind="mondrian"'], capture_output=True, text=True)
+    assert r.returncode == 2 and "the paper's experiment scores the ColorChecker" in r.stderr, r.stderr
+
+
 # -- lights ----------------------------------------------------------------------------------------------
 
 def _every_illuminant():

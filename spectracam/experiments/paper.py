@@ -119,6 +119,9 @@ def load_experiment(path: str | Path, overrides=()) -> PaperExperiment:
         raise ConfigError("scene", scene_tables, "must be a table of scene tables, e.g. [scene.sensor]", src)
     from_file = [(f"{table}.{k}", v) for table, kv in scene_tables.items() for k, v in kv.items()]
     base = load_scene(p.parent / base_name, from_file + scene_overrides)
+    if base.target.textured:
+        raise ConfigError("target.kind", base.target.kind, "the paper's experiment scores the ColorChecker; a "
+                          "textured target is scored by simulate or score", src)
     temps = _list(t, "temperatures_K", list(PaperExperiment.temperatures_K),
                   lambda x: _is_number(x) and 1000 <= x <= 40000,
                   "must be a non-empty list of colour temperatures, 1000–40000 K", src)

@@ -153,6 +153,9 @@ def load_sweep(path: str | Path, overrides=(), max_cells: int = MAX_CELLS, log=l
     largest, renders = None, set()
     for i, cell in enumerate(sweep.cells()):
         scene = cell_scene(sweep, cell, i)  # validate every combination now
+        if scene.target.textured:
+            raise ConfigError("target.kind", scene.target.kind, "a sweep scores the ColorChecker; a textured target is "
+                              f"scored by simulate or score (cell {i})", src)
         check_meterable(scene, cell, i, src)
         wanted = [m for m in metrics if m in HELD_OUT_METRICS]
         if wanted and scene.processing.held_out == "none":
