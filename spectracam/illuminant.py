@@ -75,8 +75,8 @@ class IlluminantSpec(Spec):
             import colour
 
             if self.name not in colour.SDS_ILLUMINANTS:
-                raise self.error("name", "must be a CIE illuminant or another light colour-science ships, e.g. D65, A, FL2, LED-B1 "
-                                 f"({len(colour.SDS_ILLUMINANTS)} names: colour.SDS_ILLUMINANTS)")
+                raise self.error("name", "must be a CIE illuminant or another light colour-science ships, e.g. D65, A, "
+                                 f"FL2, LED-B1 ({len(colour.SDS_ILLUMINANTS)} names: colour.SDS_ILLUMINANTS)")
         elif self.kind == "measured":
             self.string("name")
             wl, v = self.wavelengths_nm, self.values
