@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import hashlib
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -153,10 +154,17 @@ def photo_path(photo: str) -> Path:
 
 
 def file_sha256(path: Path, what: str) -> str:
+    """The file's SHA-256, read once per version of the file (a scene is validated several times a run)."""
     try:
-        return hashlib.sha256(path.read_bytes()).hexdigest()
+        st = path.stat()
+        return _sha256(str(path), st.st_mtime_ns, st.st_size)
     except OSError as e:
         raise ConfigError(what, str(path), f"cannot be read ({e.strerror})") from None
+
+
+@lru_cache(maxsize=8)
+def _sha256(path: str, mtime_ns: int, size: int) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
 def resolve_target_files(table: dict, base_dir: Path) -> dict:

@@ -159,12 +159,10 @@ def score_target(raw: RawCapture, chart: ChartReference, ref: TargetReference, t
                 **dict(zip(("delta_e_mean", "delta_e_p95", "delta_e_max"), _stats(de_px))),
                 **dict(zip(("s_cielab_mean", "s_cielab_p95", "s_cielab_max"), _stats(sc_px))),
                 "samples_scored": len(samples)}
-    if samples:
-        held_out.update(dict(zip(("sample_delta_e_of_mean_mean", "sample_delta_e_of_mean_p95", "_"),
-                                 _stats(np.array([s.delta_e_of_mean for s in samples])))))
-        held_out.update(dict(zip(("sample_delta_e_conversion_mean", "sample_delta_e_conversion_p95", "_"),
-                                 _stats(np.array([s.delta_e_conversion for s in samples])))))
-        held_out.pop("_")
+    for field in ("delta_e_of_mean", "delta_e_conversion"):
+        if samples:
+            mean, p95, _ = _stats(np.array([getattr(s, field) for s in samples]))
+            held_out.update({f"sample_{field}_mean": mean, f"sample_{field}_p95": p95})
     parameters = {"scene": raw.scene, "camera": raw.camera.to_dict(), "processing": processing.to_dict(),
                   "seed": raw.seed, "conversion_matrix": M.tolist(), "samples_per_degree": spd,
                   "definitions": __doc__.split("\n\n", 1)[1].strip()}

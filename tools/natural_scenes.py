@@ -76,7 +76,7 @@ def main() -> None:
             axes[1, j].imshow(shown_rgb)
             im = axes[2, j].imshow(de, cmap=plt.get_cmap("magma").with_extremes(bad="#d0d0d0"), vmin=0, vmax=20,
                                    interpolation="nearest")
-            axes[2, j].set_title(f"mean {mean:.2f}", fontsize=8)
+            axes[2, j].set_title(f"seed {seeds[0]}: mean {mean:.2f}", fontsize=8)
         for i, label in enumerate(("the scene (its known spectra)", "Bayer CFA, rendered", "ΔE*ab per pixel")):
             axes[i, 0].set_ylabel(label, fontsize=9)
         for ax in axes.ravel():

@@ -144,13 +144,22 @@ def _regular(values: np.ndarray, width_nm: float) -> dict:
             "values": ", ".join(f"{v:.9g}" for v in values)}
 
 
-def build_scene(mi, scene, width_nm: float) -> dict:
-    """The Mitsuba scene dictionary: board, 24 patches, a directional light, an orthographic camera."""
-    view = View.fit(scene.chart, scene.image.width, scene.image.height)
-    vw, vh = view.size_mm
+def even_band_width_nm(grid) -> float:
+    """The one band width of an evenly spaced grid (every band is mapped into one reference window)."""
+    widths = grid.widths_nm
+    width_nm = float(widths.max())
+    if not np.allclose(widths, width_nm):
+        raise SpectracamError(f"wavelengths: Mitsuba renders evenly spaced grids only (bands are "
+                              f"{widths.min():g}–{width_nm:g} nm wide)")
+    return width_nm
+
+
+def band_scene(mi, scene, view_width: float, width_nm: float) -> dict:
+    """What every band render shares: the direct integrator, an orthographic camera looking down at a
+    view ``view_width`` wide (the image's aspect) with a one-band ``specfilm`` over the reference window,
+    and a directional light whose irradiance is updated per band."""
     T = mi.ScalarTransform4f
-    placeholder = np.ones(POINTS_PER_BAND + 1)
-    d = {
+    return {
         "type": "scene",
         "integrator": {"type": "direct", "emitter_samples": 1, "bsdf_samples": 0},
         "sensor": {
@@ -158,7 +167,7 @@ def build_scene(mi, scene, width_nm: float) -> dict:
             # Mitsuba's orthographic camera images x ∈ [-1, 1], y ∈ [-1/aspect, 1/aspect], scaled by
             # to_world: a uniform scale of half the view width gives square pixels.
             "to_world": T().look_at(origin=[0, 0, CAMERA_DISTANCE_MM], target=[0, 0, 0], up=[0, 1, 0])
-            @ T().scale([vw / 2, vw / 2, 1]),
+            @ T().scale([view_width / 2, view_width / 2, 1]),
             "film": {"type": "specfilm", "width": scene.image.width, "height": scene.image.height,
                      "component_format": "float32", "rfilter": {"type": "box"},
                      "band": {"type": "irregular",
@@ -166,10 +175,20 @@ def build_scene(mi, scene, width_nm: float) -> dict:
                               "values": f"{1 / width_nm}, {1 / width_nm}"}},
             "sampler": {"type": "independent", "sample_count": scene.render.samples_per_pixel},
         },
-        "light": {"type": "directional", "direction": [0, 0, -1], "irradiance": _regular(placeholder, width_nm)},
-        "board": {"type": "rectangle", "to_world": T().scale([vw, vh, 1]),
-                  "bsdf": {"type": "diffuse", "reflectance": _regular(placeholder, width_nm)}},
+        "light": {"type": "directional", "direction": [0, 0, -1],
+                  "irradiance": _regular(np.ones(POINTS_PER_BAND + 1), width_nm)},
     }
+
+
+def build_scene(mi, scene, width_nm: float) -> dict:
+    """The Mitsuba scene dictionary: board, 24 patches, a directional light, an orthographic camera."""
+    view = View.fit(scene.chart, scene.image.width, scene.image.height)
+    vw, vh = view.size_mm
+    T = mi.ScalarTransform4f
+    placeholder = np.ones(POINTS_PER_BAND + 1)
+    d = band_scene(mi, scene, vw, width_nm)
+    d["board"] = {"type": "rectangle", "to_world": T().scale([vw, vh, 1]),
+                  "bsdf": {"type": "diffuse", "reflectance": _regular(placeholder, width_nm)}}
     for p, (x0, x1, y0, y1) in enumerate(patch_rectangles_mm(scene.chart)):
         d[f"patch{p:02d}"] = {
             "type": "rectangle",
@@ -199,8 +218,7 @@ def render_mitsuba(scene, progress: bool = False, log=None, within_band: str = "
     mi = _activate(variant)
 
     grid = scene.grid
-    widths = grid.widths_nm
-    ref_width = float(widths.max())
+    ref_width = even_band_width_nm(grid)
     # optimize=False: the loader would otherwise merge the 25 rectangles (and their BSDFs, identical
     # placeholders) into one mesh, and the per-patch spectra could no longer be updated.
     mi_scene = mi.load_dict(build_scene(mi, scene, ref_width), optimize=False)
@@ -214,9 +232,6 @@ def render_mitsuba(scene, progress: bool = False, log=None, within_band: str = "
     with np.errstate(invalid="ignore", divide="ignore"):
         rho_band = [np.nan_to_num(band_average(lambda lam, rho=rho: E(lam) * rho(lam), grid) / light_band)
                     for _, rho in reflectances]
-    if not np.allclose(widths, ref_width):
-        raise SpectracamError(f"wavelengths: Mitsuba renders evenly spaced grids only (bands are "
-                              f"{widths.min():g}–{ref_width:g} nm wide)")
     H, W, B = scene.image.height, scene.image.width, len(grid)
     cube = np.empty((H, W, B), dtype=np.float32)
     Float = type(params["board.bsdf.reflectance.values"])  # mi.Float, or a buffer type in scalar variants

@@ -15,7 +15,6 @@ import sys
 
 import numpy as np
 
-from ..errors import SpectracamError
 from ..illuminant import spectral_irradiance
 from ..reference import TargetReference
 from ..spectra import band_average
@@ -30,19 +29,14 @@ def render_target_analytic(scene) -> RadianceCube:
 
 
 def render_target_mitsuba(scene, progress: bool = False, log=None) -> RadianceCube:
-    from .mitsuba import CAMERA_DISTANCE_MM, POINTS_PER_BAND, REFERENCE_WINDOW_NM, _activate, _regular, band_seed, \
-        select_variant
+    from .mitsuba import POINTS_PER_BAND, _activate, band_scene, band_seed, even_band_width_nm, select_variant
 
     variant, reason = select_variant(scene.render.variant)
     if log:
         log(f"Mitsuba variant {variant} ({reason})")
     mi = _activate(variant)
     grid = scene.grid
-    widths = grid.widths_nm
-    width_nm = float(widths.max())
-    if not np.allclose(widths, width_nm):
-        raise SpectracamError(f"wavelengths: Mitsuba renders evenly spaced grids only (bands are "
-                              f"{widths.min():g}–{width_nm:g} nm wide)")
+    width_nm = even_band_width_nm(grid)
     ref = TargetReference.of(scene)
     W, H, B = scene.image.width, scene.image.height, len(grid)
     E = spectral_irradiance(scene.illuminant)
@@ -50,28 +44,11 @@ def render_target_mitsuba(scene, progress: bool = False, log=None) -> RadianceCu
     with np.errstate(invalid="ignore", divide="ignore"):                   # ⟨E·S⟩/⟨E⟩: 0 where there is no light
         rho = np.nan_to_num(ref.radiance * np.pi / light_band[None]).astype(np.float32)   # (n + 1, B)
     labels = ref.labels[::-1]          # a bitmap's first row is the top of the texture's v axis: the bottom row
-    T = mi.ScalarTransform4f
-    placeholder = np.ones(POINTS_PER_BAND + 1)
-    d = {
-        "type": "scene",
-        "integrator": {"type": "direct", "emitter_samples": 1, "bsdf_samples": 0},
-        "sensor": {
-            "type": "orthographic",
-            "to_world": T().look_at(origin=[0, 0, CAMERA_DISTANCE_MM], target=[0, 0, 0], up=[0, 1, 0])
-            @ T().scale([W / 2, W / 2, 1]),     # the view is W × H units: one unit per pixel
-            "film": {"type": "specfilm", "width": W, "height": H, "component_format": "float32",
-                     "rfilter": {"type": "box"},
-                     "band": {"type": "irregular",
-                              "wavelengths": f"{REFERENCE_WINDOW_NM}, {REFERENCE_WINDOW_NM + width_nm}",
-                              "values": f"{1 / width_nm}, {1 / width_nm}"}},
-            "sampler": {"type": "independent", "sample_count": scene.render.samples_per_pixel},
-        },
-        "light": {"type": "directional", "direction": [0, 0, -1], "irradiance": _regular(placeholder, width_nm)},
-        "target": {"type": "rectangle", "to_world": T().scale([W / 2, H / 2, 1]),
+    d = band_scene(mi, scene, W, width_nm)          # the view is W × H units: one unit per pixel
+    d["target"] = {"type": "rectangle", "to_world": mi.ScalarTransform4f().scale([W / 2, H / 2, 1]),
                    "bsdf": {"type": "diffuse", "reflectance": {
                        "type": "bitmap", "data": mi.TensorXf(rho[labels, 0][..., None]), "raw": True,
-                       "filter_type": "nearest", "wrap_mode": "clamp"}}},
-    }
+                       "filter_type": "nearest", "wrap_mode": "clamp"}}}
     mi_scene = mi.load_dict(d, optimize=False)
     params = mi.traverse(mi_scene)
     Float = type(params["light.irradiance.values"])
