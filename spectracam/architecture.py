@@ -1,10 +1,13 @@
-"""Colour architectures (paper, section 2): how the three channels are sampled and timed.
+"""Colour architectures (paper, section 2): how the colour channels are sampled and timed.
 
-An architecture turns per-channel photo-electron rates ``(H, W, 3)`` and per-channel exposure times
-into recorded frames, and says what those frames are — its :class:`Layout`.  Later stages
-(demosaicking, scoring, the EXR and DNG writers) dispatch on the layout, never on the
-architecture's name, so a new architecture is one subclass registered in :data:`ARCHITECTURES`
-(``@ARCHITECTURES.register("name")``), from any module.
+An architecture says which channels it records and their spectral responsivities
+(:meth:`Architecture.responsivities`: by default the three filters of ``[filters]``), turns
+per-channel photo-electron rates ``(H, W, N)`` and per-channel exposure times into recorded frames,
+and says what those frames are — its :class:`Layout`.  Later stages (demosaicking, scoring, the EXR
+and DNG writers) dispatch on the layout, never on the architecture's name, so a new architecture is
+one subclass registered in :data:`ARCHITECTURES` (``@ARCHITECTURES.register("name")``) in one file:
+the paper's three are here, later ones in :mod:`spectracam.architectures` (every module there is
+imported with this one).
 """
 from __future__ import annotations
 
@@ -14,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import kernels
-from .filters import CHANNELS
+from .filters import CHANNELS, responsivities
 from .registry import Registry
 from .sensor import TEMPORAL_STREAM, PatternRef, SensorSpec, expose, noise_stream
 
@@ -29,14 +32,16 @@ FIXED_PATTERN_CHOICES = ("physical", "shared", "independent")
 
 @dataclass(frozen=True)
 class MosaicLayout:
-    """One frame in which every pixel sees one channel, in a repeating tile of channel indices
-    (0 R, 1 G, 2 B); ``(H, W)`` digital numbers.
+    """One frame in which every pixel sees one channel, in a repeating tile of indices into
+    ``channels`` (default R, G, B: 0 R, 1 G, 2 B); ``(H, W)`` digital numbers.
 
     >>> MosaicLayout.bayer("GRBG").channel_index((2, 4)).tolist()
     [[1, 0, 1, 0], [2, 1, 2, 1]]
     """
 
     tile: tuple[tuple[int, ...], ...]
+    #: The channels' names, one letter each (a DNG CFA colour: R, G, B, C, M, Y or W).
+    channels: tuple[str, ...] = CHANNELS
 
     @classmethod
     def bayer(cls, pattern: str) -> "MosaicLayout":
@@ -51,12 +56,17 @@ class MosaicLayout:
     @property
     def pattern(self) -> str:
         """The tile's channels as letters, row by row (``"RGGB"``; 16 letters for a 4×4 tile)."""
-        return "".join(CHANNELS[k] for row in self.tile for k in row)
+        return "".join(self.channels[k] for row in self.tile for k in row)
 
     @property
     def bayer_pattern(self) -> str | None:
-        """The Bayer pattern name when the tile is a 2×2 Bayer tile, else ``None``."""
-        return self.pattern if self.tile_shape == (2, 2) and self.pattern in CFA_PATTERNS else None
+        """The Bayer pattern of the tile's geometry when it is a 2×2 tile of three channels with
+        channel 1 on a diagonal (``"RGGB"`` for R Y Y B too: a Bayer demosaicker needs only where the
+        three lattices lie), else ``None``."""
+        if self.tile_shape != (2, 2) or len(self.channels) != 3:
+            return None
+        geometry = "".join(CHANNELS[k] for row in self.tile for k in row)
+        return geometry if geometry in CFA_PATTERNS else None
 
     def sites(self) -> list[tuple[int, int, int]]:
         """``(dy, dx, channel)`` of every site of the tile."""
@@ -89,6 +99,8 @@ class PlanesLayout:
 
     kind: str
     description: str
+    #: The planes' channels, in order.
+    channels: tuple[str, ...] = CHANNELS
 
     def __post_init__(self):
         if self.kind not in PLANE_KINDS:  # a mistyped kind would be timed and written as something else
@@ -98,8 +110,9 @@ class PlanesLayout:
 
 
 class Architecture(ABC):
-    """A way of sampling three colour channels.  Subclasses set ``name``, ``independent_exposures``
-    and ``layout`` and implement :meth:`capture_time_s` and :meth:`record`."""
+    """A way of sampling colour channels.  Subclasses set ``name``, ``independent_exposures``
+    and ``layout`` and implement :meth:`capture_time_s` and :meth:`record`; one whose channels are
+    not the three filters of ``[filters]`` also implements :meth:`responsivities`."""
 
     name: str = ""
     #: Can each channel have its own exposure time?
@@ -110,18 +123,34 @@ class Architecture(ABC):
     def __init__(self, cfa_pattern: str = "RGGB", fixed_pattern: str = "physical"):
         self.cfa_pattern, self.fixed_pattern = cfa_pattern, fixed_pattern
 
+    def configure(self, camera) -> "Architecture":
+        """This architecture as ``camera`` (a :class:`~spectracam.camera.CameraSpec`) builds it: an
+        architecture whose channels depend on the camera (the number of stacked layers) returns a
+        configured copy; by default itself."""
+        return self
+
+    @property
+    def channels(self) -> tuple[str, ...]:
+        """The recorded channels' names, in the order of the rates and exposure times."""
+        return self.layout.channels
+
+    def responsivities(self, filters, grid) -> np.ndarray:
+        """``(N, n_bands)`` band-averaged responsivities of the channels, electrons per photon (paper
+        3.3): the three filters of ``[filters]`` × QE × IR cut."""
+        return responsivities(filters, grid)
+
     def channel_patterns(self, sensor: SensorSpec, shape, seed: int, drawn: bool = True) -> list:
-        """The fixed pattern each of the three channels is recorded with (see FIXED_PATTERN_CHOICES);
+        """The fixed pattern each of the channels is recorded with (see FIXED_PATTERN_CHOICES);
         ``drawn=False``: :class:`~spectracam.sensor.PatternRef` s, drawn where they are used (the
         fused capture draws the per-pixel parts in its own pass)."""
         independent = self.fixed_pattern == "independent" or (self.fixed_pattern == "physical" and self.sensors > 1)
-        shape = tuple(shape)
+        shape, n = tuple(shape), len(self.channels)
         if independent:
-            refs = [PatternRef(sensor, shape, seed, k) for k in range(3)]
-        else:  # one sensor: one pattern, shared by the three channels
-            refs = [PatternRef(sensor, shape, seed, 0)] * 3
+            refs = [PatternRef(sensor, shape, seed, k) for k in range(n)]
+        else:  # one sensor: one pattern, shared by the channels
+            refs = [PatternRef(sensor, shape, seed, 0)] * n
         if drawn:
-            return [r.draw() for r in refs] if independent else [refs[0].draw()] * 3
+            return [r.draw() for r in refs] if independent else [refs[0].draw()] * n
         return refs
 
     @property
@@ -153,12 +182,13 @@ class Architecture(ABC):
 
     @staticmethod
     def record_planes(rates, times_s, sensor, seed, patterns):
-        """Three full-resolution exposures, channel k with fixed pattern ``patterns[k]`` (a
+        """Full-resolution exposures, channel k with fixed pattern ``patterns[k]`` (a
         :class:`~spectracam.sensor.FixedPattern` or a :class:`~spectracam.sensor.PatternRef`);
-        returns ``(3, H, W)`` digital numbers and expected electrons.  The fused kernel records the
+        returns ``(N, H, W)`` digital numbers and expected electrons.  The fused kernel records up to
         three in one pass over the cube."""
-        noises = [noise_stream(seed, TEMPORAL_STREAM, k) for k in range(3)]
-        out = kernels.record(rates, np.arange(3, dtype=np.int64).reshape(3, 1, 1), times_s, sensor, noises, patterns)
+        n = len(patterns)
+        noises = [noise_stream(seed, TEMPORAL_STREAM, k) for k in range(n)]
+        out = kernels.record(rates, np.arange(n, dtype=np.int64).reshape(n, 1, 1), times_s, sensor, noises, patterns)
         if out is not None:
             return out
         drawn = {}  # a pattern shared by channels is drawn once
@@ -167,8 +197,45 @@ class Architecture(ABC):
                 drawn[id(p)] = p.draw() if isinstance(p, PatternRef) else p
         rates = np.asarray(rates)
         out = [expose(np.ascontiguousarray(rates[:, :, k]), times_s[k], sensor, noises[k], drawn[id(patterns[k])])
-               for k in range(3)]
+               for k in range(n)]
         return np.stack([o[0] for o in out]), np.stack([o[1] for o in out])
+
+
+class MosaicArchitecture(Architecture):
+    """One sensor, one exposure, behind a colour filter array: a subclass gives its tile (indices
+    into its channel names) for a Bayer phase ``cfa_pattern`` and, unless the channels are the three
+    filters of ``[filters]``, their responsivities."""
+
+    independent_exposures = False
+    channel_names: tuple[str, ...] = CHANNELS
+
+    def tile_for(self, cfa_pattern: str) -> tuple[tuple[int, ...], ...]:
+        """The tile for a Bayer phase (default: the 2×2 Bayer geometry, channel 1 on the diagonal)."""
+        return MosaicLayout.bayer(cfa_pattern).tile
+
+    @property
+    def layout(self):
+        return MosaicLayout(self.tile_for(self.cfa_pattern), self.channel_names)
+
+    def capture_time_s(self, times_s):
+        return float(times_s[0])
+
+    def record(self, rates, times_s, sensor, seed):
+        return self.record_mosaic(rates, times_s, sensor, seed)
+
+
+def complementary(R: np.ndarray, filters, grid, *pairs: str) -> np.ndarray:
+    """Responsivities of filters that pass what two of the primaries R, G, B of ``R`` ``(3, B)`` pass
+    together (``"RG"``: yellow, ``"GB"``: cyan, ``"RB"``: magenta) or everything (``"W"``: no
+    filter), ``(len(pairs), B)``: the sum, capped at the unfiltered pixel's QE × IR cut (no dye
+    transmits more than 1).  For the paper's block filters these are exact complements."""
+    from .filters import clear_responsivity
+
+    clear = clear_responsivity(filters, grid)
+    rows = []
+    for pair in pairs:
+        rows.append(clear if pair == "W" else np.minimum(sum(R[CHANNELS.index(c)] for c in pair), clear))
+    return np.stack(rows)
 
 
 @ARCHITECTURES.register("cfa")
@@ -223,3 +290,6 @@ class FieldSequential(Architecture):
 def make_architecture(name: str, cfa_pattern: str = "RGGB", fixed_pattern: str = "physical") -> Architecture:
     """An instance of the registered architecture ``name``."""
     return ARCHITECTURES[name](cfa_pattern, fixed_pattern)
+
+
+from . import architectures as _later  # noqa: E402,F401  (registers every architecture module in it)

@@ -4,8 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .camera import CameraSpec
-from .filters import responsivities
+from .camera import CameraSpec, camera_responsivities
 from .spectra import WavelengthGrid
 
 
@@ -37,7 +36,11 @@ def camera_sensitivities(camera: CameraSpec, grid: WavelengthGrid):
     """
     import colour
 
-    R = responsivities(camera.filters, grid)
+    R = camera_responsivities(camera, grid)
+    channels = camera.architecture().channels
+    if channels != ("R", "G", "B"):   # other channels (R Y B, C Y M, R G B W, …): named by their letters
+        return colour.MultiSpectralDistributions(R.T, np.asarray(grid.centres_nm), labels=list(channels),
+                                                 name=f"spectracam {camera.design} channels")
     return colour.characterisation.RGB_CameraSensitivities(R.T, np.asarray(grid.centres_nm),
                                                            labels=("red", "green", "blue"),
                                                            name=f"spectracam {camera.filters.kind} filters × "

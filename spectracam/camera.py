@@ -13,7 +13,7 @@ import numpy as np
 from .architecture import ARCHITECTURES, CFA_PATTERNS, FIXED_PATTERN_CHOICES, Architecture, make_architecture
 from .errors import ConfigError
 from .exposure import EXPOSURE_SCHEMES
-from .filters import FilterSpec, responsivities
+from .filters import FilterSpec
 from .optics import OpticsSpec, radiance_to_photon_irradiance
 from .sensor import SensorSpec
 from .spec import Spec
@@ -102,6 +102,10 @@ class CameraSpec(Spec):
                  for name in CAMERA_TABLES}
         return cls(**parts)
 
+    def architecture(self) -> Architecture:
+        """The capture's architecture, configured by this camera (e.g. the number of stacked layers)."""
+        return self.capture.make_architecture().configure(self)
+
     @property
     def design(self) -> str:
         """``"architecture/exposure"``, e.g. ``"cfa/single"``."""
@@ -117,23 +121,31 @@ class CameraSpec(Spec):
             raise ConfigError(field, design, e.allowed) from None
 
 
+def camera_responsivities(camera: CameraSpec, grid: WavelengthGrid) -> np.ndarray:
+    """``(N, n_bands)`` band-averaged responsivities R_k(λ) of the channels the camera's architecture
+    records, electrons per photon (paper 3.3): by default the three filters × QE × IR cut; an
+    architecture with other channels (a W pixel, complementary filters, stacked photodiodes) says
+    what they are."""
+    return camera.architecture().responsivities(camera.filters, grid)
+
+
 def band_weights(camera: CameraSpec, grid: WavelengthGrid) -> np.ndarray:
-    """``(n_bands, 3)`` float32 weights turning band-averaged radiance into photo-electrons per
-    second per pixel: ``π/(4N²)·T·λ/(hc)·R_k(λ)·Δλ·A`` (paper 3.2–3.3).
+    """``(n_bands, N)`` float32 weights turning band-averaged radiance into photo-electrons per
+    second per pixel: ``π/(4N²)·T·λ/(hc)·R_k(λ)·Δλ·A`` (paper 3.2–3.3), one column per channel.
 
     >>> grid = WavelengthGrid(np.arange(400.0, 701.0, 10.0))
     >>> band_weights(CameraSpec(), grid).shape
     (31, 3)
     """
     to_photons = radiance_to_photon_irradiance(grid, camera.optics)  # (B,)
-    R = responsivities(camera.filters, grid)  # (3, B) e⁻/photon
+    R = camera_responsivities(camera, grid)  # (N, B) e⁻/photon
     area_m2 = camera.sensor.pixel_area_um2 * 1e-12
     return (R * (to_photons * grid.widths_nm * area_m2)[None, :]).T.astype(np.float32)
 
 
 def photo_electron_rates(radiance: np.ndarray, grid: WavelengthGrid, camera: CameraSpec) -> np.ndarray:
-    """``(..., 3)`` photo-electrons per second per pixel for each channel of band-averaged radiance
+    """``(..., N)`` photo-electrons per second per pixel for each channel of band-averaged radiance
     ``(..., n_bands)``, float32; the cube is read once and never copied."""
     weights = band_weights(camera, grid)
     shape = radiance.shape
-    return (radiance.reshape(-1, shape[-1]) @ weights).reshape(*shape[:-1], 3)
+    return (radiance.reshape(-1, shape[-1]) @ weights).reshape(*shape[:-1], weights.shape[1])

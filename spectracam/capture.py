@@ -54,7 +54,7 @@ def capture(cube, camera: CameraSpec, seed: int, metering_box: tuple[slice, slic
     the mean rates of the pixels in ``metering_box`` (the white patch, paper 4.5) or, for any other
     white (:mod:`spectracam.metering`), on the rates of its radiance ``white_radiance`` ``(B,)``,
     recorded as ``metering``; ``seed`` fixes every random draw (fixed pattern and temporal noise)."""
-    arch = camera.capture.make_architecture()
+    arch = camera.architecture()
     weights = band_weights(camera, cube.grid)
     rates = SpectralRates(cube.radiance, weights)  # computed in the sensor's pass
     if white_radiance is not None:

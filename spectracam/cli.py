@@ -229,7 +229,7 @@ def capture_cmd(radiance_file: Path, out_dir: Path, arch, exposure, config_file,
         log(f"{radiance_file} records no spectracam chart scene: ΔE per patch and SNR are skipped (no chart truth); "
             f"exposure metered on {raw.metering['kind']} white; rendered through the conversion fitted on the "
             f"{scene.chart.dataset} chart under {scene.illuminant.label}")
-    times = ", ".join(f"{c} {1e3 * t:.2f} ms" for c, t in zip("RGB", raw.exposure_times_s))
+    times = ", ".join(f"{c} {1e3 * t:.2f} ms" for c, t in zip(raw.layout.channels, raw.exposure_times_s))
     log(f"{raw.design}: exposures {times}; capture time {1e3 * raw.capture_time_s:.2f} ms")
     log("wrote " + ", ".join(map(str, paths)))
 
@@ -372,6 +372,45 @@ def paper_cmd(out_dir, experiment_file, renderer, quick, no_cache, save_cubes, s
         log(f"  {c['verdict']:<10} {c['claim']}: {c['measured']}")
     step(f"done: {out_dir}/report.md (figures fig4-6.png/.svg, results.json, cases/ with every capture's raw.exr "
          "and rendered.exr)")
+
+
+@main.command("architectures")
+@_output("Directory to write results.json, report.md and the figures into.")
+@click.option("--experiment", "experiment_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Experiment file whose camera, chart and light are used [default: scenes/paper.toml].")
+@_renderer_option
+@click.option("--quick", is_flag=True, help="A first look: 160x120 pixels and 2 noise seeds.")
+@click.option("--seeds", type=click.IntRange(1, 100), default=None,
+              help="Noise seeds per case [default: 5; 2 with --quick].")
+@click.option("--no-cache", is_flag=True, help="Render again even if the render cache has the scene.")
+@_set_option
+@_quiet_option
+def architectures_cmd(out_dir, experiment_file, renderer, quick, seeds, no_cache, sets, quiet):
+    """Every registered architecture and exposure scheme at the paper's camera, light and noise, at 1, 1/10
+    and 1/100 of its light: SNR, ΔE (training and held-out), capture time; results.json, report.md, figures."""
+    from .experiments.architectures import SEEDS, ArchitecturesRun, designs, run_architectures, \
+        write_architectures_outputs
+    from .experiments.paper import load_experiment
+    from .pipeline import check_memory
+
+    exp = load_experiment(experiment_file or default_experiment(), sets)
+    run = ArchitecturesRun(exp, quick=quick, seeds=seeds or (2 if quick else SEEDS))
+    base = exp.base if not quick else exp.base.replace(image=exp.base.image.replace(width=160, height=120))
+    check_memory(base, copies=2, what=", two lights and a scaled copy held at once")
+    _check_writable(out_dir)
+    log = _log(quiet)
+    t0 = time.perf_counter()
+    step = lambda msg: log(f"[{time.perf_counter() - t0:6.1f} s] {msg}")  # noqa: E731
+    step(f"{len(designs())} designs: {', '.join(designs())}")
+    results = run_architectures(run, renderer=renderer, use_cache=not no_cache, step=step, log=log,
+                                progress=not quiet)
+    command = "spectracam architectures -o " + str(out_dir) + (f" --experiment {experiment_file}" if experiment_file
+                                                               else "") \
+        + (f" --renderer {renderer}" if renderer != "mitsuba" else "") + (" --quick" if quick else "") \
+        + (f" --seeds {seeds}" if seeds else "") + "".join(f" --set {s}" for s in sets)
+    write_architectures_outputs(out_dir, results, command, step)
+    for w in results["winners"]:
+        log(f"  {w['illuminant']:>7} {w['light_factor']:>5g}x  {w['metric']:<16} {w['design']:<18} {w['value']:.3g}")
 
 
 @main.command("emva")

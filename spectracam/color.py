@@ -22,7 +22,7 @@ from .spec import Spec
 #: colour-science's phosphor spectra of a typical CRT (Brainard 1997), the paper's "simple CRT display".
 CRT_PRIMARIES = "Typical CRT Brainard 1997"
 
-#: Demosaicking methods: name → function ``(mosaic (H, W), layout) → (H, W, 3)``.
+#: Demosaicking methods: name → function ``(mosaic (H, W), layout) → (H, W, N)``.
 DEMOSAIC_METHODS: Registry = Registry("processing.demosaic", "demosaicking method")
 #: Displays: name → function ``() → 3×3`` matrix from linear display RGB (white R=G=B=1) to XYZ, Y_white = 1.
 DISPLAYS: Registry = Registry("processing.display", "display")
@@ -121,23 +121,80 @@ def adaptation_matrix(white_from: np.ndarray, white_to: np.ndarray, method: str)
     return ADAPTATIONS[method](white_from, white_to)
 
 
-def _bayer(fn_name: str):
-    """A colour-demosaicing method, which needs a 2×2 Bayer layout."""
+def periodic_bilinear(mosaic: np.ndarray, layout: MosaicLayout) -> np.ndarray:
+    """Bilinear interpolation of any periodic mosaic, ``(H, W, N)``: each channel by normalised
+    convolution (Knutsson & Westin, CVPR 1993) — the tent-weighted mean of the channel's own samples
+    within one tile period (weights ``(1 − |dy|/t_h)(1 − |dx|/t_w)``), a site's own sample kept as
+    recorded; the image is mirrored at its edges (scipy's ``mirror``, which keeps the tile's phase).
+    On a Bayer tile this is colour-demosaicing's bilinear inside the image (a test holds it to 1e-12);
+    on the outermost pixels that one overshoots (scipy's ``reflect`` edge counts an edge site twice),
+    this one stays a weighted mean of samples."""
+    from scipy.ndimage import correlate1d
+
+    th, tw = layout.tile_shape
+    index = layout.channel_index(mosaic.shape)
+    m = np.asarray(mosaic, np.float64)
+
+    def tent(t):
+        d = np.arange(-(t - 1), t)
+        return 1.0 - np.abs(d) / t
+
+    ky, kx = tent(th), tent(tw)
+
+    def smooth(a):
+        return correlate1d(correlate1d(a, ky, axis=0, mode="mirror"), kx, axis=1, mode="mirror")
+
+    out = np.empty((*m.shape, len(layout.channels)), np.float64)
+    for k in range(len(layout.channels)):
+        mask = (index == k).astype(np.float64)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            out[..., k] = np.where(mask > 0, m, smooth(m * mask) / smooth(mask))
+    return out
+
+
+def remosaic_to_bayer(mosaic: np.ndarray, layout: MosaicLayout) -> tuple[np.ndarray, str]:
+    """A three-channel mosaic of another tile (Quad Bayer's 4×4) as an RGGB Bayer mosaic: each Bayer
+    site takes its channel from :func:`periodic_bilinear` (a site already of that channel keeps its
+    sample); ``(mosaic, "RGGB")``.  The phones' own remosaic engines are proprietary; this one is
+    the plain interpolating kind."""
+    full = periodic_bilinear(mosaic, layout)
+    bayer = MosaicLayout.bayer("RGGB")
+    k = bayer.channel_index(mosaic.shape)
+    return np.take_along_axis(full, k[..., None], axis=-1)[..., 0], "RGGB"
+
+
+def _bayer(name: str, fn_name: str):
+    """A colour-demosaicing method: on a 2×2 Bayer-geometry tile directly, on any other mosaic of
+    three channels after :func:`remosaic_to_bayer`; a mosaic of four channels has no Bayer form."""
 
     def method(mosaic: np.ndarray, layout: MosaicLayout) -> np.ndarray:
         import colour_demosaicing as cd
 
-        if layout.bayer_pattern is None:
-            raise ConfigError("processing.demosaic", fn_name, f"needs a 2x2 Bayer mosaic; this capture's tile is "
-                              f"{layout.pattern} ({layout.tile_shape[0]}x{layout.tile_shape[1]}); use 'patch'")
-        return getattr(cd, fn_name)(mosaic, layout.bayer_pattern)
+        pattern = layout.bayer_pattern
+        if pattern is None and len(layout.channels) == 3:
+            mosaic, pattern = remosaic_to_bayer(mosaic, layout)
+        if pattern is None:
+            raise ConfigError("processing.demosaic", name, f"needs a mosaic of three channels; this capture's "
+                              f"tile is {layout.pattern} ({len(layout.channels)} channels "
+                              f"{', '.join(layout.channels)}); use 'bilinear' (any periodic mosaic) or 'patch'")
+        return getattr(cd, fn_name)(mosaic, pattern)
 
     return method
 
 
-DEMOSAIC_METHODS.register("bilinear", _bayer("demosaicing_CFA_Bayer_bilinear"))
-DEMOSAIC_METHODS.register("malvar2004", _bayer("demosaicing_CFA_Bayer_Malvar2004"))
-DEMOSAIC_METHODS.register("menon2007", _bayer("demosaicing_CFA_Bayer_Menon2007"))
+@DEMOSAIC_METHODS.register("bilinear")
+def _bilinear(mosaic: np.ndarray, layout: MosaicLayout) -> np.ndarray:
+    """Bilinear: colour-demosaicing's on a 2×2 Bayer-geometry tile, :func:`periodic_bilinear` on any
+    other periodic mosaic (the two agree on a Bayer tile)."""
+    if layout.bayer_pattern is not None:
+        import colour_demosaicing as cd
+
+        return cd.demosaicing_CFA_Bayer_bilinear(mosaic, layout.bayer_pattern)
+    return periodic_bilinear(mosaic, layout)
+
+
+DEMOSAIC_METHODS.register("malvar2004", _bayer("malvar2004", "demosaicing_CFA_Bayer_Malvar2004"))
+DEMOSAIC_METHODS.register("menon2007", _bayer("menon2007", "demosaicing_CFA_Bayer_Menon2007"))
 
 
 @DEMOSAIC_METHODS.register("patch")
@@ -152,10 +209,11 @@ def tile_replicate(mosaic: np.ndarray, layout: MosaicLayout) -> np.ndarray:
     """
     h, w = mosaic.shape
     th, tw = layout.tile_shape
+    n = len(layout.channels)
     H, W = h // th * th, w // tw * tw
-    out = np.zeros((h, w, 3), dtype=np.float64)
-    acc = np.zeros((H // th, W // tw, 3))
-    cnt = np.zeros(3)
+    out = np.zeros((h, w, n), dtype=np.float64)
+    acc = np.zeros((H // th, W // tw, n))
+    cnt = np.zeros(n)
     for dy, dx, k in layout.sites():
         acc[:, :, k] += mosaic[dy:H:th, dx:W:tw]
         cnt[k] += 1
@@ -172,7 +230,7 @@ DEMOSAIC_MARGIN = 8
 
 
 def demosaic(mosaic: np.ndarray, layout: MosaicLayout, method: str) -> np.ndarray:
-    """``(H, W, 3)`` full-colour image from a mosaic of the given layout with a registered method,
+    """``(H, W, N)`` full-colour image from a mosaic of the given layout with a registered method,
     band by band (band edges on whole tiles): every output pixel sees exactly the neighbours it
     would in one pass over the whole image."""
     fn = DEMOSAIC_METHODS[method]
@@ -182,7 +240,7 @@ def demosaic(mosaic: np.ndarray, layout: MosaicLayout, method: str) -> np.ndarra
         return fn(mosaic, layout)
     th = layout.tile_shape[0]
     margin = -(-DEMOSAIC_MARGIN // th) * th
-    out = np.empty((*mosaic.shape, 3), dtype=np.float64)
+    out = np.empty((*mosaic.shape, len(layout.channels)), dtype=np.float64)
     for a in range(0, h, step):
         lo, hi = max(0, a - margin), min(h, a + step + margin)
         out[a:a + step] = fn(mosaic[lo:hi], layout)[a - lo:a - lo + min(step, h - a)]
@@ -190,6 +248,21 @@ def demosaic(mosaic: np.ndarray, layout: MosaicLayout, method: str) -> np.ndarra
 
 
 def fit_conversion(camera: np.ndarray, target_rgb: np.ndarray) -> np.ndarray:
-    """3×3 M minimising ‖camera·M − target‖² over the chart's patches (rows), ``(n, 3)`` each."""
-    M, *_ = np.linalg.lstsq(camera, target_rgb, rcond=None)
-    return M
+    """N×3 M minimising ‖camera·M − target‖² over the chart's patches (rows): camera ``(n, N)``,
+    target ``(n, 3)``.
+
+    More than three channels (R, G, B, W) are linearly dependent when W passes what R, G and B pass
+    (the block filters: exactly), and plain least squares then spends huge opposite coefficients on
+    the null direction, which noise multiplies: the channels are scaled to unit norm and singular
+    values below :data:`CONVERSION_RCOND` of the largest are dropped — the minimum-norm matrix among
+    the best fits.  Three channels are fitted exactly as the paper's (no truncation)."""
+    if camera.shape[1] <= 3:
+        M, *_ = np.linalg.lstsq(camera, target_rgb, rcond=None)
+        return M
+    scale = np.linalg.norm(camera, axis=0)
+    M, *_ = np.linalg.lstsq(camera / scale, target_rgb, rcond=CONVERSION_RCOND)
+    return M / scale[:, None]
+
+
+#: Relative singular-value cut-off of a fit with more than three channels (:func:`fit_conversion`).
+CONVERSION_RCOND = 1e-4

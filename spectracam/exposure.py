@@ -1,7 +1,8 @@
 """Exposure control by white-patch metering (paper, section 4.5).
 
 ``single``   one time for all channels: the first channel to saturate on the white patch reaches
-             full well (the paper's "traditional" scheme, the only one a CFA can use);
+             full well (the paper's "traditional" scheme, the only one a CFA can use; with a W pixel
+             it is W that ends the exposure);
 ``optimal``  per-channel times, each channel reaches full well on the white patch;
 ``balanced`` the optimal ratios, scaled so the total capture time equals the single exposure time
              (for field-sequential: the three frames together take as long as one CFA exposure).
@@ -21,14 +22,14 @@ from .sensor import SensorSpec
 #: dark current fills the well and the "exposure" measures the dark current, not the scene.
 MIN_PHOTO_SHARE = 0.01
 
-#: Exposure schemes: name → function ``(saturation_s (3,), architecture) → times_s (3,)``, where
+#: Exposure schemes: name → function ``(saturation_s (N,), architecture) → times_s (N,)``, where
 #: ``saturation_s`` is each channel's time to fill the well on the white patch.
 EXPOSURE_SCHEMES: Registry = Registry("capture.exposure", "exposure scheme")
 
 
 @EXPOSURE_SCHEMES.register("single")
 def _single(saturation_s, architecture):
-    return np.full(3, saturation_s.min())
+    return np.full(len(saturation_s), saturation_s.min())
 
 
 @EXPOSURE_SCHEMES.register("optimal")
@@ -42,12 +43,13 @@ def _balanced(saturation_s, architecture):
     return saturation_s * (saturation_s.min() / architecture.capture_time_s(saturation_s))
 
 
-def saturation_times_s(white_rate_e_per_s: np.ndarray, sensor: SensorSpec, white_fill: float = 1.0) -> np.ndarray:
+def saturation_times_s(white_rate_e_per_s: np.ndarray, sensor: SensorSpec, white_fill: float = 1.0,
+                       channels=("R", "G", "B")) -> np.ndarray:
     """Time for each channel's mean photo + dark charge on the white patch to reach ``white_fill·q_max``, s.  A channel
     that receives no light, or whose well the dark current fills, has no meaningful exposure: one
     clear error."""
     white = np.asarray(white_rate_e_per_s, float)
-    for k, w in zip("RGB", white):
+    for k, w in zip(channels, white):
         if not np.isfinite(w) or w <= 0:
             raise SpectracamError(f"exposure: channel {k} receives no light on the white patch ({w:g} e-/s); the "
                                   "filters or the illuminant leave it dark, so no exposure can be metered")
@@ -60,7 +62,7 @@ def saturation_times_s(white_rate_e_per_s: np.ndarray, sensor: SensorSpec, white
 
 def exposure_times_s(scheme: str, white_rate_e_per_s: np.ndarray, sensor: SensorSpec, architecture,
                      white_fill: float = 1.0) -> np.ndarray:
-    """Per-channel exposure times ``(3,)`` in seconds for the architecture under a scheme, metered so
+    """Per-channel exposure times ``(N,)`` in seconds for the architecture under a scheme, metered so
     that the white's mean charge reaches ``white_fill`` of the full well.
 
     >>> from spectracam.architecture import make_architecture
@@ -68,4 +70,5 @@ def exposure_times_s(scheme: str, white_rate_e_per_s: np.ndarray, sensor: Sensor
     >>> exposure_times_s("balanced", [100.0, 200.0, 50.0], s, make_architecture("fsc")).round(4).tolist()
     [0.1429, 0.0714, 0.2857]
     """
-    return EXPOSURE_SCHEMES[scheme](saturation_times_s(white_rate_e_per_s, sensor, white_fill), architecture)
+    saturation = saturation_times_s(white_rate_e_per_s, sensor, white_fill, architecture.channels)
+    return EXPOSURE_SCHEMES[scheme](saturation, architecture)

@@ -72,6 +72,10 @@ class FilterSpec(Spec):
     ir_cut_nm: float | None = None
     #: IR-cut filter: width of its edge from 90 % to 10 % transmittance, nm (a logistic edge).
     ir_cut_width_nm: float = 20.0
+    #: Stacked photodiodes (architecture "stacked"): the boundaries of the collection windows below
+    #: the surface, µm — a surface dead layer, then one window per photodiode from the top (n + 1
+    #: numbers for n layers).  Defaults fitted to the Sigma SD1 Merrill (spectracam.architectures.stacked).
+    stacked_depths_um: tuple = (0.33, 1.34, 3.08, 6.0)
 
     def validate(self) -> None:
         self.choice("kind", FILTER_KINDS)
@@ -92,6 +96,13 @@ class FilterSpec(Spec):
         if self.ir_cut_nm is not None:
             self.number("ir_cut_nm", 300, 1200, unit="nm")
         self.number("ir_cut_width_nm", 0.1, 500, unit="nm")
+        depths = self.stacked_depths_um
+        if not isinstance(depths, (tuple, list)) or not 3 <= len(depths) <= 7:
+            raise self.error("stacked_depths_um", "must be 3 to 7 depths in µm (a dead layer, then the bottom of "
+                                                  "each of 2 to 6 stacked photodiodes)")
+        self.numbers("stacked_depths_um", len(depths), 0, increasing=True, unit="µm")
+        if depths[-1] > 100:
+            raise self.error("stacked_depths_um", "the deepest window must end within 100 µm of the surface")
 
 
 def check_curve(spec: Spec, wl_field: str, value_field: str, required: bool) -> None:
@@ -212,6 +223,12 @@ def quantum_efficiency(spec: FilterSpec):
     qe = QE_MODELS[spec.qe](spec)
     cut = ir_cut(spec)
     return qe if cut is None else (lambda lam: qe(lam) * cut(lam))
+
+
+def clear_responsivity(spec: FilterSpec, grid: WavelengthGrid) -> np.ndarray:
+    """``(n_bands,)`` band-averaged QE × IR cut: the responsivity of a pixel with no colour filter
+    (transmittance 1; a W pixel), electrons per photon."""
+    return band_average(quantum_efficiency(spec), grid, 400)
 
 
 def _smooth(transmittance):

@@ -65,9 +65,9 @@ class ChartReference:
         return self.boxes[WHITE_PATCH]
 
     def patch_rates(self, camera: CameraSpec) -> np.ndarray:
-        """Noise-free photo-electron rates ``(24, 3)`` (e⁻/s) of the patches for a camera: the input of
+        """Noise-free photo-electron rates ``(24, N)`` (e⁻/s) of the patches for a camera: the input of
         the colour-conversion fit (paper 3.5) and of the DNG matrices."""
-        key = (camera.optics, camera.filters, camera.sensor)
+        key = (camera.optics, camera.filters, camera.sensor, camera.capture.architecture)
         if key not in self._rates:
             chart = self.patch_radiance[None].astype(np.float32)
             self._rates[key] = photo_electron_rates(chart, self.grid, camera)[0].astype(np.float64)

@@ -54,6 +54,14 @@ class PatchScore:
     snr_combined_db: float | None
     pixels: int
     snr_undefined: tuple = ()
+    #: Every recorded channel's SNR by name (R, G, B; R, Y, B; C, Y, M; R, G, B, W; …): the R/G/B
+    #: fields above are ``None`` for a channel the architecture does not record.
+    snr_by_channel_db: dict = dataclasses.field(default_factory=dict)
+    #: 20·log10(Y/σ_Y) of the rendered luminance: the channels' measured means and noise carried
+    #: through the exposure normalisation and the colour conversion to display luminance, the channels
+    #: independent (so the conversion's noise amplification counts and no demosaicker's smoothing
+    #: does; docs/metrics.md).
+    snr_rendered_db: float | None = None
 
 
 @dataclass(frozen=True)
@@ -68,12 +76,15 @@ class ChartSummary:
     snr_G_db: float | None
     snr_B_db: float | None
     capture_time_ms: float
-    exposure_R_ms: float
-    exposure_G_ms: float
-    exposure_B_ms: float
+    #: The channel's exposure time (``None`` when the architecture records no such channel).
+    exposure_R_ms: float | None
+    exposure_G_ms: float | None
+    exposure_B_ms: float | None
     #: How many patch-channel SNRs are undefined (mean signal ≤ 0 under noise); a channel's chart SNR
     #: above is ``None`` then, and ``None`` with a count of 0 means noise-free.
     snr_undefined_patches: int = 0
+    #: The patches' mean rendered-luminance SNR (:attr:`PatchScore.snr_rendered_db`).
+    snr_rendered_db: float | None = None
 
 
 #: The metrics a sweep can record: every field of :class:`ChartSummary`.
@@ -116,7 +127,7 @@ def recorded_electrons(raw: RawCapture) -> tuple[np.ndarray, np.ndarray]:
 
 
 def camera_rates(raw: RawCapture, processing: ProcessingSpec) -> np.ndarray:
-    """``(H, W, 3)`` photo-electrons per second per channel: demosaicked and exposure-normalised."""
+    """``(H, W, N)`` photo-electrons per second per channel: demosaicked and exposure-normalised."""
     e, _ = recorded_electrons(raw)
     if isinstance(raw.layout, MosaicLayout):
         rgb = demosaic(e, raw.layout, processing.demosaic)
@@ -128,24 +139,25 @@ def camera_rates(raw: RawCapture, processing: ProcessingSpec) -> np.ndarray:
 
 
 def channel_stats(raw: RawCapture, boxes) -> tuple[np.ndarray, np.ndarray]:
-    """Mean and std ``(24, 3)`` of the recorded (dark-subtracted) electrons of each channel's own
+    """Mean and std ``(24, N)`` of the recorded (dark-subtracted) electrons of each channel's own
     pixels in each box (for a mosaic: every site of the channel in the tile, both greens of a Bayer)."""
     e, _ = recorded_electrons(raw)
-    means, stds = np.zeros((len(boxes), 3)), np.zeros((len(boxes), 3))
+    n = len(raw.layout.channels)
+    means, stds = np.zeros((len(boxes), n)), np.zeros((len(boxes), n))
     mosaic = isinstance(raw.layout, MosaicLayout)
     if mosaic:
         th, tw = raw.layout.tile_shape
         sites = raw.layout.sites()
     for p, (r, c) in enumerate(boxes):
         if mosaic:
-            for k in range(3):
+            for k in range(n):
                 pix = np.concatenate([e[r, c][(dy - r.start) % th::th, (dx - c.start) % tw::tw].ravel()
                                       for dy, dx, kk in sites if kk == k])
                 means[p, k], stds[p, k] = pix.mean(), pix.std()
                 if pix.max() == pix.min():   # one code everywhere (a coarse ADC): no noise, not rounding's 1e-13
                     stds[p, k] = 0.0
         else:
-            block = e[:, r, c].reshape(3, -1)
+            block = e[:, r, c].reshape(n, -1)
             means[p], stds[p] = block.mean(axis=1), block.std(axis=1)
             stds[p][block.max(axis=1) == block.min(axis=1)] = 0.0
     return means, stds
@@ -156,22 +168,23 @@ def check_raw(raw: RawCapture) -> None:
     outside the ADC's codes, a layout that does not match the array, exposure times that are not > 0."""
     s = raw.camera.sensor
     d = raw.digital
-    want = 2 if isinstance(raw.layout, MosaicLayout) else 3
-    if d.ndim != want or (want == 3 and d.shape[0] != 3):
+    want, n = (2 if isinstance(raw.layout, MosaicLayout) else 3), len(raw.layout.channels)
+    if d.ndim != want or (want == 3 and d.shape[0] != n):
         raise SpectracamError(f"capture: a {type(raw.layout).__name__} holds "
-                              f"{'(H, W)' if want == 2 else '(3, H, W)'} digital numbers; got {d.shape}")
+                              f"{'(H, W)' if want == 2 else f'({n}, H, W)'} digital numbers; got {d.shape}")
     top = adc_full_scale_dn(s)
     bad = ~np.isfinite(d) | (d < 0) | (d > top)
     if bad.any():
         raise SpectracamError(f"capture: {int(bad.sum())} digital numbers are not finite or outside the "
                               f"{s.adc_bits}-bit ADC's 0…{top:g} (e.g. {d[bad].flat[0]!r})")
     t = np.asarray(raw.exposure_times_s, float)
-    if t.shape != (3,) or not np.all(np.isfinite(t)) or np.any(t <= 0):
-        raise SpectracamError(f"capture: exposure times must be three finite times > 0 s; got {t.tolist()}")
+    if t.shape != (n,) or not np.all(np.isfinite(t)) or np.any(t <= 0):
+        raise SpectracamError(f"capture: exposure times must be {n} finite times > 0 s, one per channel "
+                              f"{', '.join(raw.layout.channels)}; got {t.tolist()}")
 
 
 def conversion_matrix(reference: ChartReference, camera, processing: ProcessingSpec) -> np.ndarray:
-    """The 3×3 colour conversion (paper 3.5): least squares from the chart's noise-free camera rates
+    """The N×3 colour conversion (paper 3.5; 3×3 for three channels): least squares from the chart's noise-free camera rates
     to the display RGB that shows the chart's XYZ carried to the display's white."""
     M_disp = display_rgb_to_xyz(processing.display)
     to_display_xyz = adaptation_matrix(reference.white_xyz, M_disp.sum(axis=1), processing.adaptation)
@@ -185,7 +198,9 @@ def display_rgb(raw: RawCapture, reference: ChartReference, processing: Processi
     spectral image from another tool is shown through the chart's conversion)."""
     M = conversion_matrix(reference, raw.camera, processing)
     rgb = camera_rates(raw, processing)
-    for i in range(0, rgb.shape[0], 256):  # in place, a band of rows at a time: no second full-size image
+    if rgb.shape[-1] != 3:   # four channels and more: into a new (H, W, 3) image
+        rgb = np.concatenate([rgb[i:i + 256] @ M for i in range(0, rgb.shape[0], 256)])
+    for i in range(0, rgb.shape[0], 256) if M.shape[0] == 3 else ():  # in place, a band of rows at a time
         rgb[i:i + 256] = rgb[i:i + 256] @ M
     if processing.gamut_clip:
         np.clip(rgb, 0.0, 1.0, out=rgb)
@@ -209,7 +224,7 @@ def check_exposure_matches(raw: RawCapture, reference: ChartReference) -> None:
     cam = raw.camera
     try:
         want = exposure_times_s(cam.capture.exposure, reference.patch_rates(cam)[WHITE_PATCH], cam.sensor,
-                                cam.capture.make_architecture(), cam.capture.white_fill)
+                                cam.architecture(), cam.capture.white_fill)
     except SpectracamError:
         return  # the scene's light cannot be metered at all: other checks speak
     got = np.asarray(raw.exposure_times_s, float)
@@ -277,8 +292,12 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
     against = scene_lab if delta_e_reference == "scene" else conversion_lab
 
     boxes = reference.boxes
+    channels = raw.layout.channels
     de_map = np.full((h, w), np.nan, np.float32)
     means, stds = channel_stats(raw, boxes)
+    # display luminance per unit of each channel's rate, and each channel's exposure (rates = e⁻/t)
+    luminance = M @ M_disp[1]
+    times_s = np.asarray(raw.exposure_times_s, float)
     mean_labs = xyz_to_lab(np.stack([rgb[r, c].reshape(-1, 3).mean(axis=0) for r, c in boxes]) @ M_disp.T,
                            display_white)
     patches = []
@@ -288,14 +307,17 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
         with np.errstate(divide="ignore", invalid="ignore"):  # noise-free: infinite; mean ≤ 0: undefined (named)
             snr = snr_db(means[p], stds[p])
             combined = combine_snr_db(means[p], stds[p], processing.snr_combination)
+            rendered = snr_db(luminance @ (means[p] / times_s), np.linalg.norm(luminance * stds[p] / times_s))
+        by_name = dict(zip(channels, snr))
         patches.append(PatchScore(
             patch=p, name=reference.names[p], scene_lab=tuple(scene_lab[p].round(4).tolist()),
             rendered_lab=tuple(mean_labs[p].round(4).tolist()), delta_e_mean=float(de.mean()),
             delta_e_of_mean=float(delta_e(mean_labs[p], scene_lab[p], method)),
             delta_e_conversion=float(delta_e(conversion_lab[p], scene_lab[p], method)),
-            snr_R_db=_finite(snr[0]), snr_G_db=_finite(snr[1]), snr_B_db=_finite(snr[2]),
+            **{f"snr_{k}_db": _finite(by_name[k]) if k in by_name else None for k in "RGB"},
             snr_combined_db=_finite(combined), pixels=int((r.stop - r.start) * (c.stop - c.start)),
-            snr_undefined=tuple(k for k, m, sd in zip("RGB", means[p], stds[p]) if m <= 0 and sd > 0)))
+            snr_undefined=tuple(k for k, m, sd in zip(channels, means[p], stds[p]) if m <= 0 and sd > 0),
+            snr_by_channel_db={k: _finite(v) for k, v in by_name.items()}, snr_rendered_db=_finite(rendered)))
     times_ms = 1e3 * np.asarray(raw.exposure_times_s, float)
     summary = ChartSummary(
         delta_e_mean=float(np.mean([p.delta_e_mean for p in patches])),
@@ -304,8 +326,9 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
         snr_combined_db=_mean_or_none([p.snr_combined_db for p in patches]),
         **{f"snr_{k}_db": _mean_or_none([getattr(p, f"snr_{k}_db") for p in patches]) for k in "RGB"},
         capture_time_ms=1e3 * float(raw.capture_time_s),
-        **{f"exposure_{k}_ms": float(t) for k, t in zip("RGB", times_ms)},
-        snr_undefined_patches=int(sum(len(p.snr_undefined) for p in patches)))
+        **{f"exposure_{k}_ms": float(times_ms[channels.index(k)]) if k in channels else None for k in "RGB"},
+        snr_undefined_patches=int(sum(len(p.snr_undefined) for p in patches)),
+        snr_rendered_db=_mean_or_none([p.snr_rendered_db for p in patches]))
     parameters = {
         "scene": raw.scene, "camera": camera.to_dict(), "processing": processing.to_dict(), "seed": raw.seed,
         "delta_e_reference": delta_e_reference, "conversion_matrix": M.tolist(),

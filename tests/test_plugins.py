@@ -1,6 +1,6 @@
-"""A new architecture defined in this file alone — a Quad-Bayer colour filter array (2×2 blocks of one
-colour in a 4×4 tile) — goes through capture, scoring, the raw EXR, the DNG and ``--arch`` on the
-command line without any edit to spectracam: everything downstream dispatches on its layout."""
+"""A new architecture defined in this file alone — a stripe colour filter array (columns R, G, B in a
+1×3 tile) — goes through capture, scoring, the raw EXR, the DNG and ``--arch`` on the command line
+without any edit to spectracam: everything downstream dispatches on its layout."""
 import numpy as np
 import pytest
 from click.testing import CliRunner
@@ -9,14 +9,13 @@ from spectracam import ChartReference, capture, score
 from spectracam.architecture import ARCHITECTURES, Architecture, MosaicLayout
 from spectracam.cli import main
 from spectracam.color import ProcessingSpec
-from spectracam.errors import ConfigError
 from spectracam.io.dng import write_dng
 from spectracam.io.exr import read_raw_exr, write_radiance_exr, write_raw_exr
 
-QUAD = MosaicLayout(((0, 0, 1, 1), (0, 0, 1, 1), (1, 1, 2, 2), (1, 1, 2, 2)))
+QUAD = MosaicLayout(((0, 1, 2),))
 
 
-class QuadBayer(Architecture):
+class Stripes(Architecture):
     name = "quad"
     independent_exposures = False
     layout = QUAD
@@ -30,7 +29,7 @@ class QuadBayer(Architecture):
 
 @pytest.fixture(autouse=True)
 def quad_registered():
-    ARCHITECTURES.register("quad", QuadBayer)
+    ARCHITECTURES.register("quad", Stripes)
     yield
     ARCHITECTURES.unregister("quad")
 
@@ -50,12 +49,14 @@ def test_quad_bayer_captures_and_scores(scene_5000, analytic_5000):
     patch = ProcessingSpec(demosaic="patch")
     quad_score = score(raw, scene_5000, patch).summary
     cfa_score = score(cfa, scene_5000, patch).summary
-    # the same photons and filters: the same conversion error; per-tile estimates average 4 sites of
-    # each colour instead of 1-2, so less noise than the Bayer tile
+    # the same photons and filters: the same conversion error; a 1x3 tile's estimate holds one site of
+    # each colour, the Bayer tile's two greens: a little more noise
     assert quad_score.delta_e_conversion == pytest.approx(cfa_score.delta_e_conversion, rel=1e-9)
-    assert cfa_score.delta_e_conversion < quad_score.delta_e_mean < cfa_score.delta_e_mean
-    with pytest.raises(ConfigError, match="needs a 2x2 Bayer mosaic; this capture's tile is RRGGRRGGGGBBGGBB"):
-        score(raw, scene_5000, ProcessingSpec(demosaic="bilinear"))
+    assert cfa_score.delta_e_conversion < cfa_score.delta_e_mean < quad_score.delta_e_mean
+    # the periodic bilinear and, through a remosaic to Bayer, Menon 2007 take any mosaic of three channels
+    for method in ("bilinear", "menon2007"):
+        s = score(raw, scene_5000, ProcessingSpec(demosaic=method)).summary
+        assert cfa_score.delta_e_conversion < s.delta_e_mean < 2 * cfa_score.delta_e_mean
 
 
 def test_quad_bayer_files(tmp_path, scene_5000, analytic_5000):
@@ -69,8 +70,11 @@ def test_quad_bayer_files(tmp_path, scene_5000, analytic_5000):
 
     with tifffile.TiffFile(tmp_path / "raw.dng") as t:
         tags = t.pages[0].tags
-        assert tags[33421].value == (4, 4) and list(tags[33422].value) == [0, 0, 1, 1] * 2 + [1, 1, 2, 2] * 2
-        np.testing.assert_array_equal(t.pages[0].asarray(), raw.digital.astype(np.uint16))
+        # LibRaw decodes tiles two columns wide only: the DNG holds the mosaic remosaicked to RGGB, and says so
+        assert tags[33421].value == (2, 2) and list(tags[33422].value) == [0, 1, 1, 2]
+        assert "remosaicked to RGGB" in t.pages[0].description
+        sites = QUAD.channel_index(raw.digital.shape) == MosaicLayout.bayer("RGGB").channel_index(raw.digital.shape)
+        np.testing.assert_array_equal(t.pages[0].asarray()[sites], raw.digital.astype(np.uint16)[sites])
 
 
 def test_quad_bayer_on_the_command_line(tmp_path, scene_5000, analytic_5000):
@@ -86,4 +90,4 @@ def test_quad_bayer_on_the_command_line(tmp_path, scene_5000, analytic_5000):
     assert (tmp_path / "s" / "report.json").exists()
     ARCHITECTURES.unregister("quad")
     r = runner.invoke(main, ["capture", str(tmp_path / "radiance.exr"), "-o", str(tmp_path / "x"), "--arch", "quad"])
-    assert r.exit_code == 2 and "--arch = 'quad': must be one of 'cfa', 'prism', 'fsc'" in r.output
+    assert r.exit_code == 2 and "--arch = 'quad': must be one of 'cfa', 'prism', 'fsc', 'cmy'" in r.output

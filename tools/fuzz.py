@@ -4,8 +4,9 @@
 
 Cases: damaged EXR files, wrong scene values, unwritable outputs, garbage TOML, camera curve files
 (issue 17: unsorted, NaN, negative, short, narrow, units), spectral EXRs from elsewhere (stripped,
-contradicting their scene, units, --white), the validate/cameras commands, SIGTERM mid-run, and textured
-targets (issue 19: their values, damaged photographs and measured SPD files).
+contradicting their scene, units, --white), the validate/cameras commands, SIGTERM mid-run, textured
+targets (issue 19: their values, damaged photographs and measured SPD files), and the architectures of
+issue 20 (stacked depths, schemes and demosaickers that do not apply, the architectures command).
 
 Each case runs one real command in a fresh directory and is judged:
   traceback      a Python traceback on stderr (every failure must be one line);
@@ -32,7 +33,7 @@ CMD = [sys.executable, "-m", "spectracam"]
 FIELDS = ["illuminant.temperature_K", "illuminant.white_luminance_cd_m2", "image.width", "render.seed",
           "render.samples_per_pixel", "sensor.q_max_e", "sensor.adc_bits", "sensor.read_noise_e",
           "sensor.black_level_DN", "sensor.adc_full_scale_V", "sensor.dsnu_fraction", "filters.cutoffs_nm",
-          "filters.qe", "filters.collection_depth_um", "optics.f_number", "capture.architecture",
+          "filters.qe", "filters.collection_depth_um", "filters.stacked_depths_um", "optics.f_number", "capture.architecture",
           "capture.exposure", "processing.demosaic", "wavelengths.step_nm", "chart.mask_margin", "sensor.nosuch",
           "filters.camera", "filters.camera_unit", "capture.white_fill"]
 VALUES = ["0", "-1", "1e308", "nan", "inf", "-inf", "1.5", "true", '"text"', "[1, 2]", "[]", "{}", "3", "7",
@@ -610,10 +611,43 @@ def case_target(rng, d: Path):
             f"{kind} scored as another target")
 
 
+def case_architectures(rng, d: Path):
+    """Issue 20: the new architectures' options and the architectures command — bad values, exposure
+    schemes that do not apply, demosaickers that cannot, a full disk, SIGTERM part-way."""
+    cases = [
+        (["simulate", "s.toml", "-o", "out", "--renderer", "analytic", "--arch", "stacked", "--exposure", "optimal"],
+         True),
+        (["simulate", "s.toml", "-o", "out", "--renderer", "analytic", "--arch", "rgbw", "--demosaic", "menon2007"],
+         True),
+        (["simulate", "s.toml", "-o", "out", "--renderer", "analytic", "--arch", "stacked", "--set",
+          "filters.stacked_depths_um=[1, 0.5, 2]"], True),
+        (["simulate", "s.toml", "-o", "out", "--renderer", "analytic", "--arch", "stacked", "--set",
+          "filters.stacked_depths_um=[0.3, nan, 2]"], True),
+        (["simulate", "s.toml", "-o", "out", "--renderer", "analytic", "--arch", "stacked", "--set",
+          "filters.stacked_depths_um=[0.3]"], True),
+        (["simulate", "s.toml", "-o", "out", "--renderer", "analytic", "--arch", "stacked", "--set",
+          "filters.stacked_depths_um=[0.3, 1, 2, 1e9]"], True),
+        (["simulate", "s.toml", "-o", "out", "--renderer", "analytic", "--arch", rng.choice(["ryyb", "cmy", "quad_bayer",
+                                                                                            "rgbw", "stacked"])], False),
+        (["capture", "r/radiance.exr", "-o", "out", "--arch", "nosuch"], True),
+        (["architectures", "-o", "out", "--quick", "--renderer", "analytic", "--seeds", "0"], True),
+        (["architectures", "-o", "out", "--quick", "--renderer", "analytic", "--seeds", "x"], True),
+        (["architectures", "-o", "out", "--quick", "--renderer", "analytic", "--set", "temperatures_K=[]"], True),
+        (["architectures", "-o", "out", "--quick", "--renderer", "nosuch"], True),
+    ]
+    cmd, bad = rng.choice(cases)
+    fault = rng.choice(["none", "none", "disk", "signal"])
+    if fault == "disk" and not bad:
+        return cmd, False, f"full disk: {' '.join(cmd)}", {"fsize": rng.choice([0, 20_000])}
+    if fault == "signal" and not bad:
+        return cmd, False, f"SIGTERM: {' '.join(cmd)}", rng.choice([0.5, 1.5, 3.0])
+    return cmd, bad, " ".join(cmd)
+
+
 CASES = [case_damaged_file, case_scene_value, case_environment, case_garbage_text, case_camera_file, case_foreign_exr,
          case_new_commands, case_signal, case_full_disk, case_memory_limit, case_raw_attributes, case_journal,
          case_experiment_values, case_group_signal, case_scheduler_peer, case_read_only, case_reflectances,
-         case_target]
+         case_target, case_architectures]
 
 
 def one(i: int, seed: int, base: Path, cycle: bool = False) -> tuple[str, dict]:

@@ -1,8 +1,11 @@
 """Adobe DNG 1.4 for every capture, so ordinary raw developers open and develop it.
 
 Written with tifffile as one uncompressed image: a colour-filter-array mosaic (PhotometricInterpretation
-32803, CFA tags) or, for the prism and field-sequential architectures (three full planes), LinearRaw
-(34892, three samples per pixel).  Tags:
+32803, CFA tags; any tile of the DNG CFA colours R, G, B, C, M, Y, W — RYYB, CYYM and the four-colour
+RGBW among them, with ``CFAPlaneColor`` naming the planes) or, for the prism, field-sequential and
+stacked architectures (three full planes), LinearRaw (34892, three samples per pixel; planes of
+another count have no DNG form).  With N colour planes, ``ColorMatrix1`` is N×3 and ``AsShotNeutral``
+N long (DNG 1.4: ColorPlanes × 3).  Tags:
 
 * ``BlackLevel`` = the sensor's pedestal (``camera.sensor.black_level_dn``), ``WhiteLevel`` = 2ⁿ − 1.
 * ``AsShotNeutral`` = the camera's response to the scene white: the expected photo-electrons of each
@@ -52,7 +55,7 @@ from ..errors import SpectracamError
 from .files import atomic_write
 
 #: DNG CFAPattern colour codes.
-_CFA_CODE = {"R": 0, "G": 1, "B": 2}
+_CFA_CODE = {"R": 0, "G": 1, "B": 2, "C": 3, "M": 4, "Y": 5, "W": 6}
 #: EXIF LightSource codes for DNG CalibrationIlluminant1 (255 = other).
 _ILLUMINANT_CODE = {"A": 17, "B": 18, "C": 19, "D55": 20, "D65": 21, "D75": 22, "D50": 23}
 #: The Make tag of every file spectracam writes.
@@ -95,12 +98,14 @@ def as_shot_neutral(raw: RawCapture, reference) -> np.ndarray:
 
 
 def _white_preserving_fit(A: np.ndarray, Y: np.ndarray, a: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """3×3 ``B`` minimising ``‖A·Bᵀ − Y‖²`` subject to ``B·a = y`` exactly (one Lagrange multiplier
-    per output row); ``A`` ``(n, 3)`` inputs, ``Y`` ``(n, 3)`` targets."""
-    K = np.zeros((4, 4))
-    K[:3, :3] = 2 * A.T @ A
-    K[:3, 3] = K[3, :3] = a
-    rows = [np.linalg.solve(K, np.concatenate([2 * A.T @ Y[:, k], [y[k]]]))[:3] for k in range(Y.shape[1])]
+    """``B`` ``(m, k)`` minimising ``‖A·Bᵀ − Y‖²`` subject to ``B·a = y`` exactly (one Lagrange
+    multiplier per output row); ``A`` ``(n, k)`` inputs, ``Y`` ``(n, m)`` targets."""
+    k = A.shape[1]
+    K = np.zeros((k + 1, k + 1))
+    K[:k, :k] = 2 * A.T @ A
+    K[:k, k] = K[k, :k] = a
+    rows = [np.linalg.lstsq(K, np.concatenate([2 * A.T @ Y[:, j], [y[j]]]), rcond=None)[0][:k]
+            for j in range(Y.shape[1])]
     return np.array(rows)
 
 
@@ -114,8 +119,14 @@ def camera_to_xyz_matrix(raw: RawCapture, reference) -> np.ndarray:
 
 def xyz_to_camera_matrix(raw: RawCapture, reference) -> np.ndarray:
     """DNG ``ColorMatrix1``: the inverse of :func:`camera_to_xyz_matrix`, normalised so that the
-    illuminant's white maps onto :func:`as_shot_neutral` (maximum 1)."""
-    M = np.linalg.inv(camera_to_xyz_matrix(raw, reference))
+    illuminant's white maps onto :func:`as_shot_neutral` (maximum 1).  With other than three channels
+    (N×3: no inverse) the least-squares fit from the patches' XYZ to the camera, white preserved."""
+    n = len(raw.layout.channels)
+    if n == 3:
+        M = np.linalg.inv(camera_to_xyz_matrix(raw, reference))
+    else:
+        cam = reference.patch_rates(raw.camera) * np.asarray(raw.exposure_times_s, float)[None, :]
+        M = _white_preserving_fit(reference.patch_xyz, cam, reference.white_xyz, camera_white(raw, reference))
     return M / (M @ reference.white_xyz).max()
 
 
@@ -248,15 +259,40 @@ def _black_level_tag(black: float, count: int) -> tuple:
     return 50714, 5, count, _rational([black] * count), True
 
 
-def dng_tags(raw: RawCapture, reference=None, mid_step: bool = False) -> list:
-    """The tifffile ``extratags`` of a capture's DNG (see the module docstring and :func:`write_dng`)."""
+def dng_image(raw: RawCapture) -> tuple[np.ndarray, MosaicLayout | PlanesLayout, str | None]:
+    """``(digital numbers, layout, note)`` as the DNG holds them.  A mosaic whose tile LibRaw can
+    decode (its ``filters`` word holds tiles two columns wide: every 2×2 tile) is written as
+    recorded; a three-channel mosaic of a wider tile (Quad Bayer) remosaicked to RGGB Bayer, as phones
+    write theirs (:func:`spectracam.color.remosaic_to_bayer`); a four-channel mosaic of a wider tile
+    (RGBW) as LinearRaw of its channels interpolated by :func:`spectracam.color.periodic_bilinear`.
+    ``note`` says which, for the file's description; raw.exr always holds the mosaic as recorded."""
+    layout = raw.layout
+    if isinstance(layout, PlanesLayout) or layout.tile_shape == (2, 2):
+        return np.asarray(raw.digital), layout, None
+    from ..color import periodic_bilinear, remosaic_to_bayer
+
+    if len(layout.channels) == 3:
+        mosaic, pattern = remosaic_to_bayer(raw.digital, layout)
+        return mosaic, MosaicLayout.bayer(pattern), f"the {layout.pattern} mosaic remosaicked to {pattern} Bayer"
+    planes = np.moveaxis(periodic_bilinear(raw.digital, layout), -1, 0)
+    return planes, PlanesLayout("sensors", f"the {layout.pattern} mosaic interpolated to full planes",
+                                layout.channels), f"the {layout.pattern} mosaic interpolated to LinearRaw planes " \
+                                                  f"{', '.join(layout.channels)} (bilinear, periodic)"
+
+
+def dng_tags(raw: RawCapture, reference=None, mid_step: bool = False, layout=None) -> list:
+    """The tifffile ``extratags`` of a capture's DNG (see the module docstring and :func:`write_dng`);
+    ``layout``: the layout the DNG holds (:func:`dng_image`; default the capture's)."""
+    layout = layout or raw.layout
     bits = raw.camera.sensor.adc_bits
     black = raw.camera.sensor.black_level_dn
     if mid_step:  # linear values 2·DN + 1: the centre of each code, in half-DN units
         black, white = 2 * black, 2 ** (bits + 1) - 1
     else:
         white = 2**bits - 1
-    mosaic = isinstance(raw.layout, MosaicLayout)
+    mosaic = isinstance(layout, MosaicLayout)
+    channels = layout.channels
+    n = len(channels)
     model = camera_model(raw)
     tags = [
         (271, 2, 0, MAKE, True),  # Make
@@ -268,20 +304,20 @@ def dng_tags(raw: RawCapture, reference=None, mid_step: bool = False) -> list:
         (_EXIF_PLACEHOLDER, 4, 1, 0, True),  # becomes the ExifIFD pointer (34665)
     ]
     if mosaic:
-        th, tw = raw.layout.tile_shape
+        th, tw = layout.tile_shape
         tags += [(33421, 3, 2, (th, tw), True),  # CFARepeatPatternDim
-                 (33422, 1, th * tw, tuple(_CFA_CODE[c] for c in raw.layout.pattern), True),  # CFAPattern
-                 (50710, 1, 3, (0, 1, 2), True),  # CFAPlaneColor
+                 (33422, 1, th * tw, tuple(_CFA_CODE[c] for c in layout.pattern), True),  # CFAPattern
+                 (50710, 1, n, tuple(_CFA_CODE[c] for c in channels), True),  # CFAPlaneColor
                  (50711, 3, 1, 1, True),  # CFALayout: rectangular
                  _black_level_tag(black, 1)]
     else:
-        tags += [_black_level_tag(black, 3)]  # one per sample
+        tags += [_black_level_tag(black, n)]  # one per sample
     if mid_step:
         tags.append((50712, 3, 2**bits, tuple(range(1, 2 ** (bits + 1), 2)), True))  # LinearizationTable
     if reference is not None:
-        tags += [(50721, 10, 9, _srational(xyz_to_camera_matrix(raw, reference).ravel()), True),  # ColorMatrix1
+        tags += [(50721, 10, 3 * n, _srational(xyz_to_camera_matrix(raw, reference).ravel()), True),  # ColorMatrix1
                  (50778, 3, 1, calibration_illuminant_code(reference), True),  # CalibrationIlluminant1
-                 (50728, 5, 3, _rational(as_shot_neutral(raw, reference)), True)]  # AsShotNeutral
+                 (50728, 5, n, _rational(as_shot_neutral(raw, reference)), True)]  # AsShotNeutral
     return tags
 
 
@@ -321,21 +357,26 @@ def write_dng(path: str | Path, raw: RawCapture, reference=None, mid_step: bool 
     if mid_step and bits > 15:
         raise SpectracamError(f"sensor.adc_bits = {bits}: a mid-step LinearizationTable needs 15 bits or fewer")
     white_level = 2**bits - 1
-    if isinstance(raw.layout, MosaicLayout):
-        image, photometric = raw.digital, 32803
-    elif isinstance(raw.layout, PlanesLayout):
-        image, photometric = np.moveaxis(np.asarray(raw.digital), 0, -1), 34892
-    else:
+    if not isinstance(raw.layout, (MosaicLayout, PlanesLayout)):
         raise SpectracamError(f"capture.architecture = {raw.camera.capture.architecture!r}: its layout "
                               f"{type(raw.layout).__name__} has no DNG form")
+    if isinstance(raw.layout, PlanesLayout) and len(raw.layout.channels) != 3:
+        raise SpectracamError(f"capture: {len(raw.layout.channels)} full planes ({', '.join(raw.layout.channels)}) "
+                              "have no DNG form (LinearRaw holds three); the capture is in raw.exr")
+    image, layout, note = dng_image(raw)
+    if isinstance(layout, MosaicLayout):
+        photometric = 32803
+    else:
+        image, photometric = np.moveaxis(image, 0, -1), 34892
     dtype = np.uint16
     data = np.ascontiguousarray(np.clip(np.round(image), 0, white_level).astype(dtype))
     description = json.dumps({"spectracam": __version__, "design": raw.design,
                               "exposure_times_s": list(map(float, raw.exposure_times_s)),
                               "capture_time_s": float(raw.capture_time_s), "seed": raw.seed,
-                              "camera": raw.camera.to_dict(), "scene": raw.scene}, sort_keys=True)
+                              "camera": raw.camera.to_dict(), "scene": raw.scene,
+                              **({"dng_image": note} if note else {})}, sort_keys=True)
     buf = io.BytesIO()
     tifffile.imwrite(buf, data, photometric=photometric, planarconfig="contig" if data.ndim == 3 else None,
-                     compression=None, extratags=dng_tags(raw, reference, mid_step), metadata=None, subfiletype=0,
+                     compression=None, extratags=dng_tags(raw, reference, mid_step, layout), metadata=None, subfiletype=0,
                      description=description, software=f"spectracam {__version__}", byteorder="<")
     return atomic_write(path, _append_exif_ifd(buf.getvalue(), exif_entries(raw, reference)))

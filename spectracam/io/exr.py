@@ -246,32 +246,38 @@ def _other_parts(path) -> list[str]:
 
 
 def layout_to_dict(layout) -> dict:
+    """The layout as JSON; ``channels`` only when they are not R, G, B (files before issue 20 had none)."""
+    channels = getattr(layout, "channels", ("R", "G", "B"))
+    extra = {} if channels == ("R", "G", "B") else {"channels": list(channels)}
     if isinstance(layout, MosaicLayout):
-        return {"kind": "mosaic", "tile": [list(row) for row in layout.tile], "pattern": layout.pattern}
+        return {"kind": "mosaic", "tile": [list(row) for row in layout.tile], "pattern": layout.pattern, **extra}
     if isinstance(layout, PlanesLayout):
-        return {"kind": "planes", "planes": layout.kind, "description": layout.description}
+        return {"kind": "planes", "planes": layout.kind, "description": layout.description, **extra}
     raise SpectracamError(f"capture: a {type(layout).__name__} layout has no raw EXR form (a mosaic or planes); "
                           "register its writer before writing it")  # never written as something it is not
 
 
 def layout_from_dict(d: dict, source: str):
     try:
+        channels = tuple(str(c) for c in d.get("channels", ("R", "G", "B")))
         if d["kind"] == "mosaic":
-            layout = MosaicLayout(tuple(tuple(int(k) for k in row) for row in d["tile"]))
+            layout = MosaicLayout(tuple(tuple(int(k) for k in row) for row in d["tile"]), channels)
+            if any(not 0 <= k < len(channels) for row in layout.tile for k in row):
+                raise ValueError("a tile index outside the channels")
             if d.get("pattern", layout.pattern) != layout.pattern:   # redundant: it must agree with the tile
                 raise SpectracamError(f"file = {source!r}: spectracamLayout's pattern {d['pattern']!r} contradicts "
                                       f"its tile {d['tile']!r} ({layout.pattern}); the file is damaged or was edited")
             return layout
         if d["kind"] == "planes":
-            return PlanesLayout(str(d["planes"]), str(d["description"]))
-    except (KeyError, TypeError, ValueError):
+            return PlanesLayout(str(d["planes"]), str(d["description"]), channels)
+    except (KeyError, TypeError, ValueError, AttributeError):
         pass
     raise SpectracamError(f"file = {source!r}: spectracamLayout = {d!r} is not a layout spectracam wrote")
 
 
 def raw_channel_names(layout) -> list[str]:
-    """One channel "Y" for a mosaic (viewers show it as a grey mosaic), else R, G, B."""
-    return ["Y"] if isinstance(layout, MosaicLayout) else ["R", "G", "B"]
+    """One channel "Y" for a mosaic (viewers show it as a grey mosaic), else one per plane, by name."""
+    return ["Y"] if isinstance(layout, MosaicLayout) else list(layout.channels)
 
 
 def dn_scale_offset(sensor) -> tuple[float, float]:
@@ -298,8 +304,8 @@ def raw_attributes(raw: RawCapture) -> dict:
         "spectracamArchitecture": cam.capture.architecture,
         "spectracamExposure": cam.capture.exposure,
         "spectracamLayout": json.dumps(layout_to_dict(raw.layout)),
-        # R, G, B exposure times and the capture time, s (double precision)
-        "spectracamExposureTimesS": np.asarray(raw.exposure_times_s, dtype=np.float64).reshape(3),
+        # R, G, B exposure times (a JSON {channel: s} for other channels) and the capture time, s
+        "spectracamExposureTimesS": _exposure_attribute(raw),
         "spectracamCaptureTimeS": double(raw.capture_time_s),
         "spectracamCamera": json.dumps(cam.to_dict(), sort_keys=True),
         # V = g·Q + V_FPN (paper 3.4): the ADC's full scale, g·q_max, in volts
@@ -328,14 +334,23 @@ def write_raw_exr(path: str | Path, raw: RawCapture) -> Path:
     return write_exr(path, dict(zip(raw_channel_names(raw.layout), planes)), raw_attributes(raw))
 
 
-def _exposure_times(value) -> np.ndarray:
-    """R, G, B exposure times from the typed v3d attribute or the JSON ``{"R": …}`` of older files."""
+def _exposure_attribute(raw: RawCapture):
+    """R, G, B exposure times as a typed v3d (double precision); other channels as JSON ``{name: s}``
+    (``repr`` of a float round-trips exactly)."""
+    channels = raw.layout.channels
+    if channels == ("R", "G", "B"):
+        return np.asarray(raw.exposure_times_s, dtype=np.float64).reshape(3)
+    return json.dumps({c: float(t) for c, t in zip(channels, raw.exposure_times_s)})
+
+
+def _exposure_times(value, channels=("R", "G", "B")) -> np.ndarray:
+    """Exposure times of ``channels`` from the typed v3d attribute (R, G, B) or the JSON ``{"R": …}``."""
     if isinstance(value, str):
         value = json.loads(value)
-        return np.array([float(value[c]) for c in "RGB"])
+        return np.array([float(value[c]) for c in channels])
     times = np.asarray(value, dtype=np.float64).reshape(-1)
-    if times.shape != (3,):
-        raise ValueError(f"spectracamExposureTimesS = {value!r}: not three times")
+    if times.shape != (len(channels),):
+        raise ValueError(f"spectracamExposureTimesS = {value!r}: not {len(channels)} times")
     return times
 
 
@@ -362,8 +377,8 @@ def check_raw_attributes(attrs: dict, camera: CameraSpec, layout, times: np.ndar
         raise SpectracamError(f"file = {src!r}: {name} = {value!r} {why}; the file is damaged or was edited")
 
     if not (np.all(np.isfinite(times)) and np.all(times > 0)):
-        refuse("spectracamExposureTimesS", times.tolist(), "must be three finite times > 0 s")
-    arch = camera.capture.make_architecture()
+        refuse("spectracamExposureTimesS", times.tolist(), "must be finite times > 0 s, one per channel")
+    arch = camera.architecture()
     want_capture = float(arch.capture_time_s(times))
     if not (np.isfinite(capture_time) and abs(capture_time - want_capture) <= 1e-9 * max(want_capture, 1e-300)):
         refuse("spectracamCaptureTimeS", capture_time, f"contradicts its exposure times ({want_capture:.9g} s for "
@@ -399,7 +414,7 @@ def read_raw_exr(path: str | Path) -> RawCapture:
     try:
         cam = json.loads(attrs["spectracamCamera"])
         layout = layout_from_dict(json.loads(attrs["spectracamLayout"]), src)
-        times = _exposure_times(attrs["spectracamExposureTimesS"])
+        times = _exposure_times(attrs["spectracamExposureTimesS"], layout.channels)
         capture_time = attribute_number(attrs["spectracamCaptureTimeS"])
         seed = int(attrs["spectracamSeed"])
         scene = json.loads(attrs["spectracamScene"]) if "spectracamScene" in attrs else None
@@ -411,7 +426,7 @@ def read_raw_exr(path: str | Path) -> RawCapture:
     if set(names) - set(channels):
         raise SpectracamError(f"file = {src!r}: a {layout_to_dict(layout)['kind']} capture needs channels "
                               f"{', '.join(names)}; it has {', '.join(sorted(channels))}")
-    arch_layout = camera.capture.make_architecture().layout
+    arch_layout = camera.architecture().layout
     if arch_layout != layout:
         raise ConfigError("spectracamLayout", layout_to_dict(layout), f"does not match the recorded architecture "
                           f"{camera.capture.architecture!r} ({layout_to_dict(arch_layout)})", src)

@@ -241,7 +241,7 @@ def run_motion(spec: MotionSpec, scene, renderer: str = "mitsuba", log=None, kee
         timings["snr"] += time.perf_counter() - t0
         conv = Conversion.fit(ref, camera, scene.processing)
         white = white_rate(ref, camera)
-        arch = camera.capture.make_architecture()
+        arch = camera.architecture()
         times = exposure_times_s(camera.capture.exposure, white, camera.sensor, arch, camera.capture.white_fill)
         ideal_xyz = radiance_to_display_xyz(ideal, grid, scene.illuminant.white_luminance_cd_m2, conv)
         own_xyz = photo_electron_rates(ideal.astype(np.float32), grid, camera).astype(np.float64) \

@@ -80,7 +80,7 @@ def white_rate(reference: ChartReference, camera: CameraSpec) -> np.ndarray:
 
 def record(rates: np.ndarray, camera: CameraSpec, metered_rate: np.ndarray, seed: int) -> RawCapture:
     """Expose an ``(H, W, 3)`` rate image with the camera's architecture and exposure scheme."""
-    arch = camera.capture.make_architecture()
+    arch = camera.architecture()
     times = exposure_times_s(camera.capture.exposure, metered_rate, camera.sensor, arch, camera.capture.white_fill)
     digital, expected = arch.record(np.ascontiguousarray(rates, np.float32), times, camera.sensor, seed)
     return RawCapture(digital=digital, expected_e=expected, exposure_times_s=times,

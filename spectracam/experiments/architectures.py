@@ -1,0 +1,198 @@
+"""``spectracam architectures``: every registered architecture beside the paper's three, with the
+paper's camera, light and noise (issue 20).
+
+The camera, the chart and the light level are those of ``spectracam paper`` (its experiment file:
+the level at which cfa/single needs the paper's exposure at the calibration temperature).  Each
+architecture is captured with every exposure scheme that applies to it (``single`` for one
+exposure; ``optimal`` and ``balanced`` too where the channels have their own exposures) under two
+lights — the paper's error-budget illuminant (D65) and its warmest blackbody (3000 K) — at the
+paper's level and at 1/10 and 1/100 of it (the render is linear in the level: one render per light),
+and scored over several noise seeds (common random numbers: every design sees the same seeds).
+The exposures are metered at the paper's level and kept when the light dims (a camera at its
+longest allowed exposure, as in hand-held or video capture): re-metered, every design would simply
+expose 10× and 100× longer and reach the same SNR.
+
+Per row: the per-pixel ΔE against the scene (mean and spread over seeds), the raw channels' combined
+SNR and the rendered luminance SNR (after the colour conversion, so its noise amplification
+counts; docs/metrics.md), the conversion's noise-free error on the 24 patches it is fitted on
+(training) and on held-out colours (``processing.held_out``), and the capture time.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..architecture import ARCHITECTURES
+from ..capture import capture
+from ..errors import ConfigError
+from ..exposure import EXPOSURE_SCHEMES
+from ..illuminant import IlluminantSpec
+from ..reference import ChartReference
+from ..score import score
+from .paper import PaperExperiment, calibrated_luminance, scaled
+
+#: Light levels, as fractions of the paper's (its calibrated white luminance).
+LIGHT_FACTORS = (1.0, 0.1, 0.01)
+#: Noise seeds per case (the full run; ``--quick`` uses 2).
+SEEDS = 5
+
+
+def designs() -> list[str]:
+    """Every registered architecture with every exposure scheme that applies to it."""
+    out = []
+    for name in ARCHITECTURES:
+        schemes = EXPOSURE_SCHEMES.names if ARCHITECTURES[name].independent_exposures else ("single",)
+        out += [f"{name}/{s}" for s in schemes]
+    return out
+
+
+@dataclass(frozen=True)
+class ArchitecturesRun:
+    """What one ``architectures`` run compares (module docstring)."""
+
+    experiment: PaperExperiment
+    quick: bool = False
+    seeds: int = SEEDS
+    light_factors: tuple = LIGHT_FACTORS
+
+    def __post_init__(self):
+        if not isinstance(self.seeds, int) or isinstance(self.seeds, bool) or not 1 <= self.seeds <= 100:
+            raise ConfigError("--seeds", self.seeds, "must be a whole number of seeds from 1 to 100")
+
+    def scenes(self, level: float) -> dict:
+        base = self.experiment.base
+        if self.quick:
+            base = base.replace(image=base.image.replace(width=160, height=120))
+        warm = min(self.experiment.temperatures_K)
+        return {self.experiment.budget_illuminant: base.replace(
+                    illuminant=IlluminantSpec("cie", None, self.experiment.budget_illuminant, level)),
+                f"{warm:g} K": base.replace(illuminant=IlluminantSpec("blackbody", warm, None, level))}
+
+
+def _stats(values) -> tuple[float | None, float | None]:
+    v = [x for x in values if x is not None]
+    if len(v) < len(values) or not v:
+        return None, None
+    return float(np.mean(v)), float(np.std(v, ddof=1)) if len(v) > 1 else 0.0
+
+
+def case(scene, cube, design: str, seeds, metered_on=None, factor: float = 1.0) -> dict:
+    """One design under one light and level, over ``seeds``: a results row.  ``metered_on``: the
+    scene whose white patch sets the exposure (default ``scene``: metered as usual)."""
+    from ..chart import WHITE_PATCH
+
+    camera = scene.camera.with_design(design)
+    reference = ChartReference.of(scene)
+    white = ChartReference.of(metered_on or scene).patch_radiance[WHITE_PATCH]
+    metering = None if metered_on is None else {"kind": "fixed", "note": f"exposure metered on the white patch at "
+                                                f"{1 / factor:g}x this light, kept as the light dimmed"}
+    scores, raw = [], None
+    for seed in seeds:
+        raw = capture(cube, camera, seed, white_radiance=white, metering=metering)
+        scores.append(score(raw, reference, scene.processing))
+    s0 = scores[0]
+    row = {"design": design, "architecture": camera.capture.architecture, "exposure": camera.capture.exposure,
+           "channels": "".join(raw.layout.channels) if all(len(c) == 1 for c in raw.layout.channels)
+           else ",".join(raw.layout.channels),
+           "capture_time_ms": 1e3 * float(raw.capture_time_s),
+           "exposure_ms": [1e3 * float(t) for t in raw.exposure_times_s],
+           "delta_e_training": s0.summary.delta_e_conversion}
+    for key, get in (("delta_e_mean", lambda s: s.summary.delta_e_mean),
+                     ("delta_e_of_mean", lambda s: s.summary.delta_e_of_mean),
+                     ("snr_db", lambda s: s.summary.snr_combined_db),
+                     ("snr_rendered_db", lambda s: s.summary.snr_rendered_db)):
+        row[key], row[f"{key}_sd"] = _stats([get(s) for s in scores])
+    if s0.held_out is not None:
+        row["held_out_delta_e"] = s0.held_out["delta_e_mean"]
+        row["held_out_delta_e_p95"] = s0.held_out["delta_e_p95"]
+        row["held_out_library"] = s0.held_out["library"]
+    row["conversion_matrix"] = s0.parameters["conversion_matrix"]
+    return row
+
+
+def run_architectures(run: ArchitecturesRun, renderer: str = "mitsuba", use_cache: bool = True,
+                      step=lambda msg: None, log=None, progress: bool = False) -> dict:
+    """Every design × light × level × seed (module docstring): ``results`` (rows and what wins)."""
+    import time
+
+    from ..cache import cached_render
+    from ..render import render
+
+    exp = run.experiment
+    level = calibrated_luminance(exp, exp.base.camera)
+    seed0 = exp.base.render.seed
+    seeds = [seed0 + i for i in range(run.seeds)]
+    rows = []
+    t0 = time.perf_counter()
+    for light, scene in run.scenes(level).items():
+        if use_cache:
+            cube, hit = cached_render(scene, renderer, progress=progress, log=log)
+        else:
+            cube, hit = render(scene, renderer=renderer, progress=progress, log=log), False
+        step(f"render {light}: {'cached' if hit else renderer}")
+        for factor in run.light_factors:
+            sc, cb = scaled(scene, cube, factor)
+            for design in designs():
+                row = case(sc, cb, design, seeds, metered_on=None if factor == 1.0 else scene, factor=factor)
+                rows.append({"illuminant": light, "light_factor": factor,
+                             "white_luminance_cd_m2": level * factor, **row})
+            step(f"{light} at {factor:g}× the paper's light: {len(designs())} designs × {len(seeds)} seeds")
+    return {"parameters": {"renderer": renderer, "quick": run.quick, "seeds": seeds,
+                           "light_factors": list(run.light_factors), "paper_white_luminance_cd_m2": level,
+                           "designs": designs(), "scene": exp.base.to_dict(),
+                           "snr_db": "chart mean of each patch's combined raw-channel SNR "
+                                     "(processing.snr_combination), mean over seeds; _sd: its spread (sample std)",
+                           "snr_rendered_db": "chart mean of each patch's 20·log10(Y/σ_Y): the raw channels' "
+                                              "measured means and noise through the exposure normalisation and "
+                                              "the colour conversion to display luminance, channels independent "
+                                              "(docs/metrics.md), mean over seeds",
+                           "delta_e_mean": "chart mean of each patch's mean per-pixel ΔE against the scene "
+                                           "(processing.delta_e), mean over seeds",
+                           "delta_e_training": "the conversion's noise-free ΔE on the 24 patches it is fitted on",
+                           "held_out_delta_e": "the conversion's noise-free ΔE on processing.held_out's colours"},
+            "rows": rows, "winners": winners(rows), "timings_s": {"total": time.perf_counter() - t0}}
+
+
+def winners(rows: list[dict]) -> list[dict]:
+    """For each light and level: the design with the lowest per-pixel ΔE, the highest rendered SNR;
+    and overall the lowest held-out conversion error and the shortest capture time at the paper's
+    level."""
+    out = []
+    for light in dict.fromkeys(r["illuminant"] for r in rows):
+        for factor in dict.fromkeys(r["light_factor"] for r in rows):
+            group = [r for r in rows if r["illuminant"] == light and r["light_factor"] == factor]
+            for metric, best in (("delta_e_mean", min), ("snr_rendered_db", max)):
+                scored = [r for r in group if r.get(metric) is not None]
+                if scored:
+                    w = best(scored, key=lambda r: r[metric])
+                    out.append({"illuminant": light, "light_factor": factor, "metric": metric,
+                                "design": w["design"], "value": w[metric], "sd": w.get(f"{metric}_sd")})
+        group = [r for r in rows if r["illuminant"] == light and r["light_factor"] == 1.0]
+        for metric in ("held_out_delta_e", "capture_time_ms"):
+            scored = [r for r in group if r.get(metric) is not None]
+            if scored:
+                w = min(scored, key=lambda r: r[metric])
+                out.append({"illuminant": light, "light_factor": 1.0, "metric": metric, "design": w["design"],
+                            "value": w[metric], "sd": None})
+    return out
+
+
+def write_architectures_outputs(out_dir: str | Path, results: dict, command: str, step=lambda msg: None) -> list:
+    """results.json, report.md and the figures (architectures.png/.svg, responsivities.png/.svg)."""
+    import json
+
+    from ..io.files import atomic_write
+    from ..io.plots import save_figure
+    from .architectures_report import figure_comparison, figure_responsivities, report_markdown
+
+    out = Path(out_dir)
+    results = {**results, "command": command}
+    paths = save_figure(figure_comparison(results), out / "architectures.png", out / "architectures.svg", dpi=120)
+    paths += save_figure(figure_responsivities(results), out / "responsivities.png", out / "responsivities.svg",
+                         dpi=120)
+    paths.append(atomic_write(out / "results.json", json.dumps(results, indent=1, allow_nan=False).encode()))
+    paths.append(atomic_write(out / "report.md", report_markdown(results, command).encode()))
+    step(f"wrote {out}/results.json, report.md, architectures.png/.svg, responsivities.png/.svg")
+    return paths

@@ -1,0 +1,247 @@
+"""Issue 20: stacked photodiodes from silicon physics, RGBW, RYYB, CMY and Quad Bayer as registered
+architectures, the periodic-mosaic demosaicker, W-first metering, their raw files, and the
+``architectures`` comparison."""
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from spectracam import ChartReference, capture, score
+from spectracam.architecture import ARCHITECTURES, MosaicLayout
+from spectracam.camera import CameraSpec, band_weights, camera_responsivities
+from spectracam.chart import WHITE_PATCH
+from spectracam.cli import main
+from spectracam.color import ProcessingSpec, periodic_bilinear
+from spectracam.errors import ConfigError
+from spectracam.filters import FilterSpec
+from spectracam.spectra import WavelengthGrid
+
+NEW = ("stacked", "rgbw", "ryyb", "cmy", "quad_bayer")
+GRID = WavelengthGrid(np.arange(400.0, 701.0, 10.0))
+
+
+def test_every_new_architecture_is_registered_with_its_channels():
+    want = {"stacked": ("R", "G", "B"), "rgbw": ("R", "G", "B", "W"), "ryyb": ("R", "Y", "B"),
+            "cmy": ("C", "Y", "M"), "quad_bayer": ("R", "G", "B")}
+    for name, channels in want.items():
+        cam = CameraSpec().with_design(name)
+        assert cam.architecture().channels == channels
+        assert band_weights(cam, GRID).shape == (len(GRID), len(channels))
+
+
+def test_complementary_filters_are_exact_sums_of_the_block_filters():
+    R = {n: camera_responsivities(CameraSpec().with_design(n), GRID) for n in ("cfa", "ryyb", "cmy", "rgbw")}
+    r, g, b = R["cfa"]
+    np.testing.assert_allclose(R["ryyb"], [r, r + g, b], rtol=1e-12)
+    np.testing.assert_allclose(R["cmy"], [g + b, r + g, r + b], rtol=1e-12)
+    np.testing.assert_allclose(R["rgbw"][3], r + g + b, rtol=1e-12)     # W: no filter, QE 0.5 flat
+    # Gaussians overlap: a dye passes at most 1, so a yellow never exceeds the unfiltered pixel
+    gauss = CameraSpec(filters=FilterSpec(kind="gaussian", fwhm_nm=(150.0, 150.0, 150.0))).with_design("ryyb")
+    y = camera_responsivities(gauss, GRID)[1]
+    assert y.max() <= 0.5 + 1e-12 and np.isclose(y.max(), 0.5)
+
+
+# ---------------------------------------------------------------- stacked photodiodes
+def test_stacked_layers_are_beer_lambert_windows_and_sum_to_one_photodiode():
+    from spectracam.architectures.stacked import layer_qe
+    from spectracam.silicon import absorption_coefficient_per_um, photodiode_qe, reflectance
+
+    lam = np.arange(400.0, 701.0, 5.0)
+    z = (0.33, 1.34, 3.08, 6.0)
+    q = layer_qe(lam, z)
+    a, T = absorption_coefficient_per_um(lam), 1 - reflectance(lam)
+    np.testing.assert_allclose(q[2], T * (np.exp(-a * 0.33) - np.exp(-a * 1.34)), rtol=1e-12)   # top = B
+    np.testing.assert_allclose(q[0], T * (np.exp(-a * 3.08) - np.exp(-a * 6.0)), rtol=1e-12)    # bottom = R
+    np.testing.assert_allclose(q.sum(0), photodiode_qe(lam, 6.0, surface_dead_layer_um=0.33), rtol=1e-10)
+    # a thin window absorbs α·Δz of the light reaching it (first order)
+    thin = layer_qe([550.0], (1.0, 1.001))[0]
+    a550 = absorption_coefficient_per_um(550.0)
+    assert thin[0] == pytest.approx((1 - reflectance(550.0)) * np.exp(-a550) * a550 * 1e-3, rel=1e-3)
+    # four layers: four channels
+    cam = CameraSpec(filters=FilterSpec(stacked_depths_um=(0.2, 1.0, 2.0, 3.0, 6.0))).with_design("stacked")
+    assert cam.architecture().channels == ("L1", "L2", "L3", "L4")
+
+
+def _stacked_and_merrill():
+    import colour
+
+    merrill = colour.MSDS_CAMERA_SENSITIVITIES["Sigma SDMerill (NPL)"]
+    lam = merrill.wavelengths
+    cam = CameraSpec(filters=FilterSpec(ir_cut_nm=655.0)).with_design("stacked")
+    R = camera_responsivities(cam, WavelengthGrid(lam))
+    return lam, R, merrill.values
+
+
+def test_stacked_layers_match_the_sigma_sd1_merrill_curves():
+    """Shapes against NPL's measured SD1 Merrill (Darrodi et al. 2015, in colour-science): peaks in the
+    same order and within 10 nm, correlation ≥ 0.98 per layer (the default windows were fitted to these
+    shapes and the white ratio below: this holds the model and its defaults to them)."""
+    lam, R, S = _stacked_and_merrill()
+    peaks = lam[np.argmax(R, axis=1)]
+    measured = lam[np.argmax(S, axis=0)]
+    assert list(measured) == [630.0, 590.0, 480.0]
+    assert np.all(np.abs(peaks - measured) <= 10) and peaks[0] > peaks[1] > peaks[2]
+    for k in range(3):
+        assert np.corrcoef(R[k], S[:, k])[0, 1] >= 0.98
+
+
+def test_stacked_white_response_ratio_against_the_merrill():
+    """The layers' responses to a D65 white, bottom : middle : top, against LibRaw's XYZ→camera matrix
+    for the SD1/DP Merrill (colordata.cpp, {5133, −1895, −353, 4978, 744, 144, 3837, 3069, 2777}), which
+    gives 0.267 : 0.578 : 1: each within 15 % (model 0.30 : 0.60 : 1)."""
+    import colour
+
+    m = np.array([5133, -1895, -353, 4978, 744, 144, 3837, 3069, 2777], float).reshape(3, 3) / 1e4
+    d65 = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]
+    libraw = m @ colour.xy_to_XYZ(d65)
+    libraw /= libraw.max()
+    np.testing.assert_allclose(libraw, [0.267, 0.578, 1.0], atol=0.002)
+    lam, R, _ = _stacked_and_merrill()
+    sd = colour.SDS_ILLUMINANTS["D65"].copy().align(colour.SpectralShape(lam[0], lam[-1], 10))
+    photons = sd.values * lam   # a photon flux ∝ E(λ)·λ
+    white = R @ photons
+    np.testing.assert_allclose(white / white.max(), libraw, rtol=0.15)
+
+
+def test_stacked_conversion_amplifies_noise(scene_5000, analytic_5000):
+    """The layers overlap: the conversion's large off-diagonal terms amplify the noise, so at the same
+    raw SNR the rendered SNR and the per-pixel ΔE are much worse than the Bayer array's."""
+    cfa = score(capture(analytic_5000, seed=3, scene=scene_5000), scene_5000).summary
+    raw = capture(analytic_5000, design="stacked", seed=3, scene=scene_5000)
+    st = score(raw, scene_5000).summary
+    assert abs(st.snr_combined_db - cfa.snr_combined_db) < 3
+    assert st.snr_rendered_db < cfa.snr_rendered_db - 10
+    assert st.delta_e_mean > 2 * cfa.delta_e_mean
+    # noise-free, the two render the chart about equally well: the gap is noise, not the conversion
+    assert abs(st.delta_e_conversion - cfa.delta_e_conversion) < 1.0
+    # three photodiodes per pixel, three fixed patterns; one exposure
+    assert raw.digital.shape == (3, 120, 160) and len(set(raw.exposure_times_s)) == 1
+
+
+# ---------------------------------------------------------------- mosaics
+def test_periodic_bilinear_is_colour_demosaicings_bilinear_on_a_bayer_tile():
+    """Equal inside the image; on the outermost pixels colour-demosaicing convolves the masked mosaic
+    with scipy's default ``reflect`` edge, which repeats the edge pixel and so counts a site of the
+    edge's own colour up to 2.25 times (a value of 1 becomes 2.25 in a corner): ours mirrors the tile's
+    phase and stays a weighted mean."""
+    import colour_demosaicing as cd
+
+    rng = np.random.default_rng(0)
+    mosaic = rng.uniform(0, 1, (24, 30))
+    for pattern in ("RGGB", "GRBG", "GBRG", "BGGR"):
+        ours = periodic_bilinear(mosaic, MosaicLayout.bayer(pattern))
+        theirs = cd.demosaicing_CFA_Bayer_bilinear(mosaic, pattern)
+        np.testing.assert_allclose(ours[1:-1, 1:-1], theirs[1:-1, 1:-1], atol=1e-12)
+        assert ours.min() >= mosaic.min() and ours.max() <= mosaic.max() < theirs.max()
+
+
+def test_periodic_bilinear_reproduces_a_linear_ramp_on_every_mosaic():
+    """Bilinear interpolation is exact on a plane far from the edges, whatever the tile."""
+    y, x = np.mgrid[0:40, 0:40].astype(float)
+    ramp = 3.0 + 0.5 * x + 0.25 * y
+    for name in ("rgbw", "quad_bayer", "cmy"):
+        layout = CameraSpec().with_design(name).architecture().layout
+        full = periodic_bilinear(ramp, layout)
+        np.testing.assert_allclose(full[8:-8, 8:-8], np.repeat(ramp[8:-8, 8:-8, None], len(layout.channels), 2),
+                                   atol=1e-9)
+
+
+@pytest.mark.parametrize("name", ("rgbw", "ryyb", "cmy", "quad_bayer"))
+def test_each_mosaic_records_its_own_channel_at_each_site(name, scene_5000, analytic_5000):
+    raw = capture(analytic_5000, design=name, seed=2, scene=scene_5000)
+    from spectracam.camera import photo_electron_rates
+
+    rates = photo_electron_rates(analytic_5000.radiance, analytic_5000.grid, raw.camera)
+    idx = raw.layout.channel_index(raw.digital.shape)
+    t = raw.exposure_times_s[0]
+    expected = np.take_along_axis(rates, idx[..., None], 2)[..., 0] * t + raw.camera.sensor.dark_rate_e_per_s * t
+    np.testing.assert_allclose(raw.expected_e, expected, rtol=1e-5)
+    for demosaic in ("bilinear", "patch") + (("menon2007",) if name != "rgbw" else ()):
+        s = score(raw, scene_5000, scene_5000.processing.replace(demosaic=demosaic)).summary
+        assert 0 < s.delta_e_mean < 30 and s.snr_rendered_db > 10
+
+
+def test_rgbw_meters_on_w_and_refuses_bayer_demosaickers(scene_5000, analytic_5000):
+    """W collects what R, G and B pass together, so it fills its well first and ends the exposure."""
+    raw = capture(analytic_5000, design="rgbw", seed=2, scene=scene_5000)
+    white = raw.metered_rate_e_per_s
+    assert np.argmax(white) == 3
+    s = raw.camera.sensor
+    fill = (white[3] + s.dark_rate_e_per_s) * raw.exposure_times_s[3] / s.q_max_e
+    assert fill == pytest.approx(raw.camera.capture.white_fill, rel=1e-9)
+    cfa = capture(analytic_5000, seed=2, scene=scene_5000)
+    assert raw.capture_time_s < 0.5 * cfa.capture_time_s
+    with pytest.raises(ConfigError, match="menon2007.*needs a mosaic of three channels.*4 channels R, G, B, W"):
+        score(raw, scene_5000, scene_5000.processing.replace(demosaic="menon2007"))
+
+
+def test_exposure_schemes_that_do_not_apply_are_refused():
+    for name in NEW:
+        with pytest.raises(ConfigError, match=f"the {name} architecture has one exposure for all channels"):
+            CameraSpec().with_design(f"{name}/optimal")
+
+
+# ---------------------------------------------------------------- files and the command line
+@pytest.mark.parametrize("name", NEW)
+def test_capture_arch_writes_raw_exr_and_a_dng_libraw_develops(name, tmp_path, scene_5000, analytic_5000):
+    from spectracam.io.exr import read_raw_exr, write_radiance_exr
+
+    write_radiance_exr(tmp_path / "radiance.exr", analytic_5000)
+    r = CliRunner().invoke(main, ["capture", str(tmp_path / "radiance.exr"), "-o", str(tmp_path / "c"), "--arch", name,
+                                  "--quiet"])
+    assert r.exit_code == 0, r.output
+    back = read_raw_exr(tmp_path / "c" / "raw.exr")
+    direct = capture(analytic_5000, design=name, seed=scene_5000.render.seed, scene=scene_5000)
+    np.testing.assert_array_equal(back.digital, direct.digital)
+    assert back.layout == direct.layout and np.array_equal(back.exposure_times_s, direct.exposure_times_s)
+    rawpy = pytest.importorskip("rawpy")
+    with rawpy.imread(str(tmp_path / "c" / "raw.dng")) as d:
+        assert d.num_colors == len(direct.layout.channels)
+        img = d.postprocess(use_camera_wb=True, no_auto_bright=True, output_bps=16, gamma=(1, 1))
+    # the chart's light greys develop grey (the as-shot neutral is the camera's white; the white patch
+    # itself clips in LibRaw's 16-bit output once balanced): |a*|, |b*| ≤ 3 in sRGB/D65 (the Bayer
+    # array's: ≤ 1.8)
+    import colour
+
+    ref = ChartReference.of(scene_5000)
+    for k in (WHITE_PATCH + 1, WHITE_PATCH + 2, WHITE_PATCH + 3):
+        rows, cols = ref.boxes[k]
+        rgb = img[rows, cols].reshape(-1, 3).mean(0) / 65535
+        lab = colour.XYZ_to_Lab(colour.sRGB_to_XYZ(rgb, apply_cctf_decoding=False))
+        assert np.all(np.abs(lab[1:]) <= 3), (name, k, lab)
+    r = CliRunner().invoke(main, ["score", str(tmp_path / "c" / "raw.exr"), "-o", str(tmp_path / "s"), "--quiet"])
+    assert r.exit_code == 0, r.output
+    rep = json.loads((tmp_path / "s" / "report.json").read_text())
+    assert set(rep["patches"][0]["snr_by_channel_db"]) == set(direct.layout.channels)
+
+
+def test_architectures_quick_command(tmp_path):
+    r = CliRunner().invoke(main, ["architectures", "-o", str(tmp_path / "a"), "--quick", "--renderer", "analytic",
+                                  "--seeds", "2", "--quiet"])
+    assert r.exit_code == 0, r.output
+    res = json.loads((tmp_path / "a" / "results.json").read_text())
+    designs = {row["design"] for row in res["rows"]}
+    assert {f"{n}/single" for n in ARCHITECTURES} <= designs and "fsc/balanced" in designs
+    assert "stacked/optimal" not in designs
+    for row in res["rows"]:
+        for key in ("design", "snr_db", "delta_e_mean", "capture_time_ms", "delta_e_mean_sd", "held_out_delta_e",
+                    "delta_e_training"):
+            assert key in row
+    # dimming the light with the exposure kept: ΔE rises and SNR falls by the light lost (shot-noise
+    # limited: 10 dB per decade at most; read noise makes it more)
+    def get(design, f):
+        return next(r for r in res["rows"] if r["design"] == design and r["light_factor"] == f and
+                    r["illuminant"] == "D65")
+    for d in ("cfa/single", "stacked/single", "rgbw/single"):
+        assert get(d, 0.1)["delta_e_mean"] > get(d, 1.0)["delta_e_mean"]
+        assert get(d, 0.1)["capture_time_ms"] == get(d, 1.0)["capture_time_ms"]
+    assert get("cfa/single", 1.0)["snr_rendered_db"] - get("cfa/single", 0.1)["snr_rendered_db"] >= 10 - 0.5
+    # the complementary arrays see the same colours through sums of the same filters: the same
+    # noise-free conversion error as the Bayer array
+    for d in ("ryyb/single", "cmy/single", "rgbw/single", "quad_bayer/single"):
+        assert get(d, 1.0)["delta_e_training"] == pytest.approx(get("cfa/single", 1.0)["delta_e_training"], abs=1e-6)
+    for f in ("report.md", "architectures.png", "responsivities.png"):
+        assert (tmp_path / "a" / f).stat().st_size > 1000
+    r = CliRunner().invoke(main, ["architectures", "-o", str(tmp_path / "b"), "--seeds", "0"])
+    assert r.exit_code == 2 and "--seeds" in r.output
