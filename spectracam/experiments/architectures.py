@@ -8,9 +8,12 @@ exposure; ``optimal`` and ``balanced`` too where the channels have their own exp
 lights — the paper's error-budget illuminant (D65) and its warmest blackbody (3000 K) — at the
 paper's level and at 1/10 and 1/100 of it (the render is linear in the level: one render per light),
 and scored over several noise seeds (common random numbers: every design sees the same seeds).
-The exposures are metered at the paper's level and kept when the light dims (a camera at its
-longest allowed exposure, as in hand-held or video capture): re-metered, every design would simply
-expose 10× and 100× longer and reach the same SNR.
+At the paper's level each design is metered as the paper meters it (its first channel to fill
+its well on the white patch ends the exposure).  Dimmed, a hand-held limit: each design is metered
+at the dim light and its exposures scaled down so the capture lasts at most the Bayer array's
+exposure at the paper's level (:func:`time_limit_s`) — without it every design would expose 10× and
+100× longer and reach the same SNR; with it the arrays that collect more light per pixel (W, Y, C,
+M filters) and the single-exposure designs show what they gain in dim light.
 
 Per row: the per-pixel ΔE against the scene (mean and spread over seeds), the raw channels' combined
 SNR and the rendered luminance SNR (after the colour conversion, so its noise amplification
@@ -78,22 +81,42 @@ def _stats(values) -> tuple[float | None, float | None]:
     return float(np.mean(v)), float(np.std(v, ddof=1)) if len(v) > 1 else 0.0
 
 
-def case(scene, cube, design: str, seeds, metered_on=None, factor: float = 1.0) -> dict:
-    """One design under one light and level, over ``seeds``: a results row.  ``metered_on``: the
-    scene whose white patch sets the exposure (default ``scene``: metered as usual)."""
+def time_limit_s(scene) -> float:
+    """The longest capture the dimmed cases allow: cfa/single's exposure on ``scene``'s white patch."""
     from ..chart import WHITE_PATCH
+    from ..exposure import exposure_times_s
+
+    cam = scene.camera.with_design("cfa/single")
+    white = ChartReference.of(scene).patch_rates(cam)[WHITE_PATCH]
+    return float(cam.architecture().capture_time_s(exposure_times_s("single", white, cam.sensor, cam.architecture(),
+                                                                    cam.capture.white_fill)))
+
+
+def case(scene, cube, design: str, seeds, limit_s: float | None = None) -> dict:
+    """One design under one light and level, over ``seeds``: a results row.  ``limit_s``: the longest
+    capture allowed (module docstring); the exposures metered on the white patch are scaled down to it."""
+    from ..chart import WHITE_PATCH
+    from ..exposure import exposure_times_s
 
     camera = scene.camera.with_design(design)
     reference = ChartReference.of(scene)
-    white = ChartReference.of(metered_on or scene).patch_radiance[WHITE_PATCH]
-    metering = None if metered_on is None else {"kind": "fixed", "note": f"exposure metered on the white patch at "
-                                                f"{1 / factor:g}x this light, kept as the light dimmed"}
+    white = ChartReference.of(scene).patch_radiance[WHITE_PATCH]
+    metering, scale = None, 1.0
+    if limit_s is not None:
+        arch = camera.architecture()
+        times = exposure_times_s(camera.capture.exposure, reference.patch_rates(camera)[WHITE_PATCH], camera.sensor,
+                                 arch, camera.capture.white_fill)
+        scale = min(1.0, limit_s / arch.capture_time_s(times))
+        # exposure times are inversely proportional to the metered white: metering on a brighter white
+        # shortens them by ``scale`` (the dark charge aside; shorter, so it stays negligible)
+        metering = {"kind": "time_limit", "limit_ms": 1e3 * limit_s,
+                    "note": "metered on the white patch, then shortened so the capture lasts at most limit_ms"}
     scores, raw = [], None
     for seed in seeds:
-        raw = capture(cube, camera, seed, white_radiance=white, metering=metering)
+        raw = capture(cube, camera, seed, white_radiance=white / scale, metering=metering)
         scores.append(score(raw, reference, scene.processing))
     s0 = scores[0]
-    row = {"design": design, "architecture": camera.capture.architecture, "exposure": camera.capture.exposure,
+    row = {"design": design, "time_limited": scale < 1.0, "architecture": camera.capture.architecture, "exposure": camera.capture.exposure,
            "channels": "".join(raw.layout.channels) if all(len(c) == 1 for c in raw.layout.channels)
            else ",".join(raw.layout.channels),
            "capture_time_ms": 1e3 * float(raw.capture_time_s),
@@ -132,10 +155,11 @@ def run_architectures(run: ArchitecturesRun, renderer: str = "mitsuba", use_cach
         else:
             cube, hit = render(scene, renderer=renderer, progress=progress, log=log), False
         step(f"render {light}: {'cached' if hit else renderer}")
+        limit = time_limit_s(scene)
         for factor in run.light_factors:
             sc, cb = scaled(scene, cube, factor)
             for design in designs():
-                row = case(sc, cb, design, seeds, metered_on=None if factor == 1.0 else scene, factor=factor)
+                row = case(sc, cb, design, seeds, None if factor == 1.0 else limit)
                 rows.append({"illuminant": light, "light_factor": factor,
                              "white_luminance_cd_m2": level * factor, **row})
             step(f"{light} at {factor:g}× the paper's light: {len(designs())} designs × {len(seeds)} seeds")
@@ -172,10 +196,11 @@ def winners(rows: list[dict]) -> list[dict]:
         group = [r for r in rows if r["illuminant"] == light and r["light_factor"] == 1.0]
         for metric in ("held_out_delta_e", "capture_time_ms"):
             scored = [r for r in group if r.get(metric) is not None]
-            if scored:
-                w = min(scored, key=lambda r: r[metric])
-                out.append({"illuminant": light, "light_factor": 1.0, "metric": metric, "design": w["design"],
-                            "value": w[metric], "sd": None})
+            if scored:   # noise-free numbers tie exactly where the filters are sums of the same three: name all
+                best = min(r[metric] for r in scored)
+                tied = [r["design"] for r in scored if r[metric] <= best * (1 + 1e-6)]
+                out.append({"illuminant": light, "light_factor": 1.0, "metric": metric, "design": ", ".join(tied),
+                            "value": best, "sd": None})
     return out
 
 

@@ -40,12 +40,18 @@ def figure_comparison(results: dict):
             if metric == "delta_e_mean":
                 ax.set_yscale("log")
         ax = row_axes[2]
+        points: dict = {}   # designs whose noise-free errors coincide (filter sums of the same three) share a label
         for r in _rows(results, light, 1.0):
             if r.get("held_out_delta_e") is not None:
                 ax.scatter(r["delta_e_training"], r["held_out_delta_e"], s=60, **{k: v for k, v in
-                           styles[r["design"]].items() if k in ("color", "marker")}, label=r["design"])
-                ax.annotate(r["design"], (r["delta_e_training"], r["held_out_delta_e"]), fontsize=8,
-                            xytext=(4, 3), textcoords="offset points")
+                           styles[r["design"]].items() if k in ("color", "marker")})
+                key = (round(r["delta_e_training"], 3), round(r["held_out_delta_e"], 3))
+                points.setdefault(key, []).append(r["architecture"])
+        for (x, y), names in points.items():
+            names = list(dict.fromkeys(names))
+            text = names[0] if len(names) == 1 else f"{len(names)} architectures: " + ", ".join(names)
+            ax.annotate(text, (x, y), fontsize=8, xytext=(-10, -14 if len(names) > 1 else 5),
+                        textcoords="offset points", ha="right" if len(names) > 1 else "left")
         lim = ax.get_xlim()[1], ax.get_ylim()[1]
         top = max(lim)
         ax.plot([0, top], [0, top], color="0.6", lw=0.8, ls=":")
