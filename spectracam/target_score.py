@@ -71,7 +71,8 @@ class TargetScore:
     def to_dict(self) -> dict:
         return {"parameters": self.parameters, "training": self.training, "held_out": self.held_out,
                 "capture": {"capture_time_ms": self.capture_time_ms,
-                            **{f"exposure_{k}_ms": t for k, t in zip("RGB", self.exposure_ms)}},
+                            **{f"exposure_{k}_ms": t for k, t in zip(self.parameters.get("channels", "RGB"),
+                                                                     self.exposure_ms)}},
                 "samples": [dataclasses.asdict(s) for s in self.samples]}
 
 
@@ -166,6 +167,8 @@ def score_target(raw: RawCapture, chart: ChartReference, ref: TargetReference, t
     parameters = {"scene": raw.scene, "camera": raw.camera.to_dict(), "processing": processing.to_dict(),
                   "seed": raw.seed, "conversion_matrix": M.tolist(), "samples_per_degree": spd,
                   "definitions": __doc__.split("\n\n", 1)[1].strip()}
+    if raw.layout.channels != ("R", "G", "B"):   # the exposure times' names (R, G, B when not given)
+        parameters["channels"] = list(raw.layout.channels)
     times = tuple(float(1e3 * t) for t in raw.exposure_times_s)
     return TargetScore(parameters, training, held_out, tuple(samples), 1e3 * float(raw.capture_time_s), times,
                        rgb.astype(np.float32), de_map, sc_map)
