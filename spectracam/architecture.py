@@ -239,21 +239,10 @@ def complementary(R: np.ndarray, filters, grid, *pairs: str) -> np.ndarray:
 
 
 @ARCHITECTURES.register("cfa")
-class ColourFilterArray(Architecture):
+class ColourFilterArray(MosaicArchitecture):
     """One sensor, one exposure, a Bayer colour filter array (paper 2: CFA)."""
 
     name = "cfa"
-    independent_exposures = False
-
-    @property
-    def layout(self):
-        return MosaicLayout.bayer(self.cfa_pattern)
-
-    def capture_time_s(self, times_s):
-        return float(times_s[0])
-
-    def record(self, rates, times_s, sensor, seed):
-        return self.record_mosaic(rates, times_s, sensor, seed)
 
 
 @ARCHITECTURES.register("prism")

@@ -349,14 +349,14 @@ def simulate_cmd(scene_file, out_dir, renderer, arch, exposure, config_file, see
 @_quiet_option
 def paper_cmd(out_dir, experiment_file, renderer, quick, no_cache, save_cubes, sets, quiet):
     """Reproduce the paper's Figures 4, 5a, 5b and 6: figures, results.json, report.md, case files."""
-    from .experiments.paper import load_experiment, run_paper
+    from .experiments.paper import load_experiment, quick_scene, run_paper
     from .experiments.report import write_paper_outputs
 
     from .pipeline import check_memory
 
     path = experiment_file or default_experiment()
     exp = load_experiment(path, sets)
-    base = exp.base if not quick else exp.base.replace(image=exp.base.image.replace(width=160, height=120))
+    base = quick_scene(exp.base, quick)
     check_memory(base, copies=len(exp.temperatures_K) + 1, what=f", {len(exp.temperatures_K) + 1} lights held at once")
     _check_writable(out_dir)
     log = _log(quiet)
@@ -390,12 +390,12 @@ def architectures_cmd(out_dir, experiment_file, renderer, quick, seeds, no_cache
     and 1/100 of its light: SNR, ΔE (training and held-out), capture time; results.json, report.md, figures."""
     from .experiments.architectures import SEEDS, ArchitecturesRun, designs, run_architectures, \
         write_architectures_outputs
-    from .experiments.paper import load_experiment
+    from .experiments.paper import load_experiment, quick_scene
     from .pipeline import check_memory
 
     exp = load_experiment(experiment_file or default_experiment(), sets)
     run = ArchitecturesRun(exp, quick=quick, seeds=seeds or (2 if quick else SEEDS))
-    base = exp.base if not quick else exp.base.replace(image=exp.base.image.replace(width=160, height=120))
+    base = quick_scene(exp.base, quick)
     check_memory(base, copies=2, what=", two lights and a scaled copy held at once")
     _check_writable(out_dir)
     log = _log(quiet)

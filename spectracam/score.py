@@ -198,10 +198,11 @@ def display_rgb(raw: RawCapture, reference: ChartReference, processing: Processi
     spectral image from another tool is shown through the chart's conversion)."""
     M = conversion_matrix(reference, raw.camera, processing)
     rgb = camera_rates(raw, processing)
-    if rgb.shape[-1] != 3:   # four channels and more: into a new (H, W, 3) image
+    if rgb.shape[-1] == 3:   # in place, a band of rows at a time: no second full-size image
+        for i in range(0, rgb.shape[0], 256):
+            rgb[i:i + 256] = rgb[i:i + 256] @ M
+    else:                    # N ≠ 3 channels: into a new (H, W, 3) image, band by band
         rgb = np.concatenate([rgb[i:i + 256] @ M for i in range(0, rgb.shape[0], 256)])
-    for i in range(0, rgb.shape[0], 256) if M.shape[0] == 3 else ():  # in place, a band of rows at a time
-        rgb[i:i + 256] = rgb[i:i + 256] @ M
     if processing.gamut_clip:
         np.clip(rgb, 0.0, 1.0, out=rgb)
     return rgb, M

@@ -249,3 +249,28 @@ def test_architectures_quick_command(tmp_path):
         assert (tmp_path / "a" / f).stat().st_size > 1000
     r = CliRunner().invoke(main, ["architectures", "-o", str(tmp_path / "b"), "--seeds", "0"])
     assert r.exit_code == 2 and "--seeds" in r.output
+
+
+def test_stacked_layers_beyond_three_in_raw_files(tmp_path, scene_5000, analytic_5000):
+    """n layers: n planes in raw.exr; a DNG holds four colour planes at most (LinearRaw), so five refuse."""
+    from spectracam.capture import capture as capture_stage
+    from spectracam.errors import SpectracamError
+    from spectracam.io.dng import write_dng
+    from spectracam.io.exr import read_raw_exr, write_raw_exr
+
+    ref = ChartReference.of(scene_5000)
+    for depths, dng_ok in (((0.3, 1.0, 2.0, 3.5, 6.0), True), ((0.3, 0.8, 1.5, 2.5, 4.0, 6.0), False)):
+        cam = scene_5000.camera.replace(filters=scene_5000.camera.filters.replace(stacked_depths_um=depths))
+        raw = capture_stage(analytic_5000, cam.with_design("stacked"), 1, ref.white_box)
+        assert raw.digital.shape[0] == len(depths) - 1
+        write_raw_exr(tmp_path / "raw.exr", raw)
+        np.testing.assert_array_equal(read_raw_exr(tmp_path / "raw.exr").digital, raw.digital)
+        if dng_ok:
+            write_dng(tmp_path / "raw.dng", raw, ref)
+            rawpy = pytest.importorskip("rawpy")
+            with rawpy.imread(str(tmp_path / "raw.dng")) as d:
+                assert d.num_colors == 4
+        else:
+            with pytest.raises(SpectracamError, match="5 full planes .* have no DNG form"):
+                write_dng(tmp_path / "raw5.dng", raw, ref)
+            assert not (tmp_path / "raw5.dng").exists()

@@ -34,7 +34,7 @@ from ..exposure import EXPOSURE_SCHEMES
 from ..illuminant import IlluminantSpec
 from ..reference import ChartReference
 from ..score import score
-from .paper import PaperExperiment, calibrated_luminance, scaled
+from .paper import PaperExperiment, calibrated_luminance, quick_scene, scaled
 
 #: Light levels, as fractions of the paper's (its calibrated white luminance).
 LIGHT_FACTORS = (1.0, 0.1, 0.01)
@@ -65,9 +65,7 @@ class ArchitecturesRun:
             raise ConfigError("--seeds", self.seeds, "must be a whole number of seeds from 1 to 100")
 
     def scenes(self, level: float) -> dict:
-        base = self.experiment.base
-        if self.quick:
-            base = base.replace(image=base.image.replace(width=160, height=120))
+        base = quick_scene(self.experiment.base, self.quick)
         warm = min(self.experiment.temperatures_K)
         return {self.experiment.budget_illuminant: base.replace(
                     illuminant=IlluminantSpec("cie", None, self.experiment.budget_illuminant, level)),
@@ -100,7 +98,7 @@ def case(scene, cube, design: str, seeds, limit_s: float | None = None) -> dict:
 
     camera = scene.camera.with_design(design)
     reference = ChartReference.of(scene)
-    white = ChartReference.of(scene).patch_radiance[WHITE_PATCH]
+    white = reference.patch_radiance[WHITE_PATCH]
     metering, scale = None, 1.0
     if limit_s is not None:
         arch = camera.architecture()

@@ -49,9 +49,11 @@ def figure_comparison(results: dict):
                 points.setdefault(key, []).append(r["architecture"])
         for (x, y), names in points.items():
             names = list(dict.fromkeys(names))
-            text = names[0] if len(names) == 1 else f"{len(names)} architectures: " + ", ".join(names)
-            ax.annotate(text, (x, y), fontsize=8, xytext=(-10, -14 if len(names) > 1 else 5),
-                        textcoords="offset points", ha="right" if len(names) > 1 else "left")
+            text = names[0] if len(names) == 1 else f"{len(names)} architectures:\n" + "\n".join(
+                ", ".join(names[i:i + 3]) for i in range(0, len(names), 3))
+            ax.annotate(text, (x, y), fontsize=8, xytext=(-10, -8) if len(names) > 1 else (5, 5),
+                        textcoords="offset points", ha="right" if len(names) > 1 else "left",
+                        va="top" if len(names) > 1 else "bottom")
         lim = ax.get_xlim()[1], ax.get_ylim()[1]
         top = max(lim)
         ax.plot([0, top], [0, top], color="0.6", lw=0.8, ls=":")

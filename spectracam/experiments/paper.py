@@ -271,10 +271,18 @@ def comparison(exp: PaperExperiment, cubes: dict, camera: CameraSpec, processing
     return res, cases
 
 
+#: ``--quick``: a first look at a quarter of the pixels each way, the same physics.
+QUICK_IMAGE_PX = (160, 120)
+
+
+def quick_scene(scene: Scene, quick: bool = True) -> Scene:
+    """``scene`` at :data:`QUICK_IMAGE_PX` when ``quick``."""
+    w, h = QUICK_IMAGE_PX
+    return scene.replace(image=scene.image.replace(width=w, height=h)) if quick else scene
+
+
 def scenes_for(exp: PaperExperiment, level: float, quick: bool) -> dict[str, Scene]:
-    base = exp.base
-    if quick:  # a first look: a quarter of the pixels each way, the same physics
-        base = base.replace(image=base.image.replace(width=160, height=120))
+    base = quick_scene(exp.base, quick)
     out = {f"{T:g}": base.replace(illuminant=IlluminantSpec("blackbody", T, None, level)) for T in exp.temperatures_K}
     out[exp.budget_illuminant] = base.replace(illuminant=IlluminantSpec("cie", None, exp.budget_illuminant, level))
     return out

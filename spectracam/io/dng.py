@@ -2,9 +2,9 @@
 
 Written with tifffile as one uncompressed image: a colour-filter-array mosaic (PhotometricInterpretation
 32803, CFA tags; any tile of the DNG CFA colours R, G, B, C, M, Y, W — RYYB, CYYM and the four-colour
-RGBW among them, with ``CFAPlaneColor`` naming the planes) or, for the prism, field-sequential and
-stacked architectures (three full planes), LinearRaw (34892, three samples per pixel; planes of
-another count have no DNG form).  With N colour planes, ``ColorMatrix1`` is N×3 and ``AsShotNeutral``
+RGBW among them, with ``CFAPlaneColor`` naming the planes) or, for full planes (prism,
+field-sequential, stacked, and :func:`dng_image`'s RGBW), LinearRaw (34892, one sample per plane; DNG
+has three or four colour planes, so other counts have no DNG form).  With N colour planes, ``ColorMatrix1`` is N×3 and ``AsShotNeutral``
 N long (DNG 1.4: ColorPlanes × 3).  Tags:
 
 * ``BlackLevel`` = the sensor's pedestal (``camera.sensor.black_level_dn``), ``WhiteLevel`` = 2ⁿ − 1.
@@ -104,8 +104,7 @@ def _white_preserving_fit(A: np.ndarray, Y: np.ndarray, a: np.ndarray, y: np.nda
     K = np.zeros((k + 1, k + 1))
     K[:k, :k] = 2 * A.T @ A
     K[:k, k] = K[k, :k] = a
-    rows = [np.linalg.lstsq(K, np.concatenate([2 * A.T @ Y[:, j], [y[j]]]), rcond=None)[0][:k]
-            for j in range(Y.shape[1])]
+    rows = [np.linalg.solve(K, np.concatenate([2 * A.T @ Y[:, j], [y[j]]]))[:k] for j in range(Y.shape[1])]
     return np.array(rows)
 
 
@@ -360,9 +359,9 @@ def write_dng(path: str | Path, raw: RawCapture, reference=None, mid_step: bool 
     if not isinstance(raw.layout, (MosaicLayout, PlanesLayout)):
         raise SpectracamError(f"capture.architecture = {raw.camera.capture.architecture!r}: its layout "
                               f"{type(raw.layout).__name__} has no DNG form")
-    if isinstance(raw.layout, PlanesLayout) and len(raw.layout.channels) != 3:
+    if isinstance(raw.layout, PlanesLayout) and len(raw.layout.channels) not in (3, 4):
         raise SpectracamError(f"capture: {len(raw.layout.channels)} full planes ({', '.join(raw.layout.channels)}) "
-                              "have no DNG form (LinearRaw holds three); the capture is in raw.exr")
+                              "have no DNG form (a DNG has three or four colour planes); the capture is in raw.exr")
     image, layout, note = dng_image(raw)
     if isinstance(layout, MosaicLayout):
         photometric = 32803
