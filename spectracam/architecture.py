@@ -89,13 +89,15 @@ class MosaicLayout:
 
 
 #: What three planes can be: sensors exposed together, or frames of one sensor in sequence.
-PLANE_KINDS = ("sensors", "frames")
+PLANE_KINDS = ("sensors", "frames", "layers")
 
 
 @dataclass(frozen=True)
 class PlanesLayout:
     """Three full-resolution planes R, G, B, ``(3, H, W)`` digital numbers: three sensors exposed
-    together (``"sensors"``) or three frames of one sensor in sequence (``"frames"``)."""
+    together (``"sensors"``, each with its own registration), frames of one sensor in sequence
+    (``"frames"``), or photodiodes stacked in every pixel, exposed together (``"layers"``: registered by
+    construction)."""
 
     kind: str
     description: str

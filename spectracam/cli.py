@@ -387,7 +387,9 @@ def paper_cmd(out_dir, experiment_file, renderer, quick, no_cache, save_cubes, s
 @_quiet_option
 def architectures_cmd(out_dir, experiment_file, renderer, quick, seeds, no_cache, sets, quiet):
     """Every registered architecture and exposure scheme at the paper's camera, light and noise, at 1, 1/10
-    and 1/100 of its light: SNR, ΔE (training and held-out), capture time; results.json, report.md, figures."""
+    and 1/100 of its light: SNR, ΔE (training and held-out), capture time; then each architecture on the
+    slanted edge and star (MTF50, false colour, S-CIELAB; with and without an optical low-pass filter) and
+    on a moving edge (colour breakup); results.json, report.md, figures."""
     from .experiments.architectures import SEEDS, ArchitecturesRun, designs, run_architectures, \
         write_architectures_outputs
     from .experiments.paper import load_experiment, quick_scene

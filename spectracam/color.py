@@ -179,7 +179,15 @@ def _bayer(name: str, fn_name: str):
                               f"{', '.join(layout.channels)}); use 'bilinear' (any periodic mosaic) or 'patch'")
         return getattr(cd, fn_name)(mosaic, pattern)
 
+    method.channels = 3
     return method
+
+
+def demosaic_applies(method: str, layout: MosaicLayout) -> bool:
+    """Whether a registered demosaicking method takes a mosaic of this layout (the Bayer methods need
+    three channels; ``bilinear`` and ``patch`` take any)."""
+    need = getattr(DEMOSAIC_METHODS[method], "channels", None)
+    return need is None or need == len(layout.channels)
 
 
 @DEMOSAIC_METHODS.register("bilinear")

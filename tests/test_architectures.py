@@ -245,8 +245,31 @@ def test_architectures_quick_command(tmp_path):
     # noise-free conversion error as the Bayer array
     for d in ("ryyb/single", "cmy/single", "rgbw/single", "quad_bayer/single"):
         assert get(d, 1.0)["delta_e_training"] == pytest.approx(get("cfa/single", 1.0)["delta_e_training"], abs=1e-6)
-    for f in ("report.md", "architectures.png", "responsivities.png"):
+    for f in ("report.md", "architectures.png", "responsivities.png", "architectures_spacetime.png"):
         assert (tmp_path / "a" / f).stat().st_size > 1000
+    # space: every architecture once (mosaics per demosaicker × without/with the low-pass filter)
+    space = {r["label"]: r for r in res["space"]["rows"]}
+    assert {r["design"].split("/")[0] for r in res["space"]["rows"]} == set(ARCHITECTURES)
+    assert "rgbw/single menon2007" not in space and "rgbw/single bilinear OLPF 1 px" in space
+    # full-resolution planes with the same optics, noise off: the same luminance MTF; no demosaicking
+    # false colour, so far less than any mosaic
+    planes = [space[k]["mtf50_cy_per_px"] for k in ("prism/optimal aligned", "fsc/optimal", "stacked/single")]
+    assert max(planes) - min(planes) < 1e-3
+    mosaics = [r for r in res["space"]["rows"] if r["demosaic"]]
+    assert max(space[k]["false_colour_edge"] for k in ("prism/optimal aligned", "fsc/optimal", "stacked/single")) < \
+        0.2 * min(r["false_colour_edge"] for r in mosaics)
+    for dm in ("bilinear", "menon2007"):    # the filter trades MTF for less false colour
+        a, b = space[f"cfa/single {dm}"], space[f"cfa/single {dm} OLPF 1 px"]
+        assert b["mtf50_cy_per_px"] < a["mtf50_cy_per_px"] and b["false_colour_edge"] < a["false_colour_edge"]
+    # time: against the own still capture, nothing breaks up at rest; sequential frames break up most
+    motion = res["time"]["rows"]
+    assert {r["design"].split("/")[0] for r in motion} == set(ARCHITECTURES)
+    assert all(r["breakup_width_motion_px"] == 0 for r in motion if r["speed_px_per_ms"] == 0)
+    fast = max(r["speed_px_per_ms"] for r in motion)
+    at = {r["design"]: r for r in motion if r["speed_px_per_ms"] == fast}
+    assert at["fsc/optimal"]["breakup_width_motion_px"] == max(r["breakup_width_motion_px"] for r in at.values()) > 0
+    assert at["fsc/optimal"]["breakup_width_motion_px"] > at["cfa/single"]["breakup_width_motion_px"]
+    assert {w["part"] for w in res["spacetime_winners"]} == {"space", "time"}
     r = CliRunner().invoke(main, ["architectures", "-o", str(tmp_path / "b"), "--seeds", "0"])
     assert r.exit_code == 2 and "--seeds" in r.output
 

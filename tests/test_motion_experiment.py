@@ -30,6 +30,25 @@ def test_rows_have_the_fields_and_fsc_breaks_up():
     assert by[("cfa/single", 0.0, False)]["capture_time_ms"] == pytest.approx(28.0, rel=1e-4)
 
 
+def test_scored_against_the_own_still_capture():
+    """Noise off: at rest a design equals its own still capture (breakup 0, S-CIELAB 0) whatever its
+    demosaicking false colour, which is reported apart (the CFA's, not the planes'); moving, the
+    field-sequential frames break up, the simultaneous CFA does not at 0.05 px/ms. Starting the sweep
+    above 0 still scores against the still capture."""
+    spec, scene = load_motion(TINY + ("noise=false", "rolling_shutter=[false]",
+                                      "designs=['cfa/single', 'fsc/optimal', 'rgbw/single']"))
+    r = run_motion(spec, scene, renderer="analytic", keep_images=False)
+    by = {(x["design"], x["speed_px_per_ms"]): x for x in r["rows"]}
+    for d in ("cfa/single", "fsc/optimal", "rgbw/single"):
+        assert by[(d, 0.0)]["breakup_width_motion_px"] == 0 and by[(d, 0.0)]["scielab_delta_e_motion"] == 0
+    assert by[("cfa/single", 0.0)]["false_colour_still"] > 20 * by[("fsc/optimal", 0.0)]["false_colour_still"]
+    assert by[("cfa/single", 0.0)]["breakup_width_px"] > 0        # the older metric counts it as breakup
+    assert by[("fsc/optimal", 0.2)]["breakup_width_motion_px"] > 3 > by[("cfa/single", 0.05)]["breakup_width_motion_px"]
+    moving = run_motion(spec.replace(speeds_px_per_ms=(0.2,)), scene, renderer="analytic", keep_images=False)
+    assert [x["speed_px_per_ms"] for x in moving["rows"]] == [0.2] * 3
+    assert moving["rows"][1]["breakup_width_motion_px"] == by[("fsc/optimal", 0.2)]["breakup_width_motion_px"]
+
+
 def test_unknown_key_is_refused():
     with pytest.raises(ConfigError):
         load_motion(("speeds_px_per_ms=[-1]",))

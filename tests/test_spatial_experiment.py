@@ -31,7 +31,8 @@ def rows_of(results, **match):
 
 def test_output_contract(run):
     out, results = run
-    assert len(results["rows"]) == 6 * 2 * 3      # designs × cases × targets
+    # designs (cfa × 3 demosaickers × without/with OLPF, prism aligned/misaligned, fsc) × cases × targets
+    assert len(results["rows"]) == 9 * 2 * 3
     for r in results["rows"]:
         assert all(k in r for k in FIELDS)
         assert (r["mtf50_cy_per_px"] is not None) == (r["target"] == "edge")
@@ -39,7 +40,7 @@ def test_output_contract(run):
     for name in ("report.md", "mtf_curves.json", "mtf.png", "summary.png", "scielab_star.png", "crops_10um_f1.4.png"):
         assert (out / name).is_file(), name
     curves = json.loads((out / "mtf_curves.json").read_text())["curves"]
-    assert len(curves) == 6 * 2 and all(len(c["Y"]) == len(c["frequencies_cy_per_px"]) for c in curves)
+    assert len(curves) == 9 * 2 and all(len(c["Y"]) == len(c["frequencies_cy_per_px"]) for c in curves)
     assert "## Answer" in (out / "report.md").read_text()
 
 
@@ -57,9 +58,30 @@ def test_removing_demosaicking_sharpens_and_misregistration_colours(run):
             v["scielab_delta_e_spatial"] for k, v in star.items() if k.startswith("cfa"))
 
 
+def test_olpf_trades_sharpness_for_less_false_colour(run):
+    """A one-pixel 4-spot low-pass filter in front of the Bayer array: lower MTF50 on the edge, less
+    false colour at the edge and less S-CIELAB error on the star (colour moiré), for every demosaicker."""
+    _, results = run
+    for pitch in (10.0, 2.0):
+        edge = {r["label"]: r for r in rows_of(results, target="edge", pixel_pitch_um=pitch)}
+        star = {r["label"]: r for r in rows_of(results, target="star", pixel_pitch_um=pitch)}
+        for dm in ("bilinear", "malvar2004", "menon2007"):
+            plain, olpf = f"cfa/single {dm}", f"cfa/single {dm} OLPF 1 px"
+            assert edge[olpf]["olpf_separation_px"] == 1.0 and edge[plain]["olpf_separation_px"] == 0.0
+            assert edge[olpf]["mtf50_cy_per_px"] < edge[plain]["mtf50_cy_per_px"], (pitch, dm)
+            assert edge[olpf]["false_colour"] < edge[plain]["false_colour"], (pitch, dm)
+            assert star[olpf]["false_colour"] < star[plain]["false_colour"], (pitch, dm)
+
+
 def test_bad_settings_are_one_config_error():
     with pytest.raises(ConfigError, match="demosaics"):
         load_spatial(["demosaics=['patch']"])
+    with pytest.raises(ConfigError, match="none of them takes rgbw/single"):
+        load_spatial(["designs=['rgbw/single']", "demosaics=['menon2007']"])
+    with pytest.raises(ConfigError, match="olpf_separations_px"):
+        load_spatial(["olpf_separations_px=[9]"])
+    with pytest.raises(ConfigError, match="designs"):
+        load_spatial(["designs=['bayer']"])
     with pytest.raises(ConfigError, match="unknown key"):
         load_spatial(["pitch=3"])
     with pytest.raises(ConfigError, match="unknown table"):

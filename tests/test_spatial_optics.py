@@ -46,21 +46,43 @@ def test_margin_keeps_the_far_side_from_wrapping_round():
     assert np.abs(narrow[:, :2, 1] - wide[:, :2, 1]).max() / step > 0.03
 
 
-@pytest.mark.parametrize("pitch, N, w, fill", [(10.0, 1.4, 96, 1.0), (10.0, 8.0, 96, 1.0), (2.0, 1.4, 96, 1.0),
-                                               (2.0, 8.0, 160, 1.0), (5.0, 4.0, 96, 0.5)])
-def test_edge_mtf_matches_diffraction_times_aperture(pitch, N, w, fill):
+@pytest.mark.parametrize("pitch, N, w, fill, olpf", [(10.0, 1.4, 96, 1.0, 0.0), (10.0, 8.0, 96, 1.0, 0.0),
+                                                     (2.0, 1.4, 96, 1.0, 0.0), (2.0, 8.0, 160, 1.0, 0.0),
+                                                     (5.0, 4.0, 96, 0.5, 0.0), (10.0, 1.4, 96, 1.0, 1.0),
+                                                     (5.0, 4.0, 96, 0.5, 0.75)])
+def test_edge_mtf_matches_diffraction_times_aperture(pitch, N, w, fill, olpf):
     """The e-SFR of each channel of a simulated 5° edge matches the circular-aperture OTF weighted over
-    the channel's signal spectrum × the pixel aperture's sinc within 2 % (of the zero-frequency
-    response) up to Nyquist. (2 µm at f/8 needs a wider region: the e-SFR's Hamming window truncates the
-    diffraction LSF's long tails, +0.02 at low frequency over 96 px, +0.015 over 160 px.)"""
-    rates, cam, step = edge_rates(pitch, N, w=w, fill_factor=fill)
+    the channel's signal spectrum × the pixel aperture's sinc (× the optical low-pass filter's
+    cos·cos) within 2 % (of the zero-frequency response) up to Nyquist. (2 µm at f/8 needs a wider
+    region: the e-SFR's Hamming window truncates the diffraction LSF's long tails, +0.02 at low
+    frequency over 96 px, +0.015 over 160 px.)"""
+    rates, cam, step = edge_rates(pitch, N, w=w, fill_factor=fill, settings=OpticsSettings(olpf_separation_px=olpf))
     W = band_weights(cam, GRID)
     for k in range(3):
         r = esfr(rates[:, :, k], correct_binning=True)
         f = r.frequencies_cy_per_px
         m = f <= 0.5
-        cf = channel_mtf_closed_form(f, r.edge_angle_deg, pitch, N, GRID.centres_nm, W[:, k] * step, fill)
+        cf = channel_mtf_closed_form(f, r.edge_angle_deg, pitch, N, GRID.centres_nm, W[:, k] * step, fill, olpf)
         assert np.abs(r.sfr[m] - cf[m]).max() < 0.02, (k, np.abs(r.sfr[m] - cf[m]).max())
+    if olpf:   # the filter's own first zero, cos(π·f·d) = 0 at f = 1/(2d), shows in the closed form
+        f0 = 1 / (2 * olpf * np.cos(np.radians(r.edge_angle_deg)))
+        assert channel_mtf_closed_form([f0], r.edge_angle_deg, pitch, N, GRID.centres_nm, W[:, 1], fill,
+                                       olpf)[0] == pytest.approx(0.0, abs=1e-9)
+
+
+def test_olpf_is_four_spots():
+    """The filter's OTF sampled on a grid is the Fourier transform of four equal spots at (±d/2, ±d/2):
+    a point through it, in space, is those four spots (d = 2 px on a 32-px periodic grid)."""
+    from spectracam.spatial.optics import olpf_otf
+
+    n, d = 32, 2.0
+    f = np.fft.fftfreq(n)
+    psf = np.fft.ifft2(olpf_otf(f[None, :], f[:, None], d)).real
+    want = np.zeros((n, n))
+    for y in (-1, 1):
+        for x in (-1, 1):
+            want[y % n, x % n] = 0.25
+    assert np.abs(psf - want).max() < 1e-12
 
 
 def test_diffraction_otf_closed_form_values():

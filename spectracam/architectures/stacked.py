@@ -66,7 +66,7 @@ class StackedPhotodiodes(Architecture):
 
     @property
     def layout(self):
-        return PlanesLayout("sensors", "the photodiodes stacked in each pixel, bottom first, exposed together",
+        return PlanesLayout("layers", "the photodiodes stacked in each pixel, bottom first, exposed together",
                             layer_names(self.layers))
 
     def configure(self, camera) -> "StackedPhotodiodes":

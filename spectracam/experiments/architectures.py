@@ -15,6 +15,11 @@ exposure at the paper's level (:func:`time_limit_s`) — without it every design
 100× longer and reach the same SNR; with it the arrays that collect more light per pixel (W, Y, C,
 M filters) and the single-exposure designs show what they gain in dim light.
 
+In space and time (:mod:`.architectures_spacetime`): one design per architecture on the spatial
+experiment's slanted edge and Siemens star (MTF50, false colour, S-CIELAB; mosaics with and without an
+optical low-pass filter) and the motion experiment's moving edge (colour breakup and S-CIELAB against the
+design's own still capture), with the paper's pixel pitch and f-number.
+
 Per row: the per-pixel ΔE against the scene (mean and spread over seeds), the raw channels' combined
 SNR and the rendered luminance SNR (after the colour conversion, so its noise amplification
 counts; docs/metrics.md), the conversion's noise-free error on the 24 patches it is fitted on
@@ -134,12 +139,14 @@ def case(scene, cube, design: str, seeds, limit_s: float | None = None) -> dict:
 
 
 def run_architectures(run: ArchitecturesRun, renderer: str = "mitsuba", use_cache: bool = True,
-                      step=lambda msg: None, log=None, progress: bool = False) -> dict:
-    """Every design × light × level × seed (module docstring): ``results`` (rows and what wins)."""
+                      step=lambda msg: None, log=None, progress: bool = False, spacetime: bool = True) -> dict:
+    """Every design × light × level × seed (module docstring): ``results`` (rows and what wins); with
+    ``spacetime`` the spatial and motion comparisons too (``space``, ``time``)."""
     import time
 
     from ..cache import cached_render
     from ..render import render
+    from .architectures_spacetime import run_space, run_time, spacetime_winners
 
     exp = run.experiment
     level = calibrated_luminance(exp, exp.base.camera)
@@ -161,6 +168,17 @@ def run_architectures(run: ArchitecturesRun, renderer: str = "mitsuba", use_cach
                 rows.append({"illuminant": light, "light_factor": factor,
                              "white_luminance_cd_m2": level * factor, **row})
             step(f"{light} at {factor:g}× the paper's light: {len(designs())} designs × {len(seeds)} seeds")
+    t_chart = time.perf_counter() - t0
+    extra = {}
+    if spacetime:
+        base = exp.base.replace(illuminant=IlluminantSpec("blackbody", exp.calibration_temperature_K, None, level))
+        extra["space"] = run_space(base, renderer, run.quick, log)
+        step(f"space: {len(extra['space']['rows'])} designs on the slanted edge and the Siemens star "
+             f"({extra['space']['wall_s']:.1f} s)")
+        extra["time"] = run_time(base, renderer, run.quick, log)
+        step(f"time: {len({r['design'] for r in extra['time']['rows']})} designs × "
+             f"{len({r['speed_px_per_ms'] for r in extra['time']['rows']})} speeds ({extra['time']['wall_s']:.1f} s)")
+        extra["spacetime_winners"] = spacetime_winners(extra["space"], extra["time"])
     return {"parameters": {"renderer": renderer, "quick": run.quick, "seeds": seeds,
                            "light_factors": list(run.light_factors), "paper_white_luminance_cd_m2": level,
                            "designs": designs(), "scene": exp.base.to_dict(),
@@ -174,7 +192,8 @@ def run_architectures(run: ArchitecturesRun, renderer: str = "mitsuba", use_cach
                                            "(processing.delta_e), mean over seeds",
                            "delta_e_training": "the conversion's noise-free ΔE on the 24 patches it is fitted on",
                            "held_out_delta_e": "the conversion's noise-free ΔE on processing.held_out's colours"},
-            "rows": rows, "winners": winners(rows), "timings_s": {"total": time.perf_counter() - t0}}
+            "rows": rows, "winners": winners(rows), **extra,
+            "timings_s": {"chart": t_chart, "total": time.perf_counter() - t0}}
 
 
 def winners(rows: list[dict]) -> list[dict]:
@@ -208,14 +227,18 @@ def write_architectures_outputs(out_dir: str | Path, results: dict, command: str
 
     from ..io.files import atomic_write
     from ..io.plots import save_figure
-    from .architectures_report import figure_comparison, figure_responsivities, report_markdown
+    from .architectures_report import figure_comparison, figure_responsivities, figure_spacetime, report_markdown
 
     out = Path(out_dir)
     results = {**results, "command": command}
     paths = save_figure(figure_comparison(results), out / "architectures.png", out / "architectures.svg", dpi=120)
     paths += save_figure(figure_responsivities(results), out / "responsivities.png", out / "responsivities.svg",
                          dpi=120)
+    if "space" in results:
+        paths += save_figure(figure_spacetime(results), out / "architectures_spacetime.png",
+                             out / "architectures_spacetime.svg", dpi=110)
     paths.append(atomic_write(out / "results.json", json.dumps(results, indent=1, allow_nan=False).encode()))
     paths.append(atomic_write(out / "report.md", report_markdown(results, command).encode()))
-    step(f"wrote {out}/results.json, report.md, architectures.png/.svg, responsivities.png/.svg")
+    step(f"wrote {out}/results.json, report.md, architectures.png/.svg, responsivities.png/.svg"
+         + (", architectures_spacetime.png/.svg" if "space" in results else ""))
     return paths

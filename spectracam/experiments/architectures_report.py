@@ -102,6 +102,64 @@ def figure_responsivities(results: dict):
     return fig
 
 
+def figure_spacetime(results: dict):
+    """(a) MTF50 against false colour at the edge for every spatial design (resolution against colour
+    artefacts; hollow markers: with the optical low-pass filter); (b) S-CIELAB spatial error on the star;
+    (c) colour breakup and (d) S-CIELAB against the own still capture, against speed."""
+    plt = pyplot()
+    space, time_ = results["space"], results["time"]
+    cmap = plt.get_cmap("tab10")
+    archs = list(dict.fromkeys(r["design"].split("/")[0] for r in time_["rows"]))
+    colour = {a: cmap(i % 10) for i, a in enumerate(archs)}
+    fig, axes = plt.subplots(2, 2, figsize=(15, 11))
+    ax = axes[0, 0]
+    points: dict = {}    # designs that coincide (noise-free planes of the same filters) share one label
+    for r in space["rows"]:
+        if r["mtf50_cy_per_px"] is None:
+            continue
+        olpf = r["olpf_separation_px"] > 0
+        c = colour.get(r["design"].split("/")[0], "k")
+        ax.scatter(r["false_colour_edge"], r["mtf50_cy_per_px"], s=55, marker="s" if r["demosaic"] == "menon2007" else "o",
+                   facecolors="none" if olpf else c, edgecolors=c, linewidths=1.5)
+        key = (round(r["false_colour_edge"], 2), round(r["mtf50_cy_per_px"], 3))
+        points.setdefault(key, []).append(r["label"].replace("/single", "").replace("/optimal", "").replace(" aligned", ""))
+    for (x, y), names in points.items():
+        ax.annotate(" = ".join(names), (x, y), fontsize=7, xytext=(4, 3), textcoords="offset points")
+    ax.set_xscale("symlog", linthresh=0.5)
+    ax.set(xlabel="false colour at the neutral edge, √(Δa*²+Δb*²) (lower is better)",
+           ylabel="MTF50 of displayed luminance, cy/px (higher is better)",
+           title="(a) resolution against false colour (circles bilinear, squares Menon 2007; hollow: OLPF 1 px)")
+    ax.title.set_fontsize(10)
+    ax.grid(True, alpha=0.3)
+    ax = axes[0, 1]
+    rows = sorted(space["rows"], key=lambda r: r["scielab_spatial_star"])
+    y = np.arange(len(rows))
+    ax.barh(y, [r["scielab_spatial_star"] for r in rows], color=[colour.get(r["design"].split("/")[0], "k") for r in rows],
+            hatch=None)
+    ax.set_yticks(y, [r["label"] for r in rows], fontsize=7)
+    ax.invert_yaxis()
+    ax.set(xlabel="S-CIELAB ΔE*ab on the Siemens star (spatial error; lower is better)",
+           title="(b) colour moiré and blur on the star")
+    ax.title.set_fontsize(10)
+    ax.grid(True, axis="x", alpha=0.3)
+    designs = list(dict.fromkeys(r["design"] for r in time_["rows"]))
+    for ax, metric, label in ((axes[1, 0], "breakup_width_motion_px", "(c) colour breakup width, px (motion alone)"),
+                              (axes[1, 1], "scielab_delta_e_motion", "(d) S-CIELAB ΔE*ab against the own still capture")):
+        for i, d in enumerate(designs):
+            pts = sorted((r["speed_px_per_ms"], r[metric]) for r in time_["rows"] if r["design"] == d)
+            x, v = zip(*pts)
+            ax.plot(x, v, marker="osD^v<>p"[i % 8], color=colour[d.split("/")[0]], label=d)
+        ax.set(xlabel="image speed on the sensor, px/ms", ylabel=label.split(") ")[1], title=label)
+        ax.title.set_fontsize(10)
+        ax.grid(True, alpha=0.3)
+    axes[1, 1].legend(fontsize=8)
+    sp = space["parameters"]
+    fig.suptitle(f"Space (noise off, {sp['pixel_pitch_um']:g} µm pixel, f/{sp['f_number']:g}) and time (the paper's "
+                 "noise and light, global shutter): every architecture", fontsize=12)
+    fig.tight_layout(rect=(0, 0, 1, 0.96))
+    return fig
+
+
 def _fmt(v, sd=None, digits=2):
     if v is None:
         return "–"
@@ -135,6 +193,42 @@ def report_markdown(results: dict, command: str) -> str:
     for w in results["winners"]:
         lines.append(f"| {w['illuminant']} | {w['light_factor']:g}× | {w['metric']} | {w['design']} | "
                      f"{_fmt(w['value'], w['sd'])} |")
-    lines += ["", "Spatial resolution (MTF50, false colour, S-CIELAB) and motion (colour breakup) of the paper's "
-              "three architectures: `spectracam spatial` and `spectracam motion`.", ""]
+    if "space" in results:
+        lines += _spacetime_markdown(results)
     return "\n".join(lines)
+
+
+def _spacetime_markdown(results: dict) -> list[str]:
+    space, time_ = results["space"], results["time"]
+    sp = space["parameters"]
+    lines = ["", "## Space", "",
+             f"The spatial experiment's slanted edge (5°, 4:1) and Siemens star, {sp['pixel_pitch_um']:g} µm pixel, "
+             f"f/{sp['f_number']:g}, sensor noise {'on' if sp['noise'] else 'off (the spatial artefacts alone)'}, "
+             f"renderer {sp['renderer']} ({space['wall_s']:.1f} s). MTF50: e-SFR of the displayed luminance; false "
+             "colour: mean chroma √(Δa*²+Δb*²) within 2 px of the neutral edge against the same camera's rendering of "
+             "the ideal image; S-CIELAB: spatial error on the star against the same reference (docs/metrics.md).", "",
+             "| design | MTF50 cy/px | false colour, edge | false colour, star | S-CIELAB star |",
+             "|---|---:|---:|---:|---:|"]
+    for r in sorted(space["rows"], key=lambda r: -(r["mtf50_cy_per_px"] or 0)):
+        lines.append(f"| {r['label']} | {_fmt(r['mtf50_cy_per_px'], digits=3)} | {_fmt(r['false_colour_edge'])} | "
+                     f"{_fmt(r['false_colour_star'])} | {_fmt(r['scielab_spatial_star'])} |")
+    tp = time_["parameters"]
+    lines += ["", "## Time", "",
+              f"The motion experiment's edge moving across the sensor, global shutter, the paper's noise, light set so "
+              f"that cfa/single needs 28 ms (white {tp['white_luminance_cd_m2']:.1f} cd/m²), renderer {tp['renderer']} "
+              f"({time_['wall_s']:.1f} s). Breakup: width over which the chroma added to the design's own noise-free "
+              "still capture exceeds 2 ΔE*ab (noise-free captures: motion alone). S-CIELAB (motion): the noisy capture "
+              "against that still capture. False colour (still): the still capture against the camera's rendering of "
+              "the ideal image, within 2 px of the edge (demosaicking).", "",
+              "| design | capture ms | speed px/ms | breakup px | S-CIELAB (motion) | false colour (still) | MTF50 |",
+              "|---|---:|---:|---:|---:|---:|---:|"]
+    for r in time_["rows"]:
+        lines.append(f"| {r['design']} | {r['capture_time_ms']:.1f} | {r['speed_px_per_ms']:g} | "
+                     f"{r['breakup_width_motion_px']:.1f} | {r['scielab_delta_e_motion']:.2f} | "
+                     f"{r['false_colour_still']:.2f} | {_fmt(r['mtf50_cy_per_px'], digits=3)} |")
+    lines += ["", "## What wins in space and time", "", "| part | metric | design | value |", "|---|---|---|---:|"]
+    for w in results["spacetime_winners"]:
+        at = f" at {w['speed_px_per_ms']:g} px/ms" if "speed_px_per_ms" in w else ""
+        lines.append(f"| {w['part']} | {w['metric']}{at} | {w['design']} | {w['value']:.3f} |")
+    lines += ["", "![space and time](architectures_spacetime.png)", ""]
+    return lines

@@ -7,7 +7,10 @@ from ..io.plots import pyplot as _plt
 
 #: The paper's markers: Fig. 4 circles R, triangles G, squares B; Fig. 5 circles CFA, triangles FSC,
 #: squares FSC balanced (the prism, not in the paper's Fig. 5, gets diamonds).
-CHANNEL_STYLE = {"R": ("o", "tab:red"), "G": ("^", "tab:green"), "B": ("s", "tab:blue")}
+CHANNEL_STYLE = {"R": ("o", "tab:red"), "G": ("^", "tab:green"), "B": ("s", "tab:blue"), "C": ("v", "c"),
+                 "M": ("D", "m"), "Y": ("P", "goldenrod"), "W": ("*", "0.3")}
+#: The paper's four designs (Fig. 4 draws the paper's two of them; any other architecture gets its own panel).
+PAPER_DESIGNS = ("cfa/single", "fsc/optimal", "fsc/balanced", "prism/optimal")
 DESIGN_STYLE = {"cfa/single": ("o", "black", "-"), "fsc/optimal": ("^", "tab:blue", "--"),
                 "fsc/balanced": ("s", "tab:orange", ":"), "prism/optimal": ("D", "tab:purple", "-.")}
 
@@ -19,16 +22,19 @@ def fig4(results: dict):
     plt = _plt()
     f4 = results["fig4_white_response"]
     fill = (results.get("parameters", {}).get("scene") or {}).get("capture", {}).get("white_fill", 1.0)
-    designs = [d for d in ("cfa/single", "fsc/optimal") if d in f4] or list(f4)[:2]
+    designs = [d for d in ("cfa/single", "fsc/optimal") if d in f4] + [d for d in f4 if d not in PAPER_DESIGNS]
+    designs = designs or list(f4)[:2]
     fig, axes = plt.subplots(1, len(designs), figsize=(4.2 * len(designs) + 2.1, 3.6), sharey=True, squeeze=False)
-    names = {"R": "red", "G": "green", "B": "blue"}
+    names = {"R": "red", "G": "green", "B": "blue", "C": "cyan", "M": "magenta", "Y": "yellow", "W": "white (clear)"}
+    seen: dict = {}
     for ax, d in zip(axes[0], designs):
         T = sorted(f4[d], key=float)
         resp = np.array([f4[d][t] for t in T])
         x = np.array([float(t) for t in T])
-        for k, c in enumerate("RGB"):
-            m, col = CHANNEL_STYLE[c]
-            ax.plot(x, resp[:, k], marker=m, color=col, mfc="none", ls="-", label=f'"{names[c]}" channel')
+        for k, c in enumerate(_channels(results, d)):
+            m, col = CHANNEL_STYLE.get(c, ("x", f"C{k}"))
+            h, = ax.plot(x, resp[:, k], marker=m, color=col, mfc="none", ls="-")
+            seen.setdefault(f'"{names.get(c, c)}" channel', h)
             full = resp[:, k] >= fill - 1e-3
             ax.plot(x[full], resp[full, k], ls="none", marker=m, color=col)
         if np.allclose(resp, fill, atol=1e-3):
@@ -39,13 +45,23 @@ def fig4(results: dict):
         ax.set_ylim(0, 1.08)
         ax.grid(alpha=0.3)
     axes[0][0].set_ylabel("relative response to white (1 = full well)")
-    handles, labels = axes[0][0].get_legend_handles_labels()
+    labels, handles = list(seen), list(seen.values())
     handles.append(plt.Line2D([], [], ls="none", marker="o", color="0.3"))
     labels.append(f"filled: at the metered\nfill ({fill:g} of the well)")
     fig.legend(handles, labels, loc="center right", fontsize=8, frameon=False)
-    fig.suptitle("Figure 4: response of the three channels to a white surface", fontsize=10)
+    fig.suptitle("Figure 4: response of each channel to a white surface", fontsize=10)
     fig.tight_layout(rect=(0, 0, 1 - 2.0 / fig.get_figwidth(), 1))
     return fig
+
+
+def _channels(results: dict, design: str) -> tuple:
+    """The channels a design records (the paper's R, G, B unless the run's camera says otherwise)."""
+    scene = (results.get("parameters") or {}).get("scene")
+    if design in PAPER_DESIGNS or not scene:
+        return ("R", "G", "B")
+    from ..scene import Scene
+
+    return Scene.from_dict(scene).camera.with_design(design).architecture().channels
 
 
 def fig5(results: dict):

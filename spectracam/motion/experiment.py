@@ -10,7 +10,15 @@ results.json) while each design captures it — ``cfa/single``, ``prism/optimal`
 architecture's own ``record`` **with the paper's sensor noise**, demosaicked, converted to the display
 and scored against the static scene at the capture's middle instant (t = 0):
 
-* ``breakup_width_px`` — :func:`.metrics.breakup_width_px` (chroma added above ``breakup_threshold``);
+* ``breakup_width_px`` — :func:`.metrics.breakup_width_px` (chroma added above ``breakup_threshold``
+  to the camera's conversion of the ideal image: at rest a mosaic's demosaicking false colour counts);
+* ``breakup_width_motion_px`` — the same against the design's own noise-free *still* capture (same
+  exposures, demosaicking and conversion; both noise-free): colour breakup from the motion alone, 0 at rest;
+* ``scielab_delta_e_motion`` / ``cielab_delta_e_motion`` — S-CIELAB / CIELAB ΔE*ab within
+  ``zone_half_width_px`` of the edge of the (noisy) capture against that noise-free still capture: what
+  motion and noise add to the camera's own still photograph (at rest: the noise alone);
+* ``false_colour_still`` — the noise-free still capture's chroma against the camera's conversion of the
+  ideal image within 2 px of the edge, √(Δa*² + Δb*²): demosaicking false colour, its own metric;
 * ``scielab_delta_e`` / ``cielab_delta_e`` — mean S-CIELAB / CIELAB ΔE*ab within ``zone_half_width_px``
   of the edge, against the ideal image of the scene (so they hold noise, the conversion error,
   demosaicking, motion blur and breakup together: what an observer sees);
@@ -246,10 +254,13 @@ def run_motion(spec: MotionSpec, scene, renderer: str = "mitsuba", log=None, kee
         ideal_xyz = radiance_to_display_xyz(ideal, grid, scene.illuminant.white_luminance_cd_m2, conv)
         own_xyz = photo_electron_rates(ideal.astype(np.float32), grid, camera).astype(np.float64) \
             @ conv.matrix @ conv.rgb_to_xyz.T
+        quiet = camera.replace(sensor=camera.sensor.off("shot_noise", "dark_current", "read_noise", "fpn",
+                                                        "quantization"))
         for rolling in spec.rolling_shutter:
             timing = capture_timing(arch, times, spec.timing(rolling), big.height_px, -m)
             timing_info[f"{design}{' rolling' if rolling else ''}"] = timing.to_dict()
-            for v in spec.speeds_px_per_ms:
+            still = None      # the design's noise-free still capture (display XYZ): the motion metrics' reference
+            for v in ((0.0,) if spec.speeds_px_per_ms[0] > 0 else ()) + spec.speeds_px_per_ms:
                 vmm = v * 1e3 * spec.object_pixel_mm
                 motion = Motion(velocity_mm_per_s=(vmm * math.cos(direction), vmm * math.sin(direction)),
                                 angular_velocity_deg_per_s=spec.angular_velocity_deg_per_s,
@@ -259,10 +270,19 @@ def run_motion(spec: MotionSpec, scene, renderer: str = "mitsuba", log=None, kee
                 t2 = time.perf_counter()
                 rates = channel_rates(moving, integ, camera, settings, m)
                 t3 = time.perf_counter()
-                raw = record(rates, camera, white, spec.seed)
+                raw = record(rates, camera, white, spec.seed, times)
                 t4 = time.perf_counter()
                 cam_rates, xyz = process(raw, scene.processing, conv)
+                quiet_xyz = xyz if not spec.noise else process(record(rates, quiet, white, spec.seed, times),
+                                                               scene.processing, conv)[1]
                 t5 = time.perf_counter()
+                if still is None:
+                    still = quiet_xyz
+                    zone_still = mm.edge_zone(mm.edge_distance((h, w), cols0), 2.0) & valid
+                    lab_s, lab_o = (xyz_to_lab(a, conv.display_white) for a in (still, own_xyz))
+                    false_colour_still = float(np.hypot(*(lab_s - lab_o)[..., 1:].transpose(2, 0, 1))[zone_still].mean())
+                if v not in spec.speeds_px_per_ms:
+                    continue   # the still reference only
                 # the edge's columns: each row's later window shifts a uniformly moving edge (rolling shutter)
                 delay = timing.row_delay_s[m:m + h]
                 shift = v * 1e3 * math.cos(direction) * (delay - delay.mean())
@@ -272,6 +292,10 @@ def run_motion(spec: MotionSpec, scene, renderer: str = "mitsuba", log=None, kee
                                               spec.zone_half_width_px, valid)
                 sc = scielab(ideal_xyz, xyz, conv.display_white, spd)
                 de = delta_e(xyz_to_lab(xyz, conv.display_white), xyz_to_lab(ideal_xyz, conv.display_white))
+                d2, chroma_motion = mm.chroma_profile(quiet_xyz, still, conv.display_white, dist, 0.5,
+                                                      spec.zone_half_width_px, valid)
+                sc_m = scielab(still, xyz, conv.display_white, spd)
+                de_m = delta_e(xyz_to_lab(xyz, conv.display_white), xyz_to_lab(still, conv.display_white))
                 f, sfr, mtf50 = mm.mtf_along_motion(xyz, b)
                 t6 = time.perf_counter()
                 for k, dt in zip(("render", "optics", "capture", "processing", "metrics"),
@@ -280,6 +304,10 @@ def run_motion(spec: MotionSpec, scene, renderer: str = "mitsuba", log=None, kee
                 row = {"design": design, "speed_px_per_ms": v, "speed_mm_per_s": vmm, "rolling_shutter": bool(rolling),
                        "breakup_width_px": mm.breakup_width_px(d, chroma, spec.breakup_threshold),
                        "max_added_chroma": float(np.nanmax(chroma)),
+                       "breakup_width_motion_px": mm.breakup_width_px(d2, chroma_motion, spec.breakup_threshold),
+                       "scielab_delta_e_motion": float(sc_m[zone].mean()),
+                       "cielab_delta_e_motion": float(de_m[zone].mean()),
+                       "false_colour_still": false_colour_still,
                        "scielab_delta_e": float(sc[zone].mean()), "cielab_delta_e": float(de[zone].mean()),
                        "scielab_delta_e_frame": float(sc[valid].mean()), "snr_db": snr[design],
                        "mtf50_cy_per_px": mtf50 if np.isfinite(mtf50) else None,

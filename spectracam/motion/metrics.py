@@ -24,7 +24,7 @@ import math
 import numpy as np
 
 from ..metrics import xyz_to_lab
-from ..spatial.esfr import esfr
+from ..spatial.esfr import NoEdge, esfr
 
 
 def edge_columns(width_px: int, height_px: int, x0_px: float, angle_deg: float, shift_px=0.0) -> np.ndarray:
@@ -71,9 +71,13 @@ def edge_zone(distance: np.ndarray, half_width_px: float) -> np.ndarray:
 
 
 def mtf_along_motion(xyz: np.ndarray, border_px: int = 4):
-    """e-SFR of the displayed luminance Y across the edge: ``(frequencies, sfr, mtf50)``."""
+    """e-SFR of the displayed luminance Y across the edge: ``(frequencies, sfr, mtf50)``; empty
+    curves and a NaN MTF50 where noise or blur leave no usable edge (:class:`~spectracam.spatial.esfr.NoEdge`)."""
     b = border_px
-    r = esfr(np.asarray(xyz)[b:-b, b:-b, 1], correct_binning=True)
+    try:
+        r = esfr(np.asarray(xyz)[b:-b, b:-b, 1], correct_binning=True)
+    except NoEdge:
+        return np.zeros(0), np.zeros(0), float("nan")
     return r.frequencies_cy_per_px, r.sfr, float(r.mtf50_cy_per_px)
 
 

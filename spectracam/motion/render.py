@@ -227,7 +227,7 @@ class MovingScene:
 
     # -- optics ---------------------------------------------------------------------------------------
     def transfer(self, camera: CameraSpec, settings: sopt.OpticsSettings):
-        """Per basis element and channel, the band-weighted optical transfer ``(K, 3, Hs, Wf)``:
+        """Per basis element and channel, the band-weighted optical transfer ``(K, N, Hs, Wf)``:
         ``Σ_b W[b,k]·c[m,b]·OTF_b`` — the spatial optics of :func:`spectracam.spatial.optics.channel_spectra`
         applied to a basis instead of a cube (one FFT per basis element instead of one per band)."""
         key = (repr(camera.to_dict()), settings)
@@ -237,13 +237,13 @@ class MovingScene:
             fy = sfft.fftfreq(Hs)[:, None]
             fx = sfft.rfftfreq(Ws)[None, :]
             rho = np.sqrt(fx**2 + fy**2) / s_um
-            W = band_weights(camera, self.grid).astype(np.float64)            # (B, 3)
+            W = band_weights(camera, self.grid).astype(np.float64)            # (B, N)
             C = self.coefficients.astype(np.float64)                           # (K, B)
             common = sopt.defocus_otf(rho, settings.defocus_um) if settings.defocus_um > 0 else 1.0
-            Hk = np.zeros((C.shape[0], 3, Hs, fx.shape[1]))
+            Hk = np.zeros((C.shape[0], W.shape[1], Hs, fx.shape[1]))
             for b, lam in enumerate(self.grid.centres_nm):
                 otf = (sopt.diffraction_otf(rho, lam, camera.optics.f_number) if settings.diffraction else 1.0) * common
-                for k in range(3):
+                for k in range(W.shape[1]):
                     for m in range(C.shape[0]):
                         if C[m, b] * W[b, k] != 0.0:
                             Hk[m, k] += (C[m, b] * W[b, k]) * otf
@@ -316,15 +316,15 @@ def integrate(scene: MovingScene, motion: Motion, timing: CaptureTiming, max_ste
 def channel_rates(scene: MovingScene, integrated: Integrated, camera: CameraSpec,
                   settings: sopt.OpticsSettings, margin_px: int,
                   workers: int | None = -1) -> np.ndarray:
-    """``(H, W, 3)`` time-averaged photo-electrons per second per pixel of each channel (the margin cut)."""
+    """``(H, W, N)`` time-averaged photo-electrons per second per pixel of each channel (the margin cut)."""
     Hk, fy, fx, shape = scene.transfer(camera, settings)
-    spectra = np.zeros((3, shape[0], fx.shape[1]), np.complex128)
+    spectra = np.zeros((Hk.shape[1], shape[0], fx.shape[1]), np.complex128)
     for chans, acc in integrated.groups:
         Fm = sfft.rfft2(acc, axes=(1, 2), workers=workers)                   # (K, Hs, Wf)
         for k in chans:
             spectra[k] = np.einsum("mij,mij->ij", Fm, Hk[:, k])
     return sopt.sample_channels(spectra, fy, fx, shape, scene.supersampling, camera.sensor.fill_factor,
-                                settings.shifts_px, margin_px, workers)
+                                settings.shifts_px, margin_px, workers, settings.olpf_separation_px)
 
 
 def ideal_radiance(scene: MovingScene, spp: int, margin_px: int) -> np.ndarray:

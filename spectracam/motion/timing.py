@@ -58,8 +58,8 @@ class CaptureTiming:
     """The windows of one capture: channel k of row r is open over
     ``[start_s[k] + row_delay_s[r], start_s[k] + row_delay_s[r] + duration_s[k]]``."""
 
-    start_s: np.ndarray          # (3,) row 0, R G B
-    duration_s: np.ndarray       # (3,)
+    start_s: np.ndarray          # (N,) row 0, in the architecture's channel order
+    duration_s: np.ndarray       # (N,)
     row_delay_s: np.ndarray      # (rows,)
     sequential: bool
 
@@ -77,7 +77,7 @@ class CaptureTiming:
     def groups(self) -> list[tuple[int, ...]]:
         """Channels sharing one window (integrated once): e.g. ``[(0, 1, 2)]`` for a CFA."""
         out: dict = {}
-        for k in range(3):
+        for k in range(len(self.start_s)):
             out.setdefault((round(float(self.start_s[k]), 12), round(float(self.duration_s[k]), 12)), []).append(k)
         return [tuple(v) for v in out.values()]
 
@@ -95,7 +95,7 @@ class CaptureTiming:
 
 
 def capture_timing(architecture, times_s, timing: TimingSpec, rows: int, first_row: int = 0) -> CaptureTiming:
-    """The windows of an architecture's capture with per-channel exposure ``times_s`` (3,), for image
+    """The windows of an architecture's capture with per-channel exposure ``times_s`` (N,), for image
     rows ``first_row … first_row + rows − 1`` (row 0 is read first; a negative first row is a margin
     above the image), centred so that the middle of the whole capture is ``t = 0``.
 
@@ -107,11 +107,11 @@ def capture_timing(architecture, times_s, timing: TimingSpec, rows: int, first_r
     T = np.asarray(times_s, float)
     layout = architecture.layout
     sequential = isinstance(layout, PlanesLayout) and layout.kind == "frames"
-    start = np.zeros(3)
+    start = np.zeros(T.size)
     if sequential:
         t = 0.0
         for c in timing.order:
-            k = "RGB".index(c)
+            k = architecture.channels.index(c)
             start[k] = t
             t += T[k] + timing.readout_gap_ms * 1e-3
     elif timing.prism_alignment == "centre":

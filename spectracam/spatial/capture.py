@@ -1,12 +1,13 @@
 """The architectures spatially: sample, record and process an image of photo-electron rates.
 
 A *spatial design* is an architecture/exposure design of the registry (``cfa/single``,
-``prism/optimal``, ``fsc/optimal``, …), the demosaicking method when its layout is a mosaic, and a
-misregistration of its sensors in pixels (the prism: each sensor is glued to the prism with some
-error; the paper says the prism "requires precise alignment"). The misregistration is a sub-pixel
-shift of where the red and blue sensors sample the image relative to the green one —
-:func:`misregistration_shifts`: red by ``+m`` along x, blue by ``+m`` along y — applied by the
-optics stage before sampling (:class:`spectracam.spatial.optics.OpticsSettings`).
+``prism/optimal``, ``fsc/optimal``, ``rgbw/single``, …), the demosaicking method when its layout is a
+mosaic, an optical low-pass filter's spot separation (mosaics; 0 for none), and a misregistration of
+its sensors in pixels (the prism: each sensor is glued to the prism with some error; the paper says
+the prism "requires precise alignment"). The misregistration is a sub-pixel shift of where the red
+and blue sensors sample the image relative to the green one — :func:`misregistration_shifts`: red by
+``+m`` along x, blue by ``+m`` along y — applied by the optics stage before sampling
+(:class:`spectracam.spatial.optics.OpticsSettings`).
 
 Recording uses the architecture's own ``record`` (the registry's; ``sensor.expose`` with its fixed
 patterns) after metering on the ColorChecker's white patch under the same light (paper 4.5);
@@ -36,20 +37,26 @@ class SpatialDesign:
 
     design: str                       # "arch/scheme", e.g. "cfa/single"
     demosaic: str | None = None       # for a mosaic layout
-    misregistration_px: float = 0.0
+    misregistration_px: float | None = None   # for separate sensors (a prism); None where it does not apply
+    olpf_separation_px: float = 0.0   # a 4-spot optical low-pass filter's spot separation (0: none)
 
     @property
     def label(self) -> str:
         s = self.design
         if self.demosaic:
             s += f" {self.demosaic}"
-        if self.design.startswith("prism"):
+        if self.olpf_separation_px > 0:
+            s += f" OLPF {self.olpf_separation_px:g} px"
+        if self.misregistration_px is not None:
             s += f" {'aligned' if self.misregistration_px == 0 else f'misaligned {self.misregistration_px:g} px'}"
         return s
 
 
-def misregistration_shifts(m_px: float) -> tuple:
-    """Sampling offsets (dx, dy) px of the R, G, B sensors: red ``+m`` along x, blue ``+m`` along y."""
+def misregistration_shifts(m_px: float | None) -> tuple:
+    """Sampling offsets (dx, dy) px of the R, G, B sensors: red ``+m`` along x, blue ``+m`` along y
+    (``()``: every channel at the pixel centre)."""
+    if not m_px:
+        return ()
     return ((float(m_px), 0.0), (0.0, 0.0), (0.0, float(m_px)))
 
 
@@ -74,14 +81,16 @@ class Conversion:
 
 
 def white_rate(reference: ChartReference, camera: CameraSpec) -> np.ndarray:
-    """Noise-free photo-electron rates (3,) of the ColorChecker's white patch: where exposure is metered."""
+    """Noise-free photo-electron rates (N,) of the ColorChecker's white patch: where exposure is metered."""
     return reference.patch_rates(camera)[WHITE_PATCH]
 
 
-def record(rates: np.ndarray, camera: CameraSpec, metered_rate: np.ndarray, seed: int) -> RawCapture:
-    """Expose an ``(H, W, 3)`` rate image with the camera's architecture and exposure scheme."""
+def record(rates: np.ndarray, camera: CameraSpec, metered_rate: np.ndarray, seed: int, times=None) -> RawCapture:
+    """Expose an ``(H, W, N)`` rate image with the camera's architecture and exposure scheme (or the
+    exposure ``times`` given: a noise-free twin of a noisy capture keeps the noisy one's times)."""
     arch = camera.architecture()
-    times = exposure_times_s(camera.capture.exposure, metered_rate, camera.sensor, arch, camera.capture.white_fill)
+    if times is None:
+        times = exposure_times_s(camera.capture.exposure, metered_rate, camera.sensor, arch, camera.capture.white_fill)
     digital, expected = arch.record(np.ascontiguousarray(rates, np.float32), times, camera.sensor, seed)
     return RawCapture(digital=digital, expected_e=expected, exposure_times_s=times,
                       capture_time_s=arch.capture_time_s(times), layout=arch.layout, camera=camera, seed=seed,
@@ -89,7 +98,7 @@ def record(rates: np.ndarray, camera: CameraSpec, metered_rate: np.ndarray, seed
 
 
 def process(raw: RawCapture, processing: ProcessingSpec, conversion: Conversion) -> tuple[np.ndarray, np.ndarray]:
-    """``(camera rates (H, W, 3) e⁻/s, display XYZ (H, W, 3), white Y = 1)`` of a capture."""
+    """``(camera rates (H, W, N) e⁻/s, display XYZ (H, W, 3), white Y = 1)`` of a capture."""
     if not isinstance(raw.layout, MosaicLayout):
         processing = processing.replace(demosaic="bilinear")  # unused for planes
     rates = camera_rates(raw, processing)

@@ -46,6 +46,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+
+class NoEdge(ValueError):
+    """The image holds no edge the e-SFR can use (too weak against the noise, or not a straight edge
+    inside the region): a property of the image, not of the call — callers score it as no MTF."""
+
 #: Smallest region accepted: rows and columns.
 MIN_ROWS, MIN_COLS = 8, 8
 
@@ -103,7 +108,7 @@ def _edge_locations(deriv: np.ndarray, x: np.ndarray, centres) -> np.ndarray:
     w = deriv * _hamming(x, centres)
     den = w.sum(axis=1)
     if np.any(den <= 0):
-        raise ValueError(f"e-SFR: no edge found in row {int(np.argmax(den <= 0))} (derivative sums to ≤ 0)")
+        raise NoEdge(f"e-SFR: no edge found in row {int(np.argmax(den <= 0))} (derivative sums to ≤ 0)")
     return (w * x).sum(axis=1) / den
 
 
@@ -199,7 +204,7 @@ def esfr(image, *, fit_order: int = 1, oversampling: int = 4, derivative: str = 
     step = right - left
     noise = 1.4826 * np.median(np.abs(np.diff(a, axis=0))) / np.sqrt(2.0)
     if not abs(step) > max(5.0 * noise, 1e-12 * (abs(left) + abs(right)), 0.0):
-        raise ValueError(f"e-SFR: no edge: the two sides differ by {abs(step):.3g}, noise {noise:.3g}")
+        raise NoEdge(f"e-SFR: no edge: the two sides differ by {abs(step):.3g}, noise {noise:.3g}")
     sign = 1.0 if step > 0 else -1.0
 
     # 1. edge location per row: centroid of the [-1/2, 1/2] derivative (at x = j + 1/2) under a Hamming window
@@ -216,7 +221,7 @@ def esfr(image, *, fit_order: int = 1, oversampling: int = 4, derivative: str = 
     edge = np.polynomial.polynomial.polyval(rows, coef)
     margin = 1.0
     if edge.min() < margin or edge.max() > npix - 1 - margin:
-        raise ValueError(f"e-SFR: the fitted edge leaves the region (columns {edge.min():.1f} to {edge.max():.1f} "
+        raise NoEdge(f"e-SFR: the fitted edge leaves the region (columns {edge.min():.1f} to {edge.max():.1f} "
                          f"of 0 to {npix - 1}): it must cross the whole region")
     if nlin * abs(slope) < 1.0:
         angle = np.degrees(np.arctan(slope))
@@ -259,7 +264,7 @@ def esfr(image, *, fit_order: int = 1, oversampling: int = 4, derivative: str = 
     # 5. |DFT|, normalised, corrected for the derivative FIR (and optionally the binning)
     spectrum = np.abs(np.fft.rfft(lsf))
     if not spectrum[0] > 0:
-        raise ValueError("e-SFR: the line spread function integrates to ≤ 0: no usable edge")
+        raise NoEdge("e-SFR: the line spread function integrates to ≤ 0: no usable edge")
     bin_width = np.cos(np.arctan(slope)) / oversampling              # ESF spacing along the normal, px
     freq = np.arange(spectrum.size) / (nbin * bin_width)
     response = np.sinc((2.0 if derivative == "central" else 1.0) * freq * bin_width)

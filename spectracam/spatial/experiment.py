@@ -40,7 +40,7 @@ from ..spec import Spec
 from . import optics as sopt
 from .capture import (Conversion, SpatialDesign, misregistration_shifts, process, radiance_to_display_xyz, record,
                       white_rate)
-from .esfr import esfr
+from .esfr import NoEdge, esfr
 from .geometry import CameraGeometry
 from .render import SubpixelCube, defocus_diameter_um, material_radiance, render_target
 from .scielab import samples_per_degree, scielab
@@ -61,10 +61,16 @@ class SpatialSpec(Spec):
     #: The paper's f/1.4, and f/8.
     f_numbers: tuple = (1.4, 8.0)
     targets: tuple = TARGETS
+    #: The paper's three architectures with the paper's best exposure for each; any registered
+    #: ``arch/scheme`` (``spectracam architectures`` runs them all).
+    designs: tuple = ("cfa/single", "prism/optimal", "fsc/optimal")
     #: colour-demosaicing's three methods (the registry's ``patch`` is the paper's flat-patch reading).
     demosaics: tuple = ("bilinear", "malvar2004", "menon2007")
     #: The prism aligned, and misaligned by half a pixel (red along x, blue along y).
     misregistrations_px: tuple = (0.0, 0.5)
+    #: Mosaics without (0, the paper's camera) and with a 4-spot birefringent optical low-pass filter of
+    #: one pixel's spot separation (first zero at the Nyquist frequency: the usual choice).
+    olpf_separations_px: tuple = (0.0, 1.0)
     #: A short lens makes the tilted chart's perspective visible (≈18° across the 10 µm sensor).
     focal_length_mm: float = 12.0
     #: Sub-pixels per pixel side: the renders' box filter is divided out exactly by the optics stage.
@@ -106,6 +112,17 @@ class SpatialSpec(Spec):
         if "patch" in self.demosaics:
             raise self.error("demosaics", "'patch' reads flat patches only; use bilinear, malvar2004, menon2007",
                              list(self.demosaics))
+        from ..camera import split_design
+
+        if not isinstance(self.designs, tuple) or not self.designs:
+            raise self.error("designs", "must be a non-empty list of 'arch/scheme', e.g. ['cfa/single', 'fsc/optimal']",
+                             list(self.designs) if isinstance(self.designs, tuple) else self.designs)
+        for d in self.designs:
+            split_design(d, "designs")
+        self.numbers("olpf_separations_px", len(self.olpf_separations_px), 0.0, unit="px")
+        if not self.olpf_separations_px or any(x > sopt.MARGIN_PX / 2 for x in self.olpf_separations_px):
+            raise self.error("olpf_separations_px", f"must be a non-empty list of separations from 0 to "
+                             f"{sopt.MARGIN_PX / 2:g} px (0: no filter)", list(self.olpf_separations_px))
         self.numbers("misregistrations_px", len(self.misregistrations_px), 0.0, unit="px")
         if any(m > sopt.MARGIN_PX / 2 for m in self.misregistrations_px):
             raise self.error("misregistrations_px", f"must be at most {sopt.MARGIN_PX / 2:g} px",
@@ -129,15 +146,33 @@ class SpatialSpec(Spec):
         self.number("viewing_distance_m", 0.0, 100.0, lo_open=True, unit="m")
         self.number("display_pixel_pitch_mm", 0.0, 100.0, lo_open=True, unit="mm")
         self.integer("seed", 0, 2**31 - 1)
+        self.spatial_designs()   # a mosaic no demosaicking method takes is refused here
 
     @property
     def samples_per_degree(self) -> float:
         return samples_per_degree(self.viewing_distance_m, self.display_pixel_pitch_mm * 1e-3)
 
-    def designs(self) -> list[SpatialDesign]:
-        return ([SpatialDesign("cfa/single", d) for d in self.demosaics]
-                + [SpatialDesign("prism/optimal", None, m) for m in self.misregistrations_px]
-                + [SpatialDesign("fsc/optimal")])
+    def spatial_designs(self) -> list[SpatialDesign]:
+        """Each design of ``designs``: a mosaic with every demosaicking method that takes it and every
+        optical low-pass filter; separate sensors (a prism) at every misregistration; anything else once."""
+        from ..architecture import MosaicLayout, PlanesLayout
+        from ..color import demosaic_applies
+
+        out = []
+        for design in self.designs:
+            arch = CameraSpec().with_design(design).architecture()
+            layout = arch.layout
+            if isinstance(layout, MosaicLayout):
+                methods = [dm for dm in self.demosaics if demosaic_applies(dm, layout)]
+                if not methods:
+                    raise self.error("demosaics", f"none of them takes {design}'s {len(layout.channels)}-channel "
+                                     "mosaic; add 'bilinear' (any periodic mosaic)", list(self.demosaics))
+                out += [SpatialDesign(design, dm, None, o) for dm in methods for o in self.olpf_separations_px]
+            elif isinstance(layout, PlanesLayout) and layout.kind == "sensors":
+                out += [SpatialDesign(design, None, m) for m in self.misregistrations_px]
+            else:
+                out.append(SpatialDesign(design))
+        return out
 
     def quick(self) -> "SpatialSpec":
         """A first look: every case, target and design at half the image size (and 20-nm bands, see
@@ -218,7 +253,8 @@ def _edge_zone(lab_ideal: np.ndarray, width_px: int = 2) -> np.ndarray:
 
 
 def score_image(target: Target, geometry: CameraGeometry, xyz: np.ndarray, ideal_xyz: np.ndarray,
-                own_xyz: np.ndarray, cam_rates: np.ndarray, white: np.ndarray, spd: float) -> dict:
+                own_xyz: np.ndarray, cam_rates: np.ndarray, white: np.ndarray, spd: float,
+                channels=("R", "G", "B")) -> dict:
     """The metrics of one processed image (display XYZ) against the ideal image of the scene
     (``ideal_xyz``) and against the same camera's rendering of that ideal image (``own_xyz``: its colour
     conversion error without any spatial error) — see the module."""
@@ -244,17 +280,17 @@ def score_image(target: Target, geometry: CameraGeometry, xyz: np.ndarray, ideal
         out["patch_delta_e"] = float(np.mean([de[m].mean() for m in masks if m.any()]))
     if isinstance(target, SlantedEdge):
         crop = (slice(b, -b), slice(b, -b))
-        lum = esfr(xyz[crop][..., 1], correct_binning=True)
-        out["mtf50_cy_per_px"] = _finite(lum.mtf50_cy_per_px)
-        curves = {"Y": lum.sfr}
+        lum = _esfr_or_none(xyz[crop][..., 1])
+        out["mtf50_cy_per_px"] = None if lum is None else _finite(lum.mtf50_cy_per_px)
+        curves = {"Y": [] if lum is None else lum.sfr}
         out["mtf50_channels_cy_per_px"] = {}
-        for k, c in enumerate("RGB"):
-            r = esfr(cam_rates[crop][..., k], correct_binning=True)
-            n = min(r.sfr.size, lum.sfr.size)
-            curves[c] = r.sfr[:n]
-            out["mtf50_channels_cy_per_px"][c] = _finite(r.mtf50_cy_per_px)
-        out["_mtf"] = {"frequencies_cy_per_px": lum.frequencies_cy_per_px, **curves,
-                       "edge_angle_deg": lum.edge_angle_deg}
+        for k, c in enumerate(channels):   # a channel may see too weak a step for an e-SFR: no MTF, not an abort
+            r = _esfr_or_none(cam_rates[crop][..., k])
+            n = min(r.sfr.size, len(curves["Y"])) if r is not None else 0
+            curves[c] = [] if r is None else r.sfr[:n]
+            out["mtf50_channels_cy_per_px"][c] = None if r is None else _finite(r.mtf50_cy_per_px)
+        out["_mtf"] = {"frequencies_cy_per_px": [] if lum is None else lum.frequencies_cy_per_px, **curves,
+                       "edge_angle_deg": None if lum is None else lum.edge_angle_deg}
     return out
 
 
@@ -266,7 +302,7 @@ def run_spatial(spec: SpatialSpec, scene, renderer: str = "mitsuba", log=None, k
     spd = spec.samples_per_degree
     timings = {t: dict.fromkeys(STAGES, 0.0) for t in spec.targets}
     rows, curves, images, closed = [], [], {}, {}
-    designs = spec.designs()
+    designs = spec.spatial_designs()
     renders: dict = {}
     t_start = time.perf_counter()
     for pitch in spec.pixel_pitches_um:
@@ -292,10 +328,11 @@ def run_spatial(spec: SpatialSpec, scene, renderer: str = "mitsuba", log=None, k
                 cube: SubpixelCube = renders[key]
                 t1 = time.perf_counter()
                 timings[tname]["render"] += t1 - t0
-                # -- optics, per band, shared by every design of this case
+                # -- optics, per band, shared by every design of this case: each distinct channel once
                 settings = sopt.OpticsSettings(defocus_um=defocus_diameter_um(target, big, cube), cos4=spec.cos4)
+                columns, design_columns = channel_columns(base, grid, spec.designs)
                 spectra, fy, fx, shape = sopt.channel_spectra(cube.radiance, cube.wavelengths_nm, ss,
-                                                              base, grid, settings, workers=-1)
+                                                              base, grid, settings, workers=-1, weights=columns)
                 ideal = cube.pixel_average()[margin:-margin, margin:-margin]
                 t2 = time.perf_counter()
                 timings[tname]["optics"] += t2 - t1
@@ -305,20 +342,24 @@ def run_spatial(spec: SpatialSpec, scene, renderer: str = "mitsuba", log=None, k
                     L = material_radiance(target, scene.illuminant, grid)
                     Wb = band_weights(base, grid)[:, 1] * (L[1] - L[0])
                     f = np.linspace(0, 1, 201)
-                    closed[(pitch, N)] = (f, sopt.channel_mtf_closed_form(f, spec.edge_angle_deg, pitch, N,
-                                                                          grid.centres_nm, Wb, base.sensor.fill_factor))
+                    closed[(pitch, N)] = {o: sopt.channel_mtf_closed_form(f, spec.edge_angle_deg, pitch, N, grid.centres_nm,
+                                                                          Wb, base.sensor.fill_factor, o)
+                                          for o in {0.0, *spec.olpf_separations_px}}
+                    closed[(pitch, N)]["f"] = f
                 for d in designs:
                     camera = base.with_design(d.design)
                     processing = scene.processing.replace(demosaic=d.demosaic or scene.processing.demosaic)
                     t2 = time.perf_counter()
                     shifts = misregistration_shifts(d.misregistration_px)
-                    if shifts not in sampled:
-                        rates = sopt.sample_channels(spectra, fy, fx, shape, ss,
-                                                     base.sensor.fill_factor, shifts, margin, workers=-1)
+                    cols = design_columns[d.design]
+                    key = (cols, shifts, d.olpf_separation_px)
+                    if key not in sampled:
+                        rates = sopt.sample_channels(spectra[list(cols)], fy, fx, shape, ss, base.sensor.fill_factor,
+                                                     shifts, margin, workers=-1, olpf_separation_px=d.olpf_separation_px)
                         if spec.cos4:
                             rates *= geometry.off_axis_cos4()[:, :, None].astype(np.float32)
-                        sampled[shifts] = rates
-                    rates = sampled[shifts]
+                        sampled[key] = rates
+                    rates = sampled[key]
                     t3 = time.perf_counter()
                     timings[tname]["optics"] += t3 - t2
                     conv = Conversion.fit(ref, camera, processing)
@@ -331,17 +372,20 @@ def run_spatial(spec: SpatialSpec, scene, renderer: str = "mitsuba", log=None, k
                         @ conv.matrix @ conv.rgb_to_xyz.T
                     t5 = time.perf_counter()
                     timings[tname]["processing"] += t5 - t4
-                    m = score_image(target, geometry, xyz, ideal_xyz, own_xyz, cam_rates, conv.display_white, spd)
+                    m = score_image(target, geometry, xyz, ideal_xyz, own_xyz, cam_rates, conv.display_white, spd,
+                                    raw.layout.channels)
                     timings[tname]["metrics"] += time.perf_counter() - t5
-                    row = {"design": d.design, "demosaic": d.demosaic, "misregistration_px": float(d.misregistration_px),
-                           "label": d.label, **case,
+                    row = {"design": d.design, "demosaic": d.demosaic,
+                           "misregistration_px": float(d.misregistration_px or 0.0),
+                           "olpf_separation_px": float(d.olpf_separation_px), "label": d.label, **case,
                            **{k: v for k, v in m.items() if not k.startswith("_")},
                            "capture_time_ms": 1e3 * raw.capture_time_s,
                            "defocus_max_um": _max_defocus(target, geometry)}
                     rows.append(row)
                     if "_mtf" in m:
                         curves.append({"label": d.label, **case, "design": d.design, "demosaic": d.demosaic,
-                                       "misregistration_px": float(d.misregistration_px),
+                                       "misregistration_px": float(d.misregistration_px or 0.0),
+                                       "olpf_separation_px": float(d.olpf_separation_px),
                                        **{k: (v.tolist() if isinstance(v, np.ndarray) else v)
                                           for k, v in m["_mtf"].items()}})
                     if keep_images:
@@ -353,7 +397,8 @@ def run_spatial(spec: SpatialSpec, scene, renderer: str = "mitsuba", log=None, k
                 log(f"[{time.perf_counter() - t_start:6.1f} s] {pitch:g} µm, f/{N:g}, {tname}: "
                     f"{len(designs)} designs scored")
     return {"rows": rows, "mtf_curves": curves, "timings": timings, "images": images,
-            "closed_form": {f"{p:g}um_f{n:g}": {"frequencies_cy_per_px": v[0].tolist(), "G": v[1].tolist()}
+            "closed_form": {f"{p:g}um_f{n:g}": {"frequencies_cy_per_px": v["f"].tolist(), "G": v[0.0].tolist()}
+                            | {f"G OLPF {o:g} px": v[o].tolist() for o in spec.olpf_separations_px if o > 0}
                             for (p, n), v in closed.items()},
             "display_white": Conversion.fit(ref, case_camera(scene, spec, spec.pixel_pitches_um[0],
                                                              spec.f_numbers[0]), scene.processing).display_white,
@@ -362,8 +407,33 @@ def run_spatial(spec: SpatialSpec, scene, renderer: str = "mitsuba", log=None, k
                                 for k, v in renders.items()},
             "parameters": {"spatial": spec.to_dict(), "scene": scene.to_dict(),
                            "fill_factor": scene.camera.sensor.fill_factor,
-                           "misregistration": "red sensor shifted +m px along x, blue +m px along y, before sampling"},
+                           "misregistration": "red sensor shifted +m px along x, blue +m px along y, before sampling",
+                           "olpf": "4-spot birefringent filter: spots at (±d/2, ±d/2) px, OTF cos(π fx d)·cos(π fy d)"},
             "wall_s": time.perf_counter() - t_start}
+
+
+def channel_columns(camera: CameraSpec, grid, designs) -> tuple[np.ndarray, dict]:
+    """``(weights (B, M), {design: column indices})``: every distinct channel responsivity among the
+    designs once (the paper's three architectures share R, G, B; RGBW adds W; …)."""
+    cols, index, out = [], {}, {}
+    for design in designs:
+        W = np.asarray(band_weights(camera.with_design(design), grid), np.float64)
+        ids = []
+        for k in range(W.shape[1]):
+            key = W[:, k].tobytes()
+            if key not in index:
+                index[key] = len(cols)
+                cols.append(W[:, k])
+            ids.append(index[key])
+        out[design] = tuple(ids)
+    return np.stack(cols, axis=1), out
+
+
+def _esfr_or_none(image):
+    try:
+        return esfr(image, correct_binning=True)
+    except NoEdge:
+        return None
 
 
 def _finite(x):

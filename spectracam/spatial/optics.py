@@ -10,10 +10,12 @@ For every band b the sub-pixel radiance image is filtered, in the frequency doma
   diameter c: ``2·J₁(πcρ)/(πcρ)`` (geometric optics) — the Mitsuba thinlens camera renders defocus
   itself and passes c = 0;
 
-then weighted into the three channels by :func:`spectracam.camera.band_weights` (the paper's
+then weighted into the architecture's channels by :func:`spectracam.camera.band_weights` (the paper's
 ``π/(4N²)·T·λ/hc·R_k·Δλ·A``, so the result is photo-electrons per second per pixel). Each channel is
 then
 
+* optionally spread by a **birefringent optical low-pass filter** (off by default, as in the paper): two
+  crystal plates split every ray into four spots on a square of side d (:func:`olpf_otf`);
 * integrated over the pixel's **light-sensitive aperture**, a centred square of side
   ``pitch·√(fill factor)``: the transfer ``sinc(fx·a)·sinc(fy·a)``, divided by the sub-pixel box
   ``sinc(fx·s)·sinc(fy·s)`` the renderer's box filter already applied (for a full fill factor the two
@@ -76,6 +78,19 @@ def defocus_otf(rho_cy_per_um, blur_diameter_um: float) -> np.ndarray:
     return out
 
 
+def olpf_otf(fx_cy_per_px, fy_cy_per_px, separation_px: float) -> np.ndarray:
+    """OTF of a 4-spot birefringent low-pass filter: two plates (split along x, then along y) turn a
+    point into four equal spots at ``(±d/2, ±d/2)`` around it, so ``OTF = cos(π·fx·d)·cos(π·fy·d)``
+    (real: the spots are centred on the point); first zero at ``1/(2d)`` — the Nyquist frequency for
+    d = one pixel (Hecht, *Optics*, 4th ed., §8.4 on birefringent displacement; the usual camera OLPF).
+
+    >>> olpf_otf(np.array([0.0, 0.5, 1.0]), 0.0, 1.0).round(12).tolist()
+    [1.0, 0.0, -1.0]
+    """
+    d = float(separation_px)
+    return np.cos(np.pi * np.asarray(fx_cy_per_px, float) * d) * np.cos(np.pi * np.asarray(fy_cy_per_px, float) * d)
+
+
 def aperture_mtf(fx_cy_per_px, fy_cy_per_px, fill_factor: float = 1.0) -> np.ndarray:
     """Transfer of a centred square light-sensitive area of ``fill_factor`` of the pixel: ``sinc·sinc``."""
     a = float(np.sqrt(fill_factor))
@@ -83,15 +98,17 @@ def aperture_mtf(fx_cy_per_px, fy_cy_per_px, fill_factor: float = 1.0) -> np.nda
 
 
 def channel_mtf_closed_form(f_cy_per_px, angle_deg: float, pitch_um: float, f_number: float, wavelengths_nm,
-                            weights, fill_factor: float = 1.0) -> np.ndarray:
+                            weights, fill_factor: float = 1.0, olpf_separation_px: float = 0.0) -> np.ndarray:
     """The MTF a channel should show along the normal of an edge ``angle_deg`` from a pixel axis: the
     circular-aperture OTF at each band weighted by the channel's signal in that band (``weights``,
-    e.g. band weight × the edge's radiance step), times the pixel aperture's sinc along that direction."""
+    e.g. band weight × the edge's radiance step), times the pixel aperture's sinc (and the optical
+    low-pass filter's cosines) along that direction."""
     f = np.asarray(f_cy_per_px, float)
     w = np.asarray(weights, float)
     otf = np.stack([diffraction_otf(f / pitch_um, lam, f_number) for lam in wavelengths_nm])  # (B, F)
     t = np.radians(angle_deg)
-    return (w @ otf) / w.sum() * np.abs(aperture_mtf(f * np.cos(t), f * np.sin(t), fill_factor))
+    fx, fy = f * np.cos(t), f * np.sin(t)
+    return (w @ otf) / w.sum() * np.abs(aperture_mtf(fx, fy, fill_factor) * olpf_otf(fx, fy, olpf_separation_px))
 
 
 @dataclass(frozen=True)
@@ -102,24 +119,28 @@ class OpticsSettings:
     #: Blur-disc diameter of a thin lens's defocus still to apply, µm (0: in focus, or rendered).
     defocus_um: float = 0.0
     cos4: bool = False
-    #: Per channel (R, G, B): where that channel's sensor samples, (dx, dy) pixels, x right, y down.
-    shifts_px: tuple = ((0.0, 0.0), (0.0, 0.0), (0.0, 0.0))
+    #: Per channel (in the architecture's order): where that channel's sensor samples, (dx, dy) pixels,
+    #: x right, y down; channels beyond the tuple sample at the pixel centre.
+    shifts_px: tuple = ()
+    #: Spot separation of a 4-spot birefringent optical low-pass filter, pixels (0: none, the paper's camera).
+    olpf_separation_px: float = 0.0
 
 
 def channel_spectra(radiance: np.ndarray, wavelengths_nm, supersampling: int, camera: CameraSpec, grid,
-                    settings: OpticsSettings, workers: int | None = None):
-    """The 2-D spectra ``(3, Hs, Ws//2+1)`` of each channel's photo-electron rate image after the
+                    settings: OpticsSettings, workers: int | None = None, weights: np.ndarray | None = None):
+    """The 2-D spectra ``(N, Hs, Ws//2+1)`` of each channel's photo-electron rate image after the
     per-band optics (diffraction, defocus), before the pixel aperture; ``(spectra, fy, fx, (Hs, Ws))``
-    with the frequencies in cycles per sub-pixel."""
+    with the frequencies in cycles per sub-pixel.  ``weights`` ``(B, N)``: band weights to use instead
+    of the camera's own (several architectures' channels at once share the per-band transforms)."""
     Hs, Ws, B = radiance.shape
     pitch = camera.sensor.pixel_pitch_um
     s_um = pitch / supersampling
     fy = sfft.fftfreq(Hs)[:, None]
     fx = sfft.rfftfreq(Ws)[None, :]
     rho = np.sqrt(fx**2 + fy**2) / s_um                           # cycles/µm
-    W = band_weights(camera, grid).astype(np.float64)              # (B, 3)
+    W = np.asarray(band_weights(camera, grid) if weights is None else weights, np.float64)   # (B, N)
     common = defocus_otf(rho, settings.defocus_um) if settings.defocus_um > 0 else None
-    out = np.zeros((3, Hs, fx.shape[1]), np.complex128)
+    out = np.zeros((W.shape[1], Hs, fx.shape[1]), np.complex128)
     chunk = 8
     for b0 in range(0, B, chunk):
         bands = range(b0, min(B, b0 + chunk))
@@ -129,20 +150,24 @@ def channel_spectra(radiance: np.ndarray, wavelengths_nm, supersampling: int, ca
             if common is not None:
                 H = H * common
             Fb = F[:, :, i] * H
-            for k in range(3):
-                out[k] += W[b, k] * Fb
+            for k in range(W.shape[1]):
+                if W[b, k] != 0.0:
+                    out[k] += W[b, k] * Fb
     return out, fy, fx, (Hs, Ws)
 
 
 def sample_channels(spectra, fy, fx, shape, supersampling: int, fill_factor: float, shifts_px, margin_px: int,
-                    workers: int | None = None) -> np.ndarray:
-    """``(H, W, 3)`` rates: each channel's spectrum through the pixel aperture, shifted to its sampling
-    positions, back to space and sampled at the pixel centres; ``margin_px`` cut from every side."""
+                    workers: int | None = None, olpf_separation_px: float = 0.0) -> np.ndarray:
+    """``(H, W, N)`` rates: each channel's spectrum through the optical low-pass filter (if any) and the
+    pixel aperture, shifted to its sampling positions (``shifts_px`` per channel, missing ones 0),
+    back to space and sampled at the pixel centres; ``margin_px`` cut from every side."""
     ss = supersampling
     aperture = aperture_mtf(fx * ss, fy * ss, fill_factor) / (np.sinc(fx) * np.sinc(fy))
+    if olpf_separation_px > 0:
+        aperture = aperture * olpf_otf(fx * ss, fy * ss, olpf_separation_px)
     out = []
-    for k in range(3):
-        dx, dy = shifts_px[k]
+    for k in range(len(spectra)):
+        dx, dy = shifts_px[k] if k < len(shifts_px) else (0.0, 0.0)
         delta_x = (ss - 1) / 2 + dx * ss       # sub-pixels from sample index j·ss to the sampling point
         delta_y = (ss - 1) / 2 + dy * ss
         phase = np.exp(2j * np.pi * (fx * delta_x + fy * delta_y))
@@ -155,12 +180,12 @@ def sample_channels(spectra, fy, fx, shape, supersampling: int, fill_factor: flo
 def pixel_rates(radiance: np.ndarray, wavelengths_nm, supersampling: int, camera: CameraSpec, grid,
                 geometry: CameraGeometry, settings: OpticsSettings = OpticsSettings(), margin_px: int = MARGIN_PX,
                 workers: int | None = None) -> np.ndarray:
-    """``(H, W, 3)`` photo-electrons per second per pixel of each channel (float32) from the sub-pixel
+    """``(H, W, N)`` photo-electrons per second per pixel of each channel (float32) from the sub-pixel
     radiance ``(Hs, Ws, B)`` of an image with ``margin_px`` extra pixels on every side; ``geometry`` is
     the camera without the margin (for cos⁴)."""
     spectra, fy, fx, shape = channel_spectra(radiance, wavelengths_nm, supersampling, camera, grid, settings, workers)
     rates = sample_channels(spectra, fy, fx, shape, supersampling, camera.sensor.fill_factor, settings.shifts_px, margin_px,
-                            workers)
+                            workers, settings.olpf_separation_px)
     if settings.cos4:
         rates *= geometry.off_axis_cos4()[:, :, None].astype(np.float32)
     return rates

@@ -50,8 +50,23 @@ COLOURS = {"cfa/single bilinear": "#d62728", "cfa/single malvar2004": "#ff7f0e",
            "prism/optimal aligned": "#1f77b4", "fsc/optimal": "#2ca02c"}
 
 
+#: Other architectures (``spectracam architectures``), one colour each whatever their demosaicker.
+ARCH_COLOURS = {"stacked": "#8c564b", "rgbw": "#9467bd", "ryyb": "#bcbd22", "cmy": "#17becf", "quad_bayer": "#7f7f7f"}
+
+
 def _colour(label):
-    return COLOURS.get(label, "#17becf" if "misaligned" in label else "#7f7f7f")
+    base = label.replace(" OLPF", "|").split("|")[0].strip()
+    base = " ".join(w for w in base.split() if w != "px" and not w.replace(".", "").isdigit())
+    if base in COLOURS:
+        return COLOURS[base]
+    if "misaligned" in label:
+        return "#17becf"
+    return ARCH_COLOURS.get(label.split("/")[0], "#000000")
+
+
+def _style(label):
+    """Line style: dashed for a misaligned prism, dash-dot with an optical low-pass filter."""
+    return "--" if "misaligned" in label else "-." if "OLPF" in label else "-"
 
 
 def figure_mtf(result, out: Path) -> list[Path]:
@@ -68,12 +83,14 @@ def figure_mtf(result, out: Path) -> list[Path]:
         for c in curves:
             if c["pixel_pitch_um"] == p and c["f_number"] == N:
                 f = np.asarray(c["frequencies_cy_per_px"])
-                ls = "--" if "misaligned" in c["label"] else "-"
-                ax.plot(f, c["Y"], ls, color=_colour(c["label"]), lw=1.4, label=c["label"])
+                ax.plot(f, c["Y"], _style(c["label"]), color=_colour(c["label"]), lw=1.4, label=c["label"])
         cf = result["closed_form"].get(f"{p:g}um_f{N:g}")
         if cf:
             ax.plot(cf["frequencies_cy_per_px"], cf["G"], ":", color="k", lw=1.2,
                     label="diffraction × pixel aperture (closed form, G)")
+            for key in (k for k in cf if k.startswith("G OLPF")):
+                ax.plot(cf["frequencies_cy_per_px"], cf[key], ":", color="0.45", lw=1.2,
+                        label=f"… × {key[2:]} (closed form, G)")
         ax.axvline(0.5, color="0.6", lw=0.8)
         ax.axhline(0.5, color="0.8", lw=0.6)
         ax.set(xlim=(0, 1), ylim=(0, 1.25), xlabel="cycles / pixel", ylabel="e-SFR of displayed luminance Y",
@@ -106,7 +123,7 @@ def figure_summary(result, out: Path) -> list[Path]:
             vals = [_get(rows, lab, p, N, t, key) for p, N in cases]
             vals = [np.nan if v is None else v for v in vals]
             ax.bar(x + (i - (len(labels) - 1) / 2) * wbar, vals, wbar, color=_colour(lab), label=lab,
-                   hatch="//" if "misaligned" in lab else None)
+                   hatch="//" if "misaligned" in lab else ".." if "OLPF" in lab else None)
         ax.set_xticks(x, [f"{p:g} µm\nf/{N:g}" for p, N in cases])
         ax.set_title(title, fontsize=10)
         ax.grid(axis="y", alpha=0.3)
@@ -207,7 +224,8 @@ def answer(result) -> list[str]:
     """The paper's question answered with numbers."""
     rows = result["rows"]
     lines = []
-    cfa_labels = [lab for lab in _labels(rows) if lab.startswith("cfa")]
+    cfa_labels = [lab for lab in _labels(rows) if lab.startswith("cfa") and "OLPF" not in lab]
+    olpf_labels = [lab for lab in _labels(rows) if lab.startswith("cfa") and "OLPF" in lab]
     mis = sorted({r["misregistration_px"] for r in rows if r["design"].startswith("prism") and r["misregistration_px"] > 0})
     for p, N in _cases(rows):
         fsc = _get(rows, "fsc/optimal", p, N, "edge", "mtf50_cy_per_px")
@@ -223,7 +241,7 @@ def answer(result) -> list[str]:
              f"({best.split()[-1]}) — removing demosaicking gains ×{fsc / cfa[worst]:.2f} over {worst.split()[-1]} and "
              f"×{fsc / cfa[best]:.2f} over {best.split()[-1]}.")
         if star.get("fsc/optimal") is not None:
-            cs = {k: v for k, v in star.items() if k.startswith("cfa") and v is not None}
+            cs = {k: v for k, v in star.items() if k in cfa_labels and v is not None}
             bcfa = min(cs, key=lambda k: cs[k])
             s += (f" S-CIELAB spatial error on the star: FSC {star['fsc/optimal']:.2f}, best CFA "
                   f"({bcfa.split()[-1]}) {cs[bcfa]:.2f}, worst CFA {max(cs.values()):.2f} ΔE.")
@@ -241,6 +259,15 @@ def answer(result) -> list[str]:
                     s += (f" and its S-CIELAB error on the star to {ps:.2f} ΔE (aligned "
                           f"{star['prism/optimal aligned']:.2f}, best CFA {min(cs.values()):.2f})")
                 s += "."
+        for lab in olpf_labels:   # the same demosaicker without the filter
+            plain = lab.split(" OLPF")[0]
+            m0, m1 = _get(rows, plain, p, N, "edge", "mtf50_cy_per_px"), _get(rows, lab, p, N, "edge", "mtf50_cy_per_px")
+            f0, f1 = _get(rows, plain, p, N, "edge", "false_colour"), _get(rows, lab, p, N, "edge", "false_colour")
+            s0, s1 = star.get(plain), star.get(lab)
+            if None not in (m0, m1, f0, f1):
+                s += (f" {plain.split()[-1]} with an OLPF of {lab.split('OLPF ')[1]}: MTF50 {m0:.3f} → {m1:.3f}, "
+                      f"false colour at the edge {f0:.2f} → {f1:.2f}"
+                      + (f", S-CIELAB on the star {s0:.2f} → {s1:.2f}" if None not in (s0, s1) else "") + ".")
         lines.append(s)
     return lines
 
@@ -292,8 +319,10 @@ def report_markdown(result, command: str) -> str:
             "* Targets: edge 5° between ColorChecker neutral 6.5 and neutral 3.5 (4.0:1); Siemens star of "
             f"{spec['star_cycles']} cycles of the same neutrals; the ColorChecker turned {spec['chart_tilt_deg']:g}° "
             "about the vertical (thin-lens defocus across the field, focus at its centre).",
-            "* Designs: cfa/single with each demosaicking method, prism/optimal aligned and misaligned (red sensor "
-            "shifted along x, blue along y by the stated amount, before sampling), fsc/optimal (no demosaicking).",
+            f"* Designs: {', '.join(spec['designs'])}; mosaics with each demosaicking method that takes them, without "
+            "and with a 4-spot birefringent optical low-pass filter (OLPF: spots at (±d/2, ±d/2) px, OTF "
+            "cos(π·fx·d)·cos(π·fy·d)); a prism aligned and misaligned (red sensor shifted along x, blue along y by the "
+            "stated amount, before sampling); field-sequential and stacked designs need no demosaicking.",
             f"* Sensor noise {'on (the paper’s camera)' if spec['noise'] else 'off (spatial artefacts alone; --set noise=true adds the paper’s noise)'}.",
             f"* S-CIELAB: {result['samples_per_degree']:.1f} samples/degree (one image pixel per display pixel at "
             f"{spec['display_pixel_pitch_mm']:.3f} mm, viewed from {spec['viewing_distance_m']:g} m).",
