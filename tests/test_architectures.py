@@ -264,11 +264,11 @@ def test_architectures_quick_command(tmp_path):
     # time: against the own still capture, nothing breaks up at rest; sequential frames break up most
     motion = res["time"]["rows"]
     assert {r["design"].split("/")[0] for r in motion} == set(ARCHITECTURES)
-    assert all(r["breakup_width_motion_px"] == 0 for r in motion if r["speed_px_per_ms"] == 0)
+    assert all(r["breakup_width_px"] == 0 for r in motion if r["speed_px_per_ms"] == 0)
     fast = max(r["speed_px_per_ms"] for r in motion)
     at = {r["design"]: r for r in motion if r["speed_px_per_ms"] == fast}
-    assert at["fsc/optimal"]["breakup_width_motion_px"] == max(r["breakup_width_motion_px"] for r in at.values()) > 0
-    assert at["fsc/optimal"]["breakup_width_motion_px"] > at["cfa/single"]["breakup_width_motion_px"]
+    assert at["fsc/optimal"]["breakup_width_px"] == max(r["breakup_width_px"] for r in at.values()) > 0
+    assert at["fsc/optimal"]["breakup_width_px"] > at["cfa/single"]["breakup_width_px"]
     assert {w["part"] for w in res["spacetime_winners"]} == {"space", "time"}
     r = CliRunner().invoke(main, ["architectures", "-o", str(tmp_path / "b"), "--seeds", "0"])
     assert r.exit_code == 2 and "--seeds" in r.output

@@ -40,13 +40,34 @@ def test_scored_against_the_own_still_capture():
     r = run_motion(spec, scene, renderer="analytic", keep_images=False)
     by = {(x["design"], x["speed_px_per_ms"]): x for x in r["rows"]}
     for d in ("cfa/single", "fsc/optimal", "rgbw/single"):
-        assert by[(d, 0.0)]["breakup_width_motion_px"] == 0 and by[(d, 0.0)]["scielab_delta_e_motion"] == 0
+        assert by[(d, 0.0)]["breakup_width_px"] == 0 and by[(d, 0.0)]["scielab_delta_e"] == 0
     assert by[("cfa/single", 0.0)]["false_colour_still"] > 20 * by[("fsc/optimal", 0.0)]["false_colour_still"]
-    assert by[("cfa/single", 0.0)]["breakup_width_px"] > 0        # the older metric counts it as breakup
-    assert by[("fsc/optimal", 0.2)]["breakup_width_motion_px"] > 3 > by[("cfa/single", 0.05)]["breakup_width_motion_px"]
+    assert by[("cfa/single", 0.0)]["breakup_width_scene_px"] > 0  # against the scene it counts as breakup
+    assert by[("fsc/optimal", 0.2)]["breakup_width_px"] > 3 > by[("cfa/single", 0.05)]["breakup_width_px"]
     moving = run_motion(spec.replace(speeds_px_per_ms=(0.2,)), scene, renderer="analytic", keep_images=False)
     assert [x["speed_px_per_ms"] for x in moving["rows"]] == [0.2] * 3
-    assert moving["rows"][1]["breakup_width_motion_px"] == by[("fsc/optimal", 0.2)]["breakup_width_motion_px"]
+    assert moving["rows"][1]["breakup_width_px"] == by[("fsc/optimal", 0.2)]["breakup_width_px"]
+
+
+def test_seeds_give_a_spread_and_an_interval():
+    """With the paper's noise each noisy metric is a mean over the seeds with its spread; the crossing
+    comes per seed with a 95 % interval around their mean; one seed gives no interval."""
+    spec, scene = load_motion(TINY + ("rolling_shutter=[false]", "designs=['cfa/single', 'fsc/optimal']",
+                                      "speeds_px_per_ms=[0.0, 0.02, 0.05, 0.1, 0.2]", "seeds=3"))
+    r = run_motion(spec, scene, renderer="analytic", keep_images=False)
+    for row in r["rows"]:
+        assert len(row["scielab_delta_e_by_seed"]) == 3 and row["seeds"] == [0, 1, 2]
+        assert row["scielab_delta_e"] == pytest.approx(sum(row["scielab_delta_e_by_seed"]) / 3)
+        assert row["scielab_delta_e_sd"] > 0          # different noise, different errors
+    a = r["answer"]["fsc/optimal"]["scielab"]
+    assert len(a["by_seed_px_per_ms"]) == 3
+    if all(x is not None for x in a["by_seed_px_per_ms"]):
+        lo, hi = a["ci95_px_per_ms"]
+        assert lo <= a["mean_px_per_ms"] <= hi and lo < hi
+    one = run_motion(spec.replace(seeds=1), scene, renderer="analytic", keep_images=False)
+    assert "ci95_px_per_ms" not in one["answer"]["fsc/optimal"]["scielab"]
+    with pytest.raises(ConfigError, match="seeds"):
+        load_motion(("seeds=0",))
 
 
 def test_unknown_key_is_refused():

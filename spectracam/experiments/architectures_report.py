@@ -143,8 +143,8 @@ def figure_spacetime(results: dict):
     ax.title.set_fontsize(10)
     ax.grid(True, axis="x", alpha=0.3)
     designs = list(dict.fromkeys(r["design"] for r in time_["rows"]))
-    for ax, metric, label in ((axes[1, 0], "breakup_width_motion_px", "(c) colour breakup width, px (motion alone)"),
-                              (axes[1, 1], "scielab_delta_e_motion", "(d) S-CIELAB ΔE*ab against the own still capture")):
+    for ax, metric, label in ((axes[1, 0], "breakup_width_px", "(c) colour breakup width, px (motion alone)"),
+                              (axes[1, 1], "scielab_delta_e", "(d) S-CIELAB ΔE*ab against the own still capture")):
         for i, d in enumerate(designs):
             pts = sorted((r["speed_px_per_ms"], r[metric]) for r in time_["rows"] if r["design"] == d)
             x, v = zip(*pts)
@@ -224,7 +224,7 @@ def _spacetime_markdown(results: dict) -> list[str]:
               "|---|---:|---:|---:|---:|---:|---:|"]
     for r in time_["rows"]:
         lines.append(f"| {r['design']} | {r['capture_time_ms']:.1f} | {r['speed_px_per_ms']:g} | "
-                     f"{r['breakup_width_motion_px']:.1f} | {r['scielab_delta_e_motion']:.2f} | "
+                     f"{r['breakup_width_px']:.1f} | {r['scielab_delta_e']:.2f} | "
                      f"{r['false_colour_still']:.2f} | {_fmt(r['mtf50_cy_per_px'], digits=3)} |")
     lines += ["", "## What wins in space and time", "", "| part | metric | design | value |", "|---|---|---|---:|"]
     for w in results["spacetime_winners"]:

@@ -9,8 +9,8 @@ one design per architecture, with the paper's camera (its pixel pitch and f-numb
   without and with a one-pixel 4-spot optical low-pass filter.
 * **Time** — the slanted edge moving across the sensor at a few speeds, global shutter, the paper's
   noise and light (cfa/single needs 28 ms): colour breakup from the motion alone
-  (``breakup_width_motion_px``, against the design's own noise-free still capture, 0 at rest),
-  S-CIELAB against that still capture (``scielab_delta_e_motion``: noise and motion), the still
+  (``breakup_width_px``, against the design's own noise-free still capture, 0 at rest),
+  S-CIELAB against that still capture (``scielab_delta_e``: noise and motion), the still
   capture's demosaicking false colour, and the capture time.
 
 Each design is the architecture with the paper's scheme for it: ``single`` for one exposure,
@@ -78,8 +78,8 @@ def run_time(scene, renderer: str, quick: bool, log=None) -> dict:
     spec = spec.quick() if quick else spec
     spec = spec.replace(speeds_px_per_ms=SPEEDS_PX_PER_MS[::2] if quick else SPEEDS_PX_PER_MS)
     res = run_motion(spec, _experiment_scene(scene, quick), renderer, log, keep_images=False)
-    keys = ("breakup_width_motion_px", "scielab_delta_e_motion", "cielab_delta_e_motion", "false_colour_still",
-            "breakup_width_px", "scielab_delta_e", "mtf50_cy_per_px", "capture_time_ms", "snr_db")
+    keys = ("breakup_width_px", "scielab_delta_e", "scielab_delta_e_sd", "cielab_delta_e", "false_colour_still",
+            "breakup_width_scene_px", "scielab_delta_e_scene", "mtf50_cy_per_px", "capture_time_ms", "snr_db")
     rows = [{"design": r["design"], "speed_px_per_ms": r["speed_px_per_ms"], **{k: r[k] for k in keys}}
             for r in res["rows"]]
     return {"rows": rows, "wall_s": res["wall_s"],
@@ -100,7 +100,7 @@ def spacetime_winners(space: dict, time_: dict) -> list[dict]:
             out.append({"part": "space", "metric": metric, "design": ", ".join(tied), "value": v})
     fast = max(r["speed_px_per_ms"] for r in time_["rows"])
     group = [r for r in time_["rows"] if r["speed_px_per_ms"] == fast]
-    for metric in ("breakup_width_motion_px", "scielab_delta_e_motion"):
+    for metric in ("breakup_width_px", "scielab_delta_e"):
         v = min(r[metric] for r in group)
         tied = [r["design"] for r in group if abs(r[metric] - v) <= 1e-6 * max(1.0, abs(v))]
         out.append({"part": "time", "metric": metric, "speed_px_per_ms": fast, "design": ", ".join(tied), "value": v})

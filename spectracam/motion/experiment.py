@@ -10,30 +10,33 @@ results.json) while each design captures it — ``cfa/single``, ``prism/optimal`
 architecture's own ``record`` **with the paper's sensor noise**, demosaicked, converted to the display
 and scored against the static scene at the capture's middle instant (t = 0):
 
-* ``breakup_width_px`` — :func:`.metrics.breakup_width_px` (chroma added above ``breakup_threshold``
-  to the camera's conversion of the ideal image: at rest a mosaic's demosaicking false colour counts);
-* ``breakup_width_motion_px`` — the same against the design's own noise-free *still* capture (same
-  exposures, demosaicking and conversion; both noise-free): colour breakup from the motion alone, 0 at rest;
-* ``scielab_delta_e_motion`` / ``cielab_delta_e_motion`` — S-CIELAB / CIELAB ΔE*ab within
-  ``zone_half_width_px`` of the edge of the (noisy) capture against that noise-free still capture: what
-  motion and noise add to the camera's own still photograph (at rest: the noise alone);
-* ``false_colour_still`` — the noise-free still capture's chroma against the camera's conversion of the
-  ideal image within 2 px of the edge, √(Δa*² + Δb*²): demosaicking false colour, its own metric;
+* ``breakup_width_px`` — :func:`.metrics.breakup_width_px`: the width over which the chroma added to the
+  design's own noise-free *still* capture (the edge at rest; the same exposures, demosaicking and
+  conversion) by its noise-free moving capture exceeds ``breakup_threshold``: colour breakup from the
+  motion alone, 0 at rest whatever the design's demosaicking false colour;
+* ``false_colour_still`` — that still capture's chroma against the camera's conversion of the ideal image
+  within 2 px of the edge, √(Δa*² + Δb*²): demosaicking false colour, its own metric;
 * ``scielab_delta_e`` / ``cielab_delta_e`` — mean S-CIELAB / CIELAB ΔE*ab within ``zone_half_width_px``
-  of the edge, against the ideal image of the scene (so they hold noise, the conversion error,
-  demosaicking, motion blur and breakup together: what an observer sees);
+  of the edge of the noisy capture against that still capture: what motion and noise add to the
+  camera's own still photograph (at rest: the noise alone); mean over ``seeds`` noise seeds, ``_sd``
+  their spread, ``scielab_delta_e_by_seed`` each;
+* ``scielab_delta_e_scene`` / ``cielab_delta_e_scene`` / ``breakup_width_scene_px`` — the same against the
+  ideal image of the scene (they also hold the conversion's constant error and the demosaicking false
+  colour: what an observer comparing with the scene sees);
 * ``mtf50_cy_per_px`` — e-SFR of the displayed luminance across the edge;
 * ``snr_db`` — the paper's SNR of the design (chart patches, combined over channels) with the same
   light, exposure and noise: a flat patch's SNR does not depend on the motion.
 
-The answer — the speed at which ``fsc/optimal``'s S-CIELAB error first exceeds ``cfa/single``'s — is
-interpolated between the swept speeds (linearly in speed).
+The answer — the speed at which ``fsc/optimal``'s S-CIELAB error (against its own still capture) first
+exceeds ``cfa/single``'s — is interpolated between the swept speeds (linearly in speed), for the mean
+over seeds and for each seed (mean and 95 % interval).
 """
 from __future__ import annotations
 
 import math
 import time
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -102,6 +105,9 @@ class MotionSpec(Spec):
     viewing_distance_m: float = 0.5
     display_pixel_pitch_mm: float = 25.4 / 120
     seed: int = 0
+    #: Noise seeds per capture (seed, seed + 1, …): every noisy metric is their mean, with its spread, and the
+    #: crossing speed is given per seed with a 95 % interval (noise off: one capture).
+    seeds: int = 3
 
     def validate(self) -> None:
         v = self.speeds_px_per_ms
@@ -141,6 +147,7 @@ class MotionSpec(Spec):
         self.number("viewing_distance_m", 0.0, 100.0, lo_open=True, unit="m")
         self.number("display_pixel_pitch_mm", 0.0, 100.0, lo_open=True, unit="mm")
         self.integer("seed", 0, 2**31 - 1)
+        self.integer("seeds", 1, 50)
 
     def timing(self, rolling: bool) -> TimingSpec:
         return TimingSpec(self.order, self.readout_gap_ms, bool(rolling), self.line_time_us, self.prism_alignment)
@@ -154,11 +161,22 @@ class MotionSpec(Spec):
                             zone_half_width_px=min(self.zone_half_width_px, 16.0))
 
 
+def paper_scene():
+    """The paper's camera, chart, bands and processing: the base scene of ``scenes/paper.toml`` (the
+    camera ``spectracam paper`` and ``architectures`` use), so "the paper's noise" is one camera."""
+    from importlib.resources import files
+
+    from ..experiments.paper import load_experiment
+
+    return load_experiment(Path(str(files("spectracam") / "scenes" / "paper.toml"))).base
+
+
 def load_motion(sets=(), quick: bool = False):
-    """``(MotionSpec, Scene)`` from ``--set`` overrides, as the spatial experiment reads them."""
+    """``(MotionSpec, Scene)`` from ``--set`` overrides over :func:`paper_scene`, as the spatial
+    experiment reads them."""
     from ..spatial.experiment import load_spec_and_scene
 
-    return load_spec_and_scene(MotionSpec, sets, quick)
+    return load_spec_and_scene(MotionSpec, sets, quick, base_scene=paper_scene())
 
 
 def calibrated_scene(scene, spec: MotionSpec):
@@ -242,6 +260,7 @@ def run_motion(spec: MotionSpec, scene, renderer: str = "mitsuba", log=None, kee
     cols0 = mm.edge_columns(w, h, target.x0_px, spec.edge_angle_deg)
     rows, images, curves, snr, timing_info = [], {}, [], {}, {}
     direction = math.radians(spec.direction_deg)
+    seeds = [spec.seed + i for i in range(spec.seeds if spec.noise else 1)]   # noise-free: one is all there is
     for design in spec.designs:
         t0 = time.perf_counter()
         camera = base.with_design(design)
@@ -270,9 +289,9 @@ def run_motion(spec: MotionSpec, scene, renderer: str = "mitsuba", log=None, kee
                 t2 = time.perf_counter()
                 rates = channel_rates(moving, integ, camera, settings, m)
                 t3 = time.perf_counter()
-                raw = record(rates, camera, white, spec.seed, times)
+                noisy = [process(record(rates, camera, white, sd, times), scene.processing, conv) for sd in seeds]
+                cam_rates, xyz = noisy[0]
                 t4 = time.perf_counter()
-                cam_rates, xyz = process(raw, scene.processing, conv)
                 quiet_xyz = xyz if not spec.noise else process(record(rates, quiet, white, spec.seed, times),
                                                                scene.processing, conv)[1]
                 t5 = time.perf_counter()
@@ -288,29 +307,36 @@ def run_motion(spec: MotionSpec, scene, renderer: str = "mitsuba", log=None, kee
                 shift = v * 1e3 * math.cos(direction) * (delay - delay.mean())
                 dist = mm.edge_distance((h, w), cols0 + shift)
                 zone = mm.edge_zone(dist, spec.zone_half_width_px) & valid
-                d, chroma = mm.chroma_profile(xyz, own_xyz, conv.display_white, dist, 0.5,
+                # colour breakup: the motion alone (noise-free moving capture against the noise-free still one)
+                d, chroma = mm.chroma_profile(quiet_xyz, still, conv.display_white, dist, 0.5,
                                               spec.zone_half_width_px, valid)
-                sc = scielab(ideal_xyz, xyz, conv.display_white, spd)
-                de = delta_e(xyz_to_lab(xyz, conv.display_white), xyz_to_lab(ideal_xyz, conv.display_white))
-                d2, chroma_motion = mm.chroma_profile(quiet_xyz, still, conv.display_white, dist, 0.5,
-                                                      spec.zone_half_width_px, valid)
-                sc_m = scielab(still, xyz, conv.display_white, spd)
-                de_m = delta_e(xyz_to_lab(xyz, conv.display_white), xyz_to_lab(still, conv.display_white))
-                f, sfr, mtf50 = mm.mtf_along_motion(xyz, b)
+                d_s, chroma_s = mm.chroma_profile(xyz, own_xyz, conv.display_white, dist, 0.5,
+                                                  spec.zone_half_width_px, valid)
+                per_seed = {k: [] for k in ("scielab_delta_e", "cielab_delta_e", "scielab_delta_e_scene",
+                                            "cielab_delta_e_scene", "mtf50_cy_per_px")}
+                lab_still = xyz_to_lab(still, conv.display_white)
+                lab_ideal = xyz_to_lab(ideal_xyz, conv.display_white)
+                for _, x in noisy:
+                    lab = xyz_to_lab(x, conv.display_white)
+                    per_seed["scielab_delta_e"].append(float(scielab(still, x, conv.display_white, spd)[zone].mean()))
+                    per_seed["cielab_delta_e"].append(float(delta_e(lab, lab_still)[zone].mean()))
+                    per_seed["scielab_delta_e_scene"].append(float(scielab(ideal_xyz, x, conv.display_white, spd)[zone].mean()))
+                    per_seed["cielab_delta_e_scene"].append(float(delta_e(lab, lab_ideal)[zone].mean()))
+                    per_seed["mtf50_cy_per_px"].append(mm.mtf_along_motion(x, b)[2])
+                f, sfr, _ = mm.mtf_along_motion(xyz, b)
                 t6 = time.perf_counter()
                 for k, dt in zip(("render", "optics", "capture", "processing", "metrics"),
                                  (t2 - t1, t3 - t2, t4 - t3, t5 - t4, t6 - t5)):
                     timings[k] += dt
                 row = {"design": design, "speed_px_per_ms": v, "speed_mm_per_s": vmm, "rolling_shutter": bool(rolling),
                        "breakup_width_px": mm.breakup_width_px(d, chroma, spec.breakup_threshold),
-                       "max_added_chroma": float(np.nanmax(chroma)),
-                       "breakup_width_motion_px": mm.breakup_width_px(d2, chroma_motion, spec.breakup_threshold),
-                       "scielab_delta_e_motion": float(sc_m[zone].mean()),
-                       "cielab_delta_e_motion": float(de_m[zone].mean()),
+                       "max_added_chroma": float(np.nanmax(np.append(chroma, 0.0))),
+                       "breakup_width_scene_px": mm.breakup_width_px(d_s, chroma_s, spec.breakup_threshold),
                        "false_colour_still": false_colour_still,
-                       "scielab_delta_e": float(sc[zone].mean()), "cielab_delta_e": float(de[zone].mean()),
-                       "scielab_delta_e_frame": float(sc[valid].mean()), "snr_db": snr[design],
-                       "mtf50_cy_per_px": mtf50 if np.isfinite(mtf50) else None,
+                       **{k: _mean_or_none(vals) for k, vals in per_seed.items()},
+                       **{f"{k}_sd": _sd_or_none(vals) for k, vals in per_seed.items()},
+                       "scielab_delta_e_by_seed": per_seed["scielab_delta_e"], "seeds": list(seeds),
+                       "snr_db": snr[design],
                        "blur_px": v * 1e3 * timing.capture_time_s,
                        "capture_time_ms": 1e3 * timing.capture_time_s,
                        "exposure_ms": (1e3 * np.asarray(times)).tolist(), **integ.info}
@@ -335,6 +361,16 @@ def run_motion(spec: MotionSpec, scene, renderer: str = "mitsuba", log=None, kee
             "wall_s": time.perf_counter() - t_start}
 
 
+def _mean_or_none(values):
+    v = [x for x in values if x is not None and np.isfinite(x)]
+    return float(np.mean(v)) if len(v) == len(values) and v else None
+
+
+def _sd_or_none(values):
+    v = [x for x in values if x is not None and np.isfinite(x)]
+    return float(np.std(v, ddof=1)) if len(v) == len(values) and len(v) > 1 else None
+
+
 def _get(rows, design, rolling, key):
     rs = sorted((r for r in rows if r["design"] == design and r["rolling_shutter"] == rolling),
                 key=lambda r: r["speed_px_per_ms"])
@@ -355,6 +391,31 @@ def crossing(speeds, a, b) -> dict:
     return {"speed_px_per_ms": None, "status": f"better at every swept speed (up to {speeds[-1]:g} px/ms)"}
 
 
+def seed_crossings(rows, design: str, other: str, rolling: bool) -> dict:
+    """The S-CIELAB crossing of ``design`` over ``other`` per noise seed (common random numbers: both see
+    the same seeds), their mean and a 95 % Student-t interval; a seed that never crosses makes the
+    interval open (``None``)."""
+    from scipy import stats
+
+    def series(d):
+        rs = sorted((r for r in rows if r["design"] == d and r["rolling_shutter"] == rolling),
+                    key=lambda r: r["speed_px_per_ms"])
+        return np.array([r["speed_px_per_ms"] for r in rs]), np.array([r["scielab_delta_e_by_seed"] for r in rs])
+
+    s, a = series(design)
+    _, c = series(other)
+    n = min(a.shape[0], c.shape[0])
+    if n == 0 or a.ndim != 2 or a.shape[1] < 1:
+        return {}
+    per = [crossing(s[:n], a[:n, j], c[:n, j])["speed_px_per_ms"] for j in range(min(a.shape[1], c.shape[1]))]
+    out = {"by_seed_px_per_ms": per}
+    if len(per) > 1 and all(p is not None for p in per):
+        m, sd = float(np.mean(per)), float(np.std(per, ddof=1))
+        h = float(stats.t.ppf(0.975, len(per) - 1) * sd / np.sqrt(len(per)))
+        out.update(mean_px_per_ms=m, ci95_px_per_ms=[m - h, m + h])
+    return out
+
+
 def crossing_speeds(rows) -> dict:
     """For each field-sequential design and shutter: the speed at which its S-CIELAB error around the
     edge exceeds cfa/single's (and the same for CIELAB)."""
@@ -373,7 +434,8 @@ def crossing_speeds(rows) -> dict:
             n = min(a.size, c.size)
             out[f"{d}{' rolling' if rolling else ''}"] = {
                 "design": d, "rolling_shutter": rolling,
-                "scielab": crossing(s[:n], a[:n], c[:n]), "cielab": crossing(s[:n], a2[:n], c2[:n]),
+                "scielab": {**crossing(s[:n], a[:n], c[:n]), **seed_crossings(rows, d, "cfa/single", rolling)},
+                "cielab": crossing(s[:n], a2[:n], c2[:n]),
                 "still_scielab": [float(a[0]), float(c[0])]}
     for rolling in sorted({r["rolling_shutter"] for r in rows}):   # from which speed balanced beats optimal
         s, o = _get(rows, "fsc/optimal", rolling, "scielab_delta_e")

@@ -36,10 +36,10 @@ def figure_curves(result, out: Path) -> list[Path]:
     speeds = sorted({r["speed_px_per_ms"] for r in rows})
     positive = [s for s in speeds if s > 0]
     lin = min(positive) if positive else 1.0
-    panels = [("breakup_width_px", f"colour-breakup width, px (added chroma > "
-               f"{result['parameters']['motion']['breakup_threshold']:g})"),
-              ("scielab_delta_e", "S-CIELAB ΔE*ab around the edge"),
-              ("cielab_delta_e", "CIELAB ΔE*ab around the edge")]
+    panels = [("breakup_width_px", f"colour-breakup width, px\n(chroma added by the motion > "
+               f"{result['parameters']['motion']['breakup_threshold']:g} ΔE*ab)"),
+              ("scielab_delta_e", "S-CIELAB ΔE*ab at the edge\n(against the camera's own still capture)"),
+              ("cielab_delta_e", "CIELAB ΔE*ab at the edge\n(against the camera's own still capture)")]
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.3), constrained_layout=True)
     for ax, (key, title) in zip(axes, panels):
         for d in _designs(rows):
@@ -167,9 +167,15 @@ def answer(result) -> list[str]:
             if s["status"] == "crosses":
                 px_ms = s["speed_px_per_ms"]
                 mm_s = px_ms * 1e3 * result["parameters"]["motion"]["object_pixel_mm"]
-                lines.append(lead + f"its S-CIELAB error exceeds the CFA's from **{px_ms:.3g} px/ms** ({px_ms * 1e3:.3g} "
-                             f"px/s, {mm_s:.3g} mm/s in the scene; between the swept {s['between'][0]:g} and "
-                             f"{s['between'][1]:g} px/ms); CIELAB from {_fmt(c['speed_px_per_ms'], '{:.3g}')} px/ms.")
+                spread = ""
+                if s.get("ci95_px_per_ms"):
+                    lo, hi = s["ci95_px_per_ms"]
+                    spread = (f"; over {len(s['by_seed_px_per_ms'])} noise seeds {s['mean_px_per_ms']:.2g} px/ms, 95 % "
+                              f"interval {lo:.2g}–{hi:.2g}")
+                lines.append(lead + f"its S-CIELAB error exceeds the CFA's from **{px_ms:.2g} px/ms** ({px_ms * 1e3:.2g} "
+                             f"px/s, {mm_s:.2g} mm/s in the scene; between the swept {s['between'][0]:g} and "
+                             f"{s['between'][1]:g} px/ms{spread}); CIELAB from {_fmt(c['speed_px_per_ms'], '{:.2g}')} "
+                             "px/ms.")
             else:
                 lines.append(lead + f"S-CIELAB: {s['status']}; CIELAB: {c['status']}"
                              + (f" ({c['speed_px_per_ms']:.3g} px/ms)" if c.get("speed_px_per_ms") else "") + ".")
@@ -193,7 +199,9 @@ def report_markdown(result, command: str) -> str:
            "Catrysse, Wandell & El Gamal (1999) weigh the field-sequential camera's SNR advantage against \"the "
            "temporal disadvantages of FSC\". Here a neutral slanted edge moves across the image while each design "
            "captures it with the paper's exposure control, light level and sensor noise; the displayed image is "
-           "scored against the still scene at the capture's middle instant.", "",
+           "scored against the same camera's noise-free still capture (the edge at rest: its own demosaicking and "
+           "conversion, so only motion and noise count; docs/metrics.md) and, in the `*_scene` columns of "
+           "results.json, against the still scene.", "",
            "## Answer", "", *answer(result), "",
            "How the balanced scheme changes it: it gives the field-sequential camera the CFA's total time, so the "
            "frames are closer in time (smaller breakup at every speed) but each frame gets about a quarter of the "
@@ -202,7 +210,8 @@ def report_markdown(result, command: str) -> str:
            "so it skews the edge but adds no colour: it moves the crossing by less than the sweep resolves.", "",
            "![breakup and S-CIELAB against speed](breakup_scielab.png)", "", "![crops](crops.png)", "",
            "![field-sequential frames](fsc_frames.gif)", ""]
-    for key in ("scielab_delta_e", "cielab_delta_e", "breakup_width_px", "mtf50_cy_per_px"):
+    for key in ("scielab_delta_e", "cielab_delta_e", "breakup_width_px", "false_colour_still", "mtf50_cy_per_px",
+                "scielab_delta_e_scene"):
         for rolling in sorted({r["rolling_shutter"] for r in rows}):
             out += [f"**{key}** ({'rolling' if rolling else 'global'} shutter)", "",
                     "| design | SNR dB | " + " | ".join(f"{v:g}" for v in speeds) + " px/ms |",

@@ -195,10 +195,10 @@ def load_spatial(sets=(), quick: bool = False):
     return load_spec_and_scene(SpatialSpec, sets, quick)
 
 
-def load_spec_and_scene(spec_cls, sets=(), quick: bool = False):
+def load_spec_and_scene(spec_cls, sets=(), quick: bool = False, base_scene=None):
     """``(spec_cls spec, Scene)`` from ``--set`` overrides (the spatial and the motion experiments):
-    top-level keys are the experiment's, tables the scene's; ``quick``: the spec's ``quick()`` and
-    20-nm bands."""
+    top-level keys are the experiment's, tables the scene's (over ``base_scene``'s tables when given,
+    else the defaults); ``quick``: the spec's ``quick()`` and 20-nm bands."""
     from ..overrides import apply_overrides
     from ..scene import Scene
 
@@ -214,6 +214,11 @@ def load_spec_and_scene(spec_cls, sets=(), quick: bool = False):
     if quick:  # the quick look's sizes, except what --set chose
         spec = spec.quick().replace(**{k: getattr(spec, k) for k in own})
         tables.setdefault("wavelengths", {"start_nm": 400, "stop_nm": 700, "step_nm": 20})
+    if base_scene is not None:   # each table over the base scene's own (a --set key changes one entry)
+        d = base_scene.to_dict()
+        whole = ("wavelengths",)   # a grid is given one way or the other, never merged
+        tables = {**d, **{k: ({**d[k], **v} if isinstance(d.get(k), dict) and k not in whole else v)
+                          for k, v in tables.items()}}
     scene = Scene.from_dict(tables, "--set")
     return spec, scene
 
