@@ -502,6 +502,8 @@ def case_experiment_values(rng, d: Path):
         (["spatial", "--quick", "-o", "out", "--set", "designs=['rgbw/single']", "--set", "demosaics=['menon2007']"],
          True),
         (["motion", "--quick", "-o", "out", "--set", "designs=['stacked/optimal']"], True),
+        (["motion", "--quick", "-o", "out", "--set", "seeds=0"], True),
+        (["motion", "--quick", "-o", "out", "--set", "seeds=2.5"], True),
         (["consistency", "-o", "out", "--set", "temperatures_K=[]"], True),
         (["paper", "--quick", "-o", "out", "--set", "light.white_luminance_cd_m2=-5"], True),
         (["paper", "--quick", "-o", "out", "--set", "temperatures_K=[1e9]"], True),
