@@ -8,7 +8,8 @@ results.json) while each design captures it — ``cfa/single``, ``prism/optimal`
 28 ms at 5000 K), the windows those of :mod:`.timing`, the image the time integral of Mitsuba slices
 (:mod:`.render`) through the spatial optics (diffraction, pixel aperture), recorded by the
 architecture's own ``record`` **with the paper's sensor noise**, demosaicked, converted to the display
-and scored against the static scene at the capture's middle instant (t = 0):
+and scored against the same design's noise-free still capture (the edge at rest at the capture's
+middle instant, t = 0) and against the static scene there:
 
 * ``breakup_width_px`` — :func:`.metrics.breakup_width_px`: the width over which the chroma added to the
   design's own noise-free *still* capture (the edge at rest; the same exposures, demosaicking and
