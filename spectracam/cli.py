@@ -570,15 +570,13 @@ def plot_sweep_cmd(out_dir, x_axis, line_axis, panel_axis, metrics):
 
 def default_experiment() -> Path:
     """The paper's experiment file shipped with spectracam (scenes/paper.toml)."""
-    from importlib.resources import files
+    from .scene import shipped_scene_file
 
-    shipped = files("spectracam") / "scenes" / "paper.toml"
-    if shipped.is_file():
-        return Path(str(shipped))
-    here = Path(__file__).resolve().parent.parent / "scenes" / "paper.toml"
-    if not here.exists():
-        raise SpectracamError("experiment = scenes/paper.toml: not shipped with this installation; pass --experiment FILE")
-    return here
+    try:
+        return shipped_scene_file("paper.toml")
+    except ConfigError:
+        raise SpectracamError("experiment = scenes/paper.toml: not shipped with this installation; "
+                              "pass --experiment FILE") from None
 
 
 @main.command("inspect")

@@ -253,6 +253,26 @@ def load_scene(path: str | Path, overrides=()) -> Scene:
     return parse_scene(resolve_curve_files(data, Path(path).parent), source=str(path))
 
 
+def experiment_base_scene(table: dict, directory: str | Path, overrides=(), source: str | None = None) -> Scene:
+    """The scene an experiment file (``scenes/paper.toml``) builds on: its ``base_scene`` file (relative to
+    ``directory``) with its ``[scene.*]`` tables and then ``overrides`` applied."""
+    base_name = table.get("base_scene", "blackbody_5000K.toml")
+    if not isinstance(base_name, str):
+        raise ConfigError("base_scene", base_name, "must be a path to a scene file", source)
+    scene_tables = table.get("scene", {})
+    if not isinstance(scene_tables, dict) or not all(isinstance(v, dict) for v in scene_tables.values()):
+        raise ConfigError("scene", scene_tables, "must be a table of scene tables, e.g. [scene.sensor]", source)
+    from_file = [(f"{t}.{k}", v) for t, kv in scene_tables.items() for k, v in kv.items()]
+    return load_scene(Path(directory) / base_name, from_file + list(overrides))
+
+
+def paper_scene() -> Scene:
+    """The camera, chart, bands and processing of ``spectracam paper`` (the base scene of the shipped
+    ``scenes/paper.toml``): the one camera every experiment means by "the paper's camera"."""
+    path = shipped_scene_file("paper.toml")
+    return experiment_base_scene(read_toml(path, "experiment file"), path.parent, source=str(path))
+
+
 def load_camera_config(path: str | Path, base: CameraSpec | None = None) -> CameraSpec:
     """Read a camera config file (the scene file's camera tables only), over ``base``."""
     return CameraSpec.from_dict(read_toml(path, "config file"), source=str(path), base=base)

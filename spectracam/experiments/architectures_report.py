@@ -134,8 +134,7 @@ def figure_spacetime(results: dict):
     ax = axes[0, 1]
     rows = sorted(space["rows"], key=lambda r: r["scielab_spatial_star"])
     y = np.arange(len(rows))
-    ax.barh(y, [r["scielab_spatial_star"] for r in rows], color=[colour.get(r["design"].split("/")[0], "k") for r in rows],
-            hatch=None)
+    ax.barh(y, [r["scielab_spatial_star"] for r in rows], color=[colour.get(r["design"].split("/")[0], "k") for r in rows])
     ax.set_yticks(y, [r["label"] for r in rows], fontsize=7)
     ax.invert_yaxis()
     ax.set(xlabel="S-CIELAB ΔE*ab on the Siemens star (spatial error; lower is better)",

@@ -22,7 +22,7 @@ from ..illuminant import IlluminantSpec
 from ..overrides import apply_overrides, parse_assignment
 from ..reference import ChartReference
 from ..render import RadianceCube
-from ..scene import Scene, load_scene, read_toml
+from ..scene import Scene, experiment_base_scene, read_toml
 from ..score import score
 from ..spec import _is_number
 
@@ -111,14 +111,9 @@ def load_experiment(path: str | Path, overrides=()) -> PaperExperiment:
     for k in t:
         if k not in EXPERIMENT_KEYS:
             raise ConfigError(k, t[k], "unknown key; an experiment file has " + ", ".join(EXPERIMENT_KEYS), src)
-    base_name = t.pop("base_scene", "blackbody_5000K.toml")
-    if not isinstance(base_name, str):
-        raise ConfigError("base_scene", base_name, "must be a path to a scene file", src)
-    scene_tables = t.pop("scene", {})
-    if not isinstance(scene_tables, dict) or not all(isinstance(v, dict) for v in scene_tables.values()):
-        raise ConfigError("scene", scene_tables, "must be a table of scene tables, e.g. [scene.sensor]", src)
-    from_file = [(f"{table}.{k}", v) for table, kv in scene_tables.items() for k, v in kv.items()]
-    base = load_scene(p.parent / base_name, from_file + scene_overrides)
+    base = experiment_base_scene(t, p.parent, scene_overrides, src)
+    t.pop("base_scene", None)
+    t.pop("scene", None)
     if base.target.textured:
         raise ConfigError("target.kind", base.target.kind, "the paper's experiment scores the ColorChecker; a "
                           "textured target is scored by simulate or score", src)

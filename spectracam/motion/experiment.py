@@ -37,7 +37,6 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
@@ -162,19 +161,10 @@ class MotionSpec(Spec):
                             zone_half_width_px=min(self.zone_half_width_px, 16.0))
 
 
-def paper_scene():
-    """The paper's camera, chart, bands and processing: the base scene of ``scenes/paper.toml`` (the
-    camera ``spectracam paper`` and ``architectures`` use), so "the paper's noise" is one camera."""
-    from importlib.resources import files
-
-    from ..experiments.paper import load_experiment
-
-    return load_experiment(Path(str(files("spectracam") / "scenes" / "paper.toml"))).base
-
-
 def load_motion(sets=(), quick: bool = False):
-    """``(MotionSpec, Scene)`` from ``--set`` overrides over :func:`paper_scene`, as the spatial
-    experiment reads them."""
+    """``(MotionSpec, Scene)`` from ``--set`` overrides over the paper's camera and light
+    (:func:`spectracam.scene.paper_scene`), as the spatial experiment reads them."""
+    from ..scene import paper_scene
     from ..spatial.experiment import load_spec_and_scene
 
     return load_spec_and_scene(MotionSpec, sets, quick, base_scene=paper_scene())
@@ -323,8 +313,10 @@ def run_motion(spec: MotionSpec, scene, renderer: str = "mitsuba", log=None, kee
                     per_seed["cielab_delta_e"].append(float(delta_e(lab, lab_still)[zone].mean()))
                     per_seed["scielab_delta_e_scene"].append(float(scielab(ideal_xyz, x, conv.display_white, spd)[zone].mean()))
                     per_seed["cielab_delta_e_scene"].append(float(delta_e(lab, lab_ideal)[zone].mean()))
-                    per_seed["mtf50_cy_per_px"].append(mm.mtf_along_motion(x, b)[2])
-                f, sfr, _ = mm.mtf_along_motion(xyz, b)
+                    f_s, sfr_s, mtf50_s = mm.mtf_along_motion(x, b)
+                    per_seed["mtf50_cy_per_px"].append(mtf50_s)
+                    if x is xyz:   # the first seed's curve is the one drawn
+                        f, sfr = f_s, sfr_s
                 t6 = time.perf_counter()
                 for k, dt in zip(("render", "optics", "capture", "processing", "metrics"),
                                  (t2 - t1, t3 - t2, t4 - t3, t5 - t4, t6 - t5)):

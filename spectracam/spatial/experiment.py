@@ -214,12 +214,7 @@ def load_spec_and_scene(spec_cls, sets=(), quick: bool = False, base_scene=None)
     if quick:  # the quick look's sizes, except what --set chose
         spec = spec.quick().replace(**{k: getattr(spec, k) for k in own})
         tables.setdefault("wavelengths", {"start_nm": 400, "stop_nm": 700, "step_nm": 20})
-    if base_scene is not None:   # each table over the base scene's own (a --set key changes one entry)
-        d = base_scene.to_dict()
-        whole = ("wavelengths",)   # a grid is given one way or the other, never merged
-        tables = {**d, **{k: ({**d[k], **v} if isinstance(d.get(k), dict) and k not in whole else v)
-                          for k, v in tables.items()}}
-    scene = Scene.from_dict(tables, "--set")
+    scene = Scene.from_dict(tables, "--set", base=base_scene)   # a --set key changes one entry of the base
     return spec, scene
 
 
@@ -316,6 +311,7 @@ def run_spatial(spec: SpatialSpec, scene, renderer: str = "mitsuba", log=None, k
                      for N in spec.f_numbers)
         for N in spec.f_numbers:
             base = case_camera(scene, spec, pitch, N)
+            columns, design_columns = channel_columns(base, grid, spec.designs)   # the case's band weights
             for tname in spec.targets:
                 target, (w, h), field_mm = make_target(tname, spec, scene)
                 geometry = CameraGeometry.framing(field_mm, spec.focal_length_mm, N, pitch, w, h)
@@ -335,7 +331,6 @@ def run_spatial(spec: SpatialSpec, scene, renderer: str = "mitsuba", log=None, k
                 timings[tname]["render"] += t1 - t0
                 # -- optics, per band, shared by every design of this case: each distinct channel once
                 settings = sopt.OpticsSettings(defocus_um=defocus_diameter_um(target, big, cube), cos4=spec.cos4)
-                columns, design_columns = channel_columns(base, grid, spec.designs)
                 spectra, fy, fx, shape = sopt.channel_spectra(cube.radiance, cube.wavelengths_nm, ss,
                                                               base, grid, settings, workers=-1, weights=columns)
                 ideal = cube.pixel_average()[margin:-margin, margin:-margin]

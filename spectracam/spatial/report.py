@@ -55,8 +55,7 @@ ARCH_COLOURS = {"stacked": "#8c564b", "rgbw": "#9467bd", "ryyb": "#bcbd22", "cmy
 
 
 def _colour(label):
-    base = label.replace(" OLPF", "|").split("|")[0].strip()
-    base = " ".join(w for w in base.split() if w != "px" and not w.replace(".", "").isdigit())
+    base = label.split(" OLPF")[0]   # with or without the low-pass filter: one colour (the line style differs)
     if base in COLOURS:
         return COLOURS[base]
     if "misaligned" in label:
