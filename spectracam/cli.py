@@ -8,8 +8,8 @@ from pathlib import Path
 import click
 
 from . import __version__
-from .cli_options import (_camera_options, _check_writable, _flag_overrides, _log, _output, _processing_options,
-                          _quiet_option, _renderer_option, _set_option)
+from .cli_options import (camera_options, check_writable, flag_overrides, progress_log, output_option, processing_options,
+                          quiet_option, renderer_option, set_option)
 from .errors import ConfigError, SpectracamError
 
 
@@ -143,10 +143,10 @@ def _scene(data: dict, source: str, config_file=None, flags=(), sets=()):
 
 @main.command("render")
 @click.argument("scene_file", type=click.Path(dir_okay=False, path_type=Path))
-@_output("Directory to write radiance.exr into.")
-@_renderer_option
-@_set_option
-@_quiet_option
+@output_option("Directory to write radiance.exr into.")
+@renderer_option
+@set_option
+@quiet_option
 def render_cmd(scene_file: Path, out_dir: Path, renderer: str, sets, quiet: bool):
     """Render SCENE_FILE into DIR/radiance.exr (spectral EXR, W·m⁻²·sr⁻¹·nm⁻¹ per band)."""
     from .io.exr import write_radiance_exr
@@ -157,8 +157,8 @@ def render_cmd(scene_file: Path, out_dir: Path, renderer: str, sets, quiet: bool
 
     scene = _scene(read_toml(scene_file, "scene file"), str(scene_file), sets=sets)  # validated before any work
     check_memory(scene)
-    _check_writable(out_dir)
-    log = _log(quiet)
+    check_writable(out_dir)
+    log = progress_log(quiet)
     t0 = time.perf_counter()
     cube = render(scene, renderer=renderer, progress=not quiet, log=log)
     path = write_radiance_exr(out_dir / "radiance.exr", cube)
@@ -185,16 +185,16 @@ def _write_capture(out_dir: Path, raw, scene) -> list[Path]:
 
 @main.command("capture")
 @click.argument("radiance_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
-@_output("Directory to write raw.exr and raw.dng into (and rendered.exr/.png for a spectral image from another tool).")
-@_camera_options
+@output_option("Directory to write raw.exr and raw.dng into (and rendered.exr/.png for a spectral image from another tool).")
+@camera_options
 @click.option("--white", default=None, metavar="patch|brightest|X0,Y0,X1,Y1|L",
               help="Where exposure is metered: the chart's white patch (spectracam scenes' default), the brightest "
                    "neutral (other files' default), a pixel region, or a white luminance L in cd/m² under the "
                    "scene illuminant.")
 @click.option("--units", default=None, metavar="UNIT",
               help="Radiance unit of a spectral EXR that states none (emissiveUnits), e.g. W.m^-2.sr^-1 (per nm).")
-@_set_option
-@_quiet_option
+@set_option
+@quiet_option
 def capture_cmd(radiance_file: Path, out_dir: Path, arch, exposure, config_file, seed, white, units, sets, quiet):
     """Capture a spectral RADIANCE_FILE (spectracam's, or a Fichet-layout EXR from any tool) with a simulated
     sensor; write DIR/raw.exr and DIR/raw.dng."""
@@ -204,8 +204,8 @@ def capture_cmd(radiance_file: Path, out_dir: Path, arch, exposure, config_file,
 
     white_spec = parse_white(white) if white is not None else None  # checked before the file is read
     cube, _ = read_radiance_exr(radiance_file, units)  # checked as it is read
-    log = _log(quiet)
-    flags = _flag_overrides(arch=arch, exposure=exposure)
+    log = progress_log(quiet)
+    flags = flag_overrides(arch=arch, exposure=exposure)
     recorded = "scene" in cube.metadata
     if recorded:
         scene = _scene(cube.metadata["scene"], str(radiance_file), config_file, flags, sets)
@@ -220,7 +220,7 @@ def capture_cmd(radiance_file: Path, out_dir: Path, arch, exposure, config_file,
             lo, hi = cube.metadata["bands_dropped_outside_nm"]
             log(f"{radiance_file}: bands outside {lo:g}–{hi:g} nm dropped (the chart the conversion is fitted on has "
                 "no reflectance data there)")
-    _check_writable(out_dir)
+    check_writable(out_dir)
     raw = capture(cube, seed=seed, scene=scene, white=white_spec) if recorded else \
         capture_spectral_image(cube, scene, seed, white_spec)
     paths = _write_capture(out_dir, raw, scene)
@@ -282,10 +282,10 @@ def _score_and_write(raw, scene, out_dir: Path, log):
 @click.option("--scene", "scene_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="The scene the capture was taken of (its [processing] table applies) [default: the scene the "
                    "raw file records].")
-@_output("Directory to write rendered.exr/.png, delta_e.png and report.json/.csv into.")
-@_processing_options
-@_set_option
-@_quiet_option
+@output_option("Directory to write rendered.exr/.png, delta_e.png and report.json/.csv into.")
+@processing_options
+@set_option
+@quiet_option
 def score_cmd(raw_file, scene_file, out_dir, demosaic, display, adaptation, delta_e, gamut_clip, sets, quiet):
     """Render RAW_FILE on a display and score it: rendered.exr/.png, delta_e.png, report.json/.csv."""
     from .io.exr import read_raw_exr
@@ -298,21 +298,21 @@ def score_cmd(raw_file, scene_file, out_dir, demosaic, display, adaptation, delt
         data, source = raw.scene, f"the scene recorded in {raw_file}"
     else:
         raise SpectracamError(f"file = {str(raw_file)!r}: records no scene; pass --scene SCENE.toml")
-    flags = _flag_overrides(demosaic=demosaic, display=display, adaptation=adaptation, delta_e=delta_e,
+    flags = flag_overrides(demosaic=demosaic, display=display, adaptation=adaptation, delta_e=delta_e,
                             gamut_clip=gamut_clip)
     scene = _scene(data, source, flags=flags, sets=sets)
-    _check_writable(out_dir)
-    _score_and_write(raw, scene, out_dir, _log(quiet))
+    check_writable(out_dir)
+    _score_and_write(raw, scene, out_dir, progress_log(quiet))
 
 
 @main.command("simulate")
 @click.argument("scene_file", type=click.Path(dir_okay=False, path_type=Path))
-@_output("Directory to write every file of render, capture and score into.")
-@_renderer_option
-@_camera_options
-@_processing_options
-@_set_option
-@_quiet_option
+@output_option("Directory to write every file of render, capture and score into.")
+@renderer_option
+@camera_options
+@processing_options
+@set_option
+@quiet_option
 def simulate_cmd(scene_file, out_dir, renderer, arch, exposure, config_file, seed, demosaic, display, adaptation,
                  delta_e, gamut_clip, sets, quiet):
     """Render → capture → score SCENE_FILE in one go; writes every file of the three steps."""
@@ -321,14 +321,14 @@ def simulate_cmd(scene_file, out_dir, renderer, arch, exposure, config_file, see
     from .render import render
     from .scene import read_toml
 
-    flags = _flag_overrides(arch=arch, exposure=exposure, demosaic=demosaic, display=display, adaptation=adaptation,
+    flags = flag_overrides(arch=arch, exposure=exposure, demosaic=demosaic, display=display, adaptation=adaptation,
                             delta_e=delta_e, gamut_clip=gamut_clip)
     from .pipeline import check_memory
 
     scene = _scene(read_toml(scene_file, "scene file"), str(scene_file), config_file, flags, sets)
     check_memory(scene)
-    _check_writable(out_dir)
-    log = _log(quiet)
+    check_writable(out_dir)
+    log = progress_log(quiet)
     cube = render(scene, renderer=renderer, progress=not quiet, log=log)
     write_radiance_exr(out_dir / "radiance.exr", cube)
     raw = capture(cube, seed=seed, scene=scene)
@@ -337,16 +337,16 @@ def simulate_cmd(scene_file, out_dir, renderer, arch, exposure, config_file, see
 
 
 @main.command("paper")
-@_output("Directory to write the figures, results.json, report.md and the case files into.")
+@output_option("Directory to write the figures, results.json, report.md and the case files into.")
 @click.option("--experiment", "experiment_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Experiment file [default: scenes/paper.toml shipped with spectracam].")
-@_renderer_option
+@renderer_option
 @click.option("--quick", is_flag=True, help="A first look: 160x120 pixels instead of the scene's size.")
 @click.option("--no-cache", is_flag=True, help="Render again even if the render cache has the scene.")
 @click.option("--save-cubes", is_flag=True, help="Also write every light's spectral radiance cube into DIR/cases "
               "(~37 MB each; they are in the render cache).")
-@_set_option
-@_quiet_option
+@set_option
+@quiet_option
 def paper_cmd(out_dir, experiment_file, renderer, quick, no_cache, save_cubes, sets, quiet):
     """Reproduce the paper's Figures 4, 5a, 5b and 6: figures, results.json, report.md, case files."""
     from .experiments.paper import load_experiment, quick_scene, run_paper
@@ -358,8 +358,8 @@ def paper_cmd(out_dir, experiment_file, renderer, quick, no_cache, save_cubes, s
     exp = load_experiment(path, sets)
     base = quick_scene(exp.base, quick)
     check_memory(base, copies=len(exp.temperatures_K) + 1, what=f", {len(exp.temperatures_K) + 1} lights held at once")
-    _check_writable(out_dir)
-    log = _log(quiet)
+    check_writable(out_dir)
+    log = progress_log(quiet)
     t0 = time.perf_counter()
     step = lambda msg: log(f"[{time.perf_counter() - t0:6.1f} s] {msg}")  # noqa: E731
     results, cases, cubes = run_paper(exp, renderer=renderer, quick=quick, use_cache=not no_cache, step=step,
@@ -375,16 +375,16 @@ def paper_cmd(out_dir, experiment_file, renderer, quick, no_cache, save_cubes, s
 
 
 @main.command("architectures")
-@_output("Directory to write results.json, report.md and the figures into.")
+@output_option("Directory to write results.json, report.md and the figures into.")
 @click.option("--experiment", "experiment_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Experiment file whose camera, chart and light are used [default: scenes/paper.toml].")
-@_renderer_option
+@renderer_option
 @click.option("--quick", is_flag=True, help="A first look: 160x120 pixels and 2 noise seeds.")
 @click.option("--seeds", type=click.IntRange(1, 100), default=None,
               help="Noise seeds per case [default: 5; 2 with --quick].")
 @click.option("--no-cache", is_flag=True, help="Render again even if the render cache has the scene.")
-@_set_option
-@_quiet_option
+@set_option
+@quiet_option
 def architectures_cmd(out_dir, experiment_file, renderer, quick, seeds, no_cache, sets, quiet):
     """Every registered architecture and exposure scheme at the paper's camera, light and noise, at 1, 1/10
     and 1/100 of its light: SNR, ΔE (training and held-out), capture time; then each architecture on the
@@ -399,8 +399,8 @@ def architectures_cmd(out_dir, experiment_file, renderer, quick, seeds, no_cache
     run = ArchitecturesRun(exp, quick=quick, seeds=seeds or (2 if quick else SEEDS))
     base = quick_scene(exp.base, quick)
     check_memory(base, copies=2, what=", two lights and a scaled copy held at once")
-    _check_writable(out_dir)
-    log = _log(quiet)
+    check_writable(out_dir)
+    log = progress_log(quiet)
     t0 = time.perf_counter()
     step = lambda msg: log(f"[{time.perf_counter() - t0:6.1f} s] {msg}")  # noqa: E731
     step(f"{len(designs())} designs: {', '.join(designs())}")
@@ -416,7 +416,7 @@ def architectures_cmd(out_dir, experiment_file, renderer, quick, seeds, no_cache
 
 
 @main.command("emva")
-@_output("Directory to write emva.json, datasheet.md and the photon-transfer, SNR and linearity plots into.")
+@output_option("Directory to write emva.json, datasheet.md and the photon-transfer, SNR and linearity plots into.")
 @click.option("--scene", "scene_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Scene file whose camera is measured [default: the paper's camera].")
 @click.option("--config", "config_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
@@ -426,8 +426,8 @@ def architectures_cmd(out_dir, experiment_file, renderer, quick, seeds, no_cache
 @click.option("--wavelength", "wavelength_nm", type=click.FloatRange(300, 1100), default=540.0, show_default=True,
               help="Wavelength of the monochromatic light, nm.")
 @click.option("--seed", type=click.IntRange(0, 2**31 - 1), default=0, show_default=True, help="Noise seed.")
-@_set_option
-@_quiet_option
+@set_option
+@quiet_option
 def emva_cmd(out_dir, scene_file, config_file, channel, wavelength_nm, seed, sets, quiet):
     """Characterise the simulated camera by EMVA 1288 (Release 4.0, linear): datasheet and plots."""
     from .experiments.emva import EmvaSetup, run_emva, write_emva_outputs
@@ -435,13 +435,13 @@ def emva_cmd(out_dir, scene_file, config_file, channel, wavelength_nm, seed, set
 
     data, source = (read_toml(scene_file, "scene file"), str(scene_file)) if scene_file else ({}, "command line")
     scene = _scene(data, source, config_file, (), sets)
-    _check_writable(out_dir)
+    check_writable(out_dir)
     result = run_emva(scene.camera, EmvaSetup(channel=channel, wavelength_nm=wavelength_nm, seed=seed))
     command = "spectracam emva -o " + str(out_dir) + (f" --scene {scene_file}" if scene_file else "") \
         + (f" --config {config_file}" if config_file else "") + f" --channel {channel} --wavelength {wavelength_nm:g}" \
         + f" --seed {seed}" + "".join(f" --set {s}" for s in sets)
     paths = write_emva_outputs(out_dir, result, command)
-    log = _log(quiet)
+    log = progress_log(quiet)
     num = lambda x: "–" if x is None else f"{x:.5g}"  # noqa: E731
     for k, v in result["measured"].items():
         log(f"  {k:<26} configured {num(result['configured'][k]):>10}   measured {num(v):>10}")
@@ -474,18 +474,18 @@ def cameras_cmd(as_json: bool):
 
 
 @main.command("validate")
-@_output("Directory to write validate.json, validate.md and validate.png/.svg into.")
-@_renderer_option
-@_quiet_option
+@output_option("Directory to write validate.json, validate.md and validate.png/.svg into.")
+@renderer_option
+@quiet_option
 def validate_cmd(out_dir, renderer, quiet):
     """Check every shipped camera with a published XYZ(D65)→camera matrix: the simulated white's R/G and B/G against
     the matrix's neutral, and ΔE*ab of the published matrix on the simulated raw (beside a least-squares fit's)."""
     from .experiments.validate import run_validate, write_validate_outputs
 
-    _check_writable(out_dir)
+    check_writable(out_dir)
     result = run_validate(renderer)
     paths = write_validate_outputs(out_dir, result, f"spectracam validate -o {out_dir} --renderer {renderer}")
-    log = _log(quiet)
+    log = progress_log(quiet)
     for r in result["cameras"]:
         log(f"  {r['camera']}: white R/G {r['white_RG_simulated']:.3f} (published {r['white_RG_published']:.3f}, "
             f"{r['white_RG_error_percent']:+.1f} %), B/G {r['white_BG_simulated']:.3f} (published "
@@ -496,13 +496,13 @@ def validate_cmd(out_dir, renderer, quiet):
 
 
 @main.command("consistency")
-@_output("Directory to write consistency.json, consistency.md and the map (PNG, SVG) into.")
+@output_option("Directory to write consistency.json, consistency.md and the map (PNG, SVG) into.")
 @click.option("--experiment", "experiment_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Experiment file [default: scenes/paper.toml shipped with spectracam].")
-@_renderer_option
+@renderer_option
 @click.option("--full", is_flag=True, help="The scene's full image size instead of 160x120.")
-@_set_option
-@_quiet_option
+@set_option
+@quiet_option
 def consistency_cmd(out_dir, experiment_file, renderer, full, sets, quiet):
     """Which readings of the paper's open choices reproduce which of its claims: a map and a table."""
     from .experiments.consistency import run_consistency, write_consistency_outputs
@@ -513,8 +513,8 @@ def consistency_cmd(out_dir, experiment_file, renderer, full, sets, quiet):
 
     if full:  # the quick map is 160x120: nothing to estimate
         check_memory(exp.base, copies=len(exp.temperatures_K) + 1, what=f", {len(exp.temperatures_K) + 1} lights")
-    _check_writable(out_dir)
-    log = _log(quiet)
+    check_writable(out_dir)
+    log = progress_log(quiet)
     result = run_consistency(exp, renderer=renderer, quick=not full, log=log)
     command = "spectracam consistency -o " + str(out_dir) + (f" --experiment {experiment_file}" if experiment_file
                                                               else "") + f" --renderer {renderer}" \
@@ -526,7 +526,7 @@ def consistency_cmd(out_dir, experiment_file, renderer, full, sets, quiet):
 
 @main.command("sweep")
 @click.argument("sweep_file", type=click.Path(dir_okay=False, path_type=Path))
-@_output("Directory for results.jsonl/.parquet/.csv and sweep.json.")
+@output_option("Directory for results.jsonl/.parquet/.csv and sweep.json.")
 @click.option("--scheduler", default=None, help="Address of a running Dask scheduler, tcp://HOST:PORT "
               "[default: a local cluster of processes made for the run].")
 @click.option("--workers", type=click.IntRange(1, 1024), default=None, help="Local cluster size [default: cores].")
@@ -534,23 +534,23 @@ def consistency_cmd(out_dir, experiment_file, renderer, full, sets, quiet):
 @click.option("--resume", is_flag=True, help="Continue an interrupted sweep in DIR, skipping finished cells.")
 @click.option("--max-cells", type=click.IntRange(1), default=100_000, show_default=True,
               help="Refuse a sweep with more cells than this (each is validated before anything runs, ~1 ms a cell).")
-@_set_option
-@_quiet_option
+@set_option
+@quiet_option
 def sweep_cmd(sweep_file, out_dir, scheduler, workers, serial, resume, max_cells, sets, quiet):
     """Run every cell of SWEEP_FILE on Dask; results.parquet/.csv/.jsonl in DIR, a row per cell and trial."""
     from .experiments.sweep import load_sweep, run_sweep
 
     if serial and scheduler:
         raise SpectracamError("--serial and --scheduler: choose one")
-    sweep = load_sweep(sweep_file, sets, max_cells=max_cells, log=_log(quiet))
+    sweep = load_sweep(sweep_file, sets, max_cells=max_cells, log=progress_log(quiet))
     from .pipeline import check_memory
 
     check_memory(sweep.largest_scene, copies=sweep.distinct_renders,
                  what=f", {sweep.distinct_renders} distinct render(s) held at once")
-    _check_writable(Path(out_dir))
+    check_writable(Path(out_dir))
     t = run_sweep(sweep, out_dir, scheduler=scheduler, workers=workers, serial=serial, resume=resume,
-                  progress=not quiet, log=_log(quiet))
-    _log(quiet)(f"{t['new_cells']} of {t['cells']} cells computed in {t['wall_s']:.1f} s "
+                  progress=not quiet, log=progress_log(quiet))
+    progress_log(quiet)(f"{t['new_cells']} of {t['cells']} cells computed in {t['wall_s']:.1f} s "
                 f"(cell compute {t['compute_s']:.1f} s); tables in {out_dir}")
 
 

@@ -31,7 +31,7 @@ class RegistryChoice(click.ParamType):
         return self.registry.check(value, self.option)
 
 
-def _log(quiet: bool):
+def progress_log(quiet: bool):
     return (lambda msg: None) if quiet else (lambda msg: click.echo(msg, err=True))
 
 
@@ -52,18 +52,18 @@ class _OutputDir(click.Path):
         return super().convert(value, param, ctx)
 
 
-def _output(help_text: str):
+def output_option(help_text: str):
     return click.option("-o", "--output", "out_dir", required=True, type=_OutputDir(file_okay=False, path_type=Path),
                         help=help_text)
 
 
-_set_option = click.option("--set", "sets", multiple=True, metavar="PATH=VALUE", help=_SET_HELP)
-_quiet_option = click.option("--quiet", is_flag=True, help="No progress or notices on stderr.")
-_renderer_option = click.option("--renderer", type=RegistryChoice(RENDERERS, "--renderer"), default="mitsuba",
+set_option = click.option("--set", "sets", multiple=True, metavar="PATH=VALUE", help=_SET_HELP)
+quiet_option = click.option("--quiet", is_flag=True, help="No progress or notices on stderr.")
+renderer_option = click.option("--renderer", type=RegistryChoice(RENDERERS, "--renderer"), default="mitsuba",
                                 show_default=True, help="Mitsuba (Monte Carlo) or the closed form.")
 
 
-def _camera_options(f):
+def camera_options(f):
     f = click.option("--seed", type=click.IntRange(0, 2**31 - 1), default=None,
                      help="Noise seed [default: the scene's render.seed].")(f)
     f = click.option("--config", "config_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
@@ -75,7 +75,7 @@ def _camera_options(f):
     return f
 
 
-def _processing_options(f):
+def processing_options(f):
     f = click.option("--gamut-clip/--no-gamut-clip", default=None, help="Clip display RGB to [0, 1].")(f)
     f = click.option("--delta-e", "delta_e", type=RegistryChoice(DELTA_E_METHODS, "--delta-e"), default=None,
                      help="Colour difference formula [default: the scene's, else cie1976].")(f)
@@ -88,7 +88,7 @@ def _processing_options(f):
     return f
 
 
-def _flag_overrides(**flags) -> list[tuple[str, object]]:
+def flag_overrides(**flags) -> list[tuple[str, object]]:
     """``(path, value)`` overrides of the flags given on the command line."""
     paths = {"arch": "capture.architecture", "exposure": "capture.exposure", "demosaic": "processing.demosaic",
              "display": "processing.display", "adaptation": "processing.adaptation", "delta_e": "processing.delta_e",
@@ -96,7 +96,7 @@ def _flag_overrides(**flags) -> list[tuple[str, object]]:
     return [(paths[k], v) for k, v in flags.items() if v is not None]
 
 
-def _check_writable(out_dir: Path) -> None:
+def check_writable(out_dir: Path) -> None:
     """Refuse before any work when the output directory could not be made or written (nothing is
     created here: a run that fails later leaves no empty directory behind)."""
     import os

@@ -150,3 +150,12 @@ def _discard(stage: dict, renamed: list) -> None:
     for d in reversed(stage["dirs"]):
         with contextlib.suppress(OSError):
             d.rmdir()
+
+
+def json_default(o):
+    """``json.dumps(default=)`` for NumPy scalars and arrays."""
+    if isinstance(o, np.generic):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    raise TypeError(type(o).__name__)

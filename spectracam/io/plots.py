@@ -4,6 +4,8 @@ from __future__ import annotations
 import io
 from pathlib import Path
 
+import numpy as np
+
 from .files import atomic_write
 
 
@@ -32,3 +34,15 @@ def save_figure(fig, *paths: str | Path, dpi: int = 120, tight: bool = True) -> 
     finally:
         plt.close(fig)
     return out[0] if len(out) == 1 else out
+
+
+def srgb_image(xyz: np.ndarray, display_white: np.ndarray) -> np.ndarray:
+    """sRGB (0–1, encoded) of display-relative XYZ: the display white shown as D65 white."""
+    import colour
+
+    d65 = np.asarray(colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"])
+    wxy = colour.XYZ_to_xy(display_white / display_white[1])
+    M = np.asarray(colour.adaptation.matrix_chromatic_adaptation_VonKries(
+        colour.xy_to_XYZ(wxy), colour.xy_to_XYZ(d65), transform="Bradford"))
+    rgb = colour.XYZ_to_RGB(xyz @ M.T, "sRGB", apply_cctf_encoding=False)
+    return np.clip(colour.cctf_encoding(np.clip(rgb, 0, 1), "sRGB"), 0, 1)

@@ -9,15 +9,15 @@ from pathlib import Path
 
 import click
 
-from ..cli_options import _check_writable, _log, _output, _quiet_option, _renderer_option, _set_option
+from ..cli_options import check_writable, progress_log, output_option, quiet_option, renderer_option, set_option
 
 
 @click.command("motion")
-@_output("Directory to write results.json, mtf_curves.json, report.md, the figures and fsc_frames.gif into.")
+@output_option("Directory to write results.json, mtf_curves.json, report.md, the figures and fsc_frames.gif into.")
 @click.option("--quick", is_flag=True, help="A first look: a 64×64 edge, 20-nm bands, 8 speeds, 8 samples per sub-pixel.")
-@_renderer_option
-@_set_option
-@_quiet_option
+@renderer_option
+@set_option
+@quiet_option
 def motion_cmd(out_dir: Path, quick: bool, renderer: str, sets, quiet: bool):
     """Motion: a neutral slanted edge moving at a sweep of speeds, captured by cfa/single, prism/optimal,
     fsc/optimal and fsc/balanced with a global and a rolling shutter (time slices rendered by Mitsuba);
@@ -30,8 +30,8 @@ def motion_cmd(out_dir: Path, quick: bool, renderer: str, sets, quiet: bool):
     if renderer not in ("mitsuba", "analytic"):
         raise ConfigError("--renderer", renderer, "moving targets are rendered by 'mitsuba' or 'analytic'")
     check_motion_memory(spec, scene)
-    _check_writable(out_dir)
-    log = _log(quiet)
+    check_writable(out_dir)
+    log = progress_log(quiet)
     t0 = time.perf_counter()
     result = run_motion(spec, scene, renderer=renderer, log=log)
     command = "spectracam motion -o " + str(out_dir) + (" --quick" if quick else "") \

@@ -45,7 +45,7 @@ from ..errors import ConfigError, SpectracamError
 from ..spatial import optics as sopt
 from ..spatial.geometry import CameraGeometry
 from ..spatial.render import material_radiance, needs_thinlens
-from ..spatial.targets import SiemensStar, SlantedEdge, Target, _object_points
+from ..spatial.targets import SiemensStar, SlantedEdge, Target, object_points
 from .motion import Motion, pose_key, pose_matrix
 from .timing import CaptureTiming
 
@@ -81,7 +81,7 @@ def posed_coverage(target: Target, geometry: CameraGeometry, supersampling: int,
         return posed_edge(target, geometry, pose).coverage(geometry, supersampling)
     if isinstance(target, SiemensStar):
         inv = np.linalg.inv(pose_matrix(pose))
-        X, Y = _object_points(geometry, supersampling, target.oversampling)
+        X, Y = object_points(geometry, supersampling, target.oversampling)
         R = target.radius_px * geometry.object_pixel_mm
         o = target.oversampling
         dark = np.zeros((Y.shape[0], X.shape[0]))
@@ -121,11 +121,11 @@ class MovingScene:
 
     # -- Mitsuba ----------------------------------------------------------------------------------
     def _build_mitsuba(self, variant, log):
-        from ..render.mitsuba import POINTS_PER_BAND, _activate, select_variant
-        from ..spatial.render import _build
+        from ..render.mitsuba import POINTS_PER_BAND, activate_variant, select_variant
+        from ..spatial.render import build_scene
 
         name, reason = select_variant(variant)
-        mi = self._mi = _activate(name)
+        mi = self._mi = activate_variant(name)
         widths = self.grid.widths_nm
         self._width = float(widths.max())
         if not np.allclose(widths, self._width):
@@ -133,7 +133,7 @@ class MovingScene:
         thin = needs_thinlens(self.target, self.geometry)
         if log:
             log(f"Mitsuba: building the moving {self.target.name} scene ({name}, {'thinlens' if thin else 'perspective'})")
-        self._scene, self._params, self._materials = _build(mi, self.target, self.geometry, self.supersampling, 1,
+        self._scene, self._params, self._materials = build_scene(mi, self.target, self.geometry, self.supersampling, 1,
                                                             self._width, thin)
         self._base = {}
         for key, shape, _ in self.target.mitsuba_shapes(mi, self.geometry):

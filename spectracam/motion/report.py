@@ -8,9 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io.files import atomic_write
-from ..io.plots import pyplot, save_figure
-from ..spatial.report import _json_default, _srgb
+from ..io.files import atomic_write, json_default
+from ..io.plots import pyplot, save_figure, srgb_image
 
 COLOURS = {"cfa/single": "#d62728", "prism/optimal": "#1f77b4", "fsc/optimal": "#2ca02c", "fsc/balanced": "#9467bd"}
 
@@ -88,11 +87,11 @@ def figure_crops(result, out: Path, rolling: bool = False) -> list[Path]:
     ideal = result["images"][(designs[0], "ideal")]["xyz"]
     for j, v in enumerate(speeds):
         ax = axes[0, j]
-        ax.imshow(_srgb(_crop(ideal).astype(float), white), interpolation="nearest")
+        ax.imshow(srgb_image(_crop(ideal).astype(float), white), interpolation="nearest")
         ax.set_title(f"{v:g} px/ms", fontsize=9)
         for i, d in enumerate(designs):
             im = result["images"][(d, v, rolling)]["xyz"]
-            axes[i + 1, j].imshow(_srgb(_crop(im).astype(float), white), interpolation="nearest")
+            axes[i + 1, j].imshow(srgb_image(_crop(im).astype(float), white), interpolation="nearest")
     for i, lab in enumerate(["scene (t = 0)"] + designs):
         axes[i, 0].set_ylabel(lab, fontsize=8)
     for ax in axes.ravel():
@@ -126,7 +125,7 @@ def fsc_frames_gif(result, out: Path, design: str = "fsc/optimal", speed: float 
         rgb = g[..., None] * (0.25 + 0.75 * tints[k])[None, None, :]
         frames.append(rgb ** (1 / 2.2))
         names.append(f"{'RGB'[k]} frame, {rows[0]['exposure_ms'][k]:.0f} ms")
-    frames.append(_srgb(np.asarray(im["xyz"], float), white))
+    frames.append(srgb_image(np.asarray(im["xyz"], float), white))
     names.append(f"{design} at {speed:g} px/ms (displayed)")
     pics = []
     for f, name in zip(frames, names):
@@ -271,8 +270,8 @@ def write_outputs(out_dir: Path, result: dict, command: str) -> list[Path]:
     public["display_white"] = np.asarray(result["display_white"]).tolist()
     public["command"] = command
     paths.append(atomic_write(out_dir / "results.json", json.dumps(public, indent=1, allow_nan=False,
-                                                                   default=_json_default).encode()))
+                                                                   default=json_default).encode()))
     paths.append(atomic_write(out_dir / "mtf_curves.json", json.dumps({"curves": result["mtf_curves"]},
-                                                                      default=_json_default).encode()))
+                                                                      default=json_default).encode()))
     paths.append(atomic_write(out_dir / "report.md", report_markdown(result, command).encode()))
     return paths

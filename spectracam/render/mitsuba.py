@@ -127,7 +127,7 @@ def select_variant(requested: str) -> tuple[str, str]:
     return name, f"requested: {requested}"
 
 
-def _activate(variant: str):
+def activate_variant(variant: str):
     env = _jit_env()
     if "DRJIT_LIBLLVM_PATH" in env:
         os.environ.setdefault("DRJIT_LIBLLVM_PATH", env["DRJIT_LIBLLVM_PATH"])
@@ -138,7 +138,7 @@ def _activate(variant: str):
     return mi
 
 
-def _regular(values: np.ndarray, width_nm: float) -> dict:
+def regular_spectrum(values: np.ndarray, width_nm: float) -> dict:
     return {"type": "regular", "wavelength_min": REFERENCE_WINDOW_NM,
             "wavelength_max": REFERENCE_WINDOW_NM + width_nm,
             "values": ", ".join(f"{v:.9g}" for v in values)}
@@ -176,7 +176,7 @@ def band_scene(mi, scene, view_width: float, width_nm: float) -> dict:
             "sampler": {"type": "independent", "sample_count": scene.render.samples_per_pixel},
         },
         "light": {"type": "directional", "direction": [0, 0, -1],
-                  "irradiance": _regular(np.ones(POINTS_PER_BAND + 1), width_nm)},
+                  "irradiance": regular_spectrum(np.ones(POINTS_PER_BAND + 1), width_nm)},
     }
 
 
@@ -188,12 +188,12 @@ def build_scene(mi, scene, width_nm: float) -> dict:
     placeholder = np.ones(POINTS_PER_BAND + 1)
     d = band_scene(mi, scene, vw, width_nm)
     d["board"] = {"type": "rectangle", "to_world": T().scale([vw, vh, 1]),
-                  "bsdf": {"type": "diffuse", "reflectance": _regular(placeholder, width_nm)}}
+                  "bsdf": {"type": "diffuse", "reflectance": regular_spectrum(placeholder, width_nm)}}
     for p, (x0, x1, y0, y1) in enumerate(patch_rectangles_mm(scene.chart)):
         d[f"patch{p:02d}"] = {
             "type": "rectangle",
             "to_world": T().translate([(x0 + x1) / 2, (y0 + y1) / 2, PATCH_LIFT_MM]) @ T().scale([(x1 - x0) / 2, (y1 - y0) / 2, 1]),
-            "bsdf": {"type": "diffuse", "reflectance": _regular(placeholder, width_nm)},
+            "bsdf": {"type": "diffuse", "reflectance": regular_spectrum(placeholder, width_nm)},
         }
     return d
 
@@ -215,7 +215,7 @@ def render_mitsuba(scene, progress: bool = False, log=None, within_band: str = "
     variant, reason = select_variant(scene.render.variant)
     if log:
         log(f"Mitsuba variant {variant} ({reason})")
-    mi = _activate(variant)
+    mi = activate_variant(variant)
 
     grid = scene.grid
     ref_width = even_band_width_nm(grid)

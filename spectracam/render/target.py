@@ -29,12 +29,12 @@ def render_target_analytic(scene) -> RadianceCube:
 
 
 def render_target_mitsuba(scene, progress: bool = False, log=None) -> RadianceCube:
-    from .mitsuba import POINTS_PER_BAND, _activate, band_scene, band_seed, even_band_width_nm, select_variant
+    from .mitsuba import POINTS_PER_BAND, activate_variant, band_scene, band_seed, even_band_width_nm, select_variant
 
     variant, reason = select_variant(scene.render.variant)
     if log:
         log(f"Mitsuba variant {variant} ({reason})")
-    mi = _activate(variant)
+    mi = activate_variant(variant)
     grid = scene.grid
     width_nm = even_band_width_nm(grid)
     ref = TargetReference.of(scene)

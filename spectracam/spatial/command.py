@@ -9,16 +9,16 @@ from pathlib import Path
 
 import click
 
-from ..cli_options import _check_writable, _log, _output, _quiet_option, _renderer_option, _set_option
+from ..cli_options import check_writable, progress_log, output_option, quiet_option, renderer_option, set_option
 
 
 @click.command("spatial")
-@_output("Directory to write results.json, mtf_curves.json, report.md, the figures and maps/ into.")
+@output_option("Directory to write results.json, mtf_curves.json, report.md, the figures and maps/ into.")
 @click.option("--quick", is_flag=True, help="A first look: half-size images, 20-nm bands, 2 samples per sub-pixel.")
-@_renderer_option
+@renderer_option
 @click.option("--no-maps", is_flag=True, help="Skip maps/: one S-CIELAB map PNG per design, case and target.")
-@_set_option
-@_quiet_option
+@set_option
+@quiet_option
 def spatial_cmd(out_dir: Path, quick: bool, renderer: str, no_maps: bool, sets, quiet: bool):
     """Spatial comparison: slanted edge, Siemens star and tilted chart through diffraction, the pixel
     aperture and each design (CFA + demosaicking, prism aligned/misaligned, FSC); e-SFR MTF50, false
@@ -31,8 +31,8 @@ def spatial_cmd(out_dir: Path, quick: bool, renderer: str, no_maps: bool, sets, 
         from ..errors import ConfigError
 
         raise ConfigError("--renderer", renderer, "spatial targets are rendered by 'mitsuba' or 'analytic'")
-    _check_writable(out_dir)
-    log = _log(quiet)
+    check_writable(out_dir)
+    log = progress_log(quiet)
     t0 = time.perf_counter()
     result = run_spatial(spec, scene, renderer=renderer, log=log)
     command = "spectracam spatial -o " + str(out_dir) + (" --quick" if quick else "") \

@@ -84,9 +84,9 @@ def _camera_params(mi, geometry: CameraGeometry):
     return T().look_at(origin=[0, 0, geometry.object_distance_mm], target=[0, 0, 0], up=[0, 1, 0])
 
 
-def _build(mi, target: Target, geometry: CameraGeometry, supersampling: int, spp: int, width_nm: float,
+def build_scene(mi, target: Target, geometry: CameraGeometry, supersampling: int, spp: int, width_nm: float,
            thinlens: bool):
-    from ..render.mitsuba import POINTS_PER_BAND, REFERENCE_WINDOW_NM, _regular
+    from ..render.mitsuba import POINTS_PER_BAND, REFERENCE_WINDOW_NM, regular_spectrum
 
     placeholder = np.ones(POINTS_PER_BAND + 1)
     sensor = {"type": "thinlens" if thinlens else "perspective", "fov": geometry.horizontal_fov_deg, "fov_axis": "x",
@@ -104,10 +104,10 @@ def _build(mi, target: Target, geometry: CameraGeometry, supersampling: int, spp
     d = {"type": "scene", "integrator": {"type": "direct", "emitter_samples": 1, "bsdf_samples": 0},
          "sensor": sensor,
          "light": {"type": "directional", "direction": target.light_direction(),
-                   "irradiance": _regular(placeholder, width_nm)}}
+                   "irradiance": regular_spectrum(placeholder, width_nm)}}
     materials = {}
     for key, shape, m in target.mitsuba_shapes(mi, geometry):
-        bsdf = {"type": "diffuse", "reflectance": _regular(placeholder, width_nm)}
+        bsdf = {"type": "diffuse", "reflectance": regular_spectrum(placeholder, width_nm)}
         if isinstance(shape, dict):
             d[key] = {**shape, "bsdf": bsdf}
         else:  # a triangle mesh (vertices, faces) made here, with its BSDF
@@ -131,10 +131,10 @@ def render_mitsuba(target: Target, geometry: CameraGeometry, illuminant: Illumin
     """Mitsuba 3 render of the target, ``samples_per_pixel`` per sub-pixel and band; ``thinlens``: the
     camera (default: a thin lens where any of the target is out of focus, else a perspective pinhole)."""
     from ..errors import SpectracamError
-    from ..render.mitsuba import POINTS_PER_BAND, _activate, band_seed, select_variant
+    from ..render.mitsuba import POINTS_PER_BAND, activate_variant, band_seed, select_variant
 
     variant_name, reason = select_variant(variant)
-    mi = _activate(variant_name)
+    mi = activate_variant(variant_name)
     widths = grid.widths_nm
     ref_width = float(widths.max())
     if not np.allclose(widths, ref_width):
@@ -147,13 +147,13 @@ def render_mitsuba(target: Target, geometry: CameraGeometry, illuminant: Illumin
         if log:
             log(f"Mitsuba: building the {target.name} scene ({variant_name}, "
                 f"{'thinlens' if thinlens else 'perspective'} camera)")
-        _SCENES[key] = _build(mi, target, geometry, supersampling, samples_per_pixel, ref_width, thinlens)
+        _SCENES[key] = build_scene(mi, target, geometry, supersampling, samples_per_pixel, ref_width, thinlens)
         # the shapes' size depends on the field of view: built for this geometry; later geometries of the
         # same framing differ only in the camera
         _SCENES[key] = (*_SCENES[key], geometry.field_of_view_mm)
     scene, params, materials, fov_mm = _SCENES[key]
     if not np.allclose(fov_mm, geometry.field_of_view_mm, rtol=1e-9):
-        scene, params, materials = _build(mi, target, geometry, supersampling, samples_per_pixel, ref_width, thinlens)
+        scene, params, materials = build_scene(mi, target, geometry, supersampling, samples_per_pixel, ref_width, thinlens)
         _SCENES[key] = (scene, params, materials, geometry.field_of_view_mm)
     params["sensor.to_world"] = _camera_params(mi, geometry)
     params["sensor.x_fov"] = geometry.horizontal_fov_deg

@@ -6,20 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io.files import atomic_write
-from ..io.plots import pyplot, save_figure
-
-
-def _srgb(xyz: np.ndarray, display_white: np.ndarray) -> np.ndarray:
-    """sRGB (0–1, encoded) of display-relative XYZ: the display white shown as D65 white."""
-    import colour
-
-    d65 = np.asarray(colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"])
-    wxy = colour.XYZ_to_xy(display_white / display_white[1])
-    M = np.asarray(colour.adaptation.matrix_chromatic_adaptation_VonKries(
-        colour.xy_to_XYZ(wxy), colour.xy_to_XYZ(d65), transform="Bradford"))
-    rgb = colour.XYZ_to_RGB(xyz @ M.T, "sRGB", apply_cctf_encoding=False)
-    return np.clip(colour.cctf_encoding(np.clip(rgb, 0, 1), "sRGB"), 0, 1)
+from ..io.files import atomic_write, json_default
+from ..io.plots import pyplot, save_figure, srgb_image
 
 
 def _cases(rows):
@@ -157,7 +145,7 @@ def figure_crops(result, out: Path, case) -> list[Path]:
             im = result["images"][(case[0], case[1], t, lab)]["xyz"]
             box = _crop_box(t, im.shape)
             ax = axes[i, j]
-            ax.imshow(_srgb(im[box].astype(float), white), interpolation="nearest")
+            ax.imshow(srgb_image(im[box].astype(float), white), interpolation="nearest")
             ax.set_xticks([]), ax.set_yticks([])
             if i == 0:
                 ax.set_title("ideal (scene)" if lab == "ideal" else lab.replace("/optimal", "").replace("/single", ""),
@@ -352,17 +340,9 @@ def write_outputs(out_dir: Path, result: dict, command: str, maps: bool = True) 
     public["display_white"] = np.asarray(result["display_white"]).tolist()
     public["command"] = command
     paths.append(atomic_write(out_dir / "results.json", json.dumps(public, indent=1, allow_nan=False,
-                                                                   default=_json_default).encode()))
+                                                                   default=json_default).encode()))
     paths.append(atomic_write(out_dir / "mtf_curves.json", json.dumps(
         {"curves": result["mtf_curves"], "closed_form": result["closed_form"]}, allow_nan=False,
-        default=_json_default).encode()))
+        default=json_default).encode()))
     paths.append(atomic_write(out_dir / "report.md", report_markdown(result, command).encode()))
     return paths
-
-
-def _json_default(o):
-    if isinstance(o, np.generic):
-        return o.item()
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    raise TypeError(type(o).__name__)

@@ -40,7 +40,7 @@ def neutral_materials(dataset: str = "BabelColor Average") -> list:
     return [(n, tabulated(*data[n])) for n in (DARK_NEUTRAL, BRIGHT_NEUTRAL)]
 
 
-def _object_points(geometry: CameraGeometry, supersampling: int, oversampling: int):
+def object_points(geometry: CameraGeometry, supersampling: int, oversampling: int):
     """Object-plane coordinates X (cols), Y (rows) of ``oversampling²`` points in every sub-pixel, mm:
     arrays ``(Hs, os, 1)`` and ``(1, Ws, os)`` → broadcast by the caller. Pinhole projection onto z = 0."""
     k = geometry.object_distance_mm / geometry.image_distance_mm
@@ -152,7 +152,7 @@ class SiemensStar(Target):
         return (sector % 2 == 0) & (x * x + y * y <= radius * radius)
 
     def coverage(self, geometry, supersampling):
-        X, Y = _object_points(geometry, supersampling, self.oversampling)
+        X, Y = object_points(geometry, supersampling, self.oversampling)
         R = self.radius_px * geometry.object_pixel_mm
         Hs, Ws = Y.shape[0], X.shape[0]
         dark = np.zeros((Hs, Ws), np.float64)
