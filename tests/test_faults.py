@@ -400,10 +400,10 @@ def test_layouts_are_what_they_say():
         PlanesLayout("frame", "three frames")
     with pytest.raises(SpectracamError, match="no raw EXR form"):
         layout_to_dict(object())
-    with pytest.raises(Exception, match="must be one of 'edge', 'star', 'chart'"):
-        from spectracam.spatial.experiment import SpatialSpec, make_target
+    with pytest.raises(Exception, match="targets = 'nosuch': must be one of 'edge', 'edge_red_cyan'"):
+        from spectracam.spatial.experiment import SPATIAL_TARGETS
 
-        make_target("nosuch", SpatialSpec(), None)
+        SPATIAL_TARGETS.get("nosuch")
 
 
 def test_a_false_flag_on_the_command_line_is_applied(tmp_path):

@@ -54,15 +54,14 @@ def run_space(scene, renderer: str, quick: bool, log=None) -> dict:
     spec = spec.quick() if quick else spec
     res = run_spatial(spec, _experiment_scene(scene, quick), renderer, log, keep_images=False)
     rows = []
-    for label in dict.fromkeys(r["label"] for r in res["rows"]):
-        edge = next(r for r in res["rows"] if r["label"] == label and r["target"] == "edge")
-        star = next(r for r in res["rows"] if r["label"] == label and r["target"] == "star")
-        rows.append({"label": label, "design": edge["design"], "demosaic": edge["demosaic"],
-                     "olpf_separation_px": edge["olpf_separation_px"],
-                     "mtf50_cy_per_px": edge["mtf50_cy_per_px"], "false_colour_edge": edge["false_colour"],
-                     "false_colour_star": star["false_colour"],
-                     "scielab_spatial_star": star["scielab_delta_e_spatial"],
-                     "scielab_spatial_edge": edge["scielab_delta_e_spatial"]})
+    for label in dict.fromkeys(r.label for r in res["rows"]):
+        edge = next(r for r in res["rows"] if r.label == label and r.target == "edge")
+        star = next(r for r in res["rows"] if r.label == label and r.target == "star")
+        rows.append({"label": label, "design": edge.design, "demosaic": edge.demosaic,
+                     "olpf_separation_px": edge.olpf_separation_px,
+                     "mtf50_cy_per_px": edge.mtf50_cy_per_px, "false_colour_edge": edge.false_colour,
+                     "false_colour_star": star.false_colour, "scielab_spatial_star": star.scielab_delta_e_spatial,
+                     "scielab_spatial_edge": edge.scielab_delta_e_spatial})
     return {"rows": rows, "wall_s": res["wall_s"],
             "parameters": {"spatial": spec.to_dict(), "renderer": renderer, "noise": spec.noise,
                            "pixel_pitch_um": cam.sensor.pixel_pitch_um, "f_number": cam.optics.f_number}}

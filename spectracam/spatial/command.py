@@ -16,7 +16,7 @@ from ..cli_options import check_writable, progress_log, output_option, quiet_opt
 @output_option("Directory to write results.json, mtf_curves.json, report.md, the figures and maps/ into.")
 @click.option("--quick", is_flag=True, help="A first look: half-size images, 20-nm bands, 2 samples per sub-pixel.")
 @renderer_option
-@click.option("--no-maps", is_flag=True, help="Skip maps/: one S-CIELAB map PNG per design, case and target.")
+@click.option("--no-maps", is_flag=True, help="Skip cases/: every design's image of every case and target (EXR, PNG, error map).")
 @set_option
 @quiet_option
 def spatial_cmd(out_dir: Path, quick: bool, renderer: str, no_maps: bool, sets, quiet: bool):

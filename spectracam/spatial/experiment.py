@@ -1,27 +1,19 @@
 """The spatial experiment: the paper's next step ("incorporate spatial factors to understand how the
 elimination of demosaicing provides a spatial advantage for FSC").
 
-For each pixel pitch × f-number (a *case*) and each target (slanted edge, Siemens star, tilted
+For each pixel pitch × f-number (a *case*) and each target of :data:`SPATIAL_TARGETS` (the neutral
+slanted edge, four coloured slanted edges, a luminance and a chroma zone plate, a Siemens star, a tilted
 ColorChecker) the target is rendered on a sub-pixel grid (:mod:`.render`), filtered by the optics and
-sampled by each design (:mod:`.optics`, :mod:`.capture`) — ``cfa/single`` with each demosaicking
-method, ``prism/optimal`` aligned and misaligned, ``fsc/optimal`` — processed to the display and
-scored against the ideal image (each pixel's footprint of the scene, no optics, no sampling):
+sampled by each design (:mod:`.optics`, :mod:`.capture`) — every mosaic with each demosaicking method
+with and without an optical low-pass filter, a prism aligned and misaligned, anything else once —
+processed to the display and scored (:mod:`.score`) against the scene band-limited to the sensor's
+Nyquist frequency (aliasing counts as error) and against the same camera's rendering of it (the
+spatial error alone). With ``noise = true`` every design is captured with ``seeds`` noise seeds and
+each metric is their mean with a 95 % interval.
 
-* ``mtf50_cy_per_px`` — ISO 12233:2017 e-SFR of the displayed luminance Y on the slanted edge (with
-  :func:`~spectracam.spatial.esfr.esfr`'s binning correction), where it falls to 0.5; per channel too;
-* ``false_colour`` — on neutral targets, the mean chroma error ``√(Δa*² + Δb*²)`` in the edge zone
-  (pixels within 2 px of where the ideal image's L* changes) against the same camera's rendering of
-  the ideal image: colour the spatial processing made, not the colour conversion's constant tint;
-* ``scielab_delta_e`` — mean S-CIELAB ΔE*ab (Zhang & Wandell 1997) over the target's region, against
-  the ideal image of the scene (so it includes the conversion error the paper measures);
-* ``cielab_delta_e`` — mean per-pixel CIELAB ΔE*ab over the same region (no spatial filtering);
-* ``scielab_delta_e_spatial``, ``cielab_delta_e_spatial`` — the same against the camera's own
-  rendering of the ideal image: the spatial error alone (optics, sampling, demosaicking, misregistration).
-
-The ideal image is each pixel's footprint of the scene (the renderer's radiance averaged over the
-pixel: no optics, no sampling); its XYZ is carried to the display white as the paper scores colour.
-
-Stages are timed (render, optics, capture, processing, metrics) per target.
+The steps: :func:`render_case` (one render per target and pitch, per f-number for the tilted chart),
+:func:`case_optics` (every distinct channel through the optics once), :func:`capture_design` (sampling,
+recording, processing), :func:`score_design` (the metrics, over seeds). Stages are timed.
 """
 from __future__ import annotations
 
@@ -34,22 +26,81 @@ import numpy as np
 from ..camera import CAMERA_TABLES, CameraSpec, band_weights, photo_electron_rates
 from ..color import DEMOSAIC_METHODS
 from ..errors import ConfigError
-from ..metrics import delta_e, xyz_to_lab
 from ..reference import ChartReference
 from ..spec import Spec
 from . import optics as sopt
 from .capture import (Conversion, SpatialDesign, misregistration_shifts, process, radiance_to_display_xyz, record,
                       white_rate)
-from .esfr import NoEdge, esfr
+from ..registry import Registry
 from .geometry import CameraGeometry
 from .render import SubpixelCube, defocus_diameter_um, material_radiance, render_target
-from .scielab import samples_per_degree, scielab
-from .targets import SiemensStar, SlantedEdge, Target, TiltedChart
+from .scielab import samples_per_degree
+from .score import SCORE_BORDER_PX, ScoringContext, SpatialRow, mtf_curves, score_image, seed_summary
+from .targets import BRIGHT_NEUTRAL, DARK_NEUTRAL, ColouredEdge, SiemensStar, SlantedEdge, Target, TiltedChart, ZonePlate
 
-TARGETS = ("edge", "star", "chart")
 STAGES = ("render", "optics", "capture", "processing", "metrics")
-#: Pixels cut from every side before scoring: demosaicking's border rows and columns.
-SCORE_BORDER_PX = 4
+#: The scene references a spatial image is scored against (docs/metrics.md): the scene band-limited to
+#: the Nyquist frequency (aliasing counts), or each pixel's box footprint (aliasing invisible).
+REFERENCES = ("nyquist", "footprint")
+__all__ = ["SCORE_BORDER_PX", "SPATIAL_TARGETS", "SpatialSpec", "load_spatial", "run_spatial"]
+
+
+@dataclass(frozen=True)
+class TargetCase:
+    """A target as one case frames it: the target, its image size (width, height) px, the object-plane
+    field width it fills, mm, sub-pixels per pixel side and samples per sub-pixel."""
+
+    target: Target
+    size_px: tuple
+    field_mm: float
+    supersampling: int
+    samples_per_subpixel: int
+
+
+#: name → ``builder(spec, scene) -> TargetCase``: the targets ``targets`` may name.
+SPATIAL_TARGETS: Registry = Registry("targets", "spatial target")
+
+
+def _edge(patches=None):
+    def build(spec, scene):
+        w, h = spec.edge_size_px
+        t = SlantedEdge(angle_deg=spec.edge_angle_deg, dataset=scene.chart.dataset) if patches is None else \
+            ColouredEdge(angle_deg=spec.edge_angle_deg, dataset=scene.chart.dataset, patches=patches)
+        return TargetCase(t, (w, h), w * spec.object_pixel_mm, spec.supersampling, spec.samples_per_subpixel)
+    return build
+
+
+def _zone_plate(patches):
+    def build(spec, scene):
+        w, h = spec.zone_plate_size_px
+        t = ZonePlate(patches=patches, radius_px=0.5 * min(w, h), max_frequency_cy_per_px=spec.zone_plate_max_cy_per_px,
+                      dataset=scene.chart.dataset)
+        return TargetCase(t, (w, h), w * spec.object_pixel_mm, spec.supersampling, spec.samples_per_subpixel)
+    return build
+
+
+def _star(spec, scene):
+    w, h = spec.star_size_px
+    t = SiemensStar(cycles=spec.star_cycles, radius_px=0.47 * min(w, h), dataset=scene.chart.dataset)
+    return TargetCase(t, (w, h), w * spec.object_pixel_mm, spec.supersampling, spec.star_samples_per_subpixel)
+
+
+def _chart(spec, scene):
+    w, h = spec.chart_size_px
+    return TargetCase(TiltedChart(tilt_deg=spec.chart_tilt_deg, chart=scene.chart), (w, h), spec.chart_field_mm,
+                      spec.chart_supersampling, spec.samples_per_subpixel)
+
+
+SPATIAL_TARGETS.register("edge", _edge())                                    # the two neutrals, 4:1 (ISO 12233)
+SPATIAL_TARGETS.register("edge_red_cyan", _edge(("red", "cyan")))            # opposite hues, L* 40.7 / 51.8
+SPATIAL_TARGETS.register("edge_blue_yellow", _edge(("blue", "yellow")))      # opposite hues, L* 29.7 / 81.5
+SPATIAL_TARGETS.register("edge_skin", _edge(("dark skin", "light skin")))    # a natural pair, small chroma step
+SPATIAL_TARGETS.register("edge_foliage_sky", _edge(("foliage", "blue sky")))  # a natural pair, mostly chroma
+SPATIAL_TARGETS.register("zone_plate", _zone_plate((DARK_NEUTRAL, BRIGHT_NEUTRAL)))   # luminance
+SPATIAL_TARGETS.register("zone_plate_chroma", _zone_plate(("magenta", "cyan")))      # chroma: L* 51.0 / 51.8
+SPATIAL_TARGETS.register("star", _star)
+SPATIAL_TARGETS.register("chart", _chart)
+TARGETS = SPATIAL_TARGETS.names
 
 
 @dataclass(frozen=True)
@@ -88,6 +139,9 @@ class SpatialSpec(Spec):
     #: 36 cycles: the spokes reach the Nyquist frequency 36/π = 11.5 px from the centre.
     star_cycles: int = 36
     chart_size_px: tuple = (384, 256)
+    #: The zone plates: 128 × 128 px, local frequency rising to 1 cy/px (twice Nyquist) at the inscribed radius.
+    zone_plate_size_px: tuple = (128, 128)
+    zone_plate_max_cy_per_px: float = 1.0
     #: Turned 40° about the vertical axis: the right edge is ~90 mm farther than the left.
     chart_tilt_deg: float = 40.0
     chart_field_mm: float = 300.0
@@ -95,6 +149,14 @@ class SpatialSpec(Spec):
     object_pixel_mm: float = 0.5
     #: Sensor noise of the paper's camera (off: the spatial artefacts alone, noise-free and unquantised).
     noise: bool = False
+    #: Noise seeds per design when ``noise`` is on (seed, seed + 1, …): each metric their mean with a 95 %
+    #: Student-t interval; a noise-free capture is deterministic and taken once.
+    seeds: int = 3
+    #: The scene reference (see :data:`REFERENCES`): ``nyquist`` so that aliasing is scored.
+    reference: str = "nyquist"
+    #: ISO 12233:2017's e-SFR as the standard states it; true adds the binning correction of
+    #: :func:`spectracam.spatial.esfr.esfr` (not in the standard: +1.6–2.2 % MTF50 here).
+    esfr_correct_binning: bool = False
     cos4: bool = False
     #: S-CIELAB viewing: one image pixel per display pixel of 120 dpi seen from 0.5 m (ISETCam's default, 41 px/°).
     viewing_distance_m: float = 0.5
@@ -104,7 +166,7 @@ class SpatialSpec(Spec):
     def validate(self) -> None:
         self.numbers("pixel_pitches_um", len(self.pixel_pitches_um), 0.1, lo_open=True, unit="µm")
         self.numbers("f_numbers", len(self.f_numbers), 0.5, unit="")
-        for name, allowed in (("targets", TARGETS), ("demosaics", DEMOSAIC_METHODS.names)):
+        for name, allowed in (("targets", SPATIAL_TARGETS.names), ("demosaics", DEMOSAIC_METHODS.names)):
             v = getattr(self, name)
             if not isinstance(v, tuple) or not v or any(x not in allowed for x in v):
                 raise self.error(name, "must be a non-empty list of " + ", ".join(map(repr, allowed)),
@@ -134,7 +196,7 @@ class SpatialSpec(Spec):
         self.integer("samples_per_subpixel", 1, 1024)
         self.integer("star_samples_per_subpixel", 1, 1024)
         self.integer("chart_supersampling", 1, 16)
-        for name in ("edge_size_px", "star_size_px", "chart_size_px"):
+        for name in ("edge_size_px", "star_size_px", "chart_size_px", "zone_plate_size_px"):
             self.numbers(name, 2, 32.0, unit="px")
             object.__setattr__(self, name, tuple(int(x) for x in getattr(self, name)))
         self.number("edge_angle_deg", 2.0, 10.0, unit="°")
@@ -142,7 +204,11 @@ class SpatialSpec(Spec):
         self.number("chart_tilt_deg", 0.0, 70.0, unit="°")
         self.number("chart_field_mm", 10.0, 10000.0, unit="mm")
         self.number("object_pixel_mm", 1e-4, 1e3, lo_open=True, unit="mm")
-        self.boolean("noise", "cos4")
+        self.boolean("noise", "cos4", "esfr_correct_binning")
+        self.integer("seeds", 1, 1000)
+        self.number("zone_plate_max_cy_per_px", 0.05, 4.0, unit="cy/px")
+        if self.reference not in REFERENCES:
+            raise self.error("reference", "must be one of " + ", ".join(map(repr, REFERENCES)), self.reference)
         self.number("viewing_distance_m", 0.0, 100.0, lo_open=True, unit="m")
         self.number("display_pixel_pitch_mm", 0.0, 100.0, lo_open=True, unit="mm")
         self.integer("seed", 0, 2**31 - 1)
@@ -179,6 +245,7 @@ class SpatialSpec(Spec):
         :func:`load_spatial`), 2 samples per sub-pixel."""
         half = lambda t: tuple(max(32, int(x) // 2) for x in t)  # noqa: E731
         return self.replace(edge_size_px=half(self.edge_size_px), star_size_px=half(self.star_size_px),
+                            zone_plate_size_px=half(self.zone_plate_size_px),
                             chart_size_px=half(self.chart_size_px), star_cycles=max(4, self.star_cycles // 2),
                             samples_per_subpixel=min(self.samples_per_subpixel, 2),
                             star_samples_per_subpixel=min(self.star_samples_per_subpixel, 2),
@@ -191,8 +258,11 @@ SCENE_KEYS = ("illuminant", "wavelengths", "chart", "render", *CAMERA_TABLES, "p
 
 def load_spatial(sets=(), quick: bool = False):
     """``(SpatialSpec, Scene)`` from ``--set`` overrides: top-level keys are the experiment's, tables
-    (``illuminant``, ``wavelengths``, ``sensor``, ``optics``, ``filters``, ``processing``, …) the scene's."""
-    return load_spec_and_scene(SpatialSpec, sets, quick)
+    (``illuminant``, ``wavelengths``, ``sensor``, ``optics``, ``filters``, ``processing``, …) the scene's,
+    over the paper's camera and light (``scenes/paper.toml``, as ``spectracam paper`` and ``motion``)."""
+    from ..scene import paper_scene
+
+    return load_spec_and_scene(SpatialSpec, sets, quick, base_scene=paper_scene())   # the paper's camera
 
 
 def load_spec_and_scene(spec_cls, sets=(), quick: bool = False, base_scene=None):
@@ -218,22 +288,9 @@ def load_spec_and_scene(spec_cls, sets=(), quick: bool = False, base_scene=None)
     return spec, scene
 
 
+
+
 # ------------------------------------------------------------------------------------------------
-
-
-def make_target(name: str, spec: SpatialSpec, scene) -> tuple[Target, tuple[int, int], float]:
-    """The target, its image size (width, height) and the object-plane field width it is framed to, mm."""
-    if name == "edge":
-        w, h = spec.edge_size_px
-        return SlantedEdge(angle_deg=spec.edge_angle_deg, dataset=scene.chart.dataset), (w, h), w * spec.object_pixel_mm
-    if name == "star":
-        w, h = spec.star_size_px
-        return (SiemensStar(cycles=spec.star_cycles, radius_px=0.47 * min(w, h), dataset=scene.chart.dataset), (w, h),
-                w * spec.object_pixel_mm)
-    if name == "chart":
-        w, h = spec.chart_size_px
-        return TiltedChart(tilt_deg=spec.chart_tilt_deg, chart=scene.chart), (w, h), spec.chart_field_mm
-    raise ConfigError("targets", name, "must be one of " + ", ".join(map(repr, TARGETS)))  # never a silent chart
 
 
 def case_camera(scene, spec: SpatialSpec, pitch_um: float, f_number: float) -> CameraSpec:
@@ -244,172 +301,213 @@ def case_camera(scene, spec: SpatialSpec, pitch_um: float, f_number: float) -> C
     return cam.replace(sensor=sensor, optics=cam.optics.replace(f_number=float(f_number)))
 
 
-def _edge_zone(lab_ideal: np.ndarray, width_px: int = 2) -> np.ndarray:
-    from scipy import ndimage
+@dataclass
+class _Run:
+    """What a run accumulates: rows, MTF curves, images, closed forms, renders, stage timings."""
 
-    L = lab_ideal[..., 0]
-    g = np.hypot(*np.gradient(L))
-    return ndimage.binary_dilation(g > 1.0, iterations=width_px)
+    spec: SpatialSpec
+    scene: object
+    renderer: str
+    log: object
+    keep_images: bool
+    reference: ChartReference
+    designs: list
+    timings: dict
+    rows: list = dataclasses.field(default_factory=list)
+    curves: list = dataclasses.field(default_factory=list)
+    images: dict = dataclasses.field(default_factory=dict)
+    closed: dict = dataclasses.field(default_factory=dict)
+    renders: dict = dataclasses.field(default_factory=dict)
+
+    def timed(self, target: str, stage: str, t0: float) -> float:
+        t1 = time.perf_counter()
+        self.timings[target][stage] += t1 - t0
+        return t1
 
 
-def score_image(target: Target, geometry: CameraGeometry, xyz: np.ndarray, ideal_xyz: np.ndarray,
-                own_xyz: np.ndarray, cam_rates: np.ndarray, white: np.ndarray, spd: float,
-                channels=("R", "G", "B")) -> dict:
-    """The metrics of one processed image (display XYZ) against the ideal image of the scene
-    (``ideal_xyz``) and against the same camera's rendering of that ideal image (``own_xyz``: its colour
-    conversion error without any spatial error) — see the module."""
-    b = SCORE_BORDER_PX
-    region = target.region(geometry).copy()
-    region[:b], region[-b:], region[:, :b], region[:, -b:] = False, False, False, False
-    lab = xyz_to_lab(xyz, white)
-    lab_i = xyz_to_lab(ideal_xyz, white)
-    lab_o = xyz_to_lab(own_xyz, white)
-    de = delta_e(lab, lab_i)
-    sc = scielab(ideal_xyz, xyz, white, spd)
-    sc_o = scielab(own_xyz, xyz, white, spd)
-    out = {"cielab_delta_e": float(de[region].mean()), "scielab_delta_e": float(sc[region].mean()),
-           "cielab_delta_e_spatial": float(delta_e(lab, lab_o)[region].mean()),
-           "scielab_delta_e_spatial": float(sc_o[region].mean()),
-           "scielab_delta_e_spatial_p95": float(np.percentile(sc_o[region], 95)), "false_colour": None,
-           "mtf50_cy_per_px": None, "_scielab_map": sc_o, "_region": region}
-    if target.neutral:   # chroma the camera's own rendering of the ideal image does not have, at the edges
-        zone = _edge_zone(lab_i) & region
-        out["false_colour"] = float(np.hypot(*(lab - lab_o)[..., 1:].transpose(2, 0, 1))[zone].mean())
-    if isinstance(target, TiltedChart):
-        masks = target.patch_masks(geometry)
-        out["patch_delta_e"] = float(np.mean([de[m].mean() for m in masks if m.any()]))
-    if isinstance(target, SlantedEdge):
-        crop = (slice(b, -b), slice(b, -b))
-        lum = _esfr_or_none(xyz[crop][..., 1])
-        out["mtf50_cy_per_px"] = None if lum is None else _finite(lum.mtf50_cy_per_px)
-        curves = {"Y": [] if lum is None else lum.sfr}
-        out["mtf50_channels_cy_per_px"] = {}
-        for k, c in enumerate(channels):   # a channel may see too weak a step for an e-SFR: no MTF, not an abort
-            r = _esfr_or_none(cam_rates[crop][..., k])
-            n = min(r.sfr.size, len(curves["Y"])) if r is not None else 0
-            curves[c] = [] if r is None else r.sfr[:n]
-            out["mtf50_channels_cy_per_px"][c] = None if r is None else _finite(r.mtf50_cy_per_px)
-        out["_mtf"] = {"frequencies_cy_per_px": [] if lum is None else lum.frequencies_cy_per_px, **curves,
-                       "edge_angle_deg": None if lum is None else lum.edge_angle_deg}
-    return out
+@dataclass(frozen=True)
+class Case:
+    """One pixel pitch × f-number: the camera without a design, its channels, the renders' margin."""
+
+    pixel_pitch_um: float
+    f_number: float
+    camera: CameraSpec
+    columns: np.ndarray          # (B, M) every distinct channel's band weights among the designs
+    design_columns: dict         # design → column indices
+    margin_px: int
+
+    def as_dict(self) -> dict:
+        return {"pixel_pitch_um": float(self.pixel_pitch_um), "f_number": float(self.f_number)}
 
 
 def run_spatial(spec: SpatialSpec, scene, renderer: str = "mitsuba", log=None, keep_images: bool = True) -> dict:
-    """Run every case × target × design. Returns ``{"rows", "mtf_curves", "timings", "images", ...}``."""
-    log = log or (lambda msg: None)
-    grid = scene.grid
-    ref = ChartReference.of(scene)
-    spd = spec.samples_per_degree
-    timings = {t: dict.fromkeys(STAGES, 0.0) for t in spec.targets}
-    rows, curves, images, closed = [], [], {}, {}
-    designs = spec.spatial_designs()
-    renders: dict = {}
+    """Run every case × target × design. Returns ``{"rows": [SpatialRow], "mtf_curves", "timings",
+    "images", "closed_form", ...}``."""
+    run = _Run(spec, scene, renderer, log or (lambda msg: None), keep_images, ChartReference.of(scene),
+               spec.spatial_designs(), {t: dict.fromkeys(STAGES, 0.0) for t in spec.targets})
     t_start = time.perf_counter()
     for pitch in spec.pixel_pitches_um:
         # one margin per pitch (flat targets are rendered once per pitch): wide enough for the slowest lens
-        margin = max(sopt.margin_px(pitch, N, grid.edges_nm[-1], max(spec.misregistrations_px))
+        margin = max(sopt.margin_px(pitch, N, scene.grid.edges_nm[-1], max(spec.misregistrations_px))
                      for N in spec.f_numbers)
         for N in spec.f_numbers:
-            base = case_camera(scene, spec, pitch, N)
-            columns, design_columns = channel_columns(base, grid, spec.designs)   # the case's band weights
+            camera = case_camera(scene, spec, pitch, N)
+            case = Case(float(pitch), float(N), camera, *channel_columns(camera, scene.grid, spec.designs), margin)
             for tname in spec.targets:
-                target, (w, h), field_mm = make_target(tname, spec, scene)
-                geometry = CameraGeometry.framing(field_mm, spec.focal_length_mm, N, pitch, w, h)
-                if isinstance(target, TiltedChart):
-                    geometry = dataclasses.replace(geometry, focus_distance_mm=geometry.object_distance_mm)
-                big = geometry.with_margin(margin)
-                # -- render (flat targets in focus look the same at every f-number: one render per pitch)
-                t0 = time.perf_counter()
-                key = (tname, pitch, N if isinstance(target, TiltedChart) else None)
-                ss = spec.chart_supersampling if tname == "chart" else spec.supersampling
-                spp = spec.star_samples_per_subpixel if tname == "star" else spec.samples_per_subpixel
-                if key not in renders:
-                    renders[key] = render_target(renderer, target, big, scene.illuminant, grid, ss, spp,
-                                                 spec.seed + len(renders), scene.render.variant, log)
-                cube: SubpixelCube = renders[key]
-                t1 = time.perf_counter()
-                timings[tname]["render"] += t1 - t0
-                # -- optics, per band, shared by every design of this case: each distinct channel once
-                settings = sopt.OpticsSettings(defocus_um=defocus_diameter_um(target, big, cube), cos4=spec.cos4)
-                spectra, fy, fx, shape = sopt.channel_spectra(cube.radiance, cube.wavelengths_nm, ss,
-                                                              base, grid, settings, workers=-1, weights=columns)
-                ideal = cube.pixel_average()[margin:-margin, margin:-margin]
-                t2 = time.perf_counter()
-                timings[tname]["optics"] += t2 - t1
-                sampled: dict = {}
-                case = {"pixel_pitch_um": float(pitch), "f_number": float(N), "target": tname}
-                if tname == "edge":
-                    L = material_radiance(target, scene.illuminant, grid)
-                    Wb = band_weights(base, grid)[:, 1] * (L[1] - L[0])
-                    f = np.linspace(0, 1, 201)
-                    closed[(pitch, N)] = {o: sopt.channel_mtf_closed_form(f, spec.edge_angle_deg, pitch, N, grid.centres_nm,
-                                                                          Wb, base.sensor.fill_factor, o)
-                                          for o in {0.0, *spec.olpf_separations_px}}
-                    closed[(pitch, N)]["f"] = f
-                for d in designs:
-                    camera = base.with_design(d.design)
-                    processing = scene.processing.replace(demosaic=d.demosaic or scene.processing.demosaic)
-                    t2 = time.perf_counter()
-                    shifts = misregistration_shifts(d.misregistration_px)
-                    cols = design_columns[d.design]
-                    key = (cols, shifts, d.olpf_separation_px)
-                    if key not in sampled:
-                        rates = sopt.sample_channels(spectra[list(cols)], fy, fx, shape, ss, base.sensor.fill_factor,
-                                                     shifts, margin, workers=-1, olpf_separation_px=d.olpf_separation_px)
-                        if spec.cos4:
-                            rates *= geometry.off_axis_cos4()[:, :, None].astype(np.float32)
-                        sampled[key] = rates
-                    rates = sampled[key]
-                    t3 = time.perf_counter()
-                    timings[tname]["optics"] += t3 - t2
-                    conv = Conversion.fit(ref, camera, processing)
-                    raw = record(rates, camera, white_rate(ref, camera), spec.seed)
-                    t4 = time.perf_counter()
-                    timings[tname]["capture"] += t4 - t3
-                    cam_rates, xyz = process(raw, processing, conv)
-                    ideal_xyz = radiance_to_display_xyz(ideal, grid, scene.illuminant.white_luminance_cd_m2, conv)
-                    own_xyz = photo_electron_rates(ideal.astype(np.float32), grid, camera).astype(np.float64) \
-                        @ conv.matrix @ conv.rgb_to_xyz.T
-                    t5 = time.perf_counter()
-                    timings[tname]["processing"] += t5 - t4
-                    m = score_image(target, geometry, xyz, ideal_xyz, own_xyz, cam_rates, conv.display_white, spd,
-                                    raw.layout.channels)
-                    timings[tname]["metrics"] += time.perf_counter() - t5
-                    row = {"design": d.design, "demosaic": d.demosaic,
-                           "misregistration_px": float(d.misregistration_px or 0.0),
-                           "olpf_separation_px": float(d.olpf_separation_px), "label": d.label, **case,
-                           **{k: v for k, v in m.items() if not k.startswith("_")},
-                           "capture_time_ms": 1e3 * raw.capture_time_s,
-                           "defocus_max_um": _max_defocus(target, geometry)}
-                    rows.append(row)
-                    if "_mtf" in m:
-                        curves.append({"label": d.label, **case, "design": d.design, "demosaic": d.demosaic,
-                                       "misregistration_px": float(d.misregistration_px or 0.0),
-                                       "olpf_separation_px": float(d.olpf_separation_px),
-                                       **{k: (v.tolist() if isinstance(v, np.ndarray) else v)
-                                          for k, v in m["_mtf"].items()}})
-                    if keep_images:
-                        images[(pitch, N, tname, d.label)] = {"xyz": xyz.astype(np.float32),
-                                                              "scielab": m["_scielab_map"].astype(np.float32),
-                                                              "region": m["_region"]}
-                if keep_images:
-                    images[(pitch, N, tname, "ideal")] = {"xyz": ideal_xyz.astype(np.float32)}
-                log(f"[{time.perf_counter() - t_start:6.1f} s] {pitch:g} µm, f/{N:g}, {tname}: "
-                    f"{len(designs)} designs scored")
-    return {"rows": rows, "mtf_curves": curves, "timings": timings, "images": images,
-            "closed_form": {f"{p:g}um_f{n:g}": {"frequencies_cy_per_px": v["f"].tolist(), "G": v[0.0].tolist()}
-                            | {f"G OLPF {o:g} px": v[o].tolist() for o in spec.olpf_separations_px if o > 0}
-                            for (p, n), v in closed.items()},
-            "display_white": Conversion.fit(ref, case_camera(scene, spec, spec.pixel_pitches_um[0],
-                                                             spec.f_numbers[0]), scene.processing).display_white,
-            "samples_per_degree": spd, "renderer": renderer,
+                run_target(run, case, tname)
+                run.log(f"[{time.perf_counter() - t_start:6.1f} s] {pitch:g} µm, f/{N:g}, {tname}: "
+                        f"{len(run.designs)} designs scored")
+    return _result(run, time.perf_counter() - t_start)
+
+
+def render_case(run: _Run, case: Case, tname: str, tc: TargetCase, geometry: CameraGeometry) -> SubpixelCube:
+    """The target's sub-pixel render with the case's margin: flat targets in focus look the same at every
+    f-number (one render per pitch); the tilted chart is rendered per f-number (its defocus)."""
+    key = (tname, case.pixel_pitch_um, case.f_number if isinstance(tc.target, TiltedChart) else None)
+    if key not in run.renders:
+        run.renders[key] = render_target(run.renderer, tc.target, geometry.with_margin(case.margin_px),
+                                         run.scene.illuminant, run.scene.grid, tc.supersampling,
+                                         tc.samples_per_subpixel, run.spec.seed + len(run.renders),
+                                         run.scene.render.variant, run.log)
+    return run.renders[key]
+
+
+def reference_radiance(cube: SubpixelCube, reference: str, margin_px: int) -> np.ndarray:
+    """``(H, W, B)`` scene reference radiance (see :data:`REFERENCES`), the margin cut off."""
+    full = cube.band_limited() if reference == "nyquist" else cube.pixel_average()
+    return full[margin_px:-margin_px, margin_px:-margin_px]
+
+
+def run_target(run: _Run, case: Case, tname: str) -> None:
+    """One target of one case through every design: render, optics, then capture and score each design."""
+    spec, scene = run.spec, run.scene
+    tc = SPATIAL_TARGETS.get(tname)(spec, scene)
+    w, h = tc.size_px
+    geometry = CameraGeometry.framing(tc.field_mm, spec.focal_length_mm, case.f_number, case.pixel_pitch_um, w, h)
+    if isinstance(tc.target, TiltedChart):
+        geometry = dataclasses.replace(geometry, focus_distance_mm=geometry.object_distance_mm)
+    t0 = time.perf_counter()
+    cube = render_case(run, case, tname, tc, geometry)
+    t0 = run.timed(tname, "render", t0)
+    settings = sopt.OpticsSettings(defocus_um=defocus_diameter_um(tc.target, geometry.with_margin(case.margin_px),
+                                                                  cube), cos4=spec.cos4)
+    spectra = sopt.channel_spectra(cube.radiance, cube.wavelengths_nm, tc.supersampling, case.camera, scene.grid,
+                                   settings, workers=-1, weights=case.columns)
+    reference = reference_radiance(cube, spec.reference, case.margin_px)
+    if isinstance(tc.target, SlantedEdge) and tname == "edge":
+        run.closed[(case.pixel_pitch_um, case.f_number)] = closed_form_mtfs(run, case, tc.target)
+    t0 = run.timed(tname, "optics", t0)
+    sampled: dict = {}
+    for d in run.designs:
+        rates = sample_design(run, case, d, spectra, tc, geometry, sampled, tname)
+        cosited = sample_design(run, case, SpatialDesign(d.design, olpf_separation_px=d.olpf_separation_px), spectra,
+                                tc, geometry, sampled, tname)   # the optics reference's rates
+        score_design(run, case, tname, tc.target, geometry, d, rates, reference, cosited)
+    if run.keep_images:
+        conv = Conversion.fit(run.reference, case.camera, scene.processing)
+        run.images[(case.pixel_pitch_um, case.f_number, tname, "reference")] = {"xyz": radiance_to_display_xyz(
+            reference, scene.grid, scene.illuminant.white_luminance_cd_m2, conv).astype(np.float32)}
+
+
+def sample_design(run: _Run, case: Case, d: SpatialDesign, spectra, tc: TargetCase, geometry, sampled: dict,
+                  tname: str) -> np.ndarray:
+    """``(H, W, N)`` photo-electron rates the design's pixels collect (each distinct channel set, shift and
+    low-pass filter sampled once per target)."""
+    t0 = time.perf_counter()
+    spectra_, fy, fx, shape = spectra
+    shifts = misregistration_shifts(d.misregistration_px)
+    cols = case.design_columns[d.design]
+    key = (cols, shifts, d.olpf_separation_px)
+    if key not in sampled:
+        rates = sopt.sample_channels(spectra_[list(cols)], fy, fx, shape, tc.supersampling,
+                                     case.camera.sensor.fill_factor, shifts, case.margin_px, workers=-1,
+                                     olpf_separation_px=d.olpf_separation_px)
+        if run.spec.cos4:
+            rates *= geometry.off_axis_cos4()[:, :, None].astype(np.float32)
+        sampled[key] = rates
+    run.timed(tname, "optics", t0)
+    return sampled[key]
+
+
+def score_design(run: _Run, case: Case, tname: str, target: Target, geometry: CameraGeometry, d: SpatialDesign,
+                 rates: np.ndarray, reference: np.ndarray, cosited: np.ndarray) -> None:
+    """Record, process and score one design (over the noise seeds) against the scene reference, the own
+    reference and the optics reference (``cosited``: every channel's noise-free rate at every pixel centre);
+    append its row, MTF curves and images."""
+    spec, scene = run.spec, run.scene
+    camera = case.camera.with_design(d.design)
+    processing = scene.processing.replace(demosaic=d.demosaic or scene.processing.demosaic)
+    conv = Conversion.fit(run.reference, camera, processing)
+    reference_xyz = radiance_to_display_xyz(reference, scene.grid, scene.illuminant.white_luminance_cd_m2, conv)
+    own_xyz = photo_electron_rates(reference.astype(np.float32), scene.grid, camera).astype(np.float64) \
+        @ conv.matrix @ conv.rgb_to_xyz.T
+    optics_xyz = cosited.astype(np.float64) @ conv.matrix @ conv.rgb_to_xyz.T
+    scores, first = [], None
+    for s in range(spec.seeds if spec.noise else 1):
+        t0 = time.perf_counter()
+        raw = record(rates, camera, white_rate(run.reference, camera), spec.seed + s)
+        t0 = run.timed(tname, "capture", t0)
+        cam_rates, xyz = process(raw, processing, conv)
+        t0 = run.timed(tname, "processing", t0)
+        ctx = ScoringContext(target, geometry, xyz, reference_xyz, own_xyz, optics_xyz, cam_rates, conv.display_white,
+                             spec.samples_per_degree, tuple(raw.layout.channels), spec.esfr_correct_binning)
+        scores.append(score_image(ctx))
+        first = first or (ctx, raw)
+        run.timed(tname, "metrics", t0)
+    ctx, raw = first
+    means, intervals, by_seed = seed_summary(scores)
+    row = SpatialRow(d.design, d.demosaic, float(d.misregistration_px or 0.0), float(d.olpf_separation_px), d.label,
+                     case.pixel_pitch_um, case.f_number, tname, means, 1e3 * raw.capture_time_s,
+                     _max_defocus(target, geometry), len(scores), intervals, by_seed)
+    run.rows.append(row)
+    curves = mtf_curves(ctx)
+    if curves is not None:
+        run.curves.append({"label": d.label, **case.as_dict(), "target": tname, "design": d.design,
+                           "demosaic": d.demosaic, "misregistration_px": row.misregistration_px,
+                           "olpf_separation_px": row.olpf_separation_px, **curves})
+    if run.keep_images:
+        run.images[(case.pixel_pitch_um, case.f_number, tname, d.label)] = {
+            "xyz": ctx.xyz.astype(np.float32), "scielab": ctx.scielab_own_map.astype(np.float32),
+            "region": ctx.region, "seed": spec.seed}
+
+
+def closed_form_mtfs(run: _Run, case: Case, edge: SlantedEdge) -> dict:
+    """Closed-form MTF (diffraction × pixel aperture × optional low-pass filter, :mod:`.optics`) of the
+    edge's G channel and of the displayed luminance Y (the channels mixed by the colour conversion's Y row),
+    weighted by the edge's radiance step in each band."""
+    spec, grid = run.spec, run.scene.grid
+    L = material_radiance(edge, run.scene.illuminant, grid)
+    W = np.asarray(band_weights(case.camera, grid), np.float64) * (L[1] - L[0])[:, None]     # (B, N)
+    conv = Conversion.fit(run.reference, case.camera, run.scene.processing)
+    y_row = (conv.matrix @ conv.rgb_to_xyz.T)[:, 1]
+    f = np.linspace(0, 1, 201)
+    out = {"frequencies_cy_per_px": f.tolist()}
+    for o in (0.0, *[x for x in spec.olpf_separations_px if x > 0]):
+        tail = f" OLPF {o:g} px" if o > 0 else ""
+        for name, weights in (("G", W[:, 1]), ("Y", W @ y_row)):
+            out[name + tail] = sopt.channel_mtf_closed_form(f, spec.edge_angle_deg, case.pixel_pitch_um, case.f_number,
+                                                            grid.centres_nm, weights, case.camera.sensor.fill_factor,
+                                                            o).tolist()
+    return out
+
+
+def _result(run: _Run, wall_s: float) -> dict:
+    spec, scene = run.spec, run.scene
+    first = case_camera(scene, spec, spec.pixel_pitches_um[0], spec.f_numbers[0])
+    return {"rows": run.rows, "mtf_curves": run.curves, "timings": run.timings, "images": run.images,
+            "closed_form": {f"{p:g}um_f{n:g}": v for (p, n), v in run.closed.items()},
+            "display_white": Conversion.fit(run.reference, first, scene.processing).display_white,
+            "samples_per_degree": spec.samples_per_degree, "renderer": run.renderer,
             "render_metadata": {f"{k[0]}_{k[1]:g}um" + (f"_f{k[2]:g}" if k[2] else ""): v.metadata
-                                for k, v in renders.items()},
+                                for k, v in run.renders.items()},
             "parameters": {"spatial": spec.to_dict(), "scene": scene.to_dict(),
                            "fill_factor": scene.camera.sensor.fill_factor,
+                           "reference": {"nyquist": "the scene band-limited to 0.5 cy/px by an ideal low-pass, sampled "
+                                                    "at the pixel centres",
+                                         "footprint": "each pixel's box footprint of the scene"}[spec.reference],
                            "misregistration": "red sensor shifted +m px along x, blue +m px along y, before sampling",
                            "olpf": "4-spot birefringent filter: spots at (±d/2, ±d/2) px, OTF cos(π fx d)·cos(π fy d)"},
-            "wall_s": time.perf_counter() - t_start}
+            "wall_s": wall_s}
 
 
 def channel_columns(camera: CameraSpec, grid, designs) -> tuple[np.ndarray, dict]:
@@ -427,17 +525,6 @@ def channel_columns(camera: CameraSpec, grid, designs) -> tuple[np.ndarray, dict
             ids.append(index[key])
         out[design] = tuple(ids)
     return np.stack(cols, axis=1), out
-
-
-def _esfr_or_none(image):
-    try:
-        return esfr(image, correct_binning=True)
-    except NoEdge:
-        return None
-
-
-def _finite(x):
-    return float(x) if np.isfinite(x) else None
 
 
 def _max_defocus(target: Target, geometry: CameraGeometry) -> float:

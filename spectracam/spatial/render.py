@@ -49,6 +49,33 @@ class SubpixelCube:
         h, w, b = self.radiance.shape
         return self.radiance.reshape(h // ss, ss, w // ss, ss, b).mean(axis=(1, 3), dtype=np.float64)
 
+    def band_limited(self) -> np.ndarray:
+        """``(H, W, B)`` radiance of the scene band-limited to the pixel grid's Nyquist frequency by an
+        ideal low-pass (every spatial frequency below 0.5 cy/px along each axis kept, all above removed)
+        and sampled at the pixel centres: the reference against which aliasing counts (Shannon: the
+        most of the scene any sampling at this pitch can represent). The sub-pixels' box average is
+        divided out (``sinc(f/ss)`` ≥ 0.97 below the Nyquist frequency at ``ss`` ≥ 4, ≥ 0.90 at 2), and the
+        image is taken as periodic (the margin the optics stage adds absorbs the wrap-around)."""
+        from scipy import fft
+
+        ss = self.supersampling
+        hs, ws, nb = self.radiance.shape
+        h, w = hs // ss, ws // ss
+        ky, kx = np.fft.fftfreq(hs, 1.0 / ss), np.fft.rfftfreq(ws, 1.0 / ss)        # cy/px
+        keep_y = np.flatnonzero(np.abs(ky) < 0.5)
+        keep_x = np.flatnonzero(kx < 0.5)
+        delta = 0.5 - 0.5 / ss        # pixel centre i + ½ against sub-pixel centre (i·ss + ½)/ss, px
+        fy, fx = ky[keep_y][:, None], kx[keep_x][None, :]
+        gain = np.exp(2j * np.pi * (fy + fx) * delta) / (np.sinc(fy / ss) * np.sinc(fx / ss)) / ss**2
+        iy = np.where(ky[keep_y] >= 0, ky[keep_y] * h, ky[keep_y] * h + h).round().astype(int)
+        out = np.empty((h, w, nb), np.float64)
+        for b in range(nb):
+            spectrum = fft.rfft2(self.radiance[:, :, b].astype(np.float64), workers=-1)[np.ix_(keep_y, keep_x)]
+            small = np.zeros((h, w // 2 + 1), complex)
+            small[iy, :keep_x.size] = spectrum * gain
+            out[:, :, b] = fft.irfft2(small, s=(h, w), workers=-1)
+        return out
+
 
 def material_radiance(target: Target, illuminant: IlluminantSpec, grid: WavelengthGrid) -> np.ndarray:
     """``(n_materials, B)`` band-averaged radiance ``E·S/π`` of each material lit along its normal."""
@@ -108,6 +135,14 @@ def build_scene(mi, target: Target, geometry: CameraGeometry, supersampling: int
     materials = {}
     for key, shape, m in target.mitsuba_shapes(mi, geometry):
         bsdf = {"type": "diffuse", "reflectance": regular_spectrum(placeholder, width_nm)}
+        if isinstance(m, tuple):   # (material 0, material 1, blend weight bitmap): a blend of two diffuse BSDFs
+            m0, m1, weights = m
+            bsdf = {"type": "blendbsdf", "bsdf_0": dict(bsdf), "bsdf_1": dict(bsdf),
+                    "weight": {"type": "bitmap", "data": mi.TensorXf(np.ascontiguousarray(weights)[..., None]),
+                               "raw": True, "filter_type": "bilinear", "wrap_mode": "clamp"}}
+            materials[f"{key}/0"], materials[f"{key}/1"] = m0, m1
+            d[key] = {**shape, "bsdf": bsdf}
+            continue
         if isinstance(shape, dict):
             d[key] = {**shape, "bsdf": bsdf}
         else:  # a triangle mesh (vertices, faces) made here, with its BSDF
@@ -123,6 +158,13 @@ def build_scene(mi, target: Target, geometry: CameraGeometry, supersampling: int
         materials[key] = m
     scene = mi.load_dict(d, optimize=False)
     return scene, mi.traverse(scene), materials
+
+
+def reflectance_param(key: str) -> str:
+    """The Mitsuba parameter of a material key of :func:`build_scene`: ``"dark"`` → the shape's diffuse
+    reflectance, ``"plate/1"`` → the second BSDF of the shape's blend."""
+    shape, _, nested = key.partition("/")
+    return f"{shape}.bsdf.bsdf_{nested}.reflectance.values" if nested else f"{shape}.bsdf.reflectance.values"
 
 
 def render_mitsuba(target: Target, geometry: CameraGeometry, illuminant: IlluminantSpec, grid: WavelengthGrid,
@@ -172,7 +214,7 @@ def render_mitsuba(target: Target, geometry: CameraGeometry, illuminant: Illumin
     for b in range(B):
         params["light.irradiance.values"] = Float(E(lam[b]).astype(np.float32))
         for k, m in materials.items():
-            params[f"{k}.bsdf.reflectance.values"] = Float(np.asarray(spectra[m](lam[b]), np.float32))
+            params[reflectance_param(k)] = Float(np.asarray(spectra[m](lam[b]), np.float32))
         params.update()
         img = mi.render(scene, params, seed=band_seed(seed, b))
         cube[:, :, b] = np.asarray(img)[:, :, 0]

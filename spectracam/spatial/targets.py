@@ -13,6 +13,14 @@ material of reflectance ``S`` has radiance ``E·S/π`` seen from anywhere.
   (the standard's 4:1). Closed form: the exact area of each pixel on the bright side.
 * :class:`SiemensStar` — a binary Siemens star of ``cycles`` bright/dark sector pairs, the same two
   neutrals, on the bright neutral. Closed form: coverage by ``oversampling²`` points per sub-pixel.
+* :class:`ColouredEdge` — the same slanted edge between two chromatic ColorChecker patches (red/cyan,
+  blue/yellow, dark/light skin, foliage/blue sky): the verdict on demosaicking with colour contrast,
+  where one channel may see almost no step.
+* :class:`ZonePlate` — a circular zone plate ``w = ½ + ½ cos(π k r²)`` blending two materials (the two
+  neutrals: luminance; magenta and cyan, L* 51.0 and 51.8: chroma), whose local frequency ``k·r`` rises
+  linearly to ``max_frequency_cy_per_px`` at ``radius_px`` (the Nyquist frequency at half the radius):
+  everything beyond is aliased by a sensor without a low-pass filter. Closed form: the blend weight at
+  ``oversampling²`` points per sub-pixel; Mitsuba: a ``blendbsdf`` weighted by a bitmap of ``w``.
 * :class:`TiltedChart` — the ColorChecker (:mod:`spectracam.chart` geometry and reflectances) turned
   by ``tilt_deg`` about the vertical axis through its centre: perspective, and defocus across the
   field with a thin lens. Closed form: pinhole projection (no defocus) by ray–plane intersection, ``oversampling²`` rays per sub-pixel.
@@ -36,8 +44,16 @@ LIFT_MM = 0.01
 
 def neutral_materials(dataset: str = "BabelColor Average") -> list:
     """``[(name, reflectance)]`` of :data:`DARK_NEUTRAL` and :data:`BRIGHT_NEUTRAL`, in that order."""
+    return patch_materials((DARK_NEUTRAL, BRIGHT_NEUTRAL), dataset)
+
+
+def patch_materials(names, dataset: str = "BabelColor Average") -> list:
+    """``[(name, reflectance)]`` of the named ColorChecker patches, in that order."""
     data = {n: (wl, r) for n, wl, r in patch_names_and_data(dataset)}
-    return [(n, tabulated(*data[n])) for n in (DARK_NEUTRAL, BRIGHT_NEUTRAL)]
+    missing = [n for n in names if n not in data]
+    if missing:
+        raise ValueError(f"no ColorChecker patch named {missing[0]!r}; the patches are " + ", ".join(map(repr, data)))
+    return [(n, tabulated(*data[n])) for n in names]
 
 
 def object_points(geometry: CameraGeometry, supersampling: int, oversampling: int):
@@ -129,6 +145,83 @@ class SlantedEdge(Target):
             @ T().translate([big / 2, 0.0, 0.0]) @ T().scale([big / 2, big / 2, 1])
         return [("dark", {"type": "rectangle", "to_world": T().scale([big, big, 1])}, 0),
                 ("bright", {"type": "rectangle", "to_world": bright}, 1)]
+
+
+@dataclass
+class ColouredEdge(SlantedEdge):
+    """:class:`SlantedEdge` between two ColorChecker patches: ``patches[0]`` on the left, ``patches[1]`` on
+    the right (for the e-SFR the polarity does not matter: each channel's step is taken as it comes)."""
+
+    patches: tuple = ("red", "cyan")
+    name = "coloured edge"
+    neutral = False
+
+    def materials(self):
+        return patch_materials(self.patches, self.dataset)
+
+
+@dataclass
+class ZonePlate(Target):
+    """A circular zone plate centred on the optical axis: material 1 with weight
+    ``w(r) = ½ + ½ cos(π k r²)``, material 0 with ``1 - w``, ``r`` in object pixels, ``k =
+    max_frequency_cy_per_px / radius_px`` so the local frequency ``k·r`` reaches ``max_frequency_cy_per_px``
+    at ``radius_px``; scored inside ``radius_px``."""
+
+    patches: tuple = (DARK_NEUTRAL, BRIGHT_NEUTRAL)
+    radius_px: float = 64.0
+    max_frequency_cy_per_px: float = 1.0
+    oversampling: int = 4
+    #: Bitmap texels per object pixel for Mitsuba's blend weight: 16 samples per cycle at 1 cy/px, where
+    #: bilinear interpolation of the cosine is within 0.5 % of its amplitude.
+    texels_per_px: int = 16
+    dataset: str = "BabelColor Average"
+    name = "zone plate"
+
+    @property
+    def neutral(self):
+        return set(self.patches) <= {DARK_NEUTRAL, BRIGHT_NEUTRAL, "white 9.5 (.05 D)", "neutral 8 (.23 D)",
+                                     "neutral 5 (.70 D)", "black 2 (1.5 D)"}
+
+    def materials(self):
+        return patch_materials(self.patches, self.dataset)
+
+    def weight(self, x_px, y_px):
+        """Blend weight of material 1 at object-plane points (object pixels from the centre)."""
+        k = self.max_frequency_cy_per_px / self.radius_px
+        return 0.5 + 0.5 * np.cos(np.pi * k * (np.square(x_px) + np.square(y_px)))
+
+    def coverage(self, geometry, supersampling):
+        X, Y = object_points(geometry, supersampling, self.oversampling)
+        X, Y = X / geometry.object_pixel_mm, Y / geometry.object_pixel_mm
+        w = np.zeros((Y.shape[0], X.shape[0]), np.float64)
+        for i in range(self.oversampling):
+            for j in range(self.oversampling):
+                w += self.weight(X[None, :, j], Y[:, i, None])
+        w /= self.oversampling**2
+        return np.stack([1.0 - w, w])
+
+    def weight_bitmap(self, geometry):
+        """``(n, n)`` float32 blend weights at the texel centres of a square ``4×`` the field of view, row 0
+        at the top (+y) — what :meth:`mitsuba_shapes`' rectangle shows (a bitmap's first row is its top)."""
+        fw, fh = geometry.field_of_view_mm
+        half_px = 0.5 * 1.1 * max(fw, fh) / geometry.object_pixel_mm
+        n = int(np.ceil(2 * half_px * self.texels_per_px))
+        c = (np.arange(n) + 0.5) / n * 2 * half_px - half_px
+        return self.weight(c[None, :], -c[:, None]).astype(np.float32), half_px * geometry.object_pixel_mm
+
+    def mitsuba_shapes(self, mi, geometry):
+        weights, half_mm = self.weight_bitmap(geometry)
+        rect = {"type": "rectangle", "to_world": mi.ScalarTransform4f().scale([half_mm, half_mm, 1])}
+        return [("plate", rect, (0, 1, weights))]
+
+    def region(self, geometry):
+        u, w = geometry.pixel_centres_mm()
+        k = geometry.object_distance_mm / geometry.image_distance_mm / geometry.object_pixel_mm
+        return (u[None, :] * k) ** 2 + (w[:, None] * k) ** 2 <= self.radius_px ** 2
+
+    def nyquist_radius_px(self, frequency_cy_per_px: float = 0.5) -> float:
+        """Radius (object pixels) where the local frequency is ``frequency_cy_per_px``."""
+        return frequency_cy_per_px / self.max_frequency_cy_per_px * self.radius_px
 
 
 @dataclass
