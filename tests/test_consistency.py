@@ -60,3 +60,46 @@ def test_a_reading_with_another_spectral_range_is_rendered_on_that_range(monkeyp
     ranges = {(a, b) for a, b, c, d in seen}
     assert ranges == {(400.0, 700.0), (380.0, 730.0)}, ranges
     assert all((a, b) == (c, d) for a, b, c, d in seen)  # the cube's bands are always its scene's
+
+
+def _text_artists(fig):
+    from matplotlib.text import Text
+
+    return [t for t in fig.findobj(Text) if t.get_visible() and t.get_text().strip()]
+
+
+def test_consistency_figure_is_readable_and_explains_its_codes():
+    """The map's labels were 5 pt and its claim codes unexplained: every text is ≥ 8 pt, the rows are
+    at least a line of 8 pt apart, the choices are named over their columns, and a key gives every
+    claim code its claim."""
+    from matplotlib.patches import Rectangle
+
+    claims = ["fig4-green", "exposure", "de-prism", "fig6-main"]
+    verdicts = ("reproduced", "partly", "not")
+    rows = [{"reading": r.values, "verdicts": {c: verdicts[(i + j) % 3] for j, c in enumerate(claims)}}
+            for i, r in enumerate(cons.readings())]
+    fig = cons.consistency_figure({"rows": rows, "claims": claims, "best": 7})
+    fig.canvas.draw()
+    texts = _text_artists(fig)
+    small = [(t.get_text(), t.get_fontsize()) for t in texts if t.get_fontsize() < 8]
+    assert not small, small
+    ax = fig.axes[0]
+    assert [t.label1.get_text() for t in ax.xaxis.get_major_ticks()] == claims  # under the columns, and over
+    assert all(t.get_fontsize() >= 8 for t in ax.get_xticklabels() + ax.get_yticklabels())
+    assert ax.get_window_extent().height / fig.dpi * 72 / len(rows) >= 1.2 * 8  # points per row
+    shown = [" ".join(t.get_text().split()) for t in texts]
+    assert set(cons.FACTORS) <= set(shown)  # each choice named over its column
+    assert "photodiode 2 µm" in shown and "pixel: 5 µm pixel" in shown
+    # the key: every code, each beside its claim (from claims.evaluate)
+    key = [t.get_text() for t in fig.texts]
+    assert all(key.count(c) == 1 for c in claims), key
+    for code, words in (("fig4-green", "only green responds optimally"), ("exposure", "~4x the CFA's time"),
+                        ("de-prism", "the dichroic prism matches the FSC"), ("fig6-main", "CMOS noise")):
+        i = key.index(code)
+        assert words in key[i + 1], (code, key[i + 1])
+    # the two outlined rows: the experiment's reading (row 0) and the one with most claims reproduced
+    outlines = {(round(p.get_y() + 0.5), p.get_edgecolor()[:3]) for p in ax.patches if isinstance(p, Rectangle)}
+    assert (0, (0.0, 0.0, 0.0)) in outlines and 7 in {y for y, c in outlines if c != (0.0, 0.0, 0.0)}
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)

@@ -229,3 +229,59 @@ def test_two_runs_in_one_directory_at_once_are_refused(tmp_path):
         held.close()
     t = run_sweep(sweep, tmp_path / "o", serial=True, resume=True, progress=False)  # free again
     assert t["new_cells"] == t["cells"] - 1
+
+
+def _synthetic_sweep(noise, xs=(450, 470, 490, 510, 530), temps=(6500, 3000)):
+    """A sweep's meta and rows without running it: mean ΔE = 1 + |x − 490|/10 + |noise − 3| + (T = 6500),
+    two trials ±0.1 about it, so the best cell is x = 490 nm on the 3 e⁻ line in each panel."""
+    meta = {"axes": [["illuminant.temperature_K", list(temps)], ["filters.cutoffs_nm[0]", list(xs)],
+                     ["sensor.read_noise_e", list(noise)]], "metrics": ["delta_e_mean"], "trials": 2,
+            "base_values": {"illuminant.temperature_K": 5000, "filters.cutoffs_nm[0]": 490,
+                            "sensor.read_noise_e": 3}}
+    rows = [{"axis:illuminant.temperature_K": T, "axis:filters.cutoffs_nm[0]": x, "axis:sensor.read_noise_e": n,
+             "trial": k, "delta_e_mean": 1 + abs(x - 490) / 10 + abs(n - 3) + (T == 6500) + (0.1 if k else -0.1)}
+            for T in temps for n in noise for x in xs for k in (0, 1)]
+    return meta, rows
+
+
+def test_sweep_figure_legend_order_colours_and_best_line():
+    """The legend came in string order (10 before 2) and the best cell's line could not be told: lines
+    are listed and coloured in the line variable's numeric order, the legend sits beside the axes in
+    columns, the best cell is annotated with its value, x and line, and its line is the thick one."""
+    import matplotlib.pyplot as plt
+    from matplotlib.text import Text
+
+    from spectracam.experiments.sweep_plot import natural_key, sweep_figure
+
+    noise = [10, 2, 0.5, 100, 3, 1.5, 20, 5, 1, 50, 15, 7, 0.2, 30]  # 14 lines, scrambled, "10" < "2" as text
+    meta, rows = _synthetic_sweep(noise)
+    fig = sweep_figure(meta, rows, "delta_e_mean", "filters.cutoffs_nm[0]", "sensor.read_noise_e",
+                       "illuminant.temperature_K")
+    fig.canvas.draw()
+    leg = fig.legends[0]
+    labels = [t.get_text() for t in leg.get_texts()]
+    assert labels[:len(noise)] == [str(v) for v in sorted(noise)]
+    assert labels[len(noise):] == ["the base scene", "best (annotated;\nits line thick)"]
+    assert leg.get_title().get_text() == "read noise (e⁻)"
+    # the colours follow the order: viridis, darkest for the smallest value
+    lum = [0.2126 * r + 0.7152 * g + 0.0722 * b for r, g, b, _ in (h.get_color() for h in leg.legend_handles[:len(noise)])]
+    assert all(a < b for a, b in zip(lum, lum[1:])), lum
+    # beside the axes, inside the figure, in more than one column
+    box, fig_box = leg.get_window_extent(), fig.bbox
+    assert box.x0 >= max(ax.get_window_extent().x1 for ax in fig.axes) and box.x1 <= fig_box.x1 + 1
+    assert box.y0 >= fig_box.y0 and box.y1 <= fig_box.y1 and box.width > 2 * leg.get_texts()[0].get_window_extent().width
+    assert [ax.get_title() for ax in fig.axes] == ["colour temperature = 3000 K", "colour temperature = 6500 K"]
+    handle_colour = dict(zip(labels, (tuple(h.get_color()) for h in leg.legend_handles)))
+    for ax, best in zip(fig.axes, ("1", "2")):
+        notes = [t.get_text() for t in ax.texts]
+        assert any(n.startswith(f"best: {best}\n") and "blue/green cutoff = 490 nm" in n and "read noise = 3 e⁻" in n
+                   for n in notes), notes
+        thick = max(ax.lines, key=lambda ln: ln.get_linewidth())
+        assert tuple(thick.get_color()) == handle_colour["3"]
+        assert sorted(ln.get_linewidth() for ln in ax.lines if ln.get_linestyle() != "None")[-2] < thick.get_linewidth()
+    small = [t.get_text() for t in fig.findobj(Text) if t.get_text().strip() and t.get_fontsize() < 8]
+    assert not small, small
+    plt.close(fig)
+    # text values in natural order, numbers by value
+    assert sorted(["fsc 10", "fsc 9", "cfa", "fsc 100"], key=natural_key) == ["cfa", "fsc 9", "fsc 10", "fsc 100"]
+    assert sorted([10, 9.5, 100, 2], key=natural_key) == [2, 9.5, 10, 100]

@@ -125,31 +125,130 @@ VERDICT_VALUE = {"reproduced": 2, "partly": 1, "not": 0}
 
 
 def consistency_figure(result: dict):
-    """A map: one row per reading, one column per claim, coloured by verdict."""
+    """A map: one row per reading, one column per claim, coloured by verdict.  Left of it a table of
+    the reading's choices under their names; the claim codes over and under the columns, explained
+    in a key below.  Every text is at least 8 pt."""
+    import textwrap
+
+    from matplotlib import transforms
     from matplotlib.colors import ListedColormap
+    from matplotlib.font_manager import FontProperties
+    from matplotlib.textpath import TextPath
 
     from ..io.plots import pyplot
 
     plt = pyplot()
+    FS = 8  # points, every text but the title
     rows, claims = result["rows"], result["claims"]
     M = np.array([[VERDICT_VALUE[r["verdicts"][c]] for c in claims] for r in rows])
-    labels = [", ".join(str(v) for v in r["reading"].values()) for r in rows]
-    fig, ax = plt.subplots(figsize=(9.5, 0.16 * len(rows) + 2.2))
+    b = result["best"]
+
+    def width_in(s: str, bold: bool = False) -> float:
+        prop = FontProperties(size=FS, weight="bold" if bold else "normal")
+        return max(TextPath((0, 0), t, size=FS, prop=prop).get_extents().width if t.strip() else 0.0
+                   for t in s.split("\n")) / 72
+
+    # The claims' sentences, for the key: the result carries them if it was made with them; otherwise
+    # claims.evaluate is asked for them on a stand-in comparison that has every figure and design.
+    sentences = dict(result.get("claim_text") or {})
+    if not set(claims) <= sentences.keys():
+        T = {t: 0 for t in ("3000", "5000", "7000")}
+        per = lambda v: {t: v for t in T}  # noqa: E731
+        budget = [{"step": k, "delta_e": float(i), "label": f"{i}.{k}"}
+                  for i, k in enumerate(("perfect", "shot_noise", "cmos_noise", "quantization", "conversion"))]
+        try:
+            stand_in = evaluate({"exposure_ms": {"cfa/single": per(28.0), "fsc/optimal": per(111.0)},
+                                 "fig4_white_response": {"cfa/single": per([0.5, 1.0, 0.5])},
+                                 "fig5a_snr_db": {d: per(30.0) for d in ("cfa/single", "fsc/optimal", "fsc/balanced")},
+                                 "fig5b_delta_e": {d: per(7.0) for d in ("cfa/single", "fsc/optimal", "prism/optimal",
+                                                                         "fsc/balanced")},
+                                 "fig6_budget_delta_e": budget})
+            sentences = {c["id"]: c["claim"] for c in stand_in} | sentences
+        except (KeyError, IndexError, TypeError, ValueError):
+            pass
+
+    # The row labels: a column per choice of the factorial (the first row's), then, for the readings
+    # that vary one other choice from the experiment's reading, that choice (the rest greyed: defaults).
+    factors = list(rows[0]["reading"])
+    extra = [{k: v for k, v in r["reading"].items() if k not in factors} for r in rows]
+    columns = [(textwrap.fill(f, 13), [str(r["reading"].get(f, "")) for r in rows]) for f in factors]
+    if any(extra):
+        columns.append(("one choice\nchanged alone", ["; ".join(f"{k}: {v}" for k, v in e.items()) for e in extra]))
+    gap, pad = 0.16, 0.12  # inches between label columns, and before the map
+    col_w = [max([width_in(h, bold=True)] + [width_in(v, bold=True) for v in vals]) for h, vals in columns]
+    table_w = sum(col_w) + gap * (len(col_w) - 1) + pad
+
+    # Layout, in inches.
+    row_h, cell_w = 0.19, 0.52
+    map_w, map_h = cell_w * len(claims), row_h * len(rows)
+    code_band = max(width_in(c) for c in claims) * 0.71 + 0.18
+    header_h = max(h.count("\n") + 1 for h, _ in columns) * FS * 1.3 / 72 + 0.08
+    title_h = 0.55
+    key_lines = [(c, textwrap.wrap(sentences.get(c, "(no description)"), 95)) for c in claims]
+    key_h = (sum(len(t) for _, t in key_lines) + 1.6) * FS * 1.35 / 72
+    legend_w = 2.1
+    left, top, bottom = 0.15 + table_w, title_h + max(code_band, header_h), code_band + 0.25 + key_h + 0.15
+    fig_w = max(left + map_w + legend_w, 0.3 + max(width_in(c, True) for c in claims) + 0.15
+                + max(width_in(line) for _, t in key_lines for line in t) + 0.3)
+    fig_h = top + map_h + bottom
+    fig = plt.figure(figsize=(fig_w, fig_h))
+    ax = fig.add_axes((left / fig_w, bottom / fig_h, map_w / fig_w, map_h / fig_h))
+
     cmap = ListedColormap(["#d9d9d9", "#9ecae1", "#2171b5"])
     ax.imshow(M, cmap=cmap, vmin=0, vmax=2, aspect="auto", interpolation="nearest")
-    ax.set_xticks(range(len(claims)), claims, rotation=45, ha="right", fontsize=7)
-    ax.set_yticks(range(len(rows)), labels, fontsize=5)
-    b = result["best"]
-    ax.add_patch(plt.Rectangle((-0.5, -0.5), len(claims), 1, fill=False, ec="black", lw=1.5))
-    ax.add_patch(plt.Rectangle((-0.5, b - 0.5), len(claims), 1, fill=False, ec="tab:red", lw=1.5, ls="--"))
+    ax.set_xticks(range(len(claims)), claims)
+    ax.tick_params(axis="x", labelsize=FS, top=True, labeltop=True)
+    for t in ax.xaxis.get_major_ticks():
+        t.label1.set(rotation=45, ha="right", rotation_mode="anchor")
+        t.label2.set(rotation=45, ha="left", rotation_mode="anchor")
+    ax.set_yticks([])
+
+    # The table of choices, in inches left of the map, one text per row and choice.
+    row_of = transforms.blended_transform_factory(ax.transAxes, ax.transData)
+    x = -table_w
+    for j, ((header, vals), w) in enumerate(zip(columns, col_w)):
+        at = row_of + transforms.ScaledTranslation(x, 0, fig.dpi_scale_trans)
+        ax.text(0, -0.5, header, transform=at + transforms.ScaledTranslation(0, 0.06, fig.dpi_scale_trans),
+                ha="left", va="bottom", fontsize=FS, fontweight="bold")
+        for i, v in enumerate(vals):
+            default = bool(extra[i]) and j < len(factors)  # a one-at-a-time reading's unchanged choice
+            ax.text(0, i, v, transform=at, ha="left", va="center", fontsize=FS,
+                    fontweight="bold" if i == 0 else "normal",
+                    color="tab:red" if i == b else ("#8c8c8c" if default else "black"))
+        x += w + gap
+    # Rules: between the groups of the first choice, and before the one-at-a-time readings.
+    rule = dict(transform=row_of, clip_on=False)
+    for i in range(1, len(rows)):
+        if extra[i] and not extra[i - 1]:
+            ax.plot([-table_w / map_w, 1], [i - 0.5] * 2, color="black", lw=1.2, **rule)
+        elif not extra[i] and rows[i]["reading"][factors[0]] != rows[i - 1]["reading"][factors[0]]:
+            ax.plot([-table_w / map_w, 0], [i - 0.5] * 2, color="#b0b0b0", lw=0.6, **rule)
+            ax.axhline(i - 0.5, color="white", lw=1.5)
+
+    ax.add_patch(plt.Rectangle((-0.5, -0.5), len(claims), 1, fill=False, ec="black", lw=1.8))
+    ax.add_patch(plt.Rectangle((-0.5, b - 0.5), len(claims), 1, fill=False, ec="tab:red", lw=1.8, ls="--"))
     handles = [plt.Rectangle((0, 0), 1, 1, color=cmap(i)) for i in (2, 1, 0)]
-    handles += [plt.Rectangle((0, 0), 1, 1, fill=False, ec="black"), plt.Rectangle((0, 0), 1, 1, fill=False,
-                                                                                    ec="tab:red", ls="--")]
-    ax.legend(handles, ["reproduced", "partly", "not", "the experiment's reading", "most claims reproduced"],
-              loc="upper left", bbox_to_anchor=(1.01, 1), fontsize=7, title="verdict", title_fontsize=7)
-    ax.set_title("The paper's claims under each reading of its open choices\n"
-                 "QE, FPN < 1 %, FPN across channels, ADC at code 0; then one choice at a time", fontsize=8)
-    fig.tight_layout()
+    handles += [plt.Rectangle((0, 0), 1, 1, fill=False, ec="black", lw=1.8),
+                plt.Rectangle((0, 0), 1, 1, fill=False, ec="tab:red", ls="--", lw=1.8)]
+    ax.legend(handles, ["reproduced", "partly (direction\nholds, size not)", "not",
+                        "the experiment's\nreading (bold)", "most claims\nreproduced (red)"],
+              loc="upper left", bbox_to_anchor=(1 + 0.1 / map_w, 1.0), borderaxespad=0.0,
+              fontsize=FS, title="verdict", title_fontsize=FS, frameon=False)
+    fig.text(0.5, 1 - 0.12 / fig_h, "The paper's claims (columns) under each reading of its open choices (rows)\n"
+             f"every combination of the {len(factors)} choices named over the rows"
+             + (", then one other choice at a time from the experiment's reading (the first row)" if any(extra)
+                else ""), ha="center", va="top", fontsize=10)
+
+    # The key: each claim code and its claim.
+    y = bottom - code_band - 0.2
+    fig.text(0.2 / fig_w, y / fig_h, "Claims (the columns):", ha="left", va="top", fontsize=FS, fontweight="bold")
+    code_w = max(width_in(c, True) for c in claims) + 0.15
+    y -= 1.6 * FS * 1.35 / 72
+    for code, text in key_lines:
+        fig.text(0.3 / fig_w, y / fig_h, code, ha="left", va="top", fontsize=FS, fontweight="bold")
+        for line in text:
+            fig.text((0.3 + code_w) / fig_w, y / fig_h, line, ha="left", va="top", fontsize=FS)
+            y -= FS * 1.35 / 72
     return fig
 
 
