@@ -654,10 +654,35 @@ def case_architectures(rng, d: Path):
     return cmd, bad, " ".join(cmd)
 
 
+def case_spacetime(rng, d: Path):
+    """Issue 21: spatial's new keys (targets, references, e-SFR, seeds, zone plates) and motion's e-SFR option
+    — bad values; a small spatial run that writes every case's EXR/PNG/error map under a full disk or SIGTERM."""
+    small = ["spatial", "-o", "out", "--quick", "--renderer", "analytic", "--set", "pixel_pitches_um=[10]",
+             "--set", "f_numbers=[1.4]", "--set", "designs=['cfa/single', 'fsc/optimal']", "--set", "demosaics=['bilinear']"]
+    cases = [
+        (small + ["--set", "reference='nosuch'"], True), (small + ["--set", "esfr_correct_binning=2"], True),
+        (small + ["--set", "seeds=0"], True), (small + ["--set", "seeds=1.5"], True),
+        (small + ["--set", "zone_plate_size_px=[8, 8]"], True), (small + ["--set", "zone_plate_max_cy_per_px=-1"], True),
+        (small + ["--set", "zone_plate_max_cy_per_px=nan"], True), (small + ["--set", "targets=['edge_nosuch']"], True),
+        (small + ["--set", "targets=[]"], True),
+        (["motion", "--quick", "-o", "out", "--renderer", "analytic", "--set", "esfr_correct_binning='yes'"], True),
+        (small + ["--set", "targets=['zone_plate', 'edge_red_cyan']"], False),
+        (small + ["--set", "targets=['zone_plate_chroma', 'edge']", "--set", "noise=true", "--set", "seeds=2",
+                  "--set", "reference='footprint'", "--set", "esfr_correct_binning=true"], False),
+    ]
+    cmd, bad = rng.choice(cases)
+    fault = rng.choice(["none", "disk", "signal"])
+    if fault == "disk" and not bad:
+        return cmd, False, f"full disk: {' '.join(cmd)}", {"fsize": rng.choice([0, 20_000, 200_000])}
+    if fault == "signal" and not bad:
+        return cmd, False, f"SIGTERM: {' '.join(cmd)}", rng.choice([1.0, 3.0, 6.0])
+    return cmd, bad, " ".join(cmd)
+
+
 CASES = [case_damaged_file, case_scene_value, case_environment, case_garbage_text, case_camera_file, case_foreign_exr,
          case_new_commands, case_signal, case_full_disk, case_memory_limit, case_raw_attributes, case_journal,
          case_experiment_values, case_group_signal, case_scheduler_peer, case_read_only, case_reflectances,
-         case_target, case_architectures]
+         case_target, case_architectures, case_spacetime]
 
 
 def one(i: int, seed: int, base: Path, cycle: bool = False) -> tuple[str, dict]:
