@@ -79,8 +79,7 @@ def run_time(scene, renderer: str, quick: bool, log=None) -> dict:
     res = run_motion(spec, _experiment_scene(scene, quick), renderer, log, keep_images=False)
     keys = ("breakup_width_px", "scielab_delta_e", "scielab_delta_e_sd", "cielab_delta_e", "false_colour_still",
             "breakup_width_scene_px", "scielab_delta_e_scene", "mtf50_cy_per_px", "capture_time_ms", "snr_db")
-    rows = [{"design": r["design"], "speed_px_per_ms": r["speed_px_per_ms"], **{k: r[k] for k in keys}}
-            for r in res["rows"]]
+    rows = [{k: v for k, v in r.to_dict().items() if k in ("design", "speed_px_per_ms", *keys)} for r in res["rows"]]
     return {"rows": rows, "wall_s": res["wall_s"],
             "parameters": {"motion": spec.to_dict(), "renderer": renderer,
                            "white_luminance_cd_m2": res["parameters"]["white_luminance_cd_m2"]}}

@@ -24,19 +24,25 @@ middle instant, t = 0) and against the static scene there:
 * ``scielab_delta_e_scene`` / ``cielab_delta_e_scene`` / ``breakup_width_scene_px`` — the same against the
   ideal image of the scene (they also hold the conversion's constant error and the demosaicking false
   colour: what an observer comparing with the scene sees);
-* ``mtf50_cy_per_px`` — e-SFR of the displayed luminance across the edge;
+* ``mtf50_cy_per_px`` — e-SFR of the displayed luminance across the edge, as ISO 12233:2017 states it
+  (``esfr_correct_binning``: with the binning correction the standard lacks);
 * ``snr_db`` — the paper's SNR of the design (chart patches, combined over channels) with the same
   light, exposure and noise: a flat patch's SNR does not depend on the motion.
 
 The answer — the speed at which ``fsc/optimal``'s S-CIELAB error (against its own still capture) first
 exceeds ``cfa/single``'s — is interpolated between the swept speeds (linearly in speed), for the mean
 over seeds and for each seed (mean and 95 % interval).
+
+A run goes one way: :func:`prepare` (the scene, the framing, the moving target) → per design
+:func:`design_model` → per shutter and speed :func:`render_at_speed` → :func:`capture` (per seed
+:func:`capture_at_seed`) → :func:`score_case` (per seed :func:`score_capture`) → a :class:`MotionRow`.
 """
 from __future__ import annotations
 
+import contextlib
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -102,6 +108,11 @@ class MotionSpec(Spec):
     breakup_threshold: float = 2.0
     #: S-CIELAB and CIELAB are averaged within this many pixels of the edge.
     zone_half_width_px: float = 24.0
+    #: The e-SFR (MTF50) as ISO 12233:2017 states it (false). The binning correction (true) is not part of
+    #: ISO 12233:2017; it adds about +1.6–2.3 % to the MTF50 of a sharp still edge (prism and fsc at rest in the
+    #: default run; the CFA's +1.2 %), less as the motion blurs it (+0.1 % at 0.16 px/ms). What it corrects:
+    #: the docstring of spectracam/spatial/esfr.py.
+    esfr_correct_binning: bool = False
     viewing_distance_m: float = 0.5
     display_pixel_pitch_mm: float = 25.4 / 120
     seed: int = 0
@@ -141,7 +152,7 @@ class MotionSpec(Spec):
         self.choice("render_mode", RENDER_MODES)
         TimingSpec(self.order, self.readout_gap_ms, False, self.line_time_us, self.prism_alignment)
         self.number("cfa_exposure_ms", 0.0, 1e4, unit="ms")
-        self.boolean("noise")
+        self.boolean("noise", "esfr_correct_binning")
         self.number("breakup_threshold", 0.0, 100.0, lo_open=True)
         self.number("zone_half_width_px", 1.0, 1e4, unit="px")
         self.number("viewing_distance_m", 0.0, 100.0, lo_open=True, unit="m")
@@ -223,151 +234,341 @@ def check_motion_memory(spec: MotionSpec, scene) -> None:
                 f"{len(scene.grid)} bands", "use a smaller edge, less supersampling or fewer bands")
 
 
-def run_motion(spec: MotionSpec, scene, renderer: str = "mitsuba", log=None, keep_images: bool = True) -> dict:
-    """Every design × speed × shutter. Returns ``{"rows", "images", "timings", ...}``."""
-    log = log or (lambda msg: None)
-    t_start = time.perf_counter()
+# -- the result rows ------------------------------------------------------------------------------
+
+#: The scores measured on every noise seed's capture: a row holds their mean, their spread (``_sd``).
+SEED_METRICS = ("scielab_delta_e", "cielab_delta_e", "scielab_delta_e_scene", "cielab_delta_e_scene",
+                "mtf50_cy_per_px")
+
+
+@dataclass(frozen=True)
+class MotionRow:
+    """One case — a design at an image speed with a shutter — and its scores (the module docstring
+    says what each means). :meth:`to_dict` is the row of ``results.json``; the field names are its keys."""
+
+    #: The case: design ``arch/scheme``, image speed on the sensor and in the scene, shutter.
+    design: str
+    speed_px_per_ms: float
+    speed_mm_per_s: float
+    rolling_shutter: bool
+    #: Colour breakup (noise-free captures, the motion alone): width over the threshold, the largest added
+    #: chroma (ΔE*ab), the width against the scene; the still capture's demosaicking false colour (ΔE*ab).
+    breakup_width_px: float
+    max_added_chroma: float
+    breakup_width_scene_px: float
+    false_colour_still: float
+    #: Means over the noise seeds (ΔE*ab; cycles/pixel); None where a seed gave no value (no usable edge).
+    scielab_delta_e: float | None
+    cielab_delta_e: float | None
+    scielab_delta_e_scene: float | None
+    cielab_delta_e_scene: float | None
+    mtf50_cy_per_px: float | None
+    #: Their spread over the seeds (sample standard deviation; None with one seed).
+    scielab_delta_e_sd: float | None
+    cielab_delta_e_sd: float | None
+    scielab_delta_e_scene_sd: float | None
+    cielab_delta_e_scene_sd: float | None
+    mtf50_cy_per_px_sd: float | None
+    #: S-CIELAB per seed, and the seeds.
+    scielab_delta_e_by_seed: tuple
+    seeds: tuple
+    #: The design's chart SNR with the paper's noise (None with the noise off).
+    snr_db: float | None
+    #: Time: the image's travel during the capture, the capture time, each channel's exposure, and the
+    #: time slices that sampled it (:class:`.render.Integrated`).
+    blur_px: float
+    capture_time_ms: float
+    exposure_ms: tuple
+    slices: int
+    slice_dt_ms: float
+    samples_per_slice: int
+
+    def to_dict(self) -> dict:
+        """The row of ``results.json`` (tuples as lists)."""
+        return {f.name: (list(v) if isinstance(v := getattr(self, f.name), tuple) else v) for f in fields(self)}
+
+    __iter__ = None   # not a mapping: iterate over to_dict()
+
+
+# -- the steps of a run: set-up, one design, one speed, one capture, one score --------------------
+
+@dataclass(frozen=True)
+class MotionSetup:
+    """What every case shares: the calibrated scene, its chart reference, the framing, the moving
+    target and its ideal image, and where the scores are taken."""
+
+    spec: MotionSpec
+    scene: object                    # the scene at the calibrated light level
+    reference: ChartReference
+    camera: object                   # the motion camera, before a design is chosen
+    geometry: CameraGeometry         # the image (no margin)
+    margin_px: int                   # rendered around it for the optics
+    moving: MovingScene
+    ideal: np.ndarray                # (H, W, B) band radiance of the target at rest (t = 0)
+    optics: sopt.OpticsSettings
+    samples_per_degree: float        # S-CIELAB's
+    valid: np.ndarray                # (H, W) scored pixels (SCORE_BORDER_PX left out)
+    edge_columns: np.ndarray         # (H,) where the edge at rest crosses each row
+    seeds: tuple                     # noise seeds (noise off: one)
+
+
+@dataclass(frozen=True)
+class DesignModel:
+    """One design: its camera (noisy and noise-free), conversion, exposure times and its references."""
+
+    design: str
+    camera: object
+    quiet_camera: object
+    conversion: Conversion
+    white_rate: np.ndarray           # metered photo-electron rates of the white patch
+    times_s: tuple                   # exposure per channel
+    ideal_xyz: np.ndarray            # the scene at rest, display XYZ
+    own_xyz: np.ndarray              # the camera's conversion of the ideal image (no optics, no sensor)
+    snr_db: float | None
+
+
+@dataclass(frozen=True)
+class Capture:
+    """A design's capture of the target at one speed: one per noise seed and a noise-free twin."""
+
+    noisy: tuple                     # ((camera rates (H, W, N), display XYZ (H, W, 3)), ...) per seed
+    quiet_xyz: np.ndarray
+
+
+@dataclass(frozen=True)
+class StillReference:
+    """The design's noise-free still capture (the motion metrics' reference) and its false colour."""
+
+    xyz: np.ndarray
+    false_colour: float
+
+
+@contextlib.contextmanager
+def timed(timings: dict, stage: str):
+    """Add the block's wall time to ``timings[stage]``."""
+    t0 = time.perf_counter()
+    try:
+        yield
+    finally:
+        timings[stage] += time.perf_counter() - t0
+
+
+def prepare(spec: MotionSpec, scene, renderer: str, log, timings: dict) -> MotionSetup:
+    """The calibrated scene, the framing, the moving target and its ideal image (the render stage)."""
     scene = calibrated_scene(scene, spec)
-    grid = scene.grid
-    ref = ChartReference.of(scene)
-    base = motion_camera(scene, spec)
     w, h = spec.edge_size_px
     geometry = CameraGeometry.framing(w * spec.object_pixel_mm, spec.focal_length_mm, spec.f_number,
                                       spec.pixel_pitch_um, w, h)
-    m = sopt.margin_px(spec.pixel_pitch_um, spec.f_number, grid.edges_nm[-1])
-    big = geometry.with_margin(m)
+    m = sopt.margin_px(spec.pixel_pitch_um, spec.f_number, scene.grid.edges_nm[-1])
     target = SlantedEdge(angle_deg=spec.edge_angle_deg, dataset=scene.chart.dataset)
-    timings = dict.fromkeys(("render", "optics", "capture", "processing", "metrics", "snr"), 0.0)
-    t0 = time.perf_counter()
-    moving = MovingScene(target, big, scene.illuminant, grid, spec.supersampling, renderer, spec.render_mode,
-                         scene.render.variant, spec.seed, log)
-    ideal = ideal_radiance(moving, spec.samples_per_subpixel, m)
-    timings["render"] += time.perf_counter() - t0
-    settings = sopt.OpticsSettings()
-    spd = samples_per_degree(spec.viewing_distance_m, spec.display_pixel_pitch_mm * 1e-3)
+    with timed(timings, "render"):
+        moving = MovingScene(target, geometry.with_margin(m), scene.illuminant, scene.grid, spec.supersampling,
+                             renderer, spec.render_mode, scene.render.variant, spec.seed, log)
+        ideal = ideal_radiance(moving, spec.samples_per_subpixel, m)
     b = SCORE_BORDER_PX
     valid = np.zeros((h, w), bool)
     valid[b:-b, b:-b] = True
-    cols0 = mm.edge_columns(w, h, target.x0_px, spec.edge_angle_deg)
-    rows, images, curves, snr, timing_info = [], {}, [], {}, {}
+    return MotionSetup(
+        spec=spec, scene=scene, reference=ChartReference.of(scene), camera=motion_camera(scene, spec),
+        geometry=geometry, margin_px=m, moving=moving, ideal=ideal, optics=sopt.OpticsSettings(),
+        samples_per_degree=samples_per_degree(spec.viewing_distance_m, spec.display_pixel_pitch_mm * 1e-3),
+        valid=valid, edge_columns=mm.edge_columns(w, h, target.x0_px, spec.edge_angle_deg),
+        seeds=tuple(spec.seed + i for i in range(spec.seeds if spec.noise else 1)))  # noise-free: one is all there is
+
+
+def design_model(setup: MotionSetup, design: str, timings: dict) -> DesignModel:
+    """A design's camera, conversion (fitted on the chart), exposure times, references and SNR."""
+    spec, scene = setup.spec, setup.scene
+    camera = setup.camera.with_design(design)
+    with timed(timings, "snr"):
+        snr = design_snr_db(scene, camera, design, spec.seed) if spec.noise else None
+    conv = Conversion.fit(setup.reference, camera, scene.processing)
+    white = white_rate(setup.reference, camera)
+    times = exposure_times_s(camera.capture.exposure, white, camera.sensor, camera.architecture(),
+                             camera.capture.white_fill)
+    own_xyz = photo_electron_rates(setup.ideal.astype(np.float32), scene.grid, camera).astype(np.float64) \
+        @ conv.matrix @ conv.rgb_to_xyz.T
+    quiet = camera.replace(sensor=camera.sensor.off("shot_noise", "dark_current", "read_noise", "fpn", "quantization"))
+    return DesignModel(design, camera, quiet, conv, white, times,
+                       radiance_to_display_xyz(setup.ideal, scene.grid, scene.illuminant.white_luminance_cd_m2, conv),
+                       own_xyz, snr)
+
+
+def case_speeds(spec: MotionSpec) -> tuple:
+    """The speeds captured: the swept ones, after a still capture (0) if the sweep does not start at rest."""
+    return ((0.0,) if spec.speeds_px_per_ms[0] > 0 else ()) + spec.speeds_px_per_ms
+
+
+def speed_mm_per_s(spec: MotionSpec, v_px_per_ms: float) -> float:
+    return v_px_per_ms * 1e3 * spec.object_pixel_mm
+
+
+def render_at_speed(setup: MotionSetup, dm: DesignModel, timing, v_px_per_ms: float, timings: dict):
+    """The target moving at ``v_px_per_ms`` through the design's windows and the optics:
+    ``(time-averaged photo-electron rates (H, W, N), how the time was sliced)``."""
+    spec = setup.spec
+    vmm = speed_mm_per_s(spec, v_px_per_ms)
     direction = math.radians(spec.direction_deg)
-    seeds = [spec.seed + i for i in range(spec.seeds if spec.noise else 1)]   # noise-free: one is all there is
+    motion = Motion(velocity_mm_per_s=(vmm * math.cos(direction), vmm * math.sin(direction)),
+                    angular_velocity_deg_per_s=spec.angular_velocity_deg_per_s,
+                    shake_rms_px=spec.shake_rms_px, seed=spec.seed)
+    with timed(timings, "render"):
+        integ = integrate(setup.moving, motion, timing, spec.max_step_px, spec.slices, spec.samples_per_subpixel)
+    with timed(timings, "optics"):
+        rates = channel_rates(setup.moving, integ, dm.camera, setup.optics, setup.margin_px)
+    return rates, integ.info
+
+
+def capture_at_seed(setup: MotionSetup, dm: DesignModel, rates: np.ndarray, seed: int, camera=None):
+    """One capture of the rates by the design (its noise at ``seed``), processed to the display:
+    ``(camera rates (H, W, N), display XYZ (H, W, 3))``."""
+    raw = record(rates, camera or dm.camera, dm.white_rate, seed, dm.times_s)
+    return process(raw, setup.scene.processing, dm.conversion)
+
+
+def capture(setup: MotionSetup, dm: DesignModel, rates: np.ndarray, timings: dict) -> Capture:
+    """The design's captures of the rates: one per noise seed, and the noise-free twin (noise off: the same)."""
+    with timed(timings, "capture"):
+        noisy = tuple(capture_at_seed(setup, dm, rates, sd) for sd in setup.seeds)
+    with timed(timings, "processing"):
+        quiet = noisy[0][1] if not setup.spec.noise else \
+            capture_at_seed(setup, dm, rates, setup.spec.seed, dm.quiet_camera)[1]
+    return Capture(noisy, quiet)
+
+
+def still_reference(setup: MotionSetup, dm: DesignModel, still_xyz: np.ndarray) -> StillReference:
+    """The noise-free still capture and its false colour within 2 px of the edge, against the camera's
+    conversion of the ideal image (√(Δa*² + Δb*²))."""
+    h, w = setup.valid.shape
+    zone = mm.edge_zone(mm.edge_distance((h, w), setup.edge_columns), 2.0) & setup.valid
+    lab_s, lab_o = (xyz_to_lab(a, dm.conversion.display_white) for a in (still_xyz, dm.own_xyz))
+    return StillReference(still_xyz, float(np.hypot(*(lab_s - lab_o)[..., 1:].transpose(2, 0, 1))[zone].mean()))
+
+
+def score_capture(setup: MotionSetup, dm: DesignModel, still: StillReference, xyz: np.ndarray, zone: np.ndarray):
+    """One seed's capture scored: ``({metric: value} for SEED_METRICS, S-CIELAB map against the still
+    capture (H, W), (e-SFR frequencies, SFR))``."""
+    white, spd = dm.conversion.display_white, setup.samples_per_degree
+    lab = xyz_to_lab(xyz, white)
+    scielab_map = scielab(still.xyz, xyz, white, spd)
+    f, sfr, mtf50 = mm.mtf_along_motion(xyz, SCORE_BORDER_PX, correct_binning=setup.spec.esfr_correct_binning)
+    scores = {"scielab_delta_e": float(scielab_map[zone].mean()),
+              "cielab_delta_e": float(delta_e(lab, xyz_to_lab(still.xyz, white))[zone].mean()),
+              "scielab_delta_e_scene": float(scielab(dm.ideal_xyz, xyz, white, spd)[zone].mean()),
+              "cielab_delta_e_scene": float(delta_e(lab, xyz_to_lab(dm.ideal_xyz, white))[zone].mean()),
+              "mtf50_cy_per_px": mtf50}
+    return scores, scielab_map, (f, sfr)
+
+
+def edge_distance_moving(setup: MotionSetup, timing, v_px_per_ms: float) -> np.ndarray:
+    """``(H, W)`` distance from the edge, px: each row's later window shifts a uniformly moving edge
+    (rolling shutter)."""
+    h, w = setup.valid.shape
+    delay = timing.row_delay_s[setup.margin_px:setup.margin_px + h]
+    shift = v_px_per_ms * 1e3 * math.cos(math.radians(setup.spec.direction_deg)) * (delay - delay.mean())
+    return mm.edge_distance((h, w), setup.edge_columns + shift)
+
+
+def score_case(setup: MotionSetup, dm: DesignModel, timing, still: StillReference, v_px_per_ms: float,
+               cap: Capture, slicing: dict, rolling: bool):
+    """A case scored: ``(MotionRow, its e-SFR curve (first seed), its images (first seed))``."""
+    spec = setup.spec
+    white = dm.conversion.display_white
+    dist = edge_distance_moving(setup, timing, v_px_per_ms)
+    zone = mm.edge_zone(dist, spec.zone_half_width_px) & setup.valid
+    # colour breakup: the motion alone (noise-free moving capture against the noise-free still one)
+    d, chroma = mm.chroma_profile(cap.quiet_xyz, still.xyz, white, dist, 0.5, spec.zone_half_width_px, setup.valid)
+    cam_rates, xyz = cap.noisy[0]
+    d_s, chroma_s = mm.chroma_profile(xyz, dm.own_xyz, white, dist, 0.5, spec.zone_half_width_px, setup.valid)
+    scored = [score_capture(setup, dm, still, x, zone) for _, x in cap.noisy]
+    per_seed = {k: [s[k] for s, _, _ in scored] for k in SEED_METRICS}
+    _, scielab_map, (f, sfr) = scored[0]          # the first seed's map and curve are the ones drawn
+    row = MotionRow(
+        design=dm.design, speed_px_per_ms=v_px_per_ms, speed_mm_per_s=speed_mm_per_s(spec, v_px_per_ms),
+        rolling_shutter=bool(rolling),
+        breakup_width_px=mm.breakup_width_px(d, chroma, spec.breakup_threshold),
+        max_added_chroma=float(np.nanmax(np.append(chroma, 0.0))),
+        breakup_width_scene_px=mm.breakup_width_px(d_s, chroma_s, spec.breakup_threshold),
+        false_colour_still=still.false_colour,
+        **{k: mean_or_none(v) for k, v in per_seed.items()},
+        **{f"{k}_sd": sd_or_none(v) for k, v in per_seed.items()},
+        scielab_delta_e_by_seed=tuple(per_seed["scielab_delta_e"]), seeds=setup.seeds, snr_db=dm.snr_db,
+        blur_px=v_px_per_ms * 1e3 * timing.capture_time_s, capture_time_ms=1e3 * timing.capture_time_s,
+        exposure_ms=tuple((1e3 * np.asarray(dm.times_s)).tolist()), **slicing)
+    curve = {"design": dm.design, "speed_px_per_ms": v_px_per_ms, "rolling_shutter": bool(rolling),
+             "frequencies_cy_per_px": f[:80].tolist(), "sfr": sfr[:80].tolist()}
+    images = {"xyz": xyz.astype(np.float32), "cam_rates": cam_rates.astype(np.float32), "chroma": (d, chroma),
+              "scielab": np.where(setup.valid, scielab_map, np.nan).astype(np.float32), "zone": zone}
+    return row, curve, images
+
+
+def sweep_speeds(setup: MotionSetup, dm: DesignModel, timing, rolling: bool, timings: dict):
+    """Every speed of one design and shutter: yields ``(row, curve, images)`` per swept speed."""
+    still = None
+    for v in case_speeds(setup.spec):
+        rates, slicing = render_at_speed(setup, dm, timing, v, timings)
+        cap = capture(setup, dm, rates, timings)
+        if still is None:   # the first speed is 0: the still reference
+            still = still_reference(setup, dm, cap.quiet_xyz)
+        if v not in setup.spec.speeds_px_per_ms:
+            continue        # the still reference only
+        with timed(timings, "metrics"):
+            case = score_case(setup, dm, timing, still, v, cap, slicing, rolling)
+        yield case
+
+
+def run_motion(spec: MotionSpec, scene, renderer: str = "mitsuba", log=None, keep_images: bool = True) -> dict:
+    """Every design × speed × shutter. Returns ``{"rows": [MotionRow], "images", "timings", ...}``."""
+    log = log or (lambda msg: None)
+    t_start = time.perf_counter()
+    timings = dict.fromkeys(("render", "optics", "capture", "processing", "metrics", "snr"), 0.0)
+    setup = prepare(spec, scene, renderer, log, timings)
+    rows, images, curves, timing_info = [], {}, [], {}
     for design in spec.designs:
-        t0 = time.perf_counter()
-        camera = base.with_design(design)
-        snr[design] = design_snr_db(scene, camera, design, spec.seed) if spec.noise else None
-        timings["snr"] += time.perf_counter() - t0
-        conv = Conversion.fit(ref, camera, scene.processing)
-        white = white_rate(ref, camera)
-        arch = camera.architecture()
-        times = exposure_times_s(camera.capture.exposure, white, camera.sensor, arch, camera.capture.white_fill)
-        ideal_xyz = radiance_to_display_xyz(ideal, grid, scene.illuminant.white_luminance_cd_m2, conv)
-        own_xyz = photo_electron_rates(ideal.astype(np.float32), grid, camera).astype(np.float64) \
-            @ conv.matrix @ conv.rgb_to_xyz.T
-        quiet = camera.replace(sensor=camera.sensor.off("shot_noise", "dark_current", "read_noise", "fpn",
-                                                        "quantization"))
+        dm = design_model(setup, design, timings)
         for rolling in spec.rolling_shutter:
-            timing = capture_timing(arch, times, spec.timing(rolling), big.height_px, -m)
+            timing = capture_timing(dm.camera.architecture(), dm.times_s, spec.timing(rolling),
+                                    setup.moving.geometry.height_px, -setup.margin_px)
             timing_info[f"{design}{' rolling' if rolling else ''}"] = timing.to_dict()
-            still = None      # the design's noise-free still capture (display XYZ): the motion metrics' reference
-            for v in ((0.0,) if spec.speeds_px_per_ms[0] > 0 else ()) + spec.speeds_px_per_ms:
-                vmm = v * 1e3 * spec.object_pixel_mm
-                motion = Motion(velocity_mm_per_s=(vmm * math.cos(direction), vmm * math.sin(direction)),
-                                angular_velocity_deg_per_s=spec.angular_velocity_deg_per_s,
-                                shake_rms_px=spec.shake_rms_px, seed=spec.seed)
-                t1 = time.perf_counter()
-                integ = integrate(moving, motion, timing, spec.max_step_px, spec.slices, spec.samples_per_subpixel)
-                t2 = time.perf_counter()
-                rates = channel_rates(moving, integ, camera, settings, m)
-                t3 = time.perf_counter()
-                noisy = [process(record(rates, camera, white, sd, times), scene.processing, conv) for sd in seeds]
-                cam_rates, xyz = noisy[0]
-                t4 = time.perf_counter()
-                quiet_xyz = xyz if not spec.noise else process(record(rates, quiet, white, spec.seed, times),
-                                                               scene.processing, conv)[1]
-                t5 = time.perf_counter()
-                if still is None:
-                    still = quiet_xyz
-                    zone_still = mm.edge_zone(mm.edge_distance((h, w), cols0), 2.0) & valid
-                    lab_s, lab_o = (xyz_to_lab(a, conv.display_white) for a in (still, own_xyz))
-                    false_colour_still = float(np.hypot(*(lab_s - lab_o)[..., 1:].transpose(2, 0, 1))[zone_still].mean())
-                if v not in spec.speeds_px_per_ms:
-                    continue   # the still reference only
-                # the edge's columns: each row's later window shifts a uniformly moving edge (rolling shutter)
-                delay = timing.row_delay_s[m:m + h]
-                shift = v * 1e3 * math.cos(direction) * (delay - delay.mean())
-                dist = mm.edge_distance((h, w), cols0 + shift)
-                zone = mm.edge_zone(dist, spec.zone_half_width_px) & valid
-                # colour breakup: the motion alone (noise-free moving capture against the noise-free still one)
-                d, chroma = mm.chroma_profile(quiet_xyz, still, conv.display_white, dist, 0.5,
-                                              spec.zone_half_width_px, valid)
-                d_s, chroma_s = mm.chroma_profile(xyz, own_xyz, conv.display_white, dist, 0.5,
-                                                  spec.zone_half_width_px, valid)
-                per_seed = {k: [] for k in ("scielab_delta_e", "cielab_delta_e", "scielab_delta_e_scene",
-                                            "cielab_delta_e_scene", "mtf50_cy_per_px")}
-                lab_still = xyz_to_lab(still, conv.display_white)
-                lab_ideal = xyz_to_lab(ideal_xyz, conv.display_white)
-                for _, x in noisy:
-                    lab = xyz_to_lab(x, conv.display_white)
-                    per_seed["scielab_delta_e"].append(float(scielab(still, x, conv.display_white, spd)[zone].mean()))
-                    per_seed["cielab_delta_e"].append(float(delta_e(lab, lab_still)[zone].mean()))
-                    per_seed["scielab_delta_e_scene"].append(float(scielab(ideal_xyz, x, conv.display_white, spd)[zone].mean()))
-                    per_seed["cielab_delta_e_scene"].append(float(delta_e(lab, lab_ideal)[zone].mean()))
-                    f_s, sfr_s, mtf50_s = mm.mtf_along_motion(x, b)
-                    per_seed["mtf50_cy_per_px"].append(mtf50_s)
-                    if x is xyz:   # the first seed's curve is the one drawn
-                        f, sfr = f_s, sfr_s
-                t6 = time.perf_counter()
-                for k, dt in zip(("render", "optics", "capture", "processing", "metrics"),
-                                 (t2 - t1, t3 - t2, t4 - t3, t5 - t4, t6 - t5)):
-                    timings[k] += dt
-                row = {"design": design, "speed_px_per_ms": v, "speed_mm_per_s": vmm, "rolling_shutter": bool(rolling),
-                       "breakup_width_px": mm.breakup_width_px(d, chroma, spec.breakup_threshold),
-                       "max_added_chroma": float(np.nanmax(np.append(chroma, 0.0))),
-                       "breakup_width_scene_px": mm.breakup_width_px(d_s, chroma_s, spec.breakup_threshold),
-                       "false_colour_still": false_colour_still,
-                       **{k: _mean_or_none(vals) for k, vals in per_seed.items()},
-                       **{f"{k}_sd": _sd_or_none(vals) for k, vals in per_seed.items()},
-                       "scielab_delta_e_by_seed": per_seed["scielab_delta_e"], "seeds": list(seeds),
-                       "snr_db": snr[design],
-                       "blur_px": v * 1e3 * timing.capture_time_s,
-                       "capture_time_ms": 1e3 * timing.capture_time_s,
-                       "exposure_ms": (1e3 * np.asarray(times)).tolist(), **integ.info}
+            for row, curve, case_images in sweep_speeds(setup, dm, timing, rolling, timings):
                 rows.append(row)
-                curves.append({"design": design, "speed_px_per_ms": v, "rolling_shutter": bool(rolling),
-                               "frequencies_cy_per_px": f[:80].tolist(), "sfr": sfr[:80].tolist()})
+                curves.append(curve)
                 if keep_images:
-                    images[(design, v, bool(rolling))] = {"xyz": xyz.astype(np.float32),
-                                                          "cam_rates": cam_rates.astype(np.float32),
-                                                          "chroma": (d, chroma)}
+                    images[(design, row.speed_px_per_ms, bool(rolling))] = case_images
             log(f"[{time.perf_counter() - t_start:6.1f} s] {design}{' rolling shutter' if rolling else ''}: "
-                f"{len(spec.speeds_px_per_ms)} speeds ({moving.renders} slice renders so far)")
+                f"{len(spec.speeds_px_per_ms)} speeds ({setup.moving.renders} slice renders so far)")
         if keep_images:
-            images[(design, "ideal")] = {"xyz": ideal_xyz.astype(np.float32)}
+            images[(design, "ideal")] = {"xyz": dm.ideal_xyz.astype(np.float32)}
     return {"rows": rows, "mtf_curves": curves, "images": images, "timings": timings,
-            "exposure_timing": timing_info, "display_white": conv.display_white, "renderer": renderer,
-            "render_metadata": moving.metadata, "slice_renders": moving.renders,
+            "exposure_timing": timing_info, "display_white": dm.conversion.display_white, "renderer": renderer,
+            "render_metadata": setup.moving.metadata, "slice_renders": setup.moving.renders,
             "answer": crossing_speeds(rows),
-            "parameters": {"motion": spec.to_dict(), "scene": scene.to_dict(), "geometry": geometry.to_dict(),
-                           "white_luminance_cd_m2": scene.illuminant.white_luminance_cd_m2,
-                           "samples_per_degree": spd},
+            "parameters": {"motion": spec.to_dict(), "scene": setup.scene.to_dict(),
+                           "geometry": setup.geometry.to_dict(),
+                           "white_luminance_cd_m2": setup.scene.illuminant.white_luminance_cd_m2,
+                           "samples_per_degree": setup.samples_per_degree},
             "wall_s": time.perf_counter() - t_start}
 
 
-def _mean_or_none(values):
+def mean_or_none(values):
     v = [x for x in values if x is not None and np.isfinite(x)]
     return float(np.mean(v)) if len(v) == len(values) and v else None
 
 
-def _sd_or_none(values):
+def sd_or_none(values):
     v = [x for x in values if x is not None and np.isfinite(x)]
     return float(np.std(v, ddof=1)) if len(v) == len(values) and len(v) > 1 else None
 
 
-def _get(rows, design, rolling, key):
-    rs = sorted((r for r in rows if r["design"] == design and r["rolling_shutter"] == rolling),
-                key=lambda r: r["speed_px_per_ms"])
-    return np.array([r["speed_px_per_ms"] for r in rs]), np.array([np.nan if r[key] is None else r[key] for r in rs])
+# -- the answer: where the field-sequential error crosses the CFA's --------------------------------
+
+def series(rows, design: str, rolling: bool, metric: str):
+    """``(speeds, values)`` of one design and shutter, by speed; a missing value is NaN (``metric``: a
+    :class:`MotionRow` field)."""
+    rs = sorted((r for r in rows if r.design == design and r.rolling_shutter == rolling),
+                key=lambda r: r.speed_px_per_ms)
+    values = [getattr(r, metric) for r in rs]
+    return np.array([r.speed_px_per_ms for r in rs]), np.array([np.nan if x is None else x for x in values])
 
 
 def crossing(speeds, a, b) -> dict:
@@ -390,13 +591,13 @@ def seed_crossings(rows, design: str, other: str, rolling: bool) -> dict:
     interval open (``None``)."""
     from scipy import stats
 
-    def series(d):
-        rs = sorted((r for r in rows if r["design"] == d and r["rolling_shutter"] == rolling),
-                    key=lambda r: r["speed_px_per_ms"])
-        return np.array([r["speed_px_per_ms"] for r in rs]), np.array([r["scielab_delta_e_by_seed"] for r in rs])
+    def by_seed(d):
+        rs = sorted((r for r in rows if r.design == d and r.rolling_shutter == rolling),
+                    key=lambda r: r.speed_px_per_ms)
+        return np.array([r.speed_px_per_ms for r in rs]), np.array([r.scielab_delta_e_by_seed for r in rs])
 
-    s, a = series(design)
-    _, c = series(other)
+    s, a = by_seed(design)
+    _, c = by_seed(other)
     n = min(a.shape[0], c.shape[0])
     if n == 0 or a.ndim != 2 or a.shape[1] < 1:
         return {}
@@ -413,26 +614,27 @@ def crossing_speeds(rows) -> dict:
     """For each field-sequential design and shutter: the speed at which its S-CIELAB error around the
     edge exceeds cfa/single's (and the same for CIELAB)."""
     out = {}
-    designs = sorted({r["design"] for r in rows})
+    designs = sorted({r.design for r in rows})
     if "cfa/single" not in designs:
         return out
+    shutters = sorted({r.rolling_shutter for r in rows})
     for d in designs:
         if d == "cfa/single":
             continue
-        for rolling in sorted({r["rolling_shutter"] for r in rows}):
-            s, a = _get(rows, d, rolling, "scielab_delta_e")
-            _, c = _get(rows, "cfa/single", rolling, "scielab_delta_e")
-            _, a2 = _get(rows, d, rolling, "cielab_delta_e")
-            _, c2 = _get(rows, "cfa/single", rolling, "cielab_delta_e")
+        for rolling in shutters:
+            s, a = series(rows, d, rolling, "scielab_delta_e")
+            _, c = series(rows, "cfa/single", rolling, "scielab_delta_e")
+            _, a2 = series(rows, d, rolling, "cielab_delta_e")
+            _, c2 = series(rows, "cfa/single", rolling, "cielab_delta_e")
             n = min(a.size, c.size)
             out[f"{d}{' rolling' if rolling else ''}"] = {
                 "design": d, "rolling_shutter": rolling,
                 "scielab": {**crossing(s[:n], a[:n], c[:n]), **seed_crossings(rows, d, "cfa/single", rolling)},
                 "cielab": crossing(s[:n], a2[:n], c2[:n]),
                 "still_scielab": [float(a[0]), float(c[0])]}
-    for rolling in sorted({r["rolling_shutter"] for r in rows}):   # from which speed balanced beats optimal
-        s, o = _get(rows, "fsc/optimal", rolling, "scielab_delta_e")
-        _, b = _get(rows, "fsc/balanced", rolling, "scielab_delta_e")
+    for rolling in shutters:   # from which speed balanced beats optimal
+        s, o = series(rows, "fsc/optimal", rolling, "scielab_delta_e")
+        _, b = series(rows, "fsc/balanced", rolling, "scielab_delta_e")
         if o.size and o.size == b.size:
             out[f"balanced beats optimal{' rolling' if rolling else ''}"] = {"scielab": crossing(s, o, b)}
     return out

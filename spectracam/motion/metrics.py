@@ -13,7 +13,7 @@ shift ``v·(row delay − mean row delay)`` each row's later window gives a unif
   (default 2 ΔE*ab: about twice a just-noticeable difference).
 * :func:`edge_zone` — the pixels within ``half_width_px`` of the edge, where S-CIELAB and CIELAB are
   averaged (:func:`spectracam.spatial.scielab.scielab`).
-* MTF along the motion: the ISO 12233 e-SFR (:func:`spectracam.spatial.esfr.esfr`) of the displayed
+* MTF along the motion: the ISO 12233:2017 e-SFR (:func:`spectracam.spatial.esfr.esfr`) of the displayed
   luminance across the edge (the edge is 5° from the vertical, the motion horizontal); a uniform motion
   of L pixels during the exposure multiplies it by ``|sinc(f·L)|`` (:func:`motion_mtf`).
 """
@@ -70,12 +70,14 @@ def edge_zone(distance: np.ndarray, half_width_px: float) -> np.ndarray:
     return np.abs(distance) <= half_width_px
 
 
-def mtf_along_motion(xyz: np.ndarray, border_px: int = 4):
+def mtf_along_motion(xyz: np.ndarray, border_px: int = 4, correct_binning: bool = False):
     """e-SFR of the displayed luminance Y across the edge: ``(frequencies, sfr, mtf50)``; empty
-    curves and a NaN MTF50 where noise or blur leave no usable edge (:class:`~spectracam.spatial.esfr.NoEdge`)."""
+    curves and a NaN MTF50 where noise or blur leave no usable edge (:class:`~spectracam.spatial.esfr.NoEdge`).
+    As ISO 12233:2017 states it by default; ``correct_binning``: with the binning correction, which is
+    not part of the standard (:func:`spectracam.spatial.esfr.esfr`)."""
     b = border_px
     try:
-        r = esfr(np.asarray(xyz)[b:-b, b:-b, 1], correct_binning=True)
+        r = esfr(np.asarray(xyz)[b:-b, b:-b, 1], correct_binning=correct_binning)
     except NoEdge:
         return np.zeros(0), np.zeros(0), float("nan")
     return r.frequencies_cy_per_px, r.sfr, float(r.mtf50_cy_per_px)
