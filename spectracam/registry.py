@@ -68,6 +68,9 @@ class Registry(Mapping[str, T], Generic[T]):
     def __getitem__(self, name: str) -> T:
         return self.get(name)
 
+    def __contains__(self, name) -> bool:   # Mapping's would raise the ConfigError of an unknown name
+        return name in self._items
+
     def __iter__(self) -> Iterator[str]:
         return iter(self._items)
 

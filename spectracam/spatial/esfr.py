@@ -174,6 +174,20 @@ def esfr(image, *, fit_order: int = 1, oversampling: int = 4, derivative: str = 
     >>> round(float(res.sfr[0]), 6), bool(res.frequencies_cy_per_px[-1] >= 1.0)
     (1.0, True)
     """
+    a = _checked(image, fit_order, derivative, oversampling)
+    a, orientation = _oriented(a)
+    sign = _polarity(a)
+    slope, edge = _fit_edge(a, sign, fit_order)
+    esf, n_use = _project(a, edge, slope, sign, int(oversampling), correct_binning)
+    lsf = _line_spread(esf, derivative)
+    freq, sfr = _sfr(lsf, slope, int(oversampling), derivative, correct_binning, max_frequency_cy_per_px)
+    return ESFRResult(frequencies_cy_per_px=freq, sfr=sfr, mtf50_cy_per_px=_mtf50(freq, sfr),
+                      edge_angle_deg=float(np.degrees(np.arctan(slope))), orientation=orientation, esf=esf, lsf=lsf,
+                      bin_width_px=float(np.cos(np.arctan(slope)) / oversampling), rows_used=n_use)
+
+
+def _checked(image, fit_order, derivative, oversampling) -> np.ndarray:
+    """The image as a float array, with every argument checked (one line each)."""
     a = np.asarray(image, dtype=float)
     if a.ndim != 2:
         raise ValueError(f"e-SFR: expected a 2-D array (one channel), got shape {a.shape}")
@@ -185,9 +199,11 @@ def esfr(image, *, fit_order: int = 1, oversampling: int = 4, derivative: str = 
         raise ValueError(f"e-SFR: derivative = {derivative!r}: 'central' or 'forward'")
     if int(oversampling) != oversampling or oversampling < 1:
         raise ValueError(f"e-SFR: oversampling = {oversampling!r}: a positive integer (4 in ISO 12233)")
-    oversampling = int(oversampling)
+    return a
 
-    # orientation: a near-vertical edge has its gradient mostly along the rows
+
+def _oriented(a: np.ndarray) -> tuple[np.ndarray, str]:
+    """A near-vertical edge (transposed if it is near-horizontal: its gradient mostly along the columns)."""
     gx = np.abs(np.diff(a, axis=1)).mean() if a.shape[1] > 1 else 0.0
     gy = np.abs(np.diff(a, axis=0)).mean() if a.shape[0] > 1 else 0.0
     orientation = "vertical" if gx >= gy else "horizontal"
@@ -197,39 +213,49 @@ def esfr(image, *, fit_order: int = 1, oversampling: int = 4, derivative: str = 
     if nlin < MIN_ROWS or npix < MIN_COLS:
         raise ValueError(f"e-SFR: region of {nlin} x {npix} pixels (along x across the edge) is too small: "
                          f"need at least {MIN_ROWS} along and {MIN_COLS} across the edge")
+    return a, orientation
 
-    # contrast against the noise; polarity dark → bright
+
+def _polarity(a: np.ndarray) -> float:
+    """+1 for dark → bright along the rows, -1 the other way; :class:`NoEdge` if the step is within the noise."""
+    npix = a.shape[1]
     k = max(2, npix // 10)
     left, right = a[:, :k].mean(), a[:, -k:].mean()
     step = right - left
     noise = 1.4826 * np.median(np.abs(np.diff(a, axis=0))) / np.sqrt(2.0)
     if not abs(step) > max(5.0 * noise, 1e-12 * (abs(left) + abs(right)), 0.0):
         raise NoEdge(f"e-SFR: no edge: the two sides differ by {abs(step):.3g}, noise {noise:.3g}")
-    sign = 1.0 if step > 0 else -1.0
+    return 1.0 if step > 0 else -1.0
 
-    # 1. edge location per row: centroid of the [-1/2, 1/2] derivative (at x = j + 1/2) under a Hamming window
+
+def _fit_edge(a: np.ndarray, sign: float, fit_order: int) -> tuple[float, np.ndarray]:
+    """Steps 1–2: each row's edge location (windowed derivative centroid, twice) and the fitted edge:
+    ``(slope of the linear fit, edge column per row)``."""
+    nlin, npix = a.shape
     x = np.arange(npix - 1) + 0.5
     deriv = sign * 0.5 * np.diff(a, axis=1)
     rows = np.arange(nlin, dtype=float)
     loc = _edge_locations(deriv, x[None, :], np.full((nlin, 1), (npix - 1) / 2.0))
     coef = _fit(rows, loc, fit_order)
     loc = _edge_locations(deriv, x[None, :], np.polynomial.polynomial.polyval(rows, coef)[:, None])
-
-    # 2. fit of edge position against row
     coef = _fit(rows, loc, fit_order)
     slope = _fit(rows, loc, 1)[1]
     edge = np.polynomial.polynomial.polyval(rows, coef)
     margin = 1.0
     if edge.min() < margin or edge.max() > npix - 1 - margin:
         raise NoEdge(f"e-SFR: the fitted edge leaves the region (columns {edge.min():.1f} to {edge.max():.1f} "
-                         f"of 0 to {npix - 1}): it must cross the whole region")
+                     f"of 0 to {npix - 1}): it must cross the whole region")
     if nlin * abs(slope) < 1.0:
         angle = np.degrees(np.arctan(slope))
         raise ValueError(f"e-SFR: edge angle {angle:.2f}° too close to the pixel axis for {nlin} rows: "
                          f"need rows·|tan θ| ≥ 1 (ISO 12233 uses about 5°)")
-    angle_deg = float(np.degrees(np.arctan(slope)))
+    return float(slope), edge
 
-    # 3. whole number of phase cycles, then project into 1/oversampling-pixel bins along x
+
+def _project(a, edge, slope, sign, oversampling, correct_binning) -> tuple[np.ndarray, int]:
+    """Step 3: a whole number of phase cycles of rows projected along the edge into 1/oversampling-pixel
+    bins: ``(ESF, rows used)``."""
+    nlin, npix = a.shape
     n_use = min(nlin, int(round(np.floor(nlin * abs(slope)) / abs(slope))))
     a, edge = a[:n_use], edge[:n_use]
     offset = (np.arange(npix)[None, :] - edge[:, None]) * oversampling  # distance to the edge along x, bins
@@ -247,9 +273,12 @@ def esfr(image, *, fit_order: int = 1, oversampling: int = 4, derivative: str = 
         at = np.bincount(idx[keep], weights=offset[keep] - lo, minlength=nbin)[filled] / counts[filled]
     else:
         at = centres[filled]
-    esf = np.interp(centres, at, sums[filled] / counts[filled])
+    return np.interp(centres, at, sums[filled] / counts[filled]), n_use
 
-    # 4. LSF: discrete derivative, centred on its maximum, Hamming-windowed
+
+def _line_spread(esf: np.ndarray, derivative: str) -> np.ndarray:
+    """Step 4: the LSF, the ESF's discrete derivative centred on its maximum and Hamming-windowed."""
+    nbin = esf.size
     lsf = np.empty(nbin)
     if derivative == "central":
         lsf[1:-1] = 0.5 * (esf[2:] - esf[:-2])
@@ -259,9 +288,12 @@ def esfr(image, *, fit_order: int = 1, oversampling: int = 4, derivative: str = 
         lsf[-1] = lsf[-2]
     peak = int(round(np.flatnonzero(lsf == lsf.max()).mean()))
     lsf = np.roll(lsf, nbin // 2 - peak)
-    lsf = lsf * _hamming(np.arange(nbin, dtype=float), float(nbin // 2))
+    return lsf * _hamming(np.arange(nbin, dtype=float), float(nbin // 2))
 
-    # 5. |DFT|, normalised, corrected for the derivative FIR (and optionally the binning)
+
+def _sfr(lsf, slope, oversampling, derivative, correct_binning, max_frequency_cy_per_px):
+    """Steps 5–6: ``(frequencies along the edge normal, cy/px; |DFT| normalised and corrected)``."""
+    nbin = lsf.size
     spectrum = np.abs(np.fft.rfft(lsf))
     if not spectrum[0] > 0:
         raise NoEdge("e-SFR: the line spread function integrates to ≤ 0: no usable edge")
@@ -272,13 +304,13 @@ def esfr(image, *, fit_order: int = 1, oversampling: int = 4, derivative: str = 
         response = response * np.sinc(freq * bin_width)
     sfr = spectrum / spectrum[0] / np.maximum(response, 0.1)         # correction capped at 10 (ISO 12233)
     n_out = min(spectrum.size, int(np.ceil(max_frequency_cy_per_px * nbin * bin_width - 1e-9)) + 1)
-    freq, sfr = freq[:n_out], sfr[:n_out]
+    return freq[:n_out], sfr[:n_out]
 
+
+def _mtf50(freq: np.ndarray, sfr: np.ndarray) -> float:
+    """Where the SFR first falls to 0.5, linearly interpolated (NaN if it never does)."""
     below = np.flatnonzero(sfr < 0.5)
-    if below.size:
-        j = below[0]
-        mtf50 = float(freq[j - 1] + (sfr[j - 1] - 0.5) / (sfr[j - 1] - sfr[j]) * (freq[j] - freq[j - 1]))
-    else:
-        mtf50 = float("nan")
-    return ESFRResult(frequencies_cy_per_px=freq, sfr=sfr, mtf50_cy_per_px=mtf50, edge_angle_deg=angle_deg,
-                      orientation=orientation, esf=esf, lsf=lsf, bin_width_px=float(bin_width), rows_used=n_use)
+    if not below.size:
+        return float("nan")
+    j = below[0]
+    return float(freq[j - 1] + (sfr[j - 1] - 0.5) / (sfr[j - 1] - sfr[j]) * (freq[j] - freq[j - 1]))

@@ -219,25 +219,11 @@ class SpatialSpec(Spec):
         return samples_per_degree(self.viewing_distance_m, self.display_pixel_pitch_mm * 1e-3)
 
     def spatial_designs(self) -> list[SpatialDesign]:
-        """Each design of ``designs``: a mosaic with every demosaicking method that takes it and every
-        optical low-pass filter; separate sensors (a prism) at every misregistration; anything else once."""
-        from ..architecture import MosaicLayout, PlanesLayout
-        from ..color import demosaic_applies
-
+        """Each design of ``designs`` with the variants its layout takes (:data:`DESIGN_VARIANTS`)."""
         out = []
         for design in self.designs:
-            arch = CameraSpec().with_design(design).architecture()
-            layout = arch.layout
-            if isinstance(layout, MosaicLayout):
-                methods = [dm for dm in self.demosaics if demosaic_applies(dm, layout)]
-                if not methods:
-                    raise self.error("demosaics", f"none of them takes {design}'s {len(layout.channels)}-channel "
-                                     "mosaic; add 'bilinear' (any periodic mosaic)", list(self.demosaics))
-                out += [SpatialDesign(design, dm, None, o) for dm in methods for o in self.olpf_separations_px]
-            elif isinstance(layout, PlanesLayout) and layout.kind == "sensors":
-                out += [SpatialDesign(design, None, m) for m in self.misregistrations_px]
-            else:
-                out.append(SpatialDesign(design))
+            layout = CameraSpec().with_design(design).architecture().layout
+            out += DESIGN_VARIANTS[variant_kind(layout)](self, design, layout)
         return out
 
     def quick(self) -> "SpatialSpec":
@@ -250,6 +236,44 @@ class SpatialSpec(Spec):
                             samples_per_subpixel=min(self.samples_per_subpixel, 2),
                             star_samples_per_subpixel=min(self.star_samples_per_subpixel, 2),
                             object_pixel_mm=self.object_pixel_mm * 2)
+
+
+#: How a design is varied in space, by its layout (:func:`variant_kind`): kind →
+#: ``variants(spec, design, layout) -> [SpatialDesign]``.
+DESIGN_VARIANTS: Registry = Registry("designs", "spatial design variants")
+
+
+def variant_kind(layout) -> str:
+    """``"mosaic"`` for a colour filter array, the planes' kind (``"sensors"``, ``"frames"``, ``"layers"``) else."""
+    from ..architecture import MosaicLayout
+
+    if isinstance(layout, MosaicLayout):
+        return "mosaic"
+    return layout.kind if layout.kind in DESIGN_VARIANTS.names else "once"
+
+
+@DESIGN_VARIANTS.register("mosaic")
+def _mosaic_variants(spec: SpatialSpec, design: str, layout) -> list:
+    """Every demosaicking method that takes the mosaic, each with every optical low-pass filter."""
+    from ..color import demosaic_applies
+
+    methods = [dm for dm in spec.demosaics if demosaic_applies(dm, layout)]
+    if not methods:
+        raise spec.error("demosaics", f"none of them takes {design}'s {len(layout.channels)}-channel "
+                         "mosaic; add 'bilinear' (any periodic mosaic)", list(spec.demosaics))
+    return [SpatialDesign(design, dm, None, o) for dm in methods for o in spec.olpf_separations_px]
+
+
+@DESIGN_VARIANTS.register("sensors")
+def _sensor_variants(spec: SpatialSpec, design: str, layout) -> list:
+    """Separate sensors (a prism): every misregistration."""
+    return [SpatialDesign(design, None, m) for m in spec.misregistrations_px]
+
+
+@DESIGN_VARIANTS.register("once")
+def _once(spec: SpatialSpec, design: str, layout) -> list:
+    """Every channel at every pixel on one sensor (field-sequential frames, stacked layers): nothing to vary."""
+    return [SpatialDesign(design)]
 
 
 #: Tables of a scene file the experiment takes its light, bands, camera and processing from.
