@@ -38,6 +38,8 @@ def test_consistency_map(small_map, tmp_path):
     paths = cons.write_consistency_outputs(tmp_path, r, "test")
     assert {p.name for p in paths} == {"consistency.png", "consistency.svg", "consistency.json", "consistency.md"}
     assert json.loads((tmp_path / "consistency.json").read_text())["best"] == 0
+    # every claim's sentence is recorded for the figure's key
+    assert set(r["claim_text"]) == set(r["claims"]) and "green" in r["claim_text"]["fig4-green"]
 
 
 def test_a_reading_with_another_spectral_range_is_rendered_on_that_range(monkeypatch):
@@ -78,7 +80,10 @@ def test_consistency_figure_is_readable_and_explains_its_codes():
     verdicts = ("reproduced", "partly", "not")
     rows = [{"reading": r.values, "verdicts": {c: verdicts[(i + j) % 3] for j, c in enumerate(claims)}}
             for i, r in enumerate(cons.readings())]
-    fig = cons.consistency_figure({"rows": rows, "claims": claims, "best": 7})
+    text = {"fig4-green": "CFA, one exposure: only green responds optimally (saturates)",
+            "exposure": "FSC with per-channel exposures needs ~4x the CFA's time",
+            "de-prism": "the dichroic prism matches the FSC in ΔE*ab", "fig6-main": "the main sources are CMOS noise"}
+    fig = cons.consistency_figure({"rows": rows, "claims": claims, "claim_text": text, "best": 7})
     fig.canvas.draw()
     texts = _text_artists(fig)
     small = [(t.get_text(), t.get_fontsize()) for t in texts if t.get_fontsize() < 8]

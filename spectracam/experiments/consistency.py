@@ -117,7 +117,8 @@ def run_consistency(exp: PaperExperiment, renderer: str = "analytic", quick: boo
                                                                              for k, v in FACTORS.items()},
                            "one_at_a_time": [[c, lab] for c, lab, _, _ in ONE_AT_A_TIME],
                            "light": "recalibrated per reading: cfa/single needs 28 ms at 5000 K"},
-            "claims": claim_ids, "rows": rows, "summary": summary, "best": best,
+            "claims": claim_ids, "claim_text": {c["id"]: c["claim"] for c in claims}, "rows": rows,
+            "summary": summary, "best": best,
             "best_score": list(score(rows[best])), "seconds": time.perf_counter() - t0}
 
 
@@ -148,24 +149,8 @@ def consistency_figure(result: dict):
         return max(TextPath((0, 0), t, size=FS, prop=prop).get_extents().width if t.strip() else 0.0
                    for t in s.split("\n")) / 72
 
-    # The claims' sentences, for the key: the result carries them if it was made with them; otherwise
-    # claims.evaluate is asked for them on a stand-in comparison that has every figure and design.
+    # The claims' sentences, for the key, as run_consistency recorded them.
     sentences = dict(result.get("claim_text") or {})
-    if not set(claims) <= sentences.keys():
-        T = {t: 0 for t in ("3000", "5000", "7000")}
-        per = lambda v: {t: v for t in T}  # noqa: E731
-        budget = [{"step": k, "delta_e": float(i), "label": f"{i}.{k}"}
-                  for i, k in enumerate(("perfect", "shot_noise", "cmos_noise", "quantization", "conversion"))]
-        try:
-            stand_in = evaluate({"exposure_ms": {"cfa/single": per(28.0), "fsc/optimal": per(111.0)},
-                                 "fig4_white_response": {"cfa/single": per([0.5, 1.0, 0.5])},
-                                 "fig5a_snr_db": {d: per(30.0) for d in ("cfa/single", "fsc/optimal", "fsc/balanced")},
-                                 "fig5b_delta_e": {d: per(7.0) for d in ("cfa/single", "fsc/optimal", "prism/optimal",
-                                                                         "fsc/balanced")},
-                                 "fig6_budget_delta_e": budget})
-            sentences = {c["id"]: c["claim"] for c in stand_in} | sentences
-        except (KeyError, IndexError, TypeError, ValueError):
-            pass
 
     # The row labels: a column per choice of the factorial (the first row's), then, for the readings
     # that vary one other choice from the experiment's reading, that choice (the rest greyed: defaults).
