@@ -418,6 +418,10 @@ def run_target(run: _Run, case: Case, tname: str) -> None:
     spectra = sopt.channel_spectra(cube.radiance, cube.wavelengths_nm, tc.supersampling, case.camera, scene.grid,
                                    settings, workers=-1, weights=case.columns)
     reference = reference_radiance(cube, spec.reference, case.margin_px)
+    # the reference's XYZ at the display white: the adaptation depends on the scene and the display, not
+    # on the design, so it is computed once per target
+    reference_xyz = radiance_to_display_xyz(reference, scene.grid, scene.illuminant.white_luminance_cd_m2,
+                                            Conversion.fit(run.reference, case.camera, scene.processing))
     if isinstance(tc.target, SlantedEdge) and tname == "edge":
         run.closed[(case.pixel_pitch_um, case.f_number)] = closed_form_mtfs(run, case, tc.target)
     t0 = run.timed(tname, "optics", t0)
@@ -426,11 +430,9 @@ def run_target(run: _Run, case: Case, tname: str) -> None:
         rates = sample_design(run, case, d, spectra, tc, geometry, sampled, tname)
         cosited = sample_design(run, case, SpatialDesign(d.design, olpf_separation_px=d.olpf_separation_px), spectra,
                                 tc, geometry, sampled, tname)   # the optics reference's rates
-        score_design(run, case, tname, tc.target, geometry, d, rates, reference, cosited)
+        score_design(run, case, tname, tc.target, geometry, d, rates, reference, reference_xyz, cosited)
     if run.keep_images:
-        conv = Conversion.fit(run.reference, case.camera, scene.processing)
-        run.images[(case.pixel_pitch_um, case.f_number, tname, "reference")] = {"xyz": radiance_to_display_xyz(
-            reference, scene.grid, scene.illuminant.white_luminance_cd_m2, conv).astype(np.float32)}
+        run.images[(case.pixel_pitch_um, case.f_number, tname, "reference")] = {"xyz": reference_xyz.astype(np.float32)}
 
 
 def sample_design(run: _Run, case: Case, d: SpatialDesign, spectra, tc: TargetCase, geometry, sampled: dict,
@@ -454,15 +456,15 @@ def sample_design(run: _Run, case: Case, d: SpatialDesign, spectra, tc: TargetCa
 
 
 def score_design(run: _Run, case: Case, tname: str, target: Target, geometry: CameraGeometry, d: SpatialDesign,
-                 rates: np.ndarray, reference: np.ndarray, cosited: np.ndarray) -> None:
-    """Record, process and score one design (over the noise seeds) against the scene reference, the own
+                 rates: np.ndarray, reference: np.ndarray, reference_xyz: np.ndarray, cosited: np.ndarray) -> None:
+    """Record, process and score one design (over the noise seeds) against the scene reference (``reference``
+    radiance, ``reference_xyz`` at the display white), the own
     reference and the optics reference (``cosited``: every channel's noise-free rate at every pixel centre);
     append its row, MTF curves and images."""
     spec, scene = run.spec, run.scene
     camera = case.camera.with_design(d.design)
     processing = scene.processing.replace(demosaic=d.demosaic or scene.processing.demosaic)
     conv = Conversion.fit(run.reference, camera, processing)
-    reference_xyz = radiance_to_display_xyz(reference, scene.grid, scene.illuminant.white_luminance_cd_m2, conv)
     own_xyz = photo_electron_rates(reference.astype(np.float32), scene.grid, camera).astype(np.float64) \
         @ conv.matrix @ conv.rgb_to_xyz.T
     optics_xyz = cosited.astype(np.float64) @ conv.matrix @ conv.rgb_to_xyz.T

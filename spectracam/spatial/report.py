@@ -210,13 +210,17 @@ def figure_crops(result, out: Path, case) -> list[Path]:
     return [save_figure(fig, out / f"crops_{case[0]:g}um_f{case[1]:g}.png")]
 
 
+#: Percentile of a target's error-map values that tops its colour scale (a few hot pixels do not set it).
+MAP_PERCENTILE = 99.5
+
+
 def _map_scale(result, target: str) -> float:
-    """The colour scale of a target's error maps, ΔE*ab: the 99.5th percentile over every design and case
+    """The colour scale of a target's error maps, ΔE*ab: the :data:`MAP_PERCENTILE` percentile over every design and case
     inside the scored region, rounded up to 2 significant figures (one scale per target, so its maps compare)."""
     vals = [im["scielab"][im["region"]] for (p, N, t, lab), im in result["images"].items() if t == target and "scielab" in im]
     if not vals:
         return 1.0
-    v = float(np.percentile(np.concatenate(vals), 99.5))
+    v = float(np.percentile(np.concatenate(vals), MAP_PERCENTILE))
     if v <= 0:
         return 1.0
     e = np.floor(np.log10(v)) - 1
