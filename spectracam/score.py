@@ -183,13 +183,18 @@ def check_raw(raw: RawCapture) -> None:
                               f"{', '.join(raw.layout.channels)}; got {t.tolist()}")
 
 
-def conversion_matrix(reference: ChartReference, camera, processing: ProcessingSpec) -> np.ndarray:
-    """The N×3 colour conversion (paper 3.5; 3×3 for three channels): least squares from the chart's noise-free camera rates
-    to the display RGB that shows the chart's XYZ carried to the display's white."""
+def conversion_target_rgb(reference: ChartReference, processing: ProcessingSpec) -> np.ndarray:
+    """``(24, 3)`` what the conversion aims at (paper 3.5): the display RGB that shows each patch's XYZ carried
+    from the light's white to the display's."""
     M_disp = display_rgb_to_xyz(processing.display)
     to_display_xyz = adaptation_matrix(reference.white_xyz, M_disp.sum(axis=1), processing.adaptation)
-    target_rgb = reference.patch_xyz @ to_display_xyz.T @ np.linalg.inv(M_disp).T
-    return fit_conversion(reference.patch_rates(camera), target_rgb)
+    return reference.patch_xyz @ to_display_xyz.T @ np.linalg.inv(M_disp).T
+
+
+def conversion_matrix(reference: ChartReference, camera, processing: ProcessingSpec) -> np.ndarray:
+    """The N×3 colour conversion (paper 3.5; 3×3 for three channels): least squares from the chart's noise-free camera rates
+    to :func:`conversion_target_rgb`."""
+    return fit_conversion(reference.patch_rates(camera), conversion_target_rgb(reference, processing))
 
 
 def display_rgb(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec) -> tuple[np.ndarray, np.ndarray]:
