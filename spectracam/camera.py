@@ -54,6 +54,9 @@ class CaptureSpec(Spec):
     #: clips fewer than 1 in 10⁴; at 1.0 (before issue 17) half the white pixels clipped, which cut
     #: their noise and flattered SNR.  1.0 reproduces that reading.
     white_fill: float = 0.95
+    #: The ``split`` exposure scheme's shares: each channel's exposure as a fraction (0, 1] of the single
+    #: exposure's time, capped at its saturation (a designed split: ``spectracam design``).
+    exposure_split: tuple = ()
 
     def validate(self) -> None:
         self.choice("architecture", ARCHITECTURES)
@@ -61,6 +64,14 @@ class CaptureSpec(Spec):
         self.choice("cfa_pattern", CFA_PATTERNS)
         self.choice("fixed_pattern", FIXED_PATTERN_CHOICES)
         self.number("white_fill", 0.01, 1)
+        if self.exposure == "split" or self.exposure_split:
+            split = self.exposure_split
+            if self.exposure != "split":
+                raise self.error("exposure_split", "shares are given, so capture.exposure must be 'split'", list(split))
+            if (not isinstance(split, (tuple, list)) or not 2 <= len(split) <= 8
+                    or not all(isinstance(x, (int, float)) and not isinstance(x, bool) and 0 < x <= 1 for x in split)):
+                raise self.error("exposure_split", "must be one share in (0, 1] per channel", split)
+            object.__setattr__(self, "exposure_split", tuple(float(x) for x in split))
         if self.exposure != "single" and not ARCHITECTURES[self.architecture].independent_exposures:
             raise self.error("exposure", f"the {self.architecture} architecture has one exposure for all channels; "
                                          "use 'single'")

@@ -61,7 +61,8 @@ def capture(cube, camera: CameraSpec, seed: int, metering_box: tuple[slice, slic
         white_rate = np.asarray(white_radiance, np.float64) @ weights.astype(np.float64)
     else:
         white_rate = rates.mean(*metering_box)
-    times = exposure_times_s(camera.capture.exposure, white_rate, camera.sensor, arch, camera.capture.white_fill)
+    times = exposure_times_s(camera.capture.exposure, white_rate, camera.sensor, arch, camera.capture.white_fill,
+                             camera.capture.exposure_split)
     digital, expected = arch.record(rates, times, camera.sensor, seed)
     return RawCapture(digital=digital, expected_e=expected, exposure_times_s=times,
                       capture_time_s=arch.capture_time_s(times), layout=arch.layout, camera=camera, seed=seed,

@@ -6,6 +6,9 @@
 ``optimal``  per-channel times, each channel reaches full well on the white patch;
 ``balanced`` the optimal ratios, scaled so the total capture time equals the single exposure time
              (for field-sequential: the three frames together take as long as one CFA exposure).
+``split``    each channel exposed for its share of the single exposure time (``[capture]``'s
+             ``exposure_split``; shares of a field-sequential capture summing to ≤ 1 keep its total within
+             that time), capped at the channel's own saturation: a designed split (``spectracam design``).
 "Saturate" counts dark electrons too, and means "near saturation" (paper 4.5): a channel is metered
 full when its mean photo + dark charge on the white patch reaches ``white_fill·q_max`` (the
 ``[capture]`` table's ``white_fill``, 0.95 by default, so the white's noise does not clip it).
@@ -22,25 +25,34 @@ from .sensor import SensorSpec
 #: dark current fills the well and the "exposure" measures the dark current, not the scene.
 MIN_PHOTO_SHARE = 0.01
 
-#: Exposure schemes: name → function ``(saturation_s (N,), architecture) → times_s (N,)``, where
-#: ``saturation_s`` is each channel's time to fill the well on the white patch.
+#: Exposure schemes: name → function ``(saturation_s (N,), architecture, split) → times_s (N,)``, where
+#: ``saturation_s`` is each channel's time to fill the well on the white patch and ``split`` the
+#: ``exposure_split`` shares (used by ``split`` only).
 EXPOSURE_SCHEMES: Registry = Registry("capture.exposure", "exposure scheme")
 
 
 @EXPOSURE_SCHEMES.register("single")
-def _single(saturation_s, architecture):
+def _single(saturation_s, architecture, split=()):
     return np.full(len(saturation_s), saturation_s.min())
 
 
 @EXPOSURE_SCHEMES.register("optimal")
-def _optimal(saturation_s, architecture):
+def _optimal(saturation_s, architecture, split=()):
     return saturation_s
 
 
 @EXPOSURE_SCHEMES.register("balanced")
-def _balanced(saturation_s, architecture):
+def _balanced(saturation_s, architecture, split=()):
     # the paper (5.1): "FSC with total exposure equal to the CFA exposure duration" — one single time
     return saturation_s * (saturation_s.min() / architecture.capture_time_s(saturation_s))
+
+
+@EXPOSURE_SCHEMES.register("split")
+def _split(saturation_s, architecture, split=()):
+    if len(split) != len(saturation_s):
+        raise SpectracamError(f"capture.exposure_split = {list(split)}: the 'split' scheme needs one share per channel "
+                              f"({len(saturation_s)}: {', '.join(architecture.channels)}), each in (0, 1]")
+    return np.minimum(saturation_s.min() * np.asarray(split, float), saturation_s)
 
 
 def saturation_times_s(white_rate_e_per_s: np.ndarray, sensor: SensorSpec, white_fill: float = 1.0,
@@ -61,7 +73,7 @@ def saturation_times_s(white_rate_e_per_s: np.ndarray, sensor: SensorSpec, white
 
 
 def exposure_times_s(scheme: str, white_rate_e_per_s: np.ndarray, sensor: SensorSpec, architecture,
-                     white_fill: float = 1.0) -> np.ndarray:
+                     white_fill: float = 1.0, split=()) -> np.ndarray:
     """Per-channel exposure times ``(N,)`` in seconds for the architecture under a scheme, metered so
     that the white's mean charge reaches ``white_fill`` of the full well.
 
@@ -71,4 +83,4 @@ def exposure_times_s(scheme: str, white_rate_e_per_s: np.ndarray, sensor: Sensor
     [0.1429, 0.0714, 0.2857]
     """
     saturation = saturation_times_s(white_rate_e_per_s, sensor, white_fill, architecture.channels)
-    return EXPOSURE_SCHEMES[scheme](saturation, architecture)
+    return EXPOSURE_SCHEMES[scheme](saturation, architecture, tuple(split))

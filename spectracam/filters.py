@@ -33,7 +33,8 @@ SILICON_QE_SHAPE = (
 
 @dataclass(frozen=True)
 class FilterSpec(Spec):
-    #: "block" (the paper, 4.3: ideal pass bands), "gaussian" (centres, FWHM), "camera", or "xyz":
+    #: "block" (the paper, 4.3: ideal pass bands), "gaussian" (centres, FWHM), "transmittance" (tabulated),
+    #: "camera", or "xyz":
     #: the CIE 1931 colour-matching functions in quantal form, x̄ȳz̄(λ)·(555 nm/λ), times the QE — with
     #: ``qe = "flat"`` a camera that meets the Luther condition exactly (its photon counts are a
     #: linear transform of XYZ).
@@ -42,6 +43,13 @@ class FilterSpec(Spec):
     kind: str = "block"
     #: Block filter cutoffs, nm: blue below the first, green between, red above (paper: 490, 610).
     cutoffs_nm: tuple[float, float] = (490.0, 610.0)
+    #: Block filters' edges: 0 — ideal steps (the paper's); > 0 — logistic edges rising from 10 % to 90 % over
+    #: this many nm, 50 % at each cutoff (a real dichroic or dye edge; the design's smooth block filters).
+    edge_width_nm: float = 0.0
+    #: "transmittance" filters: wavelengths (nm) and rows of (R, G, B) transmittances in [0, 1], linear between
+    #: them, 0 outside (a designed or measured filter set; the sensor's QE and IR cut multiply them).
+    transmittance_nm: tuple = ()
+    transmittance: tuple = ()
     #: Gaussian filters: centres and full widths at half maximum for R, G, B, nm.
     centres_nm: tuple[float, float, float] = (610.0, 540.0, 460.0)
     fwhm_nm: tuple[float, float, float] = (60.0, 60.0, 60.0)
@@ -80,6 +88,8 @@ class FilterSpec(Spec):
     def validate(self) -> None:
         self.choice("kind", FILTER_KINDS)
         self.numbers("cutoffs_nm", 2, 0, increasing=True, unit="nm")
+        self.number("edge_width_nm", 0, 200, unit="nm")
+        _check_transmittance(self)
         self.numbers("centres_nm", 3, 0, unit="nm")
         self.numbers("fwhm_nm", 3, 1e-3, unit="nm")
         if self.camera != FROM_FILE:
@@ -120,6 +130,27 @@ def check_curve(spec: Spec, wl_field: str, value_field: str, required: bool) -> 
         raise spec.error(value_field, "values must lie in [0, 1]", [min(v), max(v)])
     object.__setattr__(spec, wl_field, tuple(float(x) for x in wl))
     object.__setattr__(spec, value_field, tuple(float(x) for x in v))
+
+
+def _check_transmittance(spec: FilterSpec) -> None:
+    """``kind = "transmittance"`` needs ≥ 2 increasing wavelengths, each with 3 transmittances in [0, 1]."""
+    wl, rows = spec.transmittance_nm, spec.transmittance
+    if spec.kind != "transmittance":
+        if wl or rows:
+            raise spec.error("transmittance", "transmittances are given, so filters.kind must be 'transmittance'", "…")
+        return
+    try:
+        w, a = np.asarray(wl, float), np.asarray(rows, float)
+        ok = w.ndim == 1 and w.size >= 2 and a.shape == (w.size, 3)
+    except (TypeError, ValueError):
+        ok = False
+    if not ok or not np.all(np.isfinite(w)) or not np.all(np.isfinite(a)) or np.any(np.diff(w) <= 0):
+        raise spec.error("transmittance", "must be ≥ 2 increasing wavelengths (transmittance_nm), each with a row of "
+                                          "3 finite transmittances (R, G, B)", "…")
+    if a.min() < 0 or a.max() > 1:
+        raise spec.error("transmittance", "transmittances must lie in [0, 1]", [float(a.min()), float(a.max())])
+    object.__setattr__(spec, "transmittance_nm", tuple(w.tolist()))
+    object.__setattr__(spec, "transmittance", tuple(tuple(r) for r in a.tolist()))
 
 
 def _check_camera_curve(spec: FilterSpec) -> None:
@@ -183,7 +214,7 @@ def ir_cut(spec: FilterSpec):
     ``ir_cut_width_nm``; 1 everywhere without one."""
     if spec.ir_cut_nm is None:
         return None
-    s = spec.ir_cut_width_nm / (2 * np.log(9.0))
+    s = logistic_scale_nm(spec.ir_cut_width_nm)
     return lambda lam: 1.0 / (1.0 + np.exp((np.asarray(lam, float) - spec.ir_cut_nm) / s))
 
 
@@ -251,6 +282,31 @@ def _gaussian_transmittance(spec: FilterSpec, k: int):
 FILTER_KINDS.register("gaussian", _smooth(_gaussian_transmittance))
 
 
+def _tabulated_transmittance(spec: FilterSpec, k: int):
+    """Column k of ``transmittance``, linear between ``transmittance_nm``, 0 outside."""
+    return tabulated(spec.transmittance_nm, [row[k] for row in spec.transmittance])
+
+
+FILTER_KINDS.register("transmittance", _smooth(_tabulated_transmittance))
+
+
+def logistic_scale_nm(edge_width_nm: float) -> float:
+    """Scale s of a logistic edge 1/(1 + exp(−(λ − c)/s)) rising from 10 % to 90 % over ``edge_width_nm``."""
+    return edge_width_nm / (2 * np.log(9.0))
+
+
+def _soft_block_transmittance(spec: FilterSpec, k: int):
+    """Block filters with logistic edges (``edge_width_nm``): R above the second cutoff, G between, B below."""
+    s = logistic_scale_nm(spec.edge_width_nm)
+    c1, c2 = spec.cutoffs_nm
+
+    def rise(lam, c):
+        return 1.0 / (1.0 + np.exp(-(np.asarray(lam, float) - c) / s))
+
+    return [lambda lam: rise(lam, c2), lambda lam: rise(lam, c1) * (1.0 - rise(lam, c2)),
+            lambda lam: 1.0 - rise(lam, c1)][k]
+
+
 @FILTER_KINDS.register("camera")
 def _camera(spec: FilterSpec, grid: WavelengthGrid) -> np.ndarray:
     """A measured camera's responsivities in electrons per photon with the channels' true gains
@@ -280,7 +336,10 @@ def _block_responsivity(spec: FilterSpec, grid: WavelengthGrid, k: int) -> np.nd
 
 @FILTER_KINDS.register("block")
 def _block(spec: FilterSpec, grid: WavelengthGrid) -> np.ndarray:
-    """Ideal pass bands (paper 4.3): blue below the first cutoff, green between, red above."""
+    """Ideal pass bands (paper 4.3): blue below the first cutoff, green between, red above; with
+    ``edge_width_nm`` > 0, logistic edges instead of steps."""
+    if spec.edge_width_nm > 0:
+        return _smooth(_soft_block_transmittance)(spec, grid)
     return np.stack([_block_responsivity(spec, grid, k) for k in range(3)])
 
 

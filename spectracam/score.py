@@ -230,7 +230,7 @@ def check_exposure_matches(raw: RawCapture, reference: ChartReference) -> None:
     cam = raw.camera
     try:
         want = exposure_times_s(cam.capture.exposure, reference.patch_rates(cam)[WHITE_PATCH], cam.sensor,
-                                cam.architecture(), cam.capture.white_fill)
+                                cam.architecture(), cam.capture.white_fill, cam.capture.exposure_split)
     except SpectracamError:
         return  # the scene's light cannot be metered at all: other checks speak
     got = np.asarray(raw.exposure_times_s, float)

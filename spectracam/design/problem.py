@@ -43,3 +43,148 @@ def light_model(scene, camera, processing, sets=(CHART,), label: str | None = No
             out[name] = ColourSet(name, c.radiance * g[None, :], xyz_to_lab(c.xyz, c.white_xyz))
     return LightModel(label or scene.illuminant.label, chart_w, conversion_target_rgb(ref, processing),
                       chart_w[WHITE_PATCH], out)
+
+
+class DesignProblem:
+    """One architecture's design: its parametrisation, the optional IR-cut edge and exposure split, the lights,
+    and the objective — the mean expected ΔE*ab over the training colours × lights, plus the realisability
+    penalty, minus ``snr_weight`` × the mean combined SNR (dB) when asked.
+
+    ``x`` = [the parametrisation's variables | IR-cut edge, nm (if designed) | exposure shares (if designed)]."""
+
+    def __init__(self, design: str, parametrisation: str, settings, camera, processing, scenes: list,
+                 training: str, held_out: str):
+        from .model import CameraModel
+        from .variables import PARAMETRISATIONS, Samples, check_parametrisation
+
+        self.camera = camera.with_design(design.replace("/split", "/single") if design.endswith("/split") else design)
+        self.design, self.settings, self.processing = design, settings, processing
+        arch = self.camera.capture.architecture
+        check_parametrisation(parametrisation, arch)
+        self.grid = scenes[0].grid
+        self.param = PARAMETRISATIONS[parametrisation](settings, self.camera, self.grid)
+        self.ir_cut = bool(settings.design_ir_cut)
+        self.split = design.endswith("/split")
+        self.samples = Samples.of(self.camera, self.grid, self.ir_cut)
+        self.model = CameraModel.of(self.camera, processing, exposure="split" if self.split else None)
+        self.training, self.held_out = training, held_out
+        self.lights = [light_model(s, self.camera, processing, sets=tuple(dict.fromkeys((CHART, training, held_out))))
+                       for s in scenes]
+        self.n_param = self.param.initial().size
+        self.evaluations = 0
+
+    # -- the vector x -------------------------------------------------------------------------------------------
+    def initial(self) -> np.ndarray:
+        parts = [self.param.initial()]
+        if self.ir_cut:
+            parts.append([self.camera.filters.ir_cut_nm or self.settings.start_ir_cut_nm])
+        if self.split:
+            parts.append(np.full(len(self.model.channels), 1.0 / len(self.model.channels)
+                                 if self.model.capture == "sum" else 1.0))
+        return np.concatenate([np.asarray(p, float) for p in parts])
+
+    def bounds(self) -> list:
+        b = list(self.param.bounds())
+        if self.ir_cut:
+            b.append((550.0, float(self.grid.edges_nm[-1]) + 50.0))
+        if self.split:
+            b += [(0.01, 1.0)] * len(self.model.channels)
+        return b
+
+    # -- from x to the model --------------------------------------------------------------------------------------
+    def responsivities(self, x) -> list:
+        """The channels' band-averaged responsivities ``(B,)`` as tensors."""
+        from .ad import backend, fresh, tensor
+        from .variables import band_average, channels_from_primaries, logistic
+
+        dr, _ = backend()
+        cut = None
+        if self.ir_cut:
+            c = fresh(x[self.n_param])
+            s = float(logistic_scale(self.camera.filters.ir_cut_width_nm))
+            cut = logistic((c - tensor(self.samples.lam)) / s)
+        qe = tensor(self.samples.qe) if cut is None else tensor(self.samples.qe) * cut
+        xp = x[:self.n_param] if self.n_param < dr.width(x) else x
+        if self.param.stacked:
+            return [band_average(v, self.samples) for v in self.param.layer_qe(xp, self.samples, cut)]
+        R = [band_average(T * qe, self.samples) for T in self.param.transmittances(xp, self.samples)]
+        return channels_from_primaries(self.camera.capture.architecture, R, band_average(qe, self.samples))
+
+    def shares(self, x):
+        """The exposure shares (tensors), normalised to sum 1 for frames in sequence."""
+        if not self.split:
+            return None
+        from .ad import fresh
+
+        n = len(self.model.channels)
+        i0 = self.n_param + (1 if self.ir_cut else 0)
+        f = [fresh(x[i0 + k]) for k in range(n)]
+        if self.model.capture == "sum":
+            total = f[0]
+            for v in f[1:]:
+                total = total + v
+            f = [v / total for v in f]
+        return f
+
+    def evaluate(self, x, sets=None) -> list:
+        """The model's :class:`~spectracam.design.model.LightResult` for each light."""
+        from .model import evaluate
+
+        R = self.responsivities(x)
+        split = self.shares(x)
+        return [evaluate(R, light, self.model, split, sets) for light in self.lights]
+
+    def objective(self, x):
+        """``(value, aux)``: the scalar the optimiser minimises (see the class), and the training ΔE."""
+        from .ad import backend
+
+        dr, _ = backend()
+        results = self.evaluate(x, sets=(self.training,))
+        de = sum(dr.mean(r.delta_e[self.training]) for r in results) / len(results)
+        value = de + self.param.penalty(x[:self.n_param])
+        if self.settings.snr_weight:
+            snr = sum(dr.mean(r.snr_db[self.training]) for r in results) / len(results)
+            value = value - self.settings.snr_weight * snr
+        return value, de
+
+    def value_and_gradient(self, x: np.ndarray):
+        from .ad import numpy, value_and_gradient
+
+        self.evaluations += 1
+        v, g, de = value_and_gradient(self.objective, x)
+        return v, g, float(numpy(de).reshape(-1)[0])
+
+    # -- from x to the pipeline ------------------------------------------------------------------------------------
+    def camera_of(self, x: np.ndarray):
+        """The :class:`~spectracam.camera.CameraSpec` of design ``x``: what the capture → score pipeline runs."""
+        x = np.asarray(x, float)
+        filters = self.param.filters(x[:self.n_param])
+        if self.ir_cut:
+            filters = filters.replace(ir_cut_nm=float(x[self.n_param]))
+        cam = self.camera.replace(filters=filters)
+        if self.split:
+            shares = np.array([float(v.numpy().reshape(-1)[0]) for v in self.shares(_as_tensor(x))])
+            cam = cam.replace(capture=cam.capture.replace(exposure="split",
+                                                          exposure_split=tuple(np.clip(shares, 1e-6, 1.0).tolist())))
+        return cam
+
+    def describe(self, x: np.ndarray) -> dict:
+        x = np.asarray(x, float)
+        out = dict(self.param.describe(x[:self.n_param]))
+        if self.ir_cut:
+            out["ir_cut_nm"] = round(float(x[self.n_param]), 2)
+        if self.split:
+            out["exposure_split"] = list(self.camera_of(x).capture.exposure_split)
+        return out
+
+
+def logistic_scale(width_nm: float) -> float:
+    from ..filters import logistic_scale_nm
+
+    return logistic_scale_nm(width_nm)
+
+
+def _as_tensor(x):
+    from .ad import tensor
+
+    return tensor(x)

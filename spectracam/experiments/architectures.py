@@ -108,7 +108,7 @@ def case(scene, cube, design: str, seeds, limit_s: float | None = None) -> dict:
     if limit_s is not None:
         arch = camera.architecture()
         times = exposure_times_s(camera.capture.exposure, reference.patch_rates(camera)[WHITE_PATCH], camera.sensor,
-                                 arch, camera.capture.white_fill)
+                                 arch, camera.capture.white_fill, camera.capture.exposure_split)
         scale = min(1.0, limit_s / arch.capture_time_s(times))
         # exposure times are inversely proportional to the metered white: metering on a brighter white
         # shortens them by ``scale`` (the dark charge aside; shorter, so it stays negligible)

@@ -385,7 +385,7 @@ def design_model(setup: MotionSetup, design: str, timings: dict) -> DesignModel:
     conv = Conversion.fit(setup.reference, camera, scene.processing)
     white = white_rate(setup.reference, camera)
     times = exposure_times_s(camera.capture.exposure, white, camera.sensor, camera.architecture(),
-                             camera.capture.white_fill)
+                             camera.capture.white_fill, camera.capture.exposure_split)
     own_xyz = photo_electron_rates(setup.ideal.astype(np.float32), scene.grid, camera).astype(np.float64) \
         @ conv.matrix @ conv.rgb_to_xyz.T
     quiet = camera.replace(sensor=camera.sensor.off("shot_noise", "dark_current", "read_noise", "fpn", "quantization"))

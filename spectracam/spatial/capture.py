@@ -90,7 +90,8 @@ def record(rates: np.ndarray, camera: CameraSpec, metered_rate: np.ndarray, seed
     exposure ``times`` given: a noise-free twin of a noisy capture keeps the noisy one's times)."""
     arch = camera.architecture()
     if times is None:
-        times = exposure_times_s(camera.capture.exposure, metered_rate, camera.sensor, arch, camera.capture.white_fill)
+        times = exposure_times_s(camera.capture.exposure, metered_rate, camera.sensor, arch, camera.capture.white_fill,
+                                 camera.capture.exposure_split)
     digital, expected = arch.record(np.ascontiguousarray(rates, np.float32), times, camera.sensor, seed)
     return RawCapture(digital=digital, expected_e=expected, exposure_times_s=times,
                       capture_time_s=arch.capture_time_s(times), layout=arch.layout, camera=camera, seed=seed,
