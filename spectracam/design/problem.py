@@ -104,7 +104,7 @@ class DesignProblem:
             s = float(logistic_scale(self.camera.filters.ir_cut_width_nm))
             cut = logistic((c - tensor(self.samples.lam)) / s)
         qe = tensor(self.samples.qe) if cut is None else tensor(self.samples.qe) * cut
-        xp = x[:self.n_param] if self.n_param < dr.width(x) else x
+        xp = x   # the parametrisation reads its own first n_param entries (no slices: see FreeForm._matrix)
         if self.param.stacked:
             return [band_average(v, self.samples) for v in self.param.layer_qe(xp, self.samples, cut)]
         R = [band_average(T * qe, self.samples) for T in self.param.transmittances(xp, self.samples)]
@@ -141,7 +141,7 @@ class DesignProblem:
         dr, _ = backend()
         results = self.evaluate(x, sets=(self.training,))
         de = sum(dr.mean(r.delta_e[self.training]) for r in results) / len(results)
-        value = de + self.param.penalty(x[:self.n_param])
+        value = de + self.param.penalty(x)
         if self.settings.snr_weight:
             snr = sum(dr.mean(r.snr_db[self.training]) for r in results) / len(results)
             value = value - self.settings.snr_weight * snr

@@ -139,6 +139,7 @@ def load_design(path: str | Path, overrides=(), quick: bool = False) -> tuple[De
     for k in t:
         if k not in DESIGN_KEYS:
             raise ConfigError(k, t[k], "unknown key; a design file has " + ", ".join(DESIGN_KEYS), str(p))
+    DesignSpec.from_dict(t, str(p))   # the file as written is checked first, even when --quick replaces keys
     if quick:
         t = {**t, **{k: list(v) if isinstance(v, tuple) else v for k, v in QUICK.items()}}
     pairs = [parse_assignment(o) if isinstance(o, str) else o for o in overrides]

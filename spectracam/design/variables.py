@@ -225,27 +225,38 @@ class FreeForm(Parametrisation):
         H[np.arange(lam.size), j + 1] += f
         return H
 
+    def _matrix(self, rows: np.ndarray, i: int, width: int) -> np.ndarray:
+        """``rows`` acting on channel i's knots, as columns of the whole vector x (Dr.Jit 1.5 loses the gradient
+        of a tensor slice that starts inside and ends inside a tensor — checked — so no slices: products)."""
+        K = self.knots_nm.size
+        out = np.zeros((rows.shape[0], width))
+        out[:, i * K:(i + 1) * K] = rows
+        return out
+
     def transmittances(self, x, samples):
         dr, _ = backend()
-        K = self.knots_nm.size
-        key = id(samples)
+        width = dr.width(x)
+        key = (id(samples), width)
         if getattr(self, "_hat_key", None) != key:
-            self._hat_cache, self._hat_key = self._hat(samples), key
+            hat = self._hat(samples)
+            self._hats, self._hat_key = [tensor(self._matrix(hat, i, width)) for i in range(3)], key
         out = []
-        for i in range(3):
-            # linear in the knots: a (samples × knots) product, one column per knot
-            T = dr.sum(tensor(self._hat_cache) * x[i * K:(i + 1) * K][None, :], axis=1)
+        for H in self._hats:   # linear in the knots: a (samples × x) product
+            T = dr.sum(H * x[None, :], axis=1)
             out.append(dr.reshape(type(T), T, samples.lam.shape))
         return out
 
     def penalty(self, x):
         dr, _ = backend()
         K = self.knots_nm.size
+        width = dr.width(x)
+        D = np.zeros((K - 2, K))
+        for j in range(K - 2):
+            D[j, j:j + 3] = (1.0, -2.0, 1.0)
         total = 0.0
         scale = (10.0 / self.settings.knot_step_nm) ** 2
         for i in range(3):
-            v = x[i * K:(i + 1) * K]
-            d2 = v[2:] - 2.0 * v[1:-1] + v[:-2]
+            d2 = dr.sum(tensor(self._matrix(D, i, width)) * x[None, :], axis=1)
             total = total + dr.mean(dr.square(d2)) * scale
         return self.settings.smoothness * total / 3.0
 

@@ -1,0 +1,177 @@
+"""What ``spectracam design`` writes: results.json, report.md, curves.csv and the figures (curves, convergence,
+comparison), every file with the command and design spec it came from."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+#: Rows of the comparison, in order: (key in a design's entry, label).
+VARIANTS = (("paper_filters", "paper's filters"), ("grid_best", "grid's best block pair"), ("optimised", "optimised"),
+            ("luther", "Luther camera (bound)"))
+
+
+def _variant(entry: dict, key: str) -> dict | None:
+    return entry if key == "optimised" else entry.get(key)
+
+
+def table_rows(results: dict) -> list[dict]:
+    """One row per design and variant: expected ΔE (training, held out, chart), Monte Carlo chart ΔE ± spread."""
+    rows = []
+    for name, e in results["designs"].items():
+        for key, label in VARIANTS:
+            v = _variant(e, key)
+            if v is None:
+                continue
+            p, mc = v["predicted_delta_e"], v["monte_carlo_delta_e"]
+            rows.append({"design": name, "filters": label, "training": p["training"], "held_out": p["held_out"],
+                         "chart_predicted": p["chart"], "chart_monte_carlo": mc["mean"], "chart_mc_std": mc["std"],
+                         "snr_db": p["chart_snr_db"], "mc_snr_db": mc["snr_db"]})
+    return rows
+
+
+def report_markdown(results: dict, command: str) -> str:
+    spec = results["parameters"]["design_spec"]
+    out = [f"# Filter design by gradient\n\n`{command}`\n",
+           f"Training: {spec['training']} × lights {', '.join(results['parameters']['lights'])} at "
+           f"{results['parameters']['white_luminance_cd_m2']:.4g} cd/m²; held out: {spec['held_out']}; filters: "
+           f"{spec['filters']}. {results['parameters']['objective']}. Monte Carlo: {results['parameters']['monte_carlo']}.\n",
+           "| design | filters | training ΔE (expected) | held-out ΔE (expected) | chart ΔE expected | chart ΔE Monte Carlo "
+           "(± sd over seeds) | chart SNR dB |", "|---|---|---|---|---|---|---|"]
+    for r in table_rows(results):
+        out.append(f"| {r['design']} | {r['filters']} | {r['training']:.2f} | {r['held_out']:.2f} | "
+                   f"{r['chart_predicted']:.2f} | {r['chart_monte_carlo']:.2f} ± {r['chart_mc_std']:.2f} | "
+                   f"{r['snr_db']:.1f} |")
+    out.append("\n| design | variables | evaluations | optimise s |\n|---|---|---|---|")
+    for name, e in results["designs"].items():
+        out.append(f"| {name} | {json.dumps(e['variables'])} | {e['evaluations']} | {e['optimise_s']:.1f} |")
+    return "\n".join(out) + "\n"
+
+
+def responsivity_table(results: dict, grid) -> tuple[list[str], np.ndarray]:
+    """Header and rows of curves.csv: wavelength, then each design's optimised and paper responsivities per
+    channel (electrons per photon, band averages)."""
+    from ..camera import camera_responsivities
+
+    cols, data = ["wavelength_nm"], [np.asarray(grid.centres_nm, float)]
+    for name, e in results["designs"].items():
+        for which in ("optimised", "paper"):
+            cam = e["_cameras"][which]
+            R = camera_responsivities(cam, grid)
+            for ch, r in zip(cam.architecture().channels, R):
+                cols.append(f"{name}:{which}:{ch}")
+                data.append(r)
+    return cols, np.stack(data, axis=1)
+
+
+_COLOURS = {"R": "tab:red", "G": "tab:green", "B": "tab:blue", "W": "0.4", "Y": "goldenrod", "C": "c", "M": "m"}
+
+
+def figure_curves(results: dict, grid):
+    """Each design's optimised responsivities (solid) against the paper's (dashed)."""
+    from ..camera import camera_responsivities
+    from ..io.plots import pyplot
+
+    plt = pyplot()
+    names = list(results["designs"])
+    n = len(names)
+    cols = min(3, n)
+    rows = -(-n // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.0 * rows), squeeze=False, sharex=True)
+    lam = np.asarray(grid.centres_nm, float)
+    for ax, name in zip(axes.flat, names):
+        e = results["designs"][name]
+        for which, style in (("paper", "--"), ("optimised", "-")):
+            cam = e["_cameras"][which]
+            for i, (ch, r) in enumerate(zip(cam.architecture().channels, camera_responsivities(cam, grid))):
+                ax.plot(lam, r, style, color=_COLOURS.get(ch, f"C{i}"), lw=1.6 if which == "optimised" else 1.0,
+                        label=f"{ch} {which}" if which == "optimised" else None)
+        p, q = e["predicted_delta_e"], e["paper_filters"]["predicted_delta_e"]
+        ax.set_title(f"{name}: held-out ΔE {q['held_out']:.2f} → {p['held_out']:.2f}", fontsize=9)
+        ax.set_ylabel("e⁻ per photon")
+        ax.legend(fontsize=6, ncol=2, loc="upper right")
+    for ax in axes.flat[n:]:
+        ax.axis("off")
+    for ax in axes[-1]:
+        ax.set_xlabel("wavelength, nm")
+    fig.suptitle("optimised responsivities (solid) against the paper's filters (dashed)", fontsize=10)
+    return fig
+
+
+def figure_convergence(results: dict):
+    """The training ΔE at every evaluation, per design."""
+    from ..io.plots import pyplot
+
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    for i, (name, e) in enumerate(results["designs"].items()):
+        de = [h["training_delta_e"] for h in e["history"]]
+        ax.plot(np.arange(1, len(de) + 1), np.minimum.accumulate(de), color=f"C{i % 10}", label=name)
+    ax.set_xlabel("model evaluations (objective + gradient)")
+    ax.set_ylabel("best training ΔE*ab (expected)")
+    ax.set_xscale("log")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    ax.set_title("convergence", fontsize=10)
+    return fig
+
+
+def figure_comparison(results: dict):
+    """Held-out expected ΔE and Monte Carlo chart ΔE per design: paper's filters, optimised, Luther."""
+    from ..io.plots import pyplot
+
+    plt = pyplot()
+    names = list(results["designs"])
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    width = 0.2
+    for j, (key, label) in enumerate(VARIANTS):
+        for ax, what in zip(axes, ("held_out", "mc")):
+            xs, ys, es = [], [], []
+            for i, name in enumerate(names):
+                v = _variant(results["designs"][name], key)
+                if v is None:
+                    continue
+                xs.append(i + (j - 1.5) * width)
+                if what == "held_out":
+                    ys.append(v["held_out_delta_e"])
+                    es.append(0.0)
+                else:
+                    ys.append(v["monte_carlo_delta_e"]["mean"])
+                    es.append(v["monte_carlo_delta_e"]["std"])
+            if xs:
+                ax.bar(xs, ys, width, yerr=es if what == "mc" else None, color=f"C{j}", label=label, capsize=2)
+    for ax, title in zip(axes, ("expected ΔE*ab on the held-out library", "chart ΔE*ab, Monte Carlo (± sd, seeds)")):
+        ax.set_xticks(range(len(names)))
+        ax.set_xticklabels(names, rotation=35, ha="right", fontsize=8)
+        ax.set_title(title, fontsize=10)
+        ax.grid(axis="y", alpha=0.3)
+    axes[0].set_ylabel("ΔE*ab")
+    axes[0].legend(fontsize=7)
+    fig.tight_layout()
+    return fig
+
+
+def write_design_outputs(out_dir, results: dict, command: str, step=lambda m: None) -> list:
+    """Every file of a design run (the module)."""
+    from ..io.files import atomic_write, json_default
+    from ..io.plots import save_figure
+
+    out = Path(out_dir)
+    grid = results["_grid"]
+    public = {**{k: v for k, v in results.items() if k != "_grid"}, "command": command,
+              "designs": {k: {kk: vv for kk, vv in v.items() if kk != "_cameras"} for k, v in results["designs"].items()},
+              "comparison": table_rows(results)}
+    paths = [atomic_write(out / "results.json", json.dumps(public, indent=1, allow_nan=False,
+                                                           default=json_default).encode())]
+    paths.append(atomic_write(out / "report.md", report_markdown(results, command).encode()))
+    header, data = responsivity_table(results, grid)
+    lines = [f"# {command}", "# band-averaged responsivities, electrons per photon: design:optimised|paper:channel",
+             ",".join(header)] + [",".join(f"{v:.6g}" for v in row) for row in data]
+    paths.append(atomic_write(out / "curves.csv", ("\n".join(lines) + "\n").encode()))
+    for name, fig in (("curves", figure_curves(results, grid)), ("convergence", figure_convergence(results)),
+                      ("comparison", figure_comparison(results))):
+        fig.text(0.005, 0.002, command, fontsize=5, color="0.45", va="bottom")   # where the figure came from
+        paths.append(save_figure(fig, out / f"{name}.png", dpi=110))
+    step(f"wrote {out}/results.json, report.md, curves.csv, curves.png, convergence.png, comparison.png")
+    return paths
