@@ -679,10 +679,39 @@ def case_spacetime(rng, d: Path):
     return cmd, bad, " ".join(cmd)
 
 
+def case_design(rng, d: Path):
+    """Issue 22: design files with bad values, damaged or missing (one line, exit 2); a quick design under a full
+    disk or SIGTERM (nothing half-written)."""
+    quick = ["design", "design.toml", "-o", "out", "--quick", "--set", "renderer='analytic'", "--set",
+             "max_iterations=3", "--set", "designs=['cfa/single']"]
+    bad_file = d / "bad_design.toml"
+    text = rng.choice(["lights = [3000\n", "\x00\xff\xfe", "designs = 3\n", "filters = 'depths'\n",
+                       "experiment = 'nosuch.toml'\n", "held_out = 'file:nosuch.csv'\n", "snr_weight = -1\n",
+                       "image_px = [320]\n", "start_cutoffs_nm = [610, 490]\n"])
+    bad_file.write_bytes(text.encode("latin-1"))
+    cases = [
+        (quick + ["--set", "lights=[]"], True), (quick + ["--set", "lights=['D99']"], True),
+        (quick + ["--set", "designs=['cfa/optimal']"], True), (quick + ["--set", "designs=['stacked/split']"], True),
+        (quick + ["--set", "filters='nosuch'"], True), (quick + ["--set", "training='nosuch'"], True),
+        (quick + ["--set", "knot_step_nm=nan"], True), (quick + ["--set", "min_transmittance=2"], True),
+        (quick + ["--set", "seeds=0"], True), (quick + ["--set", "max_iterations=0"], True),
+        (quick + ["--set", "tolerance=0"], True), (quick + ["--set", "nosuch=1"], True),
+        (["design", str(bad_file), "-o", "out"], True), (["design", "nosuch.toml", "-o", "out"], True),
+        (quick, False), (quick + ["--set", "filters='block'", "--set", "designs=['fsc/split', 'stacked/single']"], False),
+    ]
+    cmd, bad = rng.choice(cases)
+    fault = rng.choice(["none", "disk", "signal"])
+    if fault == "disk" and not bad:
+        return cmd, False, f"full disk: {' '.join(cmd)}", {"fsize": rng.choice([0, 20_000, 200_000])}
+    if fault == "signal" and not bad:
+        return cmd, False, f"SIGTERM: {' '.join(cmd)}", rng.choice([1.0, 3.0, 6.0])
+    return cmd, bad, " ".join(cmd)
+
+
 CASES = [case_damaged_file, case_scene_value, case_environment, case_garbage_text, case_camera_file, case_foreign_exr,
          case_new_commands, case_signal, case_full_disk, case_memory_limit, case_raw_attributes, case_journal,
          case_experiment_values, case_group_signal, case_scheduler_peer, case_read_only, case_reflectances,
-         case_target, case_architectures, case_spacetime]
+         case_target, case_architectures, case_spacetime, case_design]
 
 
 def one(i: int, seed: int, base: Path, cycle: bool = False) -> tuple[str, dict]:
