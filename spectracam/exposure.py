@@ -47,6 +47,11 @@ def _balanced(saturation_s, architecture, split=()):
     return saturation_s * (saturation_s.min() / architecture.capture_time_s(saturation_s))
 
 
+#: The schemes that need nothing but the white patch (``split`` needs its designed shares): what a comparison of
+#: every architecture and scheme runs.
+METERED_SCHEMES = ("single", "optimal", "balanced")
+
+
 @EXPOSURE_SCHEMES.register("split")
 def _split(saturation_s, architecture, split=()):
     if len(split) != len(saturation_s):

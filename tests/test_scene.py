@@ -9,7 +9,7 @@ from spectracam.illuminant import IlluminantSpec, irradiance_scale, spectral_irr
 from spectracam.scene import load_scene, parse_scene
 from spectracam.spectra import K_M_LM_PER_W, cie_1931_cmfs
 
-SCENES = sorted(p for p in (Path(__file__).parent.parent / "scenes").glob("*.toml") if p.stem != "paper")
+SCENES = sorted(p for p in (Path(__file__).parent.parent / "scenes").glob("*.toml") if p.stem not in ("paper", "design"))  # experiment and design files
 
 
 def test_shipped_scenes_cover_the_papers_illuminants():

@@ -9,7 +9,7 @@ import numpy as np
 
 #: Rows of the comparison, in order: (key in a design's entry, label).
 VARIANTS = (("paper_filters", "paper's filters"), ("grid_best", "grid's best block pair"), ("optimised", "optimised"),
-            ("luther", "Luther camera (bound)"))
+            ("luther", "Luther camera (no conversion error)"))
 
 
 def _variant(entry: dict, key: str) -> dict | None:

@@ -1,6 +1,7 @@
 """``spectracam design``: optimise every design, score it on held-out colours, verify it by Monte Carlo through the
 capture → score pipeline, and compare it with the paper's filters, the best block pair of the grid and the Luther
-camera (quantal CIE 1931 CMFs × QE: a conversion error of zero, the bound).
+camera (quantal CIE 1931 CMFs × QE: no conversion error at all — the bound of a noise-free camera; under noise
+its overlapping curves make the conversion amplify the noise, and a noise-aware design can beat it).
 
 Steps: :func:`setup` (experiment, light level, scenes), then per design :func:`design_one` (optimise,
 :func:`predicted`, :func:`monte_carlo`), then :mod:`spectracam.design.report` writes the files.

@@ -35,7 +35,7 @@ import numpy as np
 from ..architecture import ARCHITECTURES
 from ..capture import capture
 from ..errors import ConfigError
-from ..exposure import EXPOSURE_SCHEMES
+from ..exposure import EXPOSURE_SCHEMES, METERED_SCHEMES
 from ..illuminant import IlluminantSpec
 from ..reference import ChartReference
 from ..score import score
@@ -48,10 +48,12 @@ SEEDS = 5
 
 
 def designs() -> list[str]:
-    """Every registered architecture with every exposure scheme that applies to it."""
+    """Every registered architecture with every exposure scheme that applies to it and needs no designed
+    parameters (:data:`~spectracam.exposure.METERED_SCHEMES`)."""
     out = []
     for name in ARCHITECTURES:
-        schemes = EXPOSURE_SCHEMES.names if ARCHITECTURES[name].independent_exposures else ("single",)
+        schemes = [s for s in EXPOSURE_SCHEMES.names if s in METERED_SCHEMES] \
+            if ARCHITECTURES[name].independent_exposures else ("single",)
         out += [f"{name}/{s}" for s in schemes]
     return out
 
