@@ -248,3 +248,18 @@ def test_bad_design_files_give_one_line_and_exit_2(tmp_path, text, what):
     lines = [ln for ln in r.output.splitlines() if ln.strip()]
     assert len(lines) == 1 and what in lines[0], r.output
     assert not (tmp_path / "o").exists()
+
+
+def test_snr_weight_trades_the_mean_snr_into_the_objective(paper):
+    """``snr_weight`` w: the objective is the training ΔE minus w × the mean combined SNR (dB) over colours and
+    lights, so its gradient moves towards more signal."""
+    exp, _ = paper
+    args = ("cfa/single", "gaussian")
+    rest = (exp.base.camera, exp.base.processing, _scenes(paper), "tcs14", "vs15")
+    plain = DesignProblem(*args, DesignSpec(filters="gaussian"), *rest)
+    traded = DesignProblem(*args, DesignSpec(filters="gaussian", snr_weight=0.5), *rest)
+    x = plain.initial()
+    v0, _, de0 = plain.value_and_gradient(x)
+    v1, _, de1 = traded.value_and_gradient(x)
+    snr = tnumpy(plain.evaluate(tensor(x))[0].snr_db["tcs14"]).mean()
+    assert de0 == pytest.approx(de1) and v1 == pytest.approx(v0 - 0.5 * snr, rel=1e-9)
