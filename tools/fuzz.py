@@ -654,6 +654,16 @@ def case_architectures(rng, d: Path):
     return cmd, bad, " ".join(cmd)
 
 
+def _with_fault(rng, cmd: list, bad: bool):
+    """A case's command as it is (a known-bad one), or a good one run under a full disk or SIGTERM at random."""
+    fault = rng.choice(["none", "disk", "signal"])
+    if fault == "disk" and not bad:
+        return cmd, False, f"full disk: {' '.join(cmd)}", {"fsize": rng.choice([0, 20_000, 200_000])}
+    if fault == "signal" and not bad:
+        return cmd, False, f"SIGTERM: {' '.join(cmd)}", rng.choice([1.0, 3.0, 6.0])
+    return cmd, bad, " ".join(cmd)
+
+
 def case_spacetime(rng, d: Path):
     """Issue 21: spatial's new keys (targets, references, e-SFR, seeds, zone plates) and motion's e-SFR option
     — bad values; a small spatial run that writes every case's EXR/PNG/error map under a full disk or SIGTERM."""
@@ -670,13 +680,7 @@ def case_spacetime(rng, d: Path):
         (small + ["--set", "targets=['zone_plate_chroma', 'edge']", "--set", "noise=true", "--set", "seeds=2",
                   "--set", "reference='footprint'", "--set", "esfr_correct_binning=true"], False),
     ]
-    cmd, bad = rng.choice(cases)
-    fault = rng.choice(["none", "disk", "signal"])
-    if fault == "disk" and not bad:
-        return cmd, False, f"full disk: {' '.join(cmd)}", {"fsize": rng.choice([0, 20_000, 200_000])}
-    if fault == "signal" and not bad:
-        return cmd, False, f"SIGTERM: {' '.join(cmd)}", rng.choice([1.0, 3.0, 6.0])
-    return cmd, bad, " ".join(cmd)
+    return _with_fault(rng, *rng.choice(cases))
 
 
 def case_design(rng, d: Path):
@@ -699,13 +703,7 @@ def case_design(rng, d: Path):
         (["design", str(bad_file), "-o", "out"], True), (["design", "nosuch.toml", "-o", "out"], True),
         (quick, False), (quick + ["--set", "filters='block'", "--set", "designs=['fsc/split', 'stacked/single']"], False),
     ]
-    cmd, bad = rng.choice(cases)
-    fault = rng.choice(["none", "disk", "signal"])
-    if fault == "disk" and not bad:
-        return cmd, False, f"full disk: {' '.join(cmd)}", {"fsize": rng.choice([0, 20_000, 200_000])}
-    if fault == "signal" and not bad:
-        return cmd, False, f"SIGTERM: {' '.join(cmd)}", rng.choice([1.0, 3.0, 6.0])
-    return cmd, bad, " ".join(cmd)
+    return _with_fault(rng, *rng.choice(cases))
 
 
 CASES = [case_damaged_file, case_scene_value, case_environment, case_garbage_text, case_camera_file, case_foreign_exr,

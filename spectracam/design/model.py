@@ -184,38 +184,30 @@ def _rates(weights: np.ndarray, R) -> list:
     return [dr.sum(W * r[None, :], axis=1) for r in R]
 
 
-def _min(values):
-    dr, _ = backend()
+def _fold(op, values):
+    """``op`` (``dr.minimum``, ``dr.maximum``) over a list of tensors."""
     out = values[0]
     for v in values[1:]:
-        out = dr.minimum(out, v)
-    return out
-
-
-def _max(values):
-    dr, _ = backend()
-    out = values[0]
-    for v in values[1:]:
-        out = dr.maximum(out, v)
+        out = op(out, v)
     return out
 
 
 def exposure_times(white_rates: list, cam: CameraModel, split=None) -> list:
     """Per-channel exposure times, s (:func:`spectracam.exposure.exposure_times_s` in tensors); ``split``
     (scheme ``split``): each channel's share of the single exposure's time budget, capped at its saturation."""
+    dr, _ = backend()
     s = cam.sensor
     sat = [s.white_fill * s.q_max_e / (w + s.dark_rate_e_per_s) for w in white_rates]
     if cam.exposure == "single":
-        t = _min(sat)
+        t = _fold(dr.minimum, sat)
         return [t] * len(sat)
     if cam.exposure == "optimal":
         return sat
     if cam.exposure == "balanced":
-        total = {"first": sat[0], "max": _max(sat), "sum": sum(sat[1:], sat[0])}[cam.capture]
-        return [x * (_min(sat) / total) for x in sat]
+        total = {"first": sat[0], "max": _fold(dr.maximum, sat), "sum": sum(sat[1:], sat[0])}[cam.capture]
+        return [x * (_fold(dr.minimum, sat) / total) for x in sat]
     if cam.exposure == "split":
-        dr, _ = backend()
-        budget = _min(sat)
+        budget = _fold(dr.minimum, sat)
         return [dr.minimum(budget * f, x) for f, x in zip(split, sat)]
     raise SpectracamError(f"design: exposure {cam.exposure!r} is not modelled")
 

@@ -11,10 +11,12 @@ from __future__ import annotations
 import numpy as np
 
 from ..chart import WHITE_PATCH
+from ..filters import logistic_scale_nm
 from ..metrics import xyz_to_lab
 from ..optics import radiance_to_photon_irradiance
 from ..reference import ChartReference, library_colours
 from ..score import conversion_target_rgb
+from .ad import tensor
 from .model import ColourSet, LightModel
 
 #: The colour-set name that means the scene's own chart.
@@ -101,7 +103,7 @@ class DesignProblem:
         cut = None
         if self.ir_cut:
             c = fresh(x[self.n_param])
-            s = float(logistic_scale(self.camera.filters.ir_cut_width_nm))
+            s = float(logistic_scale_nm(self.camera.filters.ir_cut_width_nm))
             cut = logistic((c - tensor(self.samples.lam)) / s)
         qe = tensor(self.samples.qe) if cut is None else tensor(self.samples.qe) * cut
         xp = x   # the parametrisation reads its own first n_param entries (no slices: see FreeForm._matrix)
@@ -163,7 +165,7 @@ class DesignProblem:
             filters = filters.replace(ir_cut_nm=float(x[self.n_param]))
         cam = self.camera.replace(filters=filters)
         if self.split:
-            shares = np.array([float(v.numpy().reshape(-1)[0]) for v in self.shares(_as_tensor(x))])
+            shares = np.array([float(v.numpy().reshape(-1)[0]) for v in self.shares(tensor(x))])
             cam = cam.replace(capture=cam.capture.replace(exposure="split",
                                                           exposure_split=tuple(np.clip(shares, 1e-6, 1.0).tolist())))
         return cam
@@ -177,14 +179,3 @@ class DesignProblem:
             out["exposure_split"] = list(self.camera_of(x).capture.exposure_split)
         return out
 
-
-def logistic_scale(width_nm: float) -> float:
-    from ..filters import logistic_scale_nm
-
-    return logistic_scale_nm(width_nm)
-
-
-def _as_tensor(x):
-    from .ad import tensor
-
-    return tensor(x)

@@ -75,7 +75,9 @@ def predicted(problem: DesignProblem, x=None, camera=None) -> dict:
 
     if camera is not None:
         R = [tensor(r) for r in camera_responsivities(camera, problem.grid)]
-        model = CameraModel.of(camera, problem.processing)
+        same = (camera.capture.architecture == problem.camera.capture.architecture
+                and camera.capture.exposure == problem.model.exposure)
+        model = problem.model if same else CameraModel.of(camera, problem.processing)   # the demosaic's factors once
         results = [evaluate(R, light, model, None) for light in problem.lights]
     else:
         results = problem.evaluate(tensor(np.asarray(x, float)))
