@@ -56,6 +56,18 @@ if ! have_llvm19; then
   fi
 fi
 
+# --test: Debian's Chromium and its ChromeDriver for the page's browser test (tests/test_view.py), which
+# is skipped with its reason where they cannot be installed; nothing downloads a browser.
+if [ "$extras" = "exr,test" ] && { [ ! -x /usr/bin/chromium ] || [ ! -x /usr/bin/chromedriver ]; }; then
+  if can_apt; then
+    echo "setup: installing chromium and chromium-driver (the browser test of spectracam view)"
+    apt_install chromium chromium-driver
+  else
+    echo "setup: warning: chromium/chromium-driver missing and this user cannot install them" \
+         "(apt-get install chromium chromium-driver); the browser test will be skipped" >&2
+  fi
+fi
+
 # The virtual environment: kept when its python runs and has pip, made anew otherwise.
 PY=.venv/bin/python
 venv_ok() {

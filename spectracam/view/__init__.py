@@ -1,0 +1,12 @@
+"""``spectracam view DIR``: one self-contained interactive page, DIR/index.html, for any output directory."""
+from __future__ import annotations
+
+from pathlib import Path
+
+
+def write_view(directory: str | Path, log=None) -> Path:
+    """Write ``DIR/index.html`` for an output directory of any command; returns its path.
+    (Interface stub: the page itself is being written.)"""
+    from .page import write_page
+
+    return write_page(Path(directory), log=log)

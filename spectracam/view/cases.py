@@ -1,0 +1,227 @@
+"""One case of an output directory — a radiance cube, a raw capture and a rendering of one shot — read
+back from its EXR files into what the page shows and probes.
+
+The page holds every ``stride``-th pixel of each image (``stride`` = 1 up to :data:`PROBE_VALUES`
+spectral values per case), exactly as the files hold them: a probe at a kept pixel returns the
+file's float32 values, not an average.  Colorimetry follows the score (paper 3.6, docs/metrics.md):
+
+* scene CIELAB: CIE 1931 XYZ of the pixel's band-averaged radiance (Y = 1 for a perfect white
+  diffuser under the scene's light), white = that diffuser's XYZ;
+* rendered CIELAB: the display's XYZ of the rendered linear RGB, white = the display white;
+* error map: ΔE*ab (CIE 1976) of the two at each pixel — against the pixel's own radiance where the
+  case has radiance.exr, else against the chart reference's patch colour inside each patch (NaN
+  elsewhere), as ``score`` measures it.
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import SpectracamError
+
+#: 4-byte values (spectra, digital numbers, CIELAB, image pixels) a page's cases carry at most: 6 M
+#: (24 MB; 32 MB as base64), shared equally among them.
+PAGE_VALUES = 6_000_000
+#: The display colour of each channel letter of a raw capture (DNG CFA colours; others grey).
+CHANNEL_COLOURS = {"R": (1.0, 0.15, 0.1), "G": (0.1, 0.8, 0.15), "B": (0.15, 0.3, 1.0), "C": (0.0, 0.8, 0.85),
+                   "M": (0.85, 0.1, 0.8), "Y": (0.9, 0.8, 0.0), "W": (0.85, 0.85, 0.85)}
+
+
+@dataclass
+class Case:
+    """What the page shows of one shot.  Images are ``(h, w)`` uint32 RGBA, top row first, of every
+    ``stride``-th pixel of the ``width`` × ``height`` files; per-pixel arrays are float32 ``(h, w, …)``."""
+
+    name: str
+    width: int
+    height: int
+    stride: int
+    images: dict = field(default_factory=dict)       # scene, raw, rendered → RGBA; error → float32 ΔE
+    spectra: np.ndarray | None = None                # (h, w, B) W·m⁻²·sr⁻¹·nm⁻¹
+    wavelengths_nm: list = field(default_factory=list)
+    dn: np.ndarray | None = None                     # (h, w, N) digital numbers (NaN: not recorded)
+    channels: list = field(default_factory=list)
+    scene_lab: np.ndarray | None = None
+    rendered_lab: np.ndarray | None = None
+    responsivities: dict = field(default_factory=dict)  # channel → (B,) e⁻/photon; "QE × IR cut" too
+    notes: list = field(default_factory=list)
+    design: str = ""
+
+
+def _stride(width: int, height: int, bands: int, share: float = 1.0) -> int:
+    """The smallest stride keeping a case within ``share`` of :data:`PAGE_VALUES`: per kept pixel its
+    spectrum, up to 4 digital numbers, two CIELAB triples, ΔE and 4 image pixels."""
+    per_pixel = bands + 4 + 3 + 3 + 1 + 4
+    s = 1
+    while -(-width // s) * -(-height // s) * per_pixel > share * PAGE_VALUES and s < max(width, height):
+        s += 1
+    return s
+
+
+def srgb8(linear: np.ndarray) -> np.ndarray:
+    """IEC 61966-2-1 sRGB encoding of linear RGB in [0, 1] (clipped), uint8."""
+    x = np.clip(np.nan_to_num(linear, nan=0.0), 0.0, 1.0)
+    v = np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+    return np.round(255 * v).astype(np.uint8)
+
+
+def rgba(rgb8: np.ndarray) -> np.ndarray:
+    """``(h, w, 3)`` uint8 → ``(h, w)`` uint32 RGBA, opaque (Bokeh's image_rgba)."""
+    h, w, _ = rgb8.shape
+    out = np.empty((h, w, 4), np.uint8)
+    out[..., :3], out[..., 3] = rgb8, 255
+    return out.view(np.uint32)[..., 0]
+
+
+def _scene_of(params: dict | None):
+    from ..scene import parse_scene
+
+    if not params:
+        return None
+    try:
+        return parse_scene(params)
+    except SpectracamError:
+        return None
+
+
+def _radiance(case: Case, cube):
+    """Spectra, preview and scene CIELAB of the radiance cube."""
+    from ..illuminant import white_diffuser_radiance
+    from ..metrics import xyz_to_lab
+    from ..spectra import K_M_LM_PER_W, cmf_band_weights
+
+    s = case.stride
+    rad = np.asarray(cube.radiance[::s, ::s], np.float32)
+    grid = cube.grid
+    case.spectra, case.wavelengths_nm = rad, list(grid.centres_nm)
+    scene = _scene_of(cube.metadata.get("scene"))
+    w = cmf_band_weights(grid) * K_M_LM_PER_W
+    if scene is not None:
+        white = white_diffuser_radiance(scene.illuminant, grid) @ w
+    else:  # no recorded light: the brightest 1 % of the image is the white
+        y = rad.reshape(-1, rad.shape[-1]) @ w[:, 1]
+        white = np.array([0.9505, 1.0, 1.089]) * max(float(np.percentile(y, 99)), 1e-30)
+        case.notes.append("radiance.exr records no light: the preview's white is the image's 99th percentile")
+    xyz = np.tensordot(rad.astype(np.float64), w, axes=([-1], [0])) / white[1]
+    case.scene_lab = xyz_to_lab(xyz, white / white[1]).astype(np.float32)
+    import colour
+
+    m = np.asarray(colour.RGB_COLOURSPACES["sRGB"].matrix_XYZ_to_RGB)
+    case.images["scene"] = rgba(srgb8(np.tensordot(xyz, m, axes=([-1], [1]))))
+    return scene, grid
+
+
+def _raw(case: Case, path: Path, grid):
+    """Digital numbers (one channel per pixel of a mosaic, N of planes) and a picture of them: each
+    pixel in its channel's colour, brightness DN / top code."""
+    from ..architecture import MosaicLayout
+    from ..camera import camera_responsivities
+    from ..filters import clear_responsivity
+    from ..io.exr import read_raw_exr
+
+    raw = read_raw_exr(path)
+    s = case.stride
+    layout = raw.layout
+    channels = list(layout.channels)
+    top = float(2**raw.camera.sensor.adc_bits - 1)
+    case.channels, case.design = channels, raw.design
+    colours = np.array([CHANNEL_COLOURS.get(c, (0.7, 0.7, 0.7)) for c in channels])
+    if isinstance(layout, MosaicLayout):
+        dn = np.asarray(raw.digital, np.float32)[::s, ::s]
+        h, w = raw.digital.shape
+        index = layout.channel_index((h, w))[::s, ::s]
+        case.dn = np.full(dn.shape + (len(channels),), np.nan, np.float32)
+        np.put_along_axis(case.dn, index[..., None], dn[..., None], axis=-1)
+        picture = colours[index] * (dn / top)[..., None]
+    else:
+        case.dn = np.moveaxis(np.asarray(raw.digital, np.float32)[:, ::s, ::s], 0, -1)
+        picture = np.clip((case.dn / top) @ colours / max(colours.sum(axis=0).max(), 1.0), 0, 1)
+    case.images["raw"] = rgba(srgb8(picture))
+    if grid is None:
+        scene = _scene_of(raw.scene)
+        grid = scene.grid if scene is not None else None
+    if grid is not None:
+        R = camera_responsivities(raw.camera, grid)
+        case.responsivities = {c: R[k].tolist() for k, c in enumerate(channels)}
+        case.responsivities["QE × IR cut"] = clear_responsivity(raw.camera.filters, grid).tolist()
+        if not case.wavelengths_nm:
+            case.wavelengths_nm = list(grid.centres_nm)
+    return raw
+
+
+def _rendered(case: Case, path: Path):
+    """Rendered CIELAB (display white) and the sRGB picture of the display's colours."""
+    from ..color import display_rgb_to_xyz
+    from ..io.exr import read_exr
+    from ..io.report import srgb_preview
+    from ..metrics import xyz_to_lab
+
+    channels, attrs = read_exr(path)
+    if attrs.get("spectracamKind") != "rendered" or not {"R", "G", "B"} <= set(channels):
+        raise SpectracamError(f"file = {str(path)!r}: not a spectracam rendering (spectracamKind = "
+                              f"{attrs.get('spectracamKind')!r})")
+    params = json.loads(attrs.get("spectracamParameters", "{}"))
+    display = (params.get("processing") or {}).get("display", "crt")
+    s = case.stride
+    rgb = np.stack([channels[c][::s, ::s] for c in "RGB"], axis=-1).astype(np.float64)
+    M = display_rgb_to_xyz(display)
+    xyz = rgb @ M.T
+    case.rendered_lab = xyz_to_lab(xyz, M.sum(axis=1)).astype(np.float32)
+    case.images["rendered"] = rgba(srgb_preview(rgb, display))  # as rendered.png shows it
+    return params
+
+
+def _chart_lab(case: Case, scene) -> np.ndarray | None:
+    """Scene CIELAB from the chart reference inside each patch (NaN elsewhere): the score's truth."""
+    from ..metrics import xyz_to_lab
+    from ..reference import ChartReference
+
+    if scene is None or getattr(scene, "target", None) is not None and scene.target.textured:
+        return None
+    ref = ChartReference.of(scene)
+    lab = np.full((case.height, case.width, 3), np.nan, np.float32)
+    patch_lab = xyz_to_lab(ref.patch_xyz, ref.white_xyz)
+    for p, (r, c) in enumerate(ref.boxes):
+        lab[r, c] = patch_lab[p]
+    return lab[::case.stride, ::case.stride]
+
+
+def load_case(name: str, radiance: Path | None, raw: Path | None, rendered: Path | None, share: float = 1.0) -> Case:
+    """A case from its files (any of them may be missing); ``share``: its part of the page's budget
+    (:func:`_stride`)."""
+    from ..io.exr import read_exr, read_radiance_exr
+
+    cube = read_radiance_exr(radiance)[0] if radiance is not None else None
+    if cube is not None:
+        height, width, bands = cube.shape
+    else:
+        first = raw if raw is not None else rendered
+        if first is None:
+            raise SpectracamError(f"case {name!r}: no file")
+        height, width = next(iter(read_exr(first)[0].values())).shape[-2:]
+        bands = 0
+    case = Case(name=name, width=int(width), height=int(height), stride=_stride(width, height, bands, share))
+    scene, grid = (None, None)
+    if cube is not None:
+        scene, grid = _radiance(case, cube)
+    capture = _raw(case, raw, grid) if raw is not None else None
+    params = _rendered(case, rendered) if rendered is not None else None
+    if case.rendered_lab is not None:
+        truth = case.scene_lab
+        if truth is None:
+            recorded = (params or {}).get("scene") or (capture.scene if capture is not None else None)
+            scene = _scene_of(recorded)
+            truth = _chart_lab(case, scene) if scene is not None else None
+            case.scene_lab = truth
+            if truth is not None:
+                case.notes.append("no radiance.exr: scene L*a*b* is the chart reference's patch colour "
+                                  "(inside the patches only)")
+        if truth is not None and truth.shape == case.rendered_lab.shape:
+            case.images["error"] = np.linalg.norm(case.rendered_lab - truth, axis=-1).astype(np.float32)
+    if case.stride > 1:
+        case.notes.append(f"1 pixel in {case.stride} along each axis is shown and probed (the files hold "
+                          f"{width} × {height})")
+    return case

@@ -1,0 +1,108 @@
+"""What an output directory holds, found by what spectracam writes: cases (radiance.exr, raw.exr and
+rendered.exr of one shot, together in a directory, or a lone rendering such as spatial's
+``cases/<size>/<target>/<design>.exr``), figures (PNG, GIF), reports (report.md, report.json,
+results.json, report.csv, results.parquet) and the parameters that made them."""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..errors import SpectracamError
+
+#: The files of one shot, by role.
+SHOT_FILES = {"radiance": "radiance.exr", "raw": "raw.exr", "rendered": "rendered.exr"}
+#: Interactive cases one page carries at most (the rest are listed; their figures are still shown).
+MAX_CASES = 48
+#: Figures one page embeds at most (the rest are listed by name).
+MAX_FIGURES = 400
+
+
+@dataclass
+class Contents:
+    directory: Path
+    kind: str = ""                                   # simulate, paper, spatial, … (a guess named on the page)
+    cases: list = field(default_factory=list)        # (name, {role: Path})
+    more_cases: list = field(default_factory=list)   # names beyond MAX_CASES
+    figures: list = field(default_factory=list)      # Paths of PNG/GIF
+    more_figures: list = field(default_factory=list)
+    markdown: list = field(default_factory=list)     # report.md files
+    json_files: list = field(default_factory=list)   # report.json / results.json
+    tables: list = field(default_factory=list)       # report.csv, results.parquet
+    parameters: dict | None = None
+
+
+def _kind_of(d: Path, results: dict | None) -> str:
+    names = {p.name for p in d.iterdir()}
+    if results and isinstance(results.get("experiment"), str):
+        return results["experiment"]
+    for kind, marker in (("paper", "fig4.png"), ("spatial", "mtf.png"), ("motion", "breakup_scielab.png"),
+                         ("architectures", "architectures.png"), ("design", "design_curves.png"),
+                         ("consistency", "consistency.png"), ("sweep", "results.parquet"),
+                         ("emva", "emva1288.json")):
+        if marker in names:
+            return kind
+    if {"radiance.exr", "raw.exr", "rendered.exr"} <= names:
+        return "simulate"
+    for kind, marker in (("render", "radiance.exr"), ("capture", "raw.exr"), ("score", "rendered.exr")):
+        if marker in names:
+            return kind
+    return "output"
+
+
+def _is_rendering(path: Path) -> bool:
+    from ..io.exr import read_exr
+
+    try:
+        return read_exr(path)[1].get("spectracamKind") in ("rendered", "raw", "radiance")
+    except Exception:  # noqa: BLE001 - an unreadable or foreign EXR is simply not a case
+        return False
+
+
+def find_contents(directory: Path) -> Contents:
+    """Everything the page can show in ``directory`` (one clear line when it is not one to show)."""
+    d = Path(directory)
+    if not d.exists():
+        raise SpectracamError(f"directory = {str(d)!r}: does not exist")
+    if not d.is_dir():
+        raise SpectracamError(f"directory = {str(d)!r}: is a file; give the output directory a command wrote")
+    c = Contents(directory=d)
+    try:
+        files = sorted(p for p in d.rglob("*") if p.is_file() and p.name != "index.html"
+                       and not any(part.startswith(".") for part in p.relative_to(d).parts))
+    except OSError as e:
+        raise SpectracamError(f"directory = {str(d)!r}: cannot be read ({e.strerror})") from None
+    shots: dict[Path, dict] = {}
+    for p in files:
+        rel = p.relative_to(d)
+        if p.name in SHOT_FILES.values():
+            role = next(k for k, v in SHOT_FILES.items() if v == p.name)
+            shots.setdefault(p.parent, {})[role] = p
+        elif p.suffix.lower() == ".exr" and _is_rendering(p):
+            shots[p.with_suffix("")] = {"rendered": p}
+        elif p.suffix.lower() in (".png", ".gif"):
+            c.figures.append(p)
+        elif p.name == "report.md":
+            c.markdown.append(p)
+        elif p.name in ("report.json", "results.json"):
+            c.json_files.append(p)
+        elif p.name in ("report.csv", "results.parquet") or (p.suffix == ".csv" and len(rel.parts) == 1):
+            c.tables.append(p)
+    ordered = sorted(shots.items(), key=lambda kv: (len(kv[0].relative_to(d).parts), str(kv[0])))
+    names = [(str(k.relative_to(d)) if k != d else ".", v) for k, v in ordered]
+    c.cases, c.more_cases = names[:MAX_CASES], [n for n, _ in names[MAX_CASES:]]
+    c.figures, c.more_figures = c.figures[:MAX_FIGURES], c.figures[MAX_FIGURES:]
+    results = None
+    for p in c.json_files:
+        if p.parent == d:
+            try:
+                results = json.loads(p.read_text())
+            except (OSError, ValueError) as e:
+                raise SpectracamError(f"file = {str(p)!r}: is not JSON ({e})") from None
+            if isinstance(results, dict):
+                c.parameters = results.get("parameters") or c.parameters
+    c.kind = _kind_of(d, results if isinstance(results, dict) else None)
+    if not (c.cases or c.figures or c.markdown or c.json_files or c.tables):
+        raise SpectracamError(f"directory = {str(d)!r}: holds nothing spectracam wrote (no EXR, figure, report or "
+                              "results file)")
+    return c

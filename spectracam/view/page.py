@@ -1,0 +1,299 @@
+"""``DIR/index.html``: one self-contained page (Bokeh's scripts inlined, every figure embedded; it works
+from ``file://`` offline) showing what an output directory holds (:mod:`.contents`):
+
+* each case (:mod:`.cases`) as four linked images — scene preview, raw digital numbers, rendered
+  image, ΔE*ab map — sharing zoom and pan; moving over or clicking a pixel shows its radiance
+  spectrum beside the camera's responsivities R_k(λ) (filter × QE × IR cut) and its digital numbers
+  and scene and rendered L*a*b* (``window.spectracam.probe`` in :file:`page.js`);
+* the patch table of report.json, the reports (report.md as HTML, results tables), every figure and
+  per-case image, and the parameters that made them.
+"""
+from __future__ import annotations
+
+import base64
+import html
+import json
+from pathlib import Path
+
+import numpy as np
+
+from .. import __version__
+from ..errors import SpectracamError
+from .cases import CHANNEL_COLOURS, Case, load_case
+from .contents import Contents, find_contents
+
+#: Figure bytes a page embeds at most; later figures are linked (relative, so they open beside it).
+EMBED_BYTES = 40_000_000
+#: Rows of a table shown (the rest counted).
+TABLE_ROWS = 200
+#: Characters of a JSON file shown.
+JSON_CHARS = 200_000
+#: Upper end of the ΔE*ab colour scale (the scores' delta_e.png use the same).
+DELTA_E_VMAX = 20.0
+IMAGE_ROLES = (("scene", "scene (sRGB preview of the radiance)"), ("raw", "raw digital numbers (channel colours)"),
+               ("rendered", "rendered (display → sRGB)"), ("error", "ΔE*ab, rendered against the scene"))
+
+_CSS = """
+body{font-family:system-ui,sans-serif;margin:1.2em;max-width:1500px;color:#222}
+h1{font-size:1.4em} h2{font-size:1.15em;border-bottom:1px solid #ccc;margin-top:1.6em}
+table{border-collapse:collapse;font-size:0.85em} td,th{border:1px solid #ddd;padding:2px 6px;text-align:right}
+th{background:#f4f4f4} td.name{text-align:left} .sw{width:1.4em;height:1em;display:inline-block;border:1px solid #888}
+figure{display:inline-block;margin:0.4em;vertical-align:top;max-width:48%} figure img{max-width:100%;border:1px solid #ddd}
+figcaption{font-size:0.8em;color:#555;word-break:break-all} pre{background:#f8f8f8;padding:0.6em;overflow:auto;max-height:30em}
+.note{color:#555;font-size:0.9em} table.probe th{text-align:left}
+"""
+
+
+def _b64(a: np.ndarray | None) -> str | None:
+    return None if a is None else base64.b64encode(np.ascontiguousarray(a, "<f4").tobytes()).decode()
+
+
+def _hex(rgb) -> str:
+    return "#%02x%02x%02x" % tuple(int(round(255 * v)) for v in rgb)
+
+
+def case_json(case: Case) -> dict:
+    """The per-pixel data the probe reads (see page.js)."""
+    rows, cols = case.images[next(iter(case.images))].shape[:2] if case.images else (0, 0)
+    colours = {c: _hex(CHANNEL_COLOURS.get(c, (0.45, 0.45, 0.45))) for c in case.channels}
+    colours["QE × IR cut"] = "#000000"
+    return {"name": case.name, "design": case.design, "width": case.width, "height": case.height,
+            "stride": case.stride, "rows": int(rows), "cols": int(cols),
+            "bands": 0 if case.spectra is None else int(case.spectra.shape[-1]),
+            "wavelengths_nm": [float(w) for w in case.wavelengths_nm], "channels": list(case.channels),
+            "colours": colours, "responsivities": case.responsivities, "notes": case.notes,
+            "spectra": _b64(case.spectra), "dn": _b64(case.dn), "scene_lab": _b64(case.scene_lab),
+            "rendered_lab": _b64(case.rendered_lab), "error": _b64(case.images.get("error"))}
+
+
+def _image_data(case: Case, role: str) -> dict:
+    """A ColumnDataSource's data for one image, bottom row first (Bokeh draws row 0 at y = 0)."""
+    img = case.images.get(role)
+    if img is None:
+        img = np.full((1, 1), np.nan, np.float32) if role == "error" else np.zeros((1, 1), np.uint32)
+    return {"image": [np.ascontiguousarray(img[::-1])], "x": [0], "y": [0], "dw": [case.width], "dh": [case.height]}
+
+
+def interactive(cases: list[Case]):
+    """The Bokeh layout: case selector, linked images, spectrum and probe read-out."""
+    from bokeh.layouts import column, gridplot, row
+    from bokeh.models import (Button, ColorBar, ColumnDataSource, CustomJS, Div, LinearAxis, LinearColorMapper,
+                              Range1d, Select)
+    from bokeh.palettes import Inferno256
+    from bokeh.plotting import figure
+
+    first = cases[0]
+    x_range, y_range = Range1d(0, first.width, name="image_x"), Range1d(0, first.height, name="image_y")
+    mark = ColumnDataSource({"x": [], "y": []}, name="probe_mark")
+    size = 420
+    h = int(size * first.height / max(first.width, 1))
+    on_move = CustomJS(code="if (!window.spectracam.pinned) window.spectracam.probe(cb_obj.x, cb_obj.y);")
+    on_tap = CustomJS(code="window.spectracam.pinned = true; window.spectracam.probe(cb_obj.x, cb_obj.y);")
+    figures = []
+    for role, title in IMAGE_ROLES:
+        if not any(role in c.images for c in cases):
+            continue
+        f = figure(title=title, x_range=x_range, y_range=y_range, width=size, height=h + 40, match_aspect=True,
+                   tools="pan,wheel_zoom,box_zoom,reset,tap,save", active_scroll="wheel_zoom", name=f"figure_{role}")
+        src = ColumnDataSource(_image_data(first, role), name=f"image_{role}")
+        if role == "error":
+            mapper = LinearColorMapper(palette=Inferno256, low=0.0, high=DELTA_E_VMAX, nan_color="#bbbbbb")
+            f.image(image="image", x="x", y="y", dw="dw", dh="dh", source=src, color_mapper=mapper)
+            f.add_layout(ColorBar(color_mapper=mapper, title="ΔE*ab", width=8), "right")
+        else:
+            f.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=src)
+        f.scatter("x", "y", source=mark, size=14, marker="circle_cross", fill_alpha=0, line_color="#00e5ff",
+                  line_width=2)
+        f.js_on_event("mousemove", on_move)
+        f.js_on_event("tap", on_tap)
+        f.axis.visible = False
+        f.grid.visible = False
+        figures.append(f)
+    wl = [float(w) for w in first.wavelengths_nm]
+    lo, hi = (min(wl), max(wl)) if wl else (380.0, 780.0)
+    spectrum = figure(title="radiance at the probe, and the camera's responsivities", width=620, height=330,
+                      x_axis_label="wavelength (nm)", y_axis_label="radiance (W·m⁻²·sr⁻¹·nm⁻¹)",
+                      x_range=Range1d(lo - 5, hi + 5), y_range=Range1d(0, 1, name="spectrum_y"),
+                      name="figure_spectrum", tools="pan,wheel_zoom,box_zoom,reset,save")
+    spectrum.line("wavelength_nm", "radiance", source=ColumnDataSource({"wavelength_nm": [], "radiance": []},
+                                                                       name="probe_spectrum"),
+                  line_width=2.5, color="#222222", legend_label="radiance L(λ)")
+    spectrum.extra_y_ranges = {"resp": Range1d(0, 1.05 * max([max(v) for v in first.responsivities.values()] + [1e-3]))}
+    spectrum.add_layout(LinearAxis(y_range_name="resp", axis_label="R_k(λ) = filter × QE × IR cut (e⁻/photon)"),
+                        "right")
+    names = list(first.responsivities)
+    colour_of = case_json(first)["colours"]
+    resp = ColumnDataSource({"xs": [wl] * len(names), "ys": [first.responsivities[n] for n in names],
+                             "color": [colour_of.get(n, "#444444") for n in names], "label": names},
+                            name="responsivities")
+    spectrum.multi_line("xs", "ys", color="color", legend_field="label", source=resp, y_range_name="resp",
+                        line_dash="dashed", line_width=1.5)
+    spectrum.legend.location = "top_left"
+    info = Div(text="<i>move over or click an image to probe a pixel</i>", name="probe_info", width=480)
+    follow = Button(label="follow the pointer again", width=200)
+    follow.js_on_click(CustomJS(code="window.spectracam.pinned = false;"))
+    title = Div(text="", name="case_title", width=1200)
+    parts = []
+    if len(cases) > 1:
+        args = {f"c{i}_{role}": ColumnDataSource(_image_data(c, role), name=f"case_{i}_{role}")
+                for i, c in enumerate(cases) for role, _ in IMAGE_ROLES}
+        select = Select(title="case", value="0", options=[(str(i), c.name) for i, c in enumerate(cases)], width=600,
+                        name="case_select")
+        select.js_on_change("value", CustomJS(args=args, code="window.spectracam.select(parseInt(cb_obj.value));"))
+        parts.append(select)
+    parts += [title, gridplot(figures, ncols=2, toolbar_location="right"),
+              row(spectrum, column(info, follow))]
+    return column(*parts)
+
+
+def _swatch(lab) -> str:
+    import colour
+
+    rgb = colour.XYZ_to_sRGB(colour.Lab_to_XYZ(np.asarray(lab, float), illuminant=colour.CCS_ILLUMINANTS[
+        "CIE 1931 2 Degree Standard Observer"]["D65"]))
+    return f'<span class="sw" style="background:{_hex(np.clip(rgb, 0, 1))}"></span>'
+
+
+def patch_table(report: dict) -> str:
+    """report.json's patches: scene and rendered L*a*b*, ΔE*ab (per pixel, of the mean, of the
+    conversion alone) and the combined SNR."""
+    rows = []
+    for p in report.get("patches", []):
+        s, r = p.get("scene_lab"), p.get("rendered_lab")
+        snr = p.get("snr_combined_db")
+        rows.append(f"<tr><td>{p.get('patch')}</td><td class=name>{_swatch(s)} {_swatch(r)} "
+                    f"{html.escape(str(p.get('name')))}</td><td>{s[0]:.2f}, {s[1]:.2f}, {s[2]:.2f}</td>"
+                    f"<td>{r[0]:.2f}, {r[1]:.2f}, {r[2]:.2f}</td><td>{p['delta_e_mean']:.2f}</td>"
+                    f"<td>{p['delta_e_of_mean']:.2f}</td><td>{p['delta_e_conversion']:.2f}</td>"
+                    f"<td>{'∞' if snr is None else f'{snr:.1f}'}</td></tr>")
+    if not rows:
+        return ""
+    return ("<table><tr><th>patch</th><th>name (scene | rendered)</th><th>scene L*, a*, b*</th>"
+            "<th>rendered L*, a*, b*</th><th>ΔE*ab per pixel</th><th>ΔE*ab of the mean</th>"
+            "<th>ΔE*ab of the conversion</th><th>SNR (dB)</th></tr>" + "".join(rows) + "</table>")
+
+
+def _data_uri(path: Path) -> str:
+    mime = {".png": "image/png", ".gif": "image/gif", ".svg": "image/svg+xml"}.get(path.suffix.lower(), "image/png")
+    return f"data:{mime};base64," + base64.b64encode(path.read_bytes()).decode()
+
+
+def markdown_html(path: Path) -> str:
+    """report.md as HTML, its local images embedded."""
+    import re
+
+    import markdown
+
+    body = markdown.markdown(path.read_text(errors="replace"), extensions=["tables", "fenced_code"])
+
+    def inline(m):
+        target = (path.parent / html.unescape(m.group(2))).resolve()
+        ok = target.is_file() and path.parent.resolve() in target.parents
+        return f'{m.group(1)}{_data_uri(target) if ok else m.group(2)}"'
+
+    return re.sub(r'(<img[^>]*src=")([^":]+)"', inline, body)
+
+
+def table_html(path: Path) -> str:
+    import pandas as pd
+
+    frame = pd.read_parquet(path) if path.suffix == ".parquet" else pd.read_csv(path)
+    more = "" if len(frame) <= TABLE_ROWS else f"<p class=note>first {TABLE_ROWS} of {len(frame)} rows</p>"
+    return frame.head(TABLE_ROWS).to_html(index=False, float_format=lambda v: f"{v:.4g}", border=0) + more
+
+
+def _figures_html(c: Contents) -> str:
+    parts, embedded, folder = [], 0, None
+    for p in c.figures:
+        rel = p.relative_to(c.directory)
+        if rel.parent != folder:
+            folder = rel.parent
+            parts.append(f"<h3>{html.escape(str(folder)) if str(folder) != '.' else 'figures'}</h3>")
+        size = p.stat().st_size
+        if embedded + size <= EMBED_BYTES:
+            embedded += size
+            src = _data_uri(p)
+        else:
+            src = html.escape(str(rel))
+        parts.append(f'<figure><img loading="lazy" src="{src}" alt="{html.escape(str(rel))}">'
+                     f"<figcaption>{html.escape(str(rel))}</figcaption></figure>")
+    if embedded >= EMBED_BYTES or any(not s.startswith("<figure><img loading=\"lazy\" src=\"data:") for s in parts
+                                      if s.startswith("<figure>")):
+        parts.insert(0, f"<p class=note>figures past {EMBED_BYTES // 1_000_000} MB are linked beside the page, "
+                        "not embedded</p>")
+    if c.more_figures:
+        parts.append(f"<p class=note>{len(c.more_figures)} more figures are not shown: "
+                     + ", ".join(html.escape(str(p.relative_to(c.directory))) for p in c.more_figures[:20]) + "…</p>")
+    return "".join(parts)
+
+
+def build_page(c: Contents, cases: list[Case]) -> str:
+    """The whole page as one HTML string."""
+    from bokeh.embed import components
+    from bokeh.resources import INLINE
+
+    title = f"spectracam {c.kind}: {c.directory.name}"
+    body = [f"<h1>{html.escape(title)}</h1>",
+            f"<p class=note>written by spectracam {__version__} from {html.escape(str(c.directory))}; "
+            "see docs/metrics.md for every score's definition</p>"]
+    script = ""
+    if cases:
+        script, div = components(interactive(cases))
+        body += ["<h2>images and pixel probe</h2>",
+                 "<p class=note>the four images share zoom and pan (wheel, drag, box); moving over an image probes "
+                 "the pixel under the pointer, a click pins it. Scene L*a*b*: CIE 1931, white = a perfect diffuser "
+                 "under the scene's light; rendered L*a*b*: the display's colours, white = the display's white; "
+                 "ΔE*ab = CIE 1976 distance of the two.</p>", div]
+        if c.more_cases:
+            body.append(f"<p class=note>{len(c.more_cases)} more cases are not loaded into the probe (their "
+                        "figures are below): " + ", ".join(map(html.escape, c.more_cases[:20])) + "…</p>")
+    for p in c.json_files:
+        if p.name == "report.json":
+            try:
+                table = patch_table(json.loads(p.read_text()))
+            except (ValueError, KeyError, TypeError, IndexError):
+                table = ""
+            if table:
+                body += [f"<h2>patches ({html.escape(str(p.relative_to(c.directory)))})</h2>", table]
+    for p in c.markdown:
+        body += [f"<h2>{html.escape(str(p.relative_to(c.directory)))}</h2>", markdown_html(p)]
+    for p in c.tables:
+        try:
+            body += [f"<h2>{html.escape(str(p.relative_to(c.directory)))}</h2>", table_html(p)]
+        except Exception as e:  # noqa: BLE001 - a damaged table is named on the page, not fatal
+            body.append(f"<p class=note>{html.escape(str(p.name))}: not readable ({html.escape(str(e))[:200]})</p>")
+    if c.figures:
+        body += ["<h2>figures and per-case images</h2>", _figures_html(c)]
+    for p in c.json_files:
+        text = p.read_text(errors="replace")
+        more = "" if len(text) <= JSON_CHARS else f"\n… ({len(text) - JSON_CHARS} more characters in the file)"
+        body.append(f"<details><summary>{html.escape(str(p.relative_to(c.directory)))}</summary>"
+                    f"<pre>{html.escape(text[:JSON_CHARS] + more)}</pre></details>")
+    data = "".join(f'<script type="application/json" id="case-{i}">{json.dumps(case_json(k))}</script>'
+                   for i, k in enumerate(cases))
+    js = (Path(__file__).with_name("page.js")).read_text()
+    start = "<script>window.addEventListener('load', function () { window.spectracam.select(0); });</script>" \
+        if cases else ""
+    return (f"<!DOCTYPE html><html lang=en><head><meta charset=utf-8><title>{html.escape(title)}</title>"
+            f"<style>{_CSS}</style>{INLINE.render()}<script>{js}</script>{data}{start}</head>"
+            f"<body>{''.join(body)}{script}</body></html>")
+
+
+def write_page(directory: Path, log=None) -> Path:
+    """Find what ``directory`` holds, build the page and write ``directory/index.html`` (atomically)."""
+    from ..io.files import atomic_write
+
+    c = find_contents(directory)
+    cases = []
+    share = 1.0 / max(1, len(c.cases))  # many cases: each coarser, the page no larger
+    for name, files in c.cases:
+        try:
+            cases.append(load_case(name, files.get("radiance"), files.get("raw"), files.get("rendered"), share))
+        except SpectracamError as e:
+            raise SpectracamError(f"{name}: {e}") from None
+    page = build_page(c, cases)
+    out = atomic_write(Path(directory) / "index.html", page.encode())
+    if log:
+        log(f"wrote {out} ({len(page) / 1e6:.1f} MB; {len(cases)} case{'s' if len(cases) != 1 else ''}, "
+            f"{len(c.figures)} figures)")
+    return out

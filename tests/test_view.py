@@ -1,0 +1,303 @@
+"""``spectracam view``: the page of simulate, paper, spatial and motion outputs, in Debian's Chromium
+(headless, driven by Selenium with the system chromedriver: nothing downloads a browser), and its
+data checked against the files by a second reader (OpenImageIO)."""
+import io
+import json
+import os
+import shutil
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from spectracam.errors import SpectracamError
+from spectracam.view import write_view
+from spectracam.view.cases import PAGE_VALUES, load_case
+from spectracam.view.contents import find_contents
+
+CHROMIUM, CHROMEDRIVER = "/usr/bin/chromium", "/usr/bin/chromedriver"
+SIZE = ["--set", "image.width=160", "--set", "image.height=120"]
+
+
+def _invoke(cmd, args):
+    res = CliRunner().invoke(cmd, args, catch_exceptions=False)
+    assert res.exit_code == 0, res.output
+
+
+@pytest.fixture(scope="module")
+def outputs(tmp_path_factory):
+    """simulate, paper (quick), spatial and motion outputs, small, closed-form renders."""
+    from spectracam.cli import main
+    from spectracam.motion.command import motion_cmd
+    from spectracam.spatial.command import spatial_cmd
+
+    root = tmp_path_factory.mktemp("view")
+    scene = str(Path(__file__).parents[1] / "scenes" / "d65.toml")
+    _invoke(main, ["simulate", scene, "-o", str(root / "simulate"), "--renderer", "analytic", "--quiet", *SIZE])
+    _invoke(main, ["paper", "--quick", "-o", str(root / "paper"), "--renderer", "analytic", "--quiet"])
+    spatial = ["edge_size_px=[48, 48]", "star_size_px=[48, 48]", "chart_size_px=[72, 48]", "zone_plate_size_px=[48, 48]",
+               "pixel_pitches_um=[10.0]", "f_numbers=[1.4]", "wavelengths.step_nm=30", "supersampling=2",
+               "targets=['edge', 'chart']", "demosaics=['bilinear']", "olpf_separations_px=[0]",
+               "misregistrations_px=[0]", "designs=['cfa/single', 'fsc/optimal']"]
+    _invoke(spatial_cmd, ["-o", str(root / "spatial"), "--renderer", "analytic", "--quiet",
+                          *[a for s in spatial for a in ("--set", s)]])
+    motion = ["edge_size_px=[48, 32]", "speeds_px_per_ms=[0.0, 0.2]", "samples_per_subpixel=4",
+              "zone_half_width_px=12.0", "wavelengths={start_nm = 400, stop_nm = 700, step_nm = 30}",
+              "designs=[\"cfa/single\", \"fsc/optimal\"]", "rolling_shutter=[false]"]
+    _invoke(motion_cmd, ["-o", str(root / "motion"), "--renderer", "analytic", "--quiet",
+                         *[a for s in motion for a in ("--set", s)]])
+    return root
+
+
+@pytest.fixture(scope="module")
+def browser():
+    """Debian's Chromium, headless, through its own chromedriver (tools/setup.sh --test installs both)."""
+    webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed (tools/setup.sh --test)")
+    from selenium.webdriver.chrome.service import Service
+
+    missing = [p for p in (CHROMIUM, CHROMEDRIVER) if not os.access(p, os.X_OK)]
+    if missing:
+        pytest.skip(f"{', '.join(missing)} missing: Debian's chromium and chromium-driver (tools/setup.sh --test "
+                    "installs them where apt-get may run)")
+    os.environ["SE_OFFLINE"] = "true"  # Selenium Manager must never fetch a browser or driver
+    opts = webdriver.ChromeOptions()
+    opts.binary_location = CHROMIUM
+    profile = tempfile.mkdtemp(prefix="spectracam-chromium-")
+    for a in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+              "--disable-background-networking", "--disable-component-update", "--disable-sync",
+              "--disable-dev-shm-usage", f"--user-data-dir={profile}", "--window-size=1400,1500",
+              "--force-device-scale-factor=1"):
+        opts.add_argument(a)
+    opts.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=opts)
+    yield driver
+    driver.quit()
+    shutil.rmtree(profile, ignore_errors=True)
+
+
+#: Every canvas (Bokeh draws each figure on its own, inside shadow roots), as viewport rectangles.
+CANVASES = """
+const out = [];
+function walk(node) {
+  for (const el of node.querySelectorAll('*')) {
+    if (el.tagName === 'CANVAS') {
+      const r = el.getBoundingClientRect();
+      if (r.width > 50 && !out.some(o => o[0] === r.left && o[1] === r.top)) out.push([r.left, r.top, r.width, r.height]);
+    }
+    if (el.shadowRoot) walk(el.shadowRoot);
+  }
+}
+walk(document);
+return out;
+"""
+
+
+def open_page(driver, directory: Path) -> list:
+    """Load DIR/index.html from file:// and wait for Bokeh; the console's errors (none expected)."""
+    driver.get_log("browser")  # drop earlier pages' entries
+    driver.get((directory / "index.html").as_uri())
+    for _ in range(200):
+        if driver.execute_script("return !!(window.Bokeh && Bokeh.documents.length && window.spectracam && "
+                                 "Bokeh.documents[0].get_model_by_name('probe_info'))"):
+            break
+        time.sleep(0.05)
+    else:
+        raise AssertionError(f"{directory}: Bokeh did not start")
+    time.sleep(0.3)
+    return [e for e in driver.get_log("browser") if e["level"] in ("SEVERE", "WARNING")]
+
+
+def click(driver, x: float, y: float):
+    from selenium.webdriver.common.actions.action_builder import ActionBuilder
+
+    actions = ActionBuilder(driver)
+    actions.pointer_action.move_to_location(int(x), int(y)).click()
+    actions.perform()
+    time.sleep(0.3)
+
+
+def canvas_pixels(driver, rect) -> np.ndarray:
+    from PIL import Image
+
+    shot = np.asarray(Image.open(io.BytesIO(driver.get_screenshot_as_png())).convert("RGB"))
+    x, y, w, h = (int(round(v)) for v in rect)
+    return shot[y:y + h, x:x + w]
+
+
+def read_oiio(path: Path) -> tuple[np.ndarray, list]:
+    oiio = pytest.importorskip("OpenImageIO")
+    inp = oiio.ImageInput.open(str(path))
+    names = list(inp.spec().channelnames)
+    pixels = inp.read_image("float")
+    inp.close()
+    return pixels, names
+
+
+def check_page(driver, directory: Path, figures: int) -> list:
+    """The page loads with no console error or warning, and each image figure draws a picture."""
+    problems = open_page(driver, directory)
+    assert problems == [], problems
+    fetched = driver.execute_script("return performance.getEntriesByType('resource').map(e => e.name)")
+    assert all(u.startswith(("file:", "data:", "blob:")) for u in fetched), fetched  # nothing from a network
+    rects = driver.execute_script(CANVASES)
+    assert len(rects) >= figures + 1, rects  # the image figures and the spectrum
+    for rect in rects[:figures]:
+        px = canvas_pixels(driver, rect)
+        assert px.size and len(np.unique(px.reshape(-1, 3), axis=0)) > 40, f"{directory.name}: a figure is blank"
+    return rects
+
+
+def test_simulate_page_probes_the_spectrum_the_exr_holds(outputs, browser):
+    d = outputs / "simulate"
+    write_view(d)
+    rects = check_page(browser, d, 4)
+    x, y, w, h = rects[0]  # the scene preview; a real click a third of the way in
+    click(browser, x + w / 3, y + h / 2)
+    last = browser.execute_script("return window.spectracam.last")
+    assert last is not None and browser.execute_script("return window.spectracam.pinned")
+    pixels, names = read_oiio(d / "radiance.exr")   # a second reader: OpenImageIO
+    bands = sorted((float(n.split(".", 1)[1].rstrip("nm").replace(",", ".")), i) for i, n in enumerate(names)
+                   if n.startswith("S0."))
+    want = pixels[last["y"], last["x"], [i for _, i in bands]]
+    assert last["stride"] == 1 and np.array_equal(np.asarray(last["spectrum"], np.float32), want.astype(np.float32))
+    assert last["wavelengths_nm"] == pytest.approx([w for w, _ in bands])
+    raw, _ = read_oiio(d / "raw.exr")
+    from spectracam.io.exr import read_raw_exr
+
+    capture = read_raw_exr(d / "raw.exr")
+    k = capture.layout.channel_index(capture.digital.shape)[last["y"], last["x"]]
+    dn = last["dn"]
+    assert dn[k] == capture.digital[last["y"], last["x"]] and sum(v is not None for v in dn) == 1
+    # the probe's read-out and the spectrum figure show it
+    text = browser.execute_script("return window.Bokeh.documents[0].get_model_by_name('probe_info').text")
+    assert f"{last['x']}, {last['y']}" in text and "ΔE*ab" in text
+    shown = browser.execute_script("return window.Bokeh.documents[0].get_model_by_name('probe_spectrum').data.radiance")
+    assert np.allclose(shown, want)
+    # the patch table and the filter × QE × IR-cut curves
+    page = (d / "index.html").read_text()
+    assert page.count("<tr><td>") >= 24
+    data = browser.execute_script("return window.spectracam.data(0)")
+    from spectracam.camera import camera_responsivities
+    from spectracam.filters import clear_responsivity
+    from spectracam.spectra import WavelengthGrid
+
+    grid = WavelengthGrid(data["wavelengths_nm"])
+    R = camera_responsivities(capture.camera, grid)
+    assert set(data["responsivities"]) == {"R", "G", "B", "QE × IR cut"}
+    assert np.allclose([data["responsivities"][c] for c in "RGB"], R)
+    assert np.allclose(data["responsivities"]["QE × IR cut"], clear_responsivity(capture.camera.filters, grid))
+
+
+def test_simulate_page_lab_matches_the_score(outputs):
+    """Inside a patch, the page's rendered L*a*b* gives the score's per-pixel ΔE*ab of that patch
+    (report.json: the mean over its pixels against the reference's colour), and the page's scene
+    L*a*b* (from the radiance cube's 10-nm bands) is the reference's (CIE colorimetry on a 1-nm grid)
+    to 0.5: measured here up to 0.41 in a* on the blue patch, the bands' own colorimetric error."""
+    from spectracam.reference import ChartReference
+    from spectracam.scene import parse_scene
+
+    d = outputs / "simulate"
+    case = load_case(".", d / "radiance.exr", d / "raw.exr", d / "rendered.exr")
+    report = json.loads((d / "report.json").read_text())
+    scene = parse_scene(report["parameters"]["scene"])
+    ref = ChartReference.of(scene)
+    for p in (0, 6, 12, 18):
+        r, c = ref.boxes[p]
+        de = np.linalg.norm(case.rendered_lab[r, c] - np.asarray(report["patches"][p]["scene_lab"]), axis=-1)
+        assert de.mean() == pytest.approx(report["patches"][p]["delta_e_mean"], abs=2e-3)
+        assert np.abs(case.scene_lab[r, c] - report["patches"][p]["scene_lab"]).max() < 0.5
+
+
+def test_paper_page_switches_cases_and_probes_digital_numbers(outputs, browser):
+    d = outputs / "paper"
+    write_view(d)
+    contents = find_contents(d)
+    assert len(contents.cases) == 25 and contents.kind == "paper"
+    rects = check_page(browser, d, 3)
+    names = [n for n, _ in contents.cases]
+    i = names.index(next(n for n in names if n.endswith("prism-optimal")))
+    assert browser.execute_script(f"return window.spectracam.select({i})")
+    assert browser.execute_script("return Bokeh.documents[0].get_model_by_name('case_select').value") == str(i)
+    x, y, w, h = rects[0]
+    click(browser, x + w / 2, y + h / 2)
+    last = browser.execute_script("return window.spectracam.last")
+    assert last["case"] == names[i]
+    from spectracam.io.exr import read_raw_exr
+
+    capture = read_raw_exr(d / names[i] / "raw.exr")
+    assert last["dn"] == pytest.approx(capture.digital[:, last["y"], last["x"]].tolist())  # three planes
+    assert last["spectrum"] is None  # no radiance.exr in a paper case
+    page = (d / "index.html").read_text()
+    assert "fig4.png" in page and "<table" in page  # figures and report.md's tables
+
+
+@pytest.mark.parametrize("name, figures", [("spatial", 1), ("motion", 1)])
+def test_spatial_and_motion_pages(outputs, browser, name, figures):
+    d = outputs / name
+    write_view(d)
+    contents = find_contents(d)
+    assert contents.kind == name and contents.cases and contents.figures
+    rects = check_page(browser, d, figures)
+    x, y, w, h = rects[0]
+    click(browser, x + w / 2, y + h / 2)
+    last = browser.execute_script("return window.spectracam.last")
+    case = contents.cases[0][1]["rendered"]
+    pixels, names = read_oiio(case)
+    rgb = pixels[last["y"], last["x"], [names.index(c) for c in "RGB"]]
+    from spectracam.color import display_rgb_to_xyz
+    from spectracam.metrics import xyz_to_lab
+
+    display = json.loads(__import__("spectracam.io.exr", fromlist=["read_exr"]).read_exr(case)[1]
+                         ["spectracamParameters"]).get("processing", {}).get("display", "crt")
+    M = display_rgb_to_xyz(display)
+    assert last["rendered_lab"] == pytest.approx(xyz_to_lab(rgb @ M.T, M.sum(axis=1)).tolist(), abs=1e-3)
+    page = (d / "index.html").read_text()
+    assert page.count("<figure>") >= len(contents.figures) and "data:image/png;base64," in page
+
+
+def test_page_is_self_contained(outputs):
+    """No script, style or image is fetched from anywhere: the page works offline from file://."""
+    import re
+
+    d = outputs / "simulate"
+    page = write_view(d).read_text()
+    assert not re.search(r"<script[^>]+src=", page) and not re.search(r"<link[^>]+href=", page)
+    assert not re.search(r"<(img|iframe|source)[^>]+src=\"https?:", page) and "Bokeh" in page
+
+
+def test_large_images_are_strided_and_probed_exactly(tmp_path):
+    """A case too large for the page keeps every s-th pixel, exactly the file's values."""
+    from spectracam.cli import main
+
+    scene = str(Path(__file__).parents[1] / "scenes" / "d65.toml")
+    _invoke(main, ["render", scene, "-o", str(tmp_path), "--renderer", "analytic", "--quiet",
+                   "--set", "image.width=640", "--set", "image.height=480"])
+    case = load_case(".", tmp_path / "radiance.exr", None, None)
+    from spectracam.io.exr import read_radiance_exr
+
+    cube = read_radiance_exr(tmp_path / "radiance.exr")[0].radiance
+    s = case.stride
+    assert s > 1 and case.spectra.size + 15 * case.spectra[..., 0].size <= PAGE_VALUES
+    assert np.array_equal(case.spectra, cube[::s, ::s])
+    assert case.images["scene"].shape == case.spectra.shape[:2]
+    assert any(f"1 pixel in {s} " in n for n in case.notes)
+
+
+def test_what_cannot_be_shown_is_one_line(tmp_path):
+    with pytest.raises(SpectracamError, match="does not exist"):
+        write_view(tmp_path / "missing")
+    (tmp_path / "f").write_text("x")
+    with pytest.raises(SpectracamError, match="is a file"):
+        write_view(tmp_path / "f")
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(SpectracamError, match="holds nothing spectracam wrote"):
+        write_view(tmp_path / "empty")
+    assert not (tmp_path / "empty" / "index.html").exists()
+    (tmp_path / "bad").mkdir()
+    (tmp_path / "bad" / "raw.exr").write_bytes(b"not an exr")
+    with pytest.raises(SpectracamError):
+        write_view(tmp_path / "bad")
+    assert not (tmp_path / "bad" / "index.html").exists()
