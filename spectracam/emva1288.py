@@ -386,7 +386,9 @@ def analyse(series: EmvaSeries, *, saturation: str = "pixel_fraction", linearity
 
     Returns a dict with the keys of :data:`RESULT_KEYS` (floats; ``quantum_efficiency`` as a
     fraction 0-1), plus ``"curves"`` (per-step arrays for plots: photon transfer, SNR, linearity
-    deviation, saturated fraction, fit masks) and ``"details"`` (intermediate scalars, the methods
+    deviation, saturated fraction, and the masks of the steps each fit used — ``sensitivity_fit_mask``
+    (steps 3./4.), ``linearity_fit_mask`` (step 9.) — and of the steps beyond the saturation point,
+    ``beyond_saturation_mask``, which no fit uses) and ``"details"`` (intermediate scalars, the methods
     used and the alternative definitions).
     """
     if saturation not in SATURATION_METHODS:
@@ -528,7 +530,7 @@ def analyse(series: EmvaSeries, *, saturation: str = "pixel_fraction", linearity
         "mu_y": mu_y, "var_y": var_y, "mu_y_dark": np.array(mu_y_dark), "var_y_dark": np.array(var_y_dark),
         "snr": snr, "snr_model": snr_model, "snr_ideal": np.sqrt(mu_p),
         "saturated_fraction": frac, "sensitivity_fit_mask": in_range, "linearity_fit_mask": lin_range,
-        "linearity_deviation_percent": deviation,
+        "beyond_saturation_mask": mu_p > mu_p_sat, "linearity_deviation_percent": deviation,
     }
     result = {
         "system_gain_DN_per_e": K,

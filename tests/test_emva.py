@@ -96,3 +96,69 @@ def test_configured_top_code_threshold_is_the_sensors_own_quantiser(bits, black)
     eps = 0.01 / K
     codes = adc(np.array([clip_e - eps, clip_e + eps], np.float32), s.replace(clipping=False))
     assert codes.tolist() == [2**bits - 2, 2**bits - 1]
+
+
+def test_plots_mark_the_steps_the_analysis_left_out_of_its_fits():
+    """Issue 23: each EMVA plot draws the steps its fit used, the steps below saturation outside its fit
+    range and the steps beyond saturation as three kinds of marker, the two excluded kinds with a legend
+    entry that cites the clause.  The markers' data, read back from the matplotlib figures, must be
+    exactly the steps of the analysis's own masks (12-bit camera, 64 × 64 px: both kinds present)."""
+    from spectracam.emva1288 import analyse
+    from spectracam.experiments.emva import figures, simulate_series
+
+    camera = CameraSpec(sensor=SensorSpec(adc_bits=12, prnu_fraction=0.01, dsnu_fraction=0.2))
+    setup = EmvaSetup(width=64, height=64)
+    c = analyse(simulate_series(camera, setup)[0])["curves"]
+    beyond = c["beyond_saturation_mask"]
+    signal = c["mu_y"] - c["mu_y_dark"]
+    plotted = {"photon_transfer": (signal, c["sensitivity_fit_mask"], "§6.6: above 70 % of saturation"),
+               "snr": (c["mu_p"], c["sensitivity_fit_mask"], "§6.6: above 70 % of saturation"),
+               "linearity": (c["mu_p"], c["linearity_fit_mask"], "§6.9: outside 5–95 % of saturation")}
+    figs = figures(run_emva(camera, setup))
+    assert set(figs) == set(plotted)
+    for name, fig in figs.items():
+        x, fit, clause = plotted[name]
+        assert np.unique(x).size == x.size  # a marker's x names its step
+        roles = {"fit": fit, "excluded": ~fit & ~beyond, "beyond_saturation": beyond}
+        assert roles["excluded"].any() and beyond.any() and not (fit & beyond).any()
+        for ax in fig.axes:
+            drawn = {}
+            for line in ax.lines:
+                if line.get_gid() is None:
+                    continue
+                role = line.get_gid().removesuffix("_off_scale")
+                steps = [int(np.flatnonzero(x == v)[0]) for v in np.asarray(line.get_xdata(), float)]
+                assert len(steps) == len(line.get_xdata())
+                drawn.setdefault(role, set()).update(steps)
+            assert set(drawn) <= set(roles), (name, set(drawn))
+            # every excluded step is drawn as excluded, and no other step is
+            for role in ("excluded", "beyond_saturation"):
+                assert drawn.get(role, set()) == set(np.flatnonzero(roles[role]).tolist()), (name, role)
+            # the fit markers are fit steps (the SNR plot's log axes leave out the dark-most one)
+            assert drawn["fit"] <= set(np.flatnonzero(fit).tolist())
+            assert len(drawn["fit"]) >= fit.sum() - (name == "snr"), name
+        legends = fig.legends + [ax.get_legend() for ax in fig.axes if ax.get_legend()]
+        labels = [t.get_text() for legend in legends for t in legend.get_texts()]
+        assert f"excluded from the fit (EMVA 1288 {clause})" in labels, (name, labels)
+        assert "excluded from the fit (EMVA 1288 §6.5: beyond saturation)" in labels, (name, labels)
+        plt_close(fig)
+
+
+def plt_close(fig):
+    from spectracam.io.plots import pyplot
+
+    pyplot().close(fig)
+
+
+def test_a_noise_free_sensor_writes_its_datasheet(tmp_path):
+    """Without read noise and fixed pattern the dark steps have no temporal noise, hence no SNR (NaN):
+    emva.json writes it as null instead of refusing to write (it did: 'Out of range float values are
+    not JSON compliant')."""
+    from spectracam.experiments.emva import write_emva_outputs
+
+    sensor = SensorSpec(read_noise=False, fpn=False)
+    result = run_emva(CameraSpec(sensor=sensor), EmvaSetup(width=64, height=64))
+    assert not np.all(np.isfinite(result["curves"]["snr"]))
+    write_emva_outputs(tmp_path, result, "test")
+    data = json.loads((tmp_path / "emva.json").read_text())
+    assert None in data["curves"]["snr"] and (tmp_path / "linearity.png").exists()

@@ -214,6 +214,24 @@ def test_curves_for_plots(run):
     np.testing.assert_allclose(c["snr"][fit][2:], c["snr_model"][fit][2:], rtol=0.02)
 
 
+def test_fit_masks_are_the_standards_ranges(run):
+    """The steps each fit used (and the plots mark; issue 23) are the standard's: photon transfer and
+    responsivity 0-70 % of μ_y.sat − μ_y.dark, linearity 5-95 %, neither past the saturation exposure;
+    ``beyond_saturation_mask`` is every step past it.  The numbers are written out, not read from the
+    module's constants."""
+    series, result, _ = run
+    c, d = result["curves"], result["details"]
+    signal = c["mu_y"] - c["mu_y_dark"]
+    sat = d["mu_y_sat_minus_dark_DN"]
+    below = series.mu_p <= d["mu_p_sat"]
+    np.testing.assert_array_equal(c["beyond_saturation_mask"], ~below)
+    np.testing.assert_array_equal(c["sensitivity_fit_mask"], below & (signal <= 0.70 * sat))
+    np.testing.assert_array_equal(c["linearity_fit_mask"], below & (signal >= 0.05 * sat) & (signal <= 0.95 * sat))
+    # this series has steps in every role: below 5 %, 70-95 %, 95 % to saturation, beyond it
+    for part in (signal < 0.05 * sat, below & (signal > 0.70 * sat), below & (signal > 0.95 * sat), ~below):
+        assert part.any()
+
+
 def test_saturation_by_variance_maximum(run):
     """Release 3.1's definition, which the caller may ask for: 4 % (the step is 1.8 % of μ_p.sat)."""
     series, _, _ = run

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..camera import CameraSpec
 from ..errors import ConfigError, SpectracamError
-from ..emva1288 import EmvaSeries, analyse, expected
+from ..emva1288 import LINEARITY_FIT_RANGE, SENSITIVITY_FIT_MAX, EmvaSeries, analyse, expected
 from ..filters import CHANNELS, responsivities
 from ..sensor import expose, fixed_pattern, noise_stream
 from ..spectra import WavelengthGrid
@@ -126,10 +126,14 @@ def run_emva(camera: CameraSpec, setup: EmvaSetup = EmvaSetup()) -> dict:
                               "level, FPN, dark current, ADC range)") from None
     conf = configured(camera, setup, info["photons_per_s"], info["eta"])
     pick = lambda d: {k: (None if d[k] is None or not np.isfinite(d[k]) else float(d[k])) for k in KEYS}  # noqa: E731
+    d = measured["details"]
     return {"configured": pick(conf), "measured": pick(measured),
             "notes": {"dark_noise_is_upper_limit": bool(conf["details"]["dark_noise_is_upper_limit"]),
                       "saturation_method": conf["details"]["saturation_method"]},
-            "fit": {"ptc_offset_DN2": float(measured["details"]["ptc_offset_DN2"])},
+            # what the plots draw besides the curves: the fits and the saturation point
+            "fit": {**{k: float(d[k]) for k in ("ptc_offset_DN2", "mu_p_sat", "mu_y_sat_minus_dark_DN",
+                                                "linearity_fit_offset_DN", "linearity_fit_slope_DN_per_photon")},
+                    "saturation_method": d["saturation_method"]},
             "setup": {**setup.__dict__}, "camera": camera.to_dict(),
             "curves": {k: np.asarray(v).tolist() for k, v in measured.get("curves", {}).items()
                        if np.ndim(v) == 1}}
@@ -169,52 +173,150 @@ def datasheet_markdown(result: dict, command: str) -> str:
     if notes["dark_noise_is_upper_limit"]:
         lines.append("The dark variance is below 0.24 DN² (quantisation-limited), so the standard gives only an upper "
                      "limit for σ_d, 0.40/K, in both columns.")
-    lines += ["", "![photon transfer](photon_transfer.png) ![SNR](snr.png) ![linearity](linearity.png)", ""]
+    lines += ["", "![photon transfer](photon_transfer.png) ![SNR](snr.png) ![linearity](linearity.png)", "",
+              "In the plots, filled dots are the steps a fit used; hollow orange circles the steps below saturation "
+              "that the standard leaves out of it (photon transfer and SNR: above 70 % of saturation, §6.6; "
+              "linearity: outside 5–95 %, §6.9) and grey crosses the steps beyond saturation.", ""]
     return "\n".join(lines)
 
 
+#: Why a plot leaves a step out of its fit: the clauses of EMVA 1288 Release 4.0 Linear (section numbers
+#: as in :mod:`spectracam.emva1288`).  Each plot draws the steps its fit used as filled dots, the steps
+#: below saturation outside its fit range as hollow orange circles and the steps beyond saturation as
+#: grey crosses, each excluded kind with a legend entry "excluded from the fit (EMVA 1288 …)".
+SENSITIVITY_CLAUSE = f"EMVA 1288 §6.6: above {100 * SENSITIVITY_FIT_MAX:.0f} % of saturation"
+LINEARITY_CLAUSE = (f"EMVA 1288 §6.9: outside {100 * LINEARITY_FIT_RANGE[0]:.0f}–{100 * LINEARITY_FIT_RANGE[1]:.0f} "
+                    "% of saturation")
+SATURATION_CLAUSE = "EMVA 1288 §6.5: beyond saturation"
+#: The roles a step can have in a plot, in drawing order, and the ``gid`` of their matplotlib artists.
+ROLES = ("fit", "excluded", "beyond_saturation")
+
+
+def point_roles(curves: dict) -> dict:
+    """``{figure: {role: mask}}``: boolean masks over the photon-transfer steps for each figure, taken
+    from the analysis's own masks (:func:`spectracam.emva1288.analyse` ``curves``).  ``"fit"``: the
+    steps the figure's fit used (photon transfer and SNR: the 0–70 % range of K and η, which the SNR
+    model curve is drawn with; linearity: 5–95 %); ``"excluded"``: the other steps up to saturation;
+    ``"beyond_saturation"``: the steps past the saturation point, which no fit uses."""
+    beyond = np.asarray(curves["beyond_saturation_mask"], bool)
+    out = {}
+    for name, key in (("photon_transfer", "sensitivity_fit_mask"), ("snr", "sensitivity_fit_mask"),
+                      ("linearity", "linearity_fit_mask")):
+        fit = np.asarray(curves[key], bool) & ~beyond
+        out[name] = {"fit": fit, "excluded": ~fit & ~beyond, "beyond_saturation": beyond}
+    return out
+
+
+def _saturation_label(fit: dict) -> str:
+    how = ("0.1–0.2 % of pixels at the top code" if fit["saturation_method"] == "pixel_fraction"
+           else "maximum of the temporal variance")
+    return f"saturation ({how})"
+
+
+def _draw_steps(ax, x, y, roles, fit_label, clause, shown=None, off_scale=None):
+    """The steps of one plot by role; ``shown``: the steps the axes can show (a log axis drops ≤ 0);
+    ``off_scale``: −1/+1 for steps drawn at the bottom/top edge (their y already clipped there)."""
+    n = len(x)
+    shown = np.ones(n, bool) if shown is None else shown
+    off = np.zeros(n, int) if off_scale is None else off_scale
+    style = {"fit": dict(marker="o", ms=3.5, color="tab:blue", label=fit_label),
+             "excluded": dict(marker="o", ms=4.5, mfc="none", mew=1.1, color="tab:orange",
+                              label=f"excluded from the fit ({clause})"),
+             "beyond_saturation": dict(marker="x", ms=4.5, mew=1.1, color="0.4",
+                                       label=f"excluded from the fit ({SATURATION_CLAUSE})")}
+    for role in ROLES:
+        m = roles[role] & shown
+        on, edge = m & (off == 0), m & (off != 0)
+        if on.any():
+            ax.plot(x[on], y[on], ls="none", gid=role, **style[role])
+        for sign, marker in ((-1, "v"), (1, "^")):
+            e = edge & (off == sign)
+            if e.any():
+                kw = {k: v for k, v in style[role].items() if k not in ("marker", "label")}
+                ax.plot(x[e], y[e], ls="none", marker=marker, gid=f"{role}_off_scale", clip_on=False,
+                        label=None if on.any() else style[role]["label"], **kw)
+
+
 def figures(result: dict):
-    """``{name: figure}``: photon transfer, SNR and linearity, as the standard draws them."""
+    """``{name: figure}``: photon transfer, SNR and linearity, as the standard draws them, with the
+    steps each fit left out marked (:func:`point_roles`)."""
     from ..io.plots import pyplot
 
     plt = pyplot()
     cv = result["curves"]
+    fit = result["fit"]
     mu_y, var_y = np.asarray(cv["mu_y"]), np.asarray(cv["var_y"])
     mu_d, var_d = np.asarray(cv["mu_y_dark"]), np.asarray(cv["var_y_dark"])
     mu_p = np.asarray(cv["mu_p"])
-    fit = np.asarray(cv["sensitivity_fit_mask"], bool)
+    signal, excess = mu_y - mu_d, var_y - var_d
+    roles = point_roles(cv)
     K = result["measured"]["system_gain_DN_per_e"]
+    sat = dict(color="0.35", ls=":", lw=1.0, label=_saturation_label(fit))
     out = {}
-    fig, ax = plt.subplots(figsize=(5.5, 4))
-    ax.plot(mu_y - mu_d, var_y - var_d, "o", ms=3, mfc="none", color="0.3", label="measured")
-    ax.plot((mu_y - mu_d)[fit], (var_y - var_d)[fit], "o", ms=3, color="tab:blue", label="fit range (0–70 % sat.)")
-    x = np.array([0, (mu_y - mu_d)[fit].max()])
-    ax.plot(x, K * x + result["fit"]["ptc_offset_DN2"], "-", color="tab:red", label=f"fit: slope K = {K:.4g} DN/e⁻")
+
+    fig, ax = plt.subplots(figsize=(6, 4.3))
+    r = roles["photon_transfer"]
+    _draw_steps(ax, signal, excess, r, f"fit range (0–{100 * SENSITIVITY_FIT_MAX:.0f} % of saturation)",
+                SENSITIVITY_CLAUSE)
+    x = np.array([0, signal[r["fit"]].max()])
+    ax.plot(x, K * x + fit["ptc_offset_DN2"], "-", color="tab:red", label=f"fit: slope K = {K:.4g} DN/e⁻")
+    ax.axvline(fit["mu_y_sat_minus_dark_DN"], **sat)
     ax.set_xlabel("μ_y − μ_y.dark (DN)")
     ax.set_ylabel("σ²_y − σ²_y.dark (DN²)")
     ax.set_title("Photon transfer", fontsize=10)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7, loc="upper left")
     ax.grid(alpha=0.3)
     out["photon_transfer"] = fig
-    fig, ax = plt.subplots(figsize=(5.5, 4))
-    ok = mu_p >= 0.5 * mu_p[mu_p > 0][1]  # the measured steps (the first is dark)
-    ax.loglog(mu_p[ok], np.asarray(cv["snr"])[ok], "o", ms=3, mfc="none", color="0.3", label="measured")
-    ax.loglog(mu_p[ok], np.asarray(cv["snr_model"])[ok], "-", color="tab:red", label="EMVA 1288 model")
-    ax.loglog(mu_p[ok], np.asarray(cv["snr_ideal"])[ok], "--", color="0.5", label="ideal sensor")
+
+    fig, ax = plt.subplots(figsize=(6, 4.3))
+    snr = np.asarray(cv["snr"], float)
+    shown = (mu_p >= 0.5 * mu_p[mu_p > 0][1]) & np.isfinite(snr) & (snr > 0)  # the first step is dark
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    _draw_steps(ax, mu_p, snr, roles["snr"], "measured (the steps K and η are fitted on)", SENSITIVITY_CLAUSE,
+                shown=shown)
+    ax.plot(mu_p[shown], np.asarray(cv["snr_model"])[shown], "-", color="tab:red", label="EMVA 1288 model")
+    ax.plot(mu_p[shown], np.asarray(cv["snr_ideal"])[shown], "--", color="0.5", label="ideal sensor")
+    ax.axvline(fit["mu_p_sat"], **sat)
     ax.set_xlabel("μ_p (photons per pixel)")
     ax.set_ylabel("SNR")
     ax.set_title("Signal-to-noise ratio", fontsize=10)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7, loc="upper left")
     ax.grid(alpha=0.3, which="both")
     out["snr"] = fig
-    fig, ax = plt.subplots(figsize=(5.5, 4))
-    lin = np.asarray(cv["linearity_fit_mask"], bool)
-    ax.plot(mu_p[lin], np.asarray(cv["linearity_deviation_percent"])[lin], "o-", ms=3, color="tab:blue")
-    ax.axhline(0, color="0.5", lw=0.8)
-    ax.set_xlabel("μ_p (photons per pixel)")
-    ax.set_ylabel("deviation from the linear fit (%)")
-    ax.set_title("Linearity (5–95 % of saturation)", fontsize=10)
-    ax.grid(alpha=0.3)
+
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(6, 6.4), sharex=True, height_ratios=(1, 1))
+    r = roles["linearity"]
+    a0, a1 = fit["linearity_fit_offset_DN"], fit["linearity_fit_slope_DN_per_photon"]
+    fit_label = f"fit range ({100 * LINEARITY_FIT_RANGE[0]:.0f}–{100 * LINEARITY_FIT_RANGE[1]:.0f} % of saturation)"
+    _draw_steps(top, mu_p, signal, r, fit_label, LINEARITY_CLAUSE)
+    xs = np.array([0.0, mu_p.max()])
+    top.plot(xs, a0 + a1 * xs, "-", color="tab:red", lw=1, label="fit (weights 1/y², EMVA 1288 §6.9)")
+    top.axvline(fit["mu_p_sat"], **sat)
+    top.set_ylabel("μ_y − μ_y.dark (DN)")
+    top.set_title("Linearity", fontsize=10)
+    top.grid(alpha=0.3)
+    dev = np.asarray(cv["linearity_deviation_percent"], float)
+    ok = np.isfinite(dev)
+    lim = 3.0 * float(np.abs(dev[r["fit"] & ok]).max() or 1.0)  # the fit range's scale: LE is read here
+    off = np.where(ok & (dev > lim), 1, np.where(ok & (dev < -lim), -1, 0))
+    _draw_steps(bottom, mu_p, np.clip(dev, -lim, lim), r, fit_label, LINEARITY_CLAUSE, shown=ok, off_scale=off)
+    if off.any():
+        bottom.plot([], [], ls="none", marker="v", color="0.4", mfc="none",
+                    label=f"off scale (|δ| > {lim:.2g} %): drawn at the edge")
+    bottom.axhline(0, color="0.5", lw=0.8)
+    bottom.axvline(fit["mu_p_sat"], color="0.35", ls=":", lw=1.0)
+    bottom.set_ylim(-1.08 * lim, 1.08 * lim)
+    bottom.set_xlabel("μ_p (photons per pixel)")
+    bottom.set_ylabel("deviation from the linear fit δ_y (%)")
+    handles, labels = top.get_legend_handles_labels()
+    for h, label in zip(*bottom.get_legend_handles_labels()):  # the off-scale entry; the roles are above
+        if label not in labels:
+            handles.append(h)
+            labels.append(label)
+    fig.legend(handles, labels, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, 0.02), ncol=1)
+    bottom.grid(alpha=0.3)
+    fig.tight_layout()
     out["linearity"] = fig
     return out
 
@@ -231,7 +333,10 @@ def write_emva_outputs(out_dir, result: dict, command: str) -> list:
     paths = []
     for name, fig in figures(result).items():
         paths += save_figure(fig, out / f"{name}.png", out / f"{name}.svg")
-    payload = {k: v for k, v in result.items() if k != "curves"} | {"command": command, "curves": result["curves"]}
+    # a step with no temporal noise has no SNR (NaN): JSON has no NaN, so it is written as null
+    curves = {k: [None if isinstance(x, float) and not np.isfinite(x) else x for x in v]
+              for k, v in result["curves"].items()}
+    payload = {k: v for k, v in result.items() if k != "curves"} | {"command": command, "curves": curves}
     paths.append(atomic_write(out / "emva.json", json.dumps(payload, indent=1, allow_nan=False).encode()))
     paths.append(atomic_write(out / "datasheet.md", datasheet_markdown(result, command).encode()))
     return paths
