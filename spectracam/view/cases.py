@@ -211,8 +211,8 @@ def load_case(name: str, radiance: Path | None, raw: Path | None, rendered: Path
     params = _rendered(case, rendered) if rendered is not None else None
     if case.rendered_lab is not None:
         truth = case.scene_lab
-        if truth is None:
-            recorded = (params or {}).get("scene") or (capture.scene if capture is not None else None)
+        if truth is None and capture is not None:  # a captured chart shot (paper's cases): the score's truth
+            recorded = (params or {}).get("scene") or capture.scene
             scene = _scene_of(recorded)
             truth = _chart_lab(case, scene) if scene is not None else None
             case.scene_lab = truth
