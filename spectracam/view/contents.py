@@ -26,8 +26,8 @@ class Contents:
     more_cases: list = field(default_factory=list)   # names beyond MAX_CASES
     figures: list = field(default_factory=list)      # Paths of PNG/GIF
     more_figures: list = field(default_factory=list)
-    markdown: list = field(default_factory=list)     # report.md files
-    json_files: list = field(default_factory=list)   # report.json / results.json
+    markdown: list = field(default_factory=list)     # report.md files, and the top level's .md (datasheet.md)
+    json_files: list = field(default_factory=list)   # report.json / results.json, and the top level's .json
     tables: list = field(default_factory=list)       # report.csv, results.parquet
     parameters: dict | None = None
 
@@ -39,7 +39,7 @@ def _kind_of(d: Path, results: dict | None) -> str:
     for kind, marker in (("paper", "fig4.png"), ("spatial", "mtf.png"), ("motion", "breakup_scielab.png"),
                          ("architectures", "architectures.png"), ("design", "design_curves.png"),
                          ("consistency", "consistency.png"), ("sweep", "results.parquet"),
-                         ("emva", "emva1288.json")):
+                         ("emva", "emva.json")):
         if marker in names:
             return kind
     if {"radiance.exr", "raw.exr", "rendered.exr"} <= names:
@@ -82,12 +82,14 @@ def find_contents(directory: Path) -> Contents:
             shots[p.with_suffix("")] = {"rendered": p}
         elif p.suffix.lower() in (".png", ".gif"):
             c.figures.append(p)
-        elif p.name == "report.md":
+        elif p.name == "report.md" or (p.suffix == ".md" and len(rel.parts) == 1):
             c.markdown.append(p)
-        elif p.name in ("report.json", "results.json"):
+        elif p.name in ("report.json", "results.json") or (p.suffix == ".json" and len(rel.parts) == 1):
             c.json_files.append(p)
         elif p.name in ("report.csv", "results.parquet") or (p.suffix == ".csv" and len(rel.parts) == 1):
             c.tables.append(p)
+    # a sweep writes results.csv beside results.parquet: one table
+    c.tables = [t for t in c.tables if not (t.suffix == ".csv" and t.with_suffix(".parquet") in c.tables)]
     ordered = sorted(shots.items(), key=lambda kv: (len(kv[0].relative_to(d).parts), str(kv[0])))
     names = [(str(k.relative_to(d)) if k != d else ".", v) for k, v in ordered]
     c.cases, c.more_cases = names[:MAX_CASES], [n for n, _ in names[MAX_CASES:]]
