@@ -18,8 +18,11 @@ def patch_spectra(scene):
     """
     import colour
 
+    from .errors import expect
     from .reference import ChartReference
+    from .scene import Scene
 
+    expect(scene, Scene, "patch_spectra(scene)")
     ref = ChartReference.of(scene)
     return colour.MultiSpectralDistributions(ref.patch_radiance.T, np.asarray(scene.grid.centres_nm),
                                              labels=list(ref.names), name=f"{scene.name}: patch radiance")
@@ -36,6 +39,10 @@ def camera_sensitivities(camera: CameraSpec, grid: WavelengthGrid):
     """
     import colour
 
+    from .errors import expect
+
+    expect(camera, CameraSpec, "camera_sensitivities(camera)")
+    expect(grid, WavelengthGrid, "camera_sensitivities(grid)")
     R = camera_responsivities(camera, grid)
     channels = camera.architecture().channels
     if channels != ("R", "G", "B"):   # other channels (R Y B, C Y M, R G B W, …): named by their letters

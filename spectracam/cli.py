@@ -8,8 +8,9 @@ from pathlib import Path
 import click
 
 from . import __version__
-from .cli_options import (camera_options, check_writable, flag_overrides, progress_log, output_option, processing_options,
-                          quiet_option, renderer_option, set_option)
+from .cli_options import (VIEW_REQUEST, ShippedFile, as_given, camera_options, check_writable, flag_overrides,
+                          output_option, processing_options, progress_log, quiet_option, renderer_option, set_option,
+                          view_option)
 from .errors import ConfigError, SpectracamError
 
 
@@ -28,6 +29,10 @@ def _interrupted(signum, frame):
     signal.signal(signum, signal.SIG_IGN)  # a second signal must not interrupt the cleanup
     terminate_children()
     remove_unfinished()
+    from .progress import on_terminal
+
+    if on_terminal():  # a progress bar may be drawn on this line: clear it
+        sys.stderr.write("\r\x1b[K")
     sys.stderr.write(f"spectracam: interrupted ({signal.Signals(signum).name}); nothing written\n")
     sys.stderr.flush()
     os._exit(128 + signum)
@@ -67,6 +72,13 @@ class _Group(click.Group):
     LAZY = {"spatial": ("spectracam.spatial.command", "spatial_cmd"),
             "motion": ("spectracam.motion.command", "motion_cmd")}
 
+    def format_epilog(self, ctx, formatter):
+        """The shipped files a file argument may name, listed as this installation has them."""
+        from .cli_options import shipped_summary
+
+        with formatter.section("Shipped files"):
+            formatter.write_text(shipped_summary())
+
     def list_commands(self, ctx):
         return sorted([*super().list_commands(ctx), *self.LAZY])
 
@@ -81,13 +93,24 @@ class _Group(click.Group):
     def invoke(self, ctx):
         import signal
 
-        from .io.files import staged
+        from .io.files import stage_outputs, staged
 
         for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
             signal.signal(sig, _interrupted)
         try:
             with staged():
-                return super().invoke(ctx)
+                try:
+                    rv = super().invoke(ctx)
+                except BaseException:
+                    from .progress import close_bars
+
+                    close_bars()  # the error's one line starts a line of its own
+                    raise
+                request = ctx.meta.pop(VIEW_REQUEST, None)
+                outputs = stage_outputs() if request is not None else None
+            if request is not None:
+                _write_page(*request, outputs)
+            return rv
         except SpectracamError as e:
             click.echo(f"spectracam: error: {e}", err=True)
             sys.exit(2)
@@ -109,10 +132,27 @@ class _Group(click.Group):
             sys.exit(128 + signal.SIGINT)
 
 
+def _write_page(out_dir: Path, quiet: bool, outputs: tuple[list, list]) -> None:
+    """``--view``: write DIR/index.html once the command's outputs are in place under their names; should
+    it fail (a full disk, a signal), the outputs the command just wrote are removed too
+    (:func:`spectracam.io.files.staged_after`)."""
+    from .io.files import staged_after
+    from .view import write_view
+
+    with staged_after(outputs):
+        write_view(out_dir, log=progress_log(quiet))  # its log says what it wrote
+
+
 @click.group(cls=_Group, context_settings={"max_content_width": 120})
 @click.version_option(__version__, prog_name="spectracam")
 def main():
     """Simulate colour image sensors on a rendered Macbeth chart (Catrysse, Wandell & El Gamal, 1999)."""
+
+
+def _given(flag: str, name: str, value) -> str:
+    """`` FLAG VALUE`` for the command a report records, as the user wrote it (a shipped file's name stays a
+    name); empty when the option was not given."""
+    return f" {flag} {as_given(name, value)}" if value else ""
 
 
 def _scene(data: dict, source: str, config_file=None, flags=(), sets=()):
@@ -141,14 +181,18 @@ def _scene(data: dict, source: str, config_file=None, flags=(), sets=()):
 # ------------------------------------------------------------------------------------------------
 
 
-@main.command("render")
-@click.argument("scene_file", type=click.Path(dir_okay=False, path_type=Path))
+@main.command("render", short_help="Render a scene into a spectral EXR.")
+@click.argument("scene_file", type=ShippedFile("scene file"))
 @output_option("Directory to write radiance.exr into.")
 @renderer_option
 @set_option
 @quiet_option
+@view_option
 def render_cmd(scene_file: Path, out_dir: Path, renderer: str, sets, quiet: bool):
-    """Render SCENE_FILE into DIR/radiance.exr (spectral EXR, W·m⁻²·sr⁻¹·nm⁻¹ per band)."""
+    """Render SCENE_FILE into DIR/radiance.exr (spectral EXR, W·m⁻²·sr⁻¹·nm⁻¹ per band).
+
+    SCENE_FILE is a path, or the name of a scene shipped with spectracam (d65, blackbody_3000K …
+    blackbody_7000K, cfi99, mondrian, dead_leaves, photo), with or without .toml."""
     from .io.exr import write_radiance_exr
     from .render import render
     from .scene import read_toml
@@ -183,7 +227,7 @@ def _write_capture(out_dir: Path, raw, scene) -> list[Path]:
     return paths + [write_dng(out_dir / "raw.dng", raw, ChartReference.of(scene))]
 
 
-@main.command("capture")
+@main.command("capture", short_help="Capture a spectral EXR with a simulated sensor.")
 @click.argument("radiance_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
 @output_option("Directory to write raw.exr and raw.dng into (and rendered.exr/.png for a spectral image from another tool).")
 @camera_options
@@ -195,6 +239,7 @@ def _write_capture(out_dir: Path, raw, scene) -> list[Path]:
               help="Radiance unit of a spectral EXR that states none (emissiveUnits), e.g. W.m^-2.sr^-1 (per nm).")
 @set_option
 @quiet_option
+@view_option
 def capture_cmd(radiance_file: Path, out_dir: Path, arch, exposure, config_file, seed, white, units, sets, quiet):
     """Capture a spectral RADIANCE_FILE (spectracam's, or a Fichet-layout EXR from any tool) with a simulated
     sensor; write DIR/raw.exr and DIR/raw.dng."""
@@ -277,15 +322,16 @@ def _score_and_write(raw, scene, out_dir: Path, log):
     log("wrote " + ", ".join(map(str, paths)))
 
 
-@main.command("score")
+@main.command("score", short_help="Render a raw capture on a display and score it.")
 @click.argument("raw_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
-@click.option("--scene", "scene_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="The scene the capture was taken of (its [processing] table applies) [default: the scene the "
-                   "raw file records].")
+@click.option("--scene", "scene_file", type=ShippedFile("scene file"), default=None,
+              help="The scene the capture was taken of (its [processing] table applies): a path or a shipped "
+                   "scene's name [default: the scene the raw file records].")
 @output_option("Directory to write rendered.exr/.png, delta_e.png and report.json/.csv into.")
 @processing_options
 @set_option
 @quiet_option
+@view_option
 def score_cmd(raw_file, scene_file, out_dir, demosaic, display, adaptation, delta_e, gamut_clip, sets, quiet):
     """Render RAW_FILE on a display and score it: rendered.exr/.png, delta_e.png, report.json/.csv."""
     from .io.exr import read_raw_exr
@@ -305,17 +351,21 @@ def score_cmd(raw_file, scene_file, out_dir, demosaic, display, adaptation, delt
     _score_and_write(raw, scene, out_dir, progress_log(quiet))
 
 
-@main.command("simulate")
-@click.argument("scene_file", type=click.Path(dir_okay=False, path_type=Path))
+@main.command("simulate", short_help="Render, capture and score a scene in one go.")
+@click.argument("scene_file", type=ShippedFile("scene file"))
 @output_option("Directory to write every file of render, capture and score into.")
 @renderer_option
 @camera_options
 @processing_options
 @set_option
 @quiet_option
+@view_option
 def simulate_cmd(scene_file, out_dir, renderer, arch, exposure, config_file, seed, demosaic, display, adaptation,
                  delta_e, gamut_clip, sets, quiet):
-    """Render → capture → score SCENE_FILE in one go; writes every file of the three steps."""
+    """Render → capture → score SCENE_FILE in one go; writes every file of the three steps.
+
+    SCENE_FILE is a path, or the name of a scene shipped with spectracam (d65, blackbody_3000K …
+    blackbody_7000K, cfi99, mondrian, dead_leaves, photo), with or without .toml."""
     from .io.exr import write_radiance_exr
     from .pipeline import capture
     from .render import render
@@ -336,10 +386,11 @@ def simulate_cmd(scene_file, out_dir, renderer, arch, exposure, config_file, see
     _score_and_write(raw, scene, out_dir, log)
 
 
-@main.command("paper")
+@main.command("paper", short_help="Reproduce the paper's Figures 4, 5a, 5b and 6.")
 @output_option("Directory to write the figures, results.json, report.md and the case files into.")
-@click.option("--experiment", "experiment_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="Experiment file [default: scenes/paper.toml shipped with spectracam].")
+@click.option("--experiment", "experiment_file", type=ShippedFile("experiment file"), default=None,
+              help="Experiment file: a path or a shipped one's name [default: paper, scenes/paper.toml shipped with "
+                   "spectracam].")
 @renderer_option
 @click.option("--quick", is_flag=True, help="A first look: 160x120 pixels instead of the scene's size.")
 @click.option("--no-cache", is_flag=True, help="Render again even if the render cache has the scene.")
@@ -347,6 +398,7 @@ def simulate_cmd(scene_file, out_dir, renderer, arch, exposure, config_file, see
               "(~37 MB each; they are in the render cache).")
 @set_option
 @quiet_option
+@view_option
 def paper_cmd(out_dir, experiment_file, renderer, quick, no_cache, save_cubes, sets, quiet):
     """Reproduce the paper's Figures 4, 5a, 5b and 6: figures, results.json, report.md, case files."""
     from .experiments.paper import load_experiment, quick_scene, run_paper
@@ -364,7 +416,7 @@ def paper_cmd(out_dir, experiment_file, renderer, quick, no_cache, save_cubes, s
     step = lambda msg: log(f"[{time.perf_counter() - t0:6.1f} s] {msg}")  # noqa: E731
     results, cases, cubes = run_paper(exp, renderer=renderer, quick=quick, use_cache=not no_cache, step=step,
                                       log=log, progress=not quiet)
-    command = "spectracam paper -o " + str(out_dir) + (f" --experiment {experiment_file}" if experiment_file else "") \
+    command = "spectracam paper -o " + str(out_dir) + _given("--experiment", "experiment_file", experiment_file) \
         + (f" --renderer {renderer}" if renderer != "mitsuba" else "") + (" --quick" if quick else "") \
         + "".join(f" --set {s}" for s in sets)
     write_paper_outputs(out_dir, results, cases, cubes, command, step, save_cubes=save_cubes)
@@ -374,10 +426,11 @@ def paper_cmd(out_dir, experiment_file, renderer, quick, no_cache, save_cubes, s
          "and rendered.exr)")
 
 
-@main.command("architectures")
+@main.command("architectures", short_help="Compare every architecture at the paper's camera and light.")
 @output_option("Directory to write results.json, report.md and the figures into.")
-@click.option("--experiment", "experiment_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="Experiment file whose camera, chart and light are used [default: scenes/paper.toml].")
+@click.option("--experiment", "experiment_file", type=ShippedFile("experiment file"), default=None,
+              help="Experiment file whose camera, chart and light are used: a path or a shipped one's name "
+                   "[default: paper, scenes/paper.toml].")
 @renderer_option
 @click.option("--quick", is_flag=True, help="A first look: 160x120 pixels and 2 noise seeds.")
 @click.option("--seeds", type=click.IntRange(1, 100), default=None,
@@ -385,6 +438,7 @@ def paper_cmd(out_dir, experiment_file, renderer, quick, no_cache, save_cubes, s
 @click.option("--no-cache", is_flag=True, help="Render again even if the render cache has the scene.")
 @set_option
 @quiet_option
+@view_option
 def architectures_cmd(out_dir, experiment_file, renderer, quick, seeds, no_cache, sets, quiet):
     """Every registered architecture and exposure scheme at the paper's camera, light and noise, at 1, 1/10
     and 1/100 of its light: SNR, ΔE (training and held-out), capture time; then each architecture on the
@@ -406,8 +460,8 @@ def architectures_cmd(out_dir, experiment_file, renderer, quick, seeds, no_cache
     step(f"{len(designs())} designs: {', '.join(designs())}")
     results = run_architectures(run, renderer=renderer, use_cache=not no_cache, step=step, log=log,
                                 progress=not quiet)
-    command = "spectracam architectures -o " + str(out_dir) + (f" --experiment {experiment_file}" if experiment_file
-                                                               else "") \
+    command = "spectracam architectures -o " + str(out_dir) \
+        + _given("--experiment", "experiment_file", experiment_file) \
         + (f" --renderer {renderer}" if renderer != "mitsuba" else "") + (" --quick" if quick else "") \
         + (f" --seeds {seeds}" if seeds else "") + "".join(f" --set {s}" for s in sets)
     write_architectures_outputs(out_dir, results, command, step)
@@ -415,10 +469,11 @@ def architectures_cmd(out_dir, experiment_file, renderer, quick, seeds, no_cache
         log(f"  {w['illuminant']:>7} {w['light_factor']:>5g}x  {w['metric']:<16} {w['design']:<18} {w['value']:.3g}")
 
 
-@main.command("emva")
+@main.command("emva", short_help="Measure the simulated camera by EMVA 1288.")
 @output_option("Directory to write emva.json, datasheet.md and the photon-transfer, SNR and linearity plots into.")
-@click.option("--scene", "scene_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="Scene file whose camera is measured [default: the paper's camera].")
+@click.option("--scene", "scene_file", type=ShippedFile("scene file"), default=None,
+              help="Scene file whose camera is measured, a path or a shipped scene's name [default: the paper's "
+                   "camera].")
 @click.option("--config", "config_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="TOML with [optics], [filters], [sensor], [capture] tables, over the scene's camera.")
 @click.option("--channel", type=click.Choice(["R", "G", "B"]), default="G", show_default=True,
@@ -428,6 +483,7 @@ def architectures_cmd(out_dir, experiment_file, renderer, quick, seeds, no_cache
 @click.option("--seed", type=click.IntRange(0, 2**31 - 1), default=0, show_default=True, help="Noise seed.")
 @set_option
 @quiet_option
+@view_option
 def emva_cmd(out_dir, scene_file, config_file, channel, wavelength_nm, seed, sets, quiet):
     """Characterise the simulated camera by EMVA 1288 (Release 4.0, linear): datasheet and plots."""
     from .experiments.emva import EmvaSetup, run_emva, write_emva_outputs
@@ -437,7 +493,7 @@ def emva_cmd(out_dir, scene_file, config_file, channel, wavelength_nm, seed, set
     scene = _scene(data, source, config_file, (), sets)
     check_writable(out_dir)
     result = run_emva(scene.camera, EmvaSetup(channel=channel, wavelength_nm=wavelength_nm, seed=seed))
-    command = "spectracam emva -o " + str(out_dir) + (f" --scene {scene_file}" if scene_file else "") \
+    command = "spectracam emva -o " + str(out_dir) + _given("--scene", "scene_file", scene_file) \
         + (f" --config {config_file}" if config_file else "") + f" --channel {channel} --wavelength {wavelength_nm:g}" \
         + f" --seed {seed}" + "".join(f" --set {s}" for s in sets)
     paths = write_emva_outputs(out_dir, result, command)
@@ -448,7 +504,7 @@ def emva_cmd(out_dir, scene_file, config_file, channel, wavelength_nm, seed, set
     log("wrote " + ", ".join(str(p) for p in paths if p.suffix != ".svg"))
 
 
-@main.command("cameras")
+@main.command("cameras", short_help="List the measured cameras filters.camera can name.")
 @click.option("--json", "as_json", is_flag=True, help="Print the library as JSON instead of a table.")
 def cameras_cmd(as_json: bool):
     """List the measured cameras filters.camera can name: range, source, normalisation and how their channels'
@@ -473,10 +529,11 @@ def cameras_cmd(as_json: bool):
                "relative | A/W | electrons_per_photon.")
 
 
-@main.command("validate")
+@main.command("validate", short_help="Check the shipped cameras against published matrices.")
 @output_option("Directory to write validate.json, validate.md and validate.png/.svg into.")
 @renderer_option
 @quiet_option
+@view_option
 def validate_cmd(out_dir, renderer, quiet):
     """Check every shipped camera with a published XYZ(D65)→camera matrix: the simulated white's R/G and B/G against
     the matrix's neutral, and ΔE*ab of the published matrix on the simulated raw (beside a least-squares fit's)."""
@@ -495,14 +552,16 @@ def validate_cmd(out_dir, renderer, quiet):
     log("wrote " + ", ".join(str(p) for p in paths if p.suffix != ".svg"))
 
 
-@main.command("consistency")
+@main.command("consistency", short_help="Map which readings of the paper reproduce its claims.")
 @output_option("Directory to write consistency.json, consistency.md and the map (PNG, SVG) into.")
-@click.option("--experiment", "experiment_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="Experiment file [default: scenes/paper.toml shipped with spectracam].")
+@click.option("--experiment", "experiment_file", type=ShippedFile("experiment file"), default=None,
+              help="Experiment file: a path or a shipped one's name [default: paper, scenes/paper.toml shipped with "
+                   "spectracam].")
 @renderer_option
 @click.option("--full", is_flag=True, help="The scene's full image size instead of 160x120.")
 @set_option
 @quiet_option
+@view_option
 def consistency_cmd(out_dir, experiment_file, renderer, full, sets, quiet):
     """Which readings of the paper's open choices reproduce which of its claims: a map and a table."""
     from .experiments.consistency import run_consistency, write_consistency_outputs
@@ -515,17 +574,17 @@ def consistency_cmd(out_dir, experiment_file, renderer, full, sets, quiet):
         check_memory(exp.base, copies=len(exp.temperatures_K) + 1, what=f", {len(exp.temperatures_K) + 1} lights")
     check_writable(out_dir)
     log = progress_log(quiet)
-    result = run_consistency(exp, renderer=renderer, quick=not full, log=log)
-    command = "spectracam consistency -o " + str(out_dir) + (f" --experiment {experiment_file}" if experiment_file
-                                                              else "") + f" --renderer {renderer}" \
+    result = run_consistency(exp, renderer=renderer, quick=not full, log=log, progress=not quiet)
+    command = "spectracam consistency -o " + str(out_dir) \
+        + _given("--experiment", "experiment_file", experiment_file) + f" --renderer {renderer}" \
         + (" --full" if full else "") + "".join(f" --set {s}" for s in sets)
     paths = write_consistency_outputs(out_dir, result, command)
     log(f"{len(result['rows'])} readings in {result['seconds']:.0f} s; wrote " + ", ".join(
         str(p) for p in paths if p.suffix != ".svg"))
 
 
-@main.command("sweep")
-@click.argument("sweep_file", type=click.Path(dir_okay=False, path_type=Path))
+@main.command("sweep", short_help="Run a design-space sweep, a row per cell and trial.")
+@click.argument("sweep_file", type=ShippedFile("sweep file"))
 @output_option("Directory for results.jsonl/.parquet/.csv and sweep.json.")
 @click.option("--scheduler", default=None, help="Address of a running Dask scheduler, tcp://HOST:PORT "
               "[default: a local cluster of processes made for the run].")
@@ -536,8 +595,12 @@ def consistency_cmd(out_dir, experiment_file, renderer, full, sets, quiet):
               help="Refuse a sweep with more cells than this (each is validated before anything runs, ~1 ms a cell).")
 @set_option
 @quiet_option
+@view_option
 def sweep_cmd(sweep_file, out_dir, scheduler, workers, serial, resume, max_cells, sets, quiet):
-    """Run every cell of SWEEP_FILE on Dask; results.parquet/.csv/.jsonl in DIR, a row per cell and trial."""
+    """Run every cell of SWEEP_FILE on Dask; results.parquet/.csv/.jsonl in DIR, a row per cell and trial.
+
+    SWEEP_FILE is a path, or the name of a sweep shipped with spectracam (cfa_cutoffs,
+    cfa_cutoffs_held_out), with or without .toml."""
     from .experiments.sweep import load_sweep, run_sweep
 
     if serial and scheduler:
@@ -554,12 +617,13 @@ def sweep_cmd(sweep_file, out_dir, scheduler, workers, serial, resume, max_cells
                 f"(cell compute {t['compute_s']:.1f} s); tables in {out_dir}")
 
 
-@main.command("plot-sweep")
+@main.command("plot-sweep", short_help="Plot a finished sweep: one figure per metric.")
 @click.argument("out_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
 @click.option("--x", "x_axis", default=None, help="Axis on the x axis [default: the last varying axis].")
 @click.option("--line", "line_axis", default=None, help="Axis drawn as one line per value.")
 @click.option("--panel", "panel_axis", default=None, help="Axis drawn as one panel per value.")
 @click.option("--metric", "metrics", multiple=True, help="Metric(s) to plot [default: all recorded].")
+@view_option
 def plot_sweep_cmd(out_dir, x_axis, line_axis, panel_axis, metrics):
     """Plot a finished sweep: DIR/plots/<metric>.png and .svg."""
     from .experiments.sweep_plot import plot_sweep
@@ -579,37 +643,34 @@ def default_experiment() -> Path:
                               "pass --experiment FILE") from None
 
 
-@main.command("design")
-@click.argument("spec_file", metavar="SPEC.toml", type=str)
+@main.command("design", short_help="Design each architecture's filters by gradient.")
+@click.argument("spec_file", metavar="SPEC.toml", type=ShippedFile("design file"))
 @output_option("Directory to write results.json, report.md, curves.csv and the figures into.")
 @click.option("--quick", is_flag=True, help="A first look in under 2 minutes: 2 lights, 3 designs (cfa, prism, "
               "fsc with its exposure split) trained on the ColorChecker, 20-nm knots, 25 iterations, 2 seeds at "
               "160x120 pixels.")
 @set_option
 @quiet_option
+@view_option
 def design_cmd(spec_file, out_dir, quick, sets, quiet):
     """Design each architecture's filters (or stacked depths, IR-cut edge, exposure split) by gradient: minimise
     the expected ΔE*ab under the sensor's noise over a training library × lights with Dr.Jit's gradients; score
     on held-out colours; verify by Monte Carlo through capture → score; compare with the paper's filters, the
     grid's best block pair and the Luther camera.  SPEC.toml: a design file, or the name of a shipped one
-    (design.toml)."""
+    (design, with or without .toml)."""
     from .design.report import write_design_outputs
     from .design.run import run_design, setup
     from .design.spec import load_design
-    from .scene import shipped_scene_file
 
-    path = Path(spec_file)
-    if not path.exists():
-        path = shipped_scene_file(spec_file)
-    spec, base_dir = load_design(path, sets, quick=quick)
+    spec, base_dir = load_design(spec_file, sets, quick=quick)
     st = setup(spec, base_dir)
     check_writable(out_dir)
     log = progress_log(quiet)
     t0 = time.perf_counter()
     step = lambda msg: log(f"[{time.perf_counter() - t0:6.1f} s] {msg}")  # noqa: E731
     step(f"{len(spec.designs)} designs ({spec.filters} filters) on {spec.training} × {len(spec.lights)} lights")
-    results = run_design(spec, base_dir, log=step, st=st)
-    command = f"spectracam design {spec_file} -o {out_dir}" + (" --quick" if quick else "") \
+    results = run_design(spec, base_dir, log=step, st=st, progress=not quiet)
+    command = f"spectracam design {as_given('spec_file', spec_file)} -o {out_dir}" + (" --quick" if quick else "") \
         + "".join(f" --set {s}" for s in sets)
     write_design_outputs(out_dir, results, command, step)
     for name, e in results["designs"].items():
@@ -618,13 +679,26 @@ def design_cmd(spec_file, out_dir, quick, sets, quiet):
             f"expected {e['predicted_delta_e']['chart']:.2f}, Monte Carlo {mc['mean']:.2f} ± {mc['std']:.2f}")
 
 
-@main.command("inspect")
+@main.command("inspect", short_help="Print an EXR file's channels, parameters and statistics.")
 @click.argument("file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
 def inspect_cmd(file: Path):
     """Print channels, size, recorded parameters and per-channel min/mean/max of an EXR file."""
     from .io.exr import describe
 
     click.echo(describe(file))
+
+
+@main.command("view", short_help="Write DIR/index.html, an interactive page of DIR.")
+@click.argument("out_dir", metavar="DIR", type=click.Path(exists=True, file_okay=False, path_type=Path))
+@quiet_option
+def view_cmd(out_dir: Path, quiet: bool):
+    """Write DIR/index.html: one self-contained interactive page of what a spectracam command wrote into DIR
+    (any command's output directory); print the page's path.  Every command that writes a directory does
+    the same with --view."""
+    from .view import write_view
+
+    page = write_view(out_dir, log=progress_log(quiet))
+    click.echo(str(page))
 
 
 if __name__ == "__main__":

@@ -9,7 +9,7 @@ import click
 
 from .architecture import ARCHITECTURES
 from .color import ADAPTATIONS, DEMOSAIC_METHODS, DISPLAYS
-from .errors import SpectracamError
+from .errors import ConfigError, SpectracamError
 from .exposure import EXPOSURE_SCHEMES
 from .metrics import DELTA_E_METHODS
 from .render import RENDERERS
@@ -32,7 +32,117 @@ class RegistryChoice(click.ParamType):
 
 
 def progress_log(quiet: bool):
-    return (lambda msg: None) if quiet else (lambda msg: click.echo(msg, err=True))
+    """One-line notices on stderr (none with ``--quiet``); a line printed while a progress bar is drawn
+    goes above the bar instead of through it."""
+    if quiet:
+        return lambda msg: None
+
+    def log(msg: str) -> None:
+        import sys
+
+        tqdm = sys.modules.get("tqdm")
+        if tqdm is not None and getattr(tqdm.tqdm, "_instances", None):  # a bar is drawn (spectracam.progress)
+            from .progress import note
+
+            note(msg)
+        else:
+            click.echo(msg, err=True)
+    return log
+
+
+# ------------------------------------------------------------------------------------------------
+# shipped files by name: `spectracam simulate d65`, `sweep cfa_cutoffs`, `design design` from any install
+
+#: The shipped files each kind of argument may name (besides a path): sweeps live in sweeps/; the
+#: experiment and the design file are one each; every other shipped file is a scene.
+_SHIPPED_ONLY = {"experiment file": ("paper",), "design file": ("design",)}
+
+
+def shipped_dir() -> Path | None:
+    """The directory of the shipped scene, sweep, experiment and design files: the package's
+    ``spectracam/scenes`` (in a wheel), else the checkout's ``scenes/``."""
+    from importlib.resources import files
+
+    d = files("spectracam") / "scenes"
+    if d.is_dir():
+        return Path(str(d))
+    here = Path(__file__).resolve().parent.parent / "scenes"
+    return here if here.is_dir() else None
+
+
+def shipped_files(what: str) -> dict[str, Path]:
+    """``name → path`` of the shipped files an argument of kind ``what`` may name (``"scene file"``,
+    ``"sweep file"``, ``"experiment file"``, ``"design file"``); a sweep's name is ``sweeps/NAME``."""
+    root = shipped_dir()
+    if root is None:
+        return {}
+    out = {}
+    for p in sorted(root.rglob("*.toml")):
+        name = p.relative_to(root).with_suffix("").as_posix()
+        if (what == "sweep file") != name.startswith("sweeps/"):
+            continue
+        if what in _SHIPPED_ONLY and name not in _SHIPPED_ONLY[what]:
+            continue
+        if what == "scene file" and name in {n for v in _SHIPPED_ONLY.values() for n in v}:
+            continue
+        out[name] = p
+    return out
+
+
+def resolve_shipped(value: str | Path, what: str = "scene file") -> Path:
+    """A path that exists, else the shipped file ``value`` names — with or without ``.toml``, with or
+    without the checkout's ``scenes/`` (``d65``, ``scenes/d65.toml``, ``cfa_cutoffs``,
+    ``scenes/sweeps/cfa_cutoffs.toml``); else one line listing what ships."""
+    p = Path(value)
+    if p.exists():
+        return p
+    shipped = shipped_files(what)
+    name = str(value).strip().removeprefix("./").removeprefix("scenes/").removesuffix(".toml")
+    if name in shipped:
+        return shipped[name]
+    by_stem = {k.rsplit("/", 1)[-1]: v for k, v in shipped.items()}
+    if name in by_stem:
+        return by_stem[name]
+    kind = what.split()[0]
+    names = ", ".join(by_stem) or "none in this installation"
+    raise ConfigError(what, str(value), f"no such file, and not the name of a shipped {kind} (shipped: {names})")
+
+
+class ShippedFile(click.ParamType):
+    """A TOML file argument: a path, or the name of a file shipped with spectracam (:func:`resolve_shipped`)."""
+
+    name = "file"
+
+    def __init__(self, what: str):
+        self.what = what
+
+    def convert(self, value, param, ctx):
+        path = resolve_shipped(value, self.what)
+        if ctx is not None and param is not None:
+            ctx.meta.setdefault(_GIVEN, {})[param.name] = str(value)
+        return path
+
+
+_GIVEN = "spectracam.given"
+
+
+def as_given(name: str, value) -> str:
+    """How the user wrote the :class:`ShippedFile` parameter ``name`` (a shipped file's name stays a name
+    in the command a report records), else ``str(value)``."""
+    ctx = click.get_current_context(silent=True)
+    given = ctx.meta.get(_GIVEN, {}).get(name) if ctx is not None else None
+    return given if given is not None else str(value)
+
+
+def shipped_summary() -> str:
+    """One paragraph for ``spectracam --help``: what a file argument may name."""
+    kinds = [(what, list(shipped_files(what))) for what in ("scene file", "sweep file", "experiment file",
+                                                             "design file")]
+    listed = "; ".join(f"{what.split()[0]}s: " + ", ".join(n.rsplit("/", 1)[-1] for n in names)
+                       for what, names in kinds if names)
+    return ("A scene, sweep, experiment or design file argument is a path, or the name of a file shipped with "
+            "spectracam, with or without .toml (spectracam simulate d65 -o out) — "
+            + (listed or "none shipped") + ".")
 
 
 # ------------------------------------------------------------------------------------------------
@@ -55,6 +165,27 @@ class _OutputDir(click.Path):
 def output_option(help_text: str):
     return click.option("-o", "--output", "out_dir", required=True, type=_OutputDir(file_okay=False, path_type=Path),
                         help=help_text)
+
+
+def view_option(f):
+    """``--view``: after the command's outputs are written, also write DIR/index.html (``spectracam view``).
+    The request is recorded here and carried out by the command group once the outputs are in place
+    (:meth:`spectracam.cli._Group.invoke`), so the page sees the files under their final names."""
+    import functools
+
+    @functools.wraps(f)
+    def wrapper(*args, view: bool = False, **kwargs):
+        if view:
+            ctx = click.get_current_context()
+            ctx.meta[VIEW_REQUEST] = (Path(kwargs["out_dir"]), bool(kwargs.get("quiet", False)))
+        return f(*args, **kwargs)
+
+    return click.option("--view", is_flag=True, help=VIEW_HELP)(wrapper)
+
+
+#: Where a command's ``--view`` request waits for the group (``ctx.meta`` is shared by nested contexts).
+VIEW_REQUEST = "spectracam.view"
+VIEW_HELP = "Also write DIR/index.html, an interactive page (spectracam view)."
 
 
 set_option = click.option("--set", "sets", multiple=True, metavar="PATH=VALUE", help=_SET_HELP)

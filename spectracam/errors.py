@@ -19,3 +19,47 @@ class ConfigError(SpectracamError, ValueError):
         if source is None or self.source is not None:
             return self
         return ConfigError(self.field, self.value, self.allowed, source)
+
+
+class ArgumentTypeError(SpectracamError, TypeError):
+    """A function of the Python API was given an argument of the wrong type: one line naming the
+    function's argument, the type given and what is allowed (raised where the argument enters, not as an
+    AttributeError deep inside)."""
+
+
+#: What each kind of object is made by, for the messages of :func:`expect`.
+MADE_BY = {
+    "Scene": "a Scene (spectracam.load_scene(path) reads a scene file, spectracam.parse_scene(data) a dict)",
+    "RadianceCube": "a RadianceCube (spectracam.render(scene); spectracam.read_radiance_exr(path) returns (cube, "
+                    "attributes); RadianceCube(radiance, wavelengths_nm) wraps an (H, W, bands) array)",
+    "RawCapture": "a RawCapture (spectracam.capture(cube), or spectracam.read_raw_exr(path))",
+    "CameraSpec": "a CameraSpec (scene.camera, or spectracam.CameraSpec.from_dict(tables) for [optics], "
+                  "[filters], [sensor], [capture] tables)",
+    "SensorSpec": "a SensorSpec (scene.camera.sensor, or spectracam.SensorSpec.from_dict(table))",
+    "ProcessingSpec": "a ProcessingSpec (scene.processing, or ProcessingSpec.from_dict(table))",
+    "WavelengthGrid": "a WavelengthGrid (scene.grid, or WavelengthGrid(centres_nm))",
+}
+
+
+def expect(value, types, where: str, allowed: str | None = None, optional: bool = False):
+    """``value`` if it is one of ``types`` (or None when ``optional``); else :class:`ArgumentTypeError`
+    naming ``where`` (``"capture(cube)"``), the type given and what is allowed (default: what makes the
+    first type, :data:`MADE_BY`)."""
+    if (optional and value is None) or isinstance(value, types):
+        return value
+    first = (types if isinstance(types, tuple) else (types,))[0].__name__
+    allowed = allowed or MADE_BY.get(first, f"a {first}")
+    given = type(value).__name__
+    if isinstance(value, tuple) and len(value) == 2 and first == "RadianceCube":
+        given += " (read_radiance_exr's (cube, attributes)? pass its [0])"
+    raise ArgumentTypeError(f"{where}: got {given}; allowed: {allowed}{' or None' if optional else ''}")
+
+
+def expect_integer(value, where: str, optional: bool = False):
+    """An integer (not a bool, not a float or a string of digits), or None when ``optional``."""
+    import numbers
+
+    if (optional and value is None) or (isinstance(value, numbers.Integral) and not isinstance(value, bool)):
+        return value
+    raise ArgumentTypeError(f"{where}: got {type(value).__name__} {value!r}; allowed: an integer"
+                            f"{' or None' if optional else ''}")

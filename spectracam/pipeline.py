@@ -13,9 +13,10 @@ from .camera import CameraSpec
 from .capture import RawCapture
 from .capture import capture as capture_stage
 from .color import ProcessingSpec
-from .errors import SpectracamError
+from .errors import ArgumentTypeError, SpectracamError, expect, expect_integer
 from .reference import ChartReference
-from .render import RadianceCube, render
+from .render import RENDERERS, RadianceCube
+from .render import render as render_stage
 from .scene import Scene
 from .score import ChartScore
 from .score import score as score_stage
@@ -43,6 +44,12 @@ def capture(cube: RadianceCube, camera: CameraSpec | None = None, seed: int | No
     chart scene the white patch).  Such a capture records no scene: there is no chart truth to score."""
     from .metering import metered_radiance, parse_white
 
+    expect(cube, RadianceCube, "capture(cube)")
+    expect(camera, CameraSpec, "capture(camera)", optional=True)
+    expect_integer(seed, "capture(seed)", optional=True)
+    expect(scene, Scene, "capture(scene)", optional=True)
+    expect(sensor, SensorSpec, "capture(sensor)", optional=True)
+    expect(design, str, "capture(design)", "an 'architecture/exposure' name such as 'fsc/optimal'", optional=True)
     if cube.metadata.get("renderer") is None:  # made by hand, not rendered or read (both checked)
         cube.check()
     foreign = scene is None and cube.metadata.get("scene") is None
@@ -211,6 +218,10 @@ def score(raw: RawCapture, scene: Scene | None = None, processing: ProcessingSpe
     """Score a capture against its scene (default: the scene it records), with ``processing``
     (default: the scene's): a :class:`ChartScore`, or for a textured target a
     :class:`~spectracam.target_score.TargetScore` (per pixel against its known spectra)."""
+    expect(raw, RawCapture, "score(raw)")
+    expect(scene, Scene, "score(scene)", optional=True)
+    expect(processing, ProcessingSpec, "score(processing)", optional=True)
+    expect(delta_e_reference, str, "score(delta_e_reference)", "'scene' or 'camera'")
     scene = scene or scene_of(raw, "capture")
     if scene.target.textured:
         from .reference import TargetReference
@@ -224,8 +235,20 @@ def score(raw: RawCapture, scene: Scene | None = None, processing: ProcessingSpe
     return score_stage(raw, ChartReference.of(scene), processing or scene.processing, delta_e_reference)
 
 
+def render(scene: Scene, renderer: str = "mitsuba", progress: bool = False, log=None) -> RadianceCube:
+    """Render ``scene`` with a registered renderer (:func:`spectracam.render.render`), its arguments
+    checked here, at the API's boundary."""
+    expect(scene, Scene, "render(scene)")
+    expect(renderer, str, "render(renderer)", "a renderer's name: " + ", ".join(map(repr, RENDERERS.names)))
+    if log is not None and not callable(log):
+        raise ArgumentTypeError(f"render(log): got {type(log).__name__}; allowed: a function of one string, or None")
+    return render_stage(scene, renderer, progress=progress, log=log)
+
+
 def simulate(scene: Scene, renderer: str = "mitsuba", seed: int | None = None):
     """render → capture → score: ``(cube, raw, score)``."""
+    expect(scene, Scene, "simulate(scene)")
+    expect_integer(seed, "simulate(seed)", optional=True)
     cube = render(scene, renderer)
     raw = capture(cube, seed=seed, scene=scene)
     return cube, raw, score(raw, scene)

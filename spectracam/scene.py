@@ -182,6 +182,12 @@ class Scene(Spec):
 
 def parse_scene(data: dict, source: str | None = None) -> Scene:
     """Validate a parsed TOML/JSON dict and build a :class:`Scene`."""
+    from collections.abc import Mapping
+
+    from .errors import expect
+
+    expect(data, Mapping, "parse_scene(data)", "a dict of scene tables, e.g. {'image': {'width': 320}} (a scene "
+           "file: spectracam.load_scene(path))")
     return Scene.from_dict(data, source)
 
 
@@ -247,8 +253,16 @@ def resolve_curve_files(data: dict, base_dir: Path) -> dict:
 
 def load_scene(path: str | Path, overrides=()) -> Scene:
     """Read and validate a TOML scene file, with ``--set``-style overrides applied first."""
+    import os
+
+    from .errors import ArgumentTypeError, expect
     from .overrides import apply_overrides
 
+    expect(path, (str, os.PathLike), "load_scene(path)", "a path to a TOML scene file, str or Path (a dict: "
+           "spectracam.parse_scene(data))")
+    if isinstance(overrides, (str, bytes)) or not hasattr(overrides, "__iter__"):
+        raise ArgumentTypeError(f"load_scene(overrides): got {type(overrides).__name__}; allowed: a list of "
+                                "'PATH=VALUE' strings or (path, value) pairs, e.g. ['image.width=320']")
     data = apply_overrides(read_toml(path, "scene file"), overrides)
     return parse_scene(resolve_curve_files(data, Path(path).parent), source=str(path))
 

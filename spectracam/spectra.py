@@ -121,7 +121,8 @@ def cmf_band_weights(grid: WavelengthGrid) -> np.ndarray:
 
     Each weight is the band's width times the band-averaged colour-matching function, so a cube of
     band-averaged radiance integrates exactly when L is constant within each band.  A plain
-    tensordot with these weights replaces colour-science's per-spectrum path (see DESIGN.md).
+    tensordot with these weights replaces colour-science's per-spectrum path: a whole cube integrates in
+    one matrix product.
     """
     wl, xyz = cie_1931_cmfs()
     avg = np.stack([band_average(tabulated(wl, xyz[:, k]), grid) for k in range(3)], axis=-1)

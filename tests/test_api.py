@@ -3,6 +3,7 @@ import re
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 README = Path(__file__).resolve().parent.parent / "README.md"
 
@@ -29,3 +30,77 @@ def test_colour_science_bridges():
     # block filters 490/610 nm with a flat QE of 0.5: green passes exactly 495-605 nm
     g = sens.values[:, 1]
     np.testing.assert_allclose(g[(sens.wavelengths > 490) & (sens.wavelengths < 610)], 0.5)
+
+
+# -- wrong argument types fail at the API's boundary, naming the argument, the type given and what is allowed --
+
+
+@pytest.fixture(scope="module")
+def small():
+    import spectracam
+
+    scene = spectracam.parse_scene({"image": {"width": 64, "height": 48}})
+    cube = spectracam.render(scene, "analytic")
+    return scene, cube, spectracam.capture(cube)
+
+
+def _wrong_type_cases(scene, cube, raw):
+    import spectracam
+
+    return [
+        (lambda: spectracam.load_scene({"image": {}}), "load_scene(path)", "dict", "parse_scene"),
+        (lambda: spectracam.load_scene(3), "load_scene(path)", "int", "path"),
+        (lambda: spectracam.load_scene("scenes/d65.toml", "image.width=64"), "load_scene(overrides)", "str", "list"),
+        (lambda: spectracam.parse_scene("scenes/d65.toml"), "parse_scene(data)", "str", "load_scene"),
+        (lambda: spectracam.parse_scene(Path("scenes/d65.toml")), "parse_scene(data)", "PosixPath", "dict"),
+        (lambda: spectracam.render({"image": {}}, "analytic"), "render(scene)", "dict", "parse_scene"),
+        (lambda: spectracam.render("scenes/d65.toml"), "render(scene)", "str", "load_scene"),
+        (lambda: spectracam.render(scene, 3), "render(renderer)", "int", "'analytic'"),
+        (lambda: spectracam.render(scene, "analytic", log="x"), "render(log)", "str", "function"),
+        (lambda: spectracam.capture(np.zeros((4, 4, 30))), "capture(cube)", "ndarray", "RadianceCube"),
+        (lambda: spectracam.capture(5), "capture(cube)", "int", "RadianceCube"),
+        (lambda: spectracam.capture(scene), "capture(cube)", "Scene", "spectracam.render(scene)"),
+        (lambda: spectracam.capture((cube, {})), "capture(cube)", "tuple", "[0]"),
+        (lambda: spectracam.capture(cube, scene), "capture(camera)", "Scene", "CameraSpec"),
+        (lambda: spectracam.capture(cube, {"sensor": {}}), "capture(camera)", "dict", "CameraSpec"),
+        (lambda: spectracam.capture(cube, seed="1"), "capture(seed)", "str", "integer"),
+        (lambda: spectracam.capture(cube, seed=1.5), "capture(seed)", "float", "integer"),
+        (lambda: spectracam.capture(cube, scene={"image": {}}), "capture(scene)", "dict", "Scene"),
+        (lambda: spectracam.capture(cube, sensor={"adc_bits": 12}), "capture(sensor)", "dict", "SensorSpec"),
+        (lambda: spectracam.capture(cube, design=3), "capture(design)", "int", "fsc/optimal"),
+        (lambda: spectracam.score(cube), "score(raw)", "RadianceCube", "RawCapture"),
+        (lambda: spectracam.score("raw.exr"), "score(raw)", "str", "read_raw_exr"),
+        (lambda: spectracam.score(raw, {"image": {}}), "score(scene)", "dict", "Scene"),
+        (lambda: spectracam.score(raw, processing={"demosaic": "patch"}), "score(processing)", "dict",
+         "ProcessingSpec"),
+        (lambda: spectracam.simulate({"image": {}}, "analytic"), "simulate(scene)", "dict", "Scene"),
+        (lambda: spectracam.simulate("d65", "analytic"), "simulate(scene)", "str", "load_scene"),
+        (lambda: spectracam.simulate(scene, "analytic", seed="0"), "simulate(seed)", "str", "integer"),
+        (lambda: spectracam.patch_spectra({}), "patch_spectra(scene)", "dict", "Scene"),
+        (lambda: spectracam.camera_sensitivities({}, scene.grid), "camera_sensitivities(camera)", "dict",
+         "CameraSpec"),
+        (lambda: spectracam.camera_sensitivities(scene.camera, 3), "camera_sensitivities(grid)", "int",
+         "WavelengthGrid"),
+    ]
+
+
+def test_wrong_argument_types_name_the_argument_the_type_and_what_is_allowed(small):
+    from spectracam.errors import ArgumentTypeError, SpectracamError
+
+    for call, where, given, allowed in _wrong_type_cases(*small):
+        with pytest.raises(TypeError) as e:
+            call()
+        msg = str(e.value)
+        assert isinstance(e.value, ArgumentTypeError) and isinstance(e.value, SpectracamError), (where, msg)
+        assert msg.startswith(f"{where}: got {given}") and "allowed:" in msg and allowed in msg, msg
+        assert "\n" not in msg
+
+
+def test_right_types_still_work(small):
+    import spectracam
+
+    scene, cube, raw = small
+    raw2 = spectracam.capture(cube, scene.camera, np.int64(3), scene=scene, sensor=scene.camera.sensor,
+                              design="cfa/single")
+    assert spectracam.score(raw2, scene, scene.processing).summary.delta_e_mean > 0
+    assert spectracam.load_scene(README.parent / "scenes" / "d65.toml", ["image.width=64"]).image.width == 64

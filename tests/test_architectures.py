@@ -218,8 +218,10 @@ def test_capture_arch_writes_raw_exr_and_a_dng_libraw_develops(name, tmp_path, s
 
 def test_architectures_quick_command(tmp_path):
     r = CliRunner().invoke(main, ["architectures", "-o", str(tmp_path / "a"), "--quick", "--renderer", "analytic",
-                                  "--seeds", "2", "--quiet"])
+                                  "--seeds", "2", "--quiet", "--view"])
     assert r.exit_code == 0, r.output
+    page = (tmp_path / "a" / "index.html").read_text()  # --view: the figures embedded, report.md's tables
+    assert "spectracam architectures" in page and page.count("data:image/png;base64,") >= 3 and "<table>" in page
     res = json.loads((tmp_path / "a" / "results.json").read_text())
     designs = {row["design"] for row in res["rows"]}
     assert {f"{n}/single" for n in ARCHITECTURES} <= designs and "fsc/balanced" in designs

@@ -215,7 +215,7 @@ def test_design_command_quick(tmp_path):
     per design; every design beats the paper's filters on held-out colours, and the Monte Carlo pipeline confirms
     the model within 5 %; the files are written; the curves CSV holds the designed camera."""
     out = tmp_path / "d"
-    r = CliRunner().invoke(main, ["design", "design.toml", "-o", str(out), "--quick", "--quiet",
+    r = CliRunner().invoke(main, ["design", "design.toml", "-o", str(out), "--quick", "--quiet", "--view",
                                   "--set", "renderer=analytic", "--set", "max_iterations=12"])
     assert r.exit_code == 0, r.output
     res = json.loads((out / "results.json").read_text())
@@ -232,6 +232,8 @@ def test_design_command_quick(tmp_path):
         assert (out / f).stat().st_size > 100
     header = (out / "curves.csv").read_text().splitlines()[2].split(",")
     assert header[0] == "wavelength_nm" and "cfa/single:optimised:R" in header
+    page = (out / "index.html").read_text()  # --view: the figures embedded, report.md's tables as HTML
+    assert "spectracam design" in page and page.count("data:image/png;base64,") >= 3 and "<table>" in page
 
 
 @pytest.mark.parametrize("text,what", [

@@ -68,8 +68,10 @@ def test_measured_recovers_configured(sensor, seed):
 
 
 def test_emva_command_writes_the_datasheet(tmp_path):
-    r = CliRunner().invoke(main, ["emva", "-o", str(tmp_path), "--quiet", "--set", "sensor.adc_bits=10"])
+    r = CliRunner().invoke(main, ["emva", "-o", str(tmp_path), "--quiet", "--set", "sensor.adc_bits=10", "--view"])
     assert r.exit_code == 0, r.output
+    page = (tmp_path / "index.html").read_text()  # --view: the datasheet as HTML, the plots embedded
+    assert "spectracam emva" in page and "system gain K" in page and page.count("data:image/png;base64,") >= 3
     data = json.loads((tmp_path / "emva.json").read_text())
     assert set(data["configured"]) == set(data["measured"]) == set(KEYS)
     assert data["camera"]["sensor"]["adc_bits"] == 10 and "--set sensor.adc_bits=10" in data["command"]

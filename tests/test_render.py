@@ -98,7 +98,7 @@ def test_auto_variant_prefers_llvm_when_it_renders():
 
 
 def test_probe_survives_a_backend_that_aborts():
-    # DESIGN.md: with libLLVM 15 the first render aborts the whole process; the probe must say False.
+    # drjit 1.5 needs libLLVM 19: with libLLVM 15 the first render aborts the whole process; the probe must say False.
     bad = [p for p in ("/usr/lib/x86_64-linux-gnu/libLLVM-15.so.1", "/usr/lib/x86_64-linux-gnu/libLLVM-14.so.1")
            if os.path.exists(p)]
     env = dict(os.environ, DRJIT_LIBLLVM_PATH=bad[0] if bad else "/nonexistent/libLLVM.so")

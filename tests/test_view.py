@@ -296,8 +296,13 @@ def test_what_cannot_be_shown_is_one_line(tmp_path):
     with pytest.raises(SpectracamError, match="holds nothing spectracam wrote"):
         write_view(tmp_path / "empty")
     assert not (tmp_path / "empty" / "index.html").exists()
+    (tmp_path / "foreign").mkdir()  # a picture and a note are not spectracam's outputs
+    (tmp_path / "foreign" / "picture.png").write_bytes(os.urandom(100))
+    (tmp_path / "foreign" / "notes.csv").write_text("a,b\n1,2\n")
+    with pytest.raises(SpectracamError, match="holds nothing spectracam wrote"):
+        write_view(tmp_path / "foreign")
     (tmp_path / "bad").mkdir()
     (tmp_path / "bad" / "raw.exr").write_bytes(b"not an exr")
-    with pytest.raises(SpectracamError):
+    with pytest.raises(SpectracamError, match=r"^file = .*raw\.exr"):  # one line, naming the file
         write_view(tmp_path / "bad")
     assert not (tmp_path / "bad" / "index.html").exists()

@@ -6,7 +6,8 @@ Cases: damaged EXR files, wrong scene values, unwritable outputs, garbage TOML, 
 (issue 17: unsorted, NaN, negative, short, narrow, units), spectral EXRs from elsewhere (stripped,
 contradicting their scene, units, --white), the validate/cameras commands, SIGTERM mid-run, textured
 targets (issue 19: their values, damaged photographs and measured SPD files), and the architectures of
-issue 20 (stacked depths, schemes and demosaickers that do not apply, the architectures command).
+issue 20 (stacked depths, schemes and demosaickers that do not apply, the architectures command), and the
+page of issue 23 (``view DIR`` on bad directories, ``--view`` under faults).
 
 Each case runs one real command in a fresh directory and is judged:
   traceback      a Python traceback on stderr (every failure must be one line);
@@ -184,9 +185,12 @@ def judge(r, out: Path, known_bad: bool, before: dict | None = None, command: st
     left = [p for p in out.rglob("*")] if out.exists() else []
     made = [p for p in left if p.is_file() and before.get(p) != (p.stat().st_size, p.stat().st_mtime_ns)
             and not (command == "sweep" and p.name in SWEEP_JOURNAL)]
+    # `view` reads a directory it did not write (possibly damaged on purpose): only its page is its own
+    scan = command != "view"
     res = {"traceback": "Traceback" in r.stderr,
            "partial": r.returncode != 0 and bool(made),
-           "silent_wrong": r.returncode == 0 and (known_bad or non_finite_outputs(out) or absurd_outputs(out)),
+           "silent_wrong": r.returncode == 0 and (known_bad or (scan and (non_finite_outputs(out)
+                                                                          or absurd_outputs(out)))),
            "multi_line": r.returncode != 0 and not one_line}
     res["temporaries"] = any(p.name.startswith(".tmp") for p in left)
     res["partial"] = res["partial"] or res["temporaries"]
@@ -706,10 +710,54 @@ def case_design(rng, d: Path):
     return _with_fault(rng, *rng.choice(cases))
 
 
+def case_view(rng, d: Path):
+    """Issue 23: ``spectracam view DIR`` on a directory that is missing, a file, empty, unreadable, holds only
+    foreign files or a damaged output — and on real outputs under a full disk or a signal; ``--view`` on commands
+    that write a directory, under the same faults (the page belongs to the outputs: all or nothing)."""
+    kind = rng.choice(["missing", "file", "empty", "unreadable", "foreign", "damaged", "good", "flag"])
+    if kind == "missing":
+        return ["view", "nosuch"], True, "view: a missing directory"
+    if kind == "file":
+        (d / "afile").write_text("x")
+        return ["view", "afile"], True, "view: a file"
+    (d / "out").mkdir()
+    if kind == "empty":
+        return ["view", "out"], True, "view: an empty directory"
+    if kind == "unreadable":   # mode 000 while the command runs (one() sets and restores it)
+        shutil.copytree(d / "c", d / "out", dirs_exist_ok=True)
+        return ["view", "out"], True, "view: an unreadable directory", {"drop_caps": True, "chmod": 0o000}
+    if kind == "foreign":
+        (d / "out" / "notes.txt").write_text("not spectracam's")
+        (d / "out" / "picture.png").write_bytes(os.urandom(rng.randrange(1, 2000)))
+        return ["view", "out"], True, "view: only foreign files"
+    source = rng.choice(["r", "c", "sw"])
+    if kind == "damaged":
+        shutil.copytree(d / source, d / "out", dirs_exist_ok=True)
+        victim = rng.choice([p for p in (d / "out").iterdir() if p.is_file()])
+        data = victim.read_bytes()
+        victim.write_bytes(data[: rng.randrange(0, max(1, len(data)))])
+        return ["view", "out"], False, f"view: {source}'s outputs, {victim.name} truncated"
+    if kind == "good":
+        shutil.copytree(d / source, d / "out", dirs_exist_ok=True)
+        return _with_fault(rng, ["view", "out"], False)
+    (d / "out").rmdir()
+    cmd = rng.choice([["simulate", "s.toml", "-o", "out", "--renderer", "analytic", "--view"],
+                      ["render", "s.toml", "-o", "out", "--renderer", "analytic", "--view", "--quiet"],
+                      ["capture", "r/radiance.exr", "-o", "out", "--view"],
+                      ["score", "c/raw.exr", "-o", "out", "--view"],
+                      ["sweep", "sw.toml", "-o", "out", "--serial", "--view"],
+                      ["emva", "-o", "out", "--view"],
+                      ["paper", "--quick", "--renderer", "analytic", "-o", "out", "--view"],
+                      ["plot-sweep", "out", "--view"]])
+    if cmd[0] == "plot-sweep":
+        shutil.copytree(d / "sw", d / "out")
+    return _with_fault(rng, cmd, False)
+
+
 CASES = [case_damaged_file, case_scene_value, case_environment, case_garbage_text, case_camera_file, case_foreign_exr,
          case_new_commands, case_signal, case_full_disk, case_memory_limit, case_raw_attributes, case_journal,
          case_experiment_values, case_group_signal, case_scheduler_peer, case_read_only, case_reflectances,
-         case_target, case_architectures, case_spacetime, case_design]
+         case_target, case_architectures, case_spacetime, case_design, case_view]
 
 
 def one(i: int, seed: int, base: Path, cycle: bool = False) -> tuple[str, dict]:
@@ -721,7 +769,11 @@ def one(i: int, seed: int, base: Path, cycle: bool = False) -> tuple[str, dict]:
         cmd, known_bad, label, *extra = make(rng, d)
         opts = extra[0] if extra and isinstance(extra[0], dict) else ({"kill": extra[0]} if extra else {})
         before = snapshot(d / "out")
+        if "chmod" in opts:
+            os.chmod(d / "out", opts["chmod"])
         r, orphans, hung = run(cmd, d, opts=opts)
+        if "chmod" in opts:
+            os.chmod(d / "out", 0o755)
         res = judge(r, d / "out", known_bad, before, cmd[0]) | {"status": r.returncode, "stderr": r.stderr[-400:]}
         return label, res | {"orphans": orphans, "hang": hung, "command": cmd[0]}
 

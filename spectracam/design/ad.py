@@ -3,7 +3,8 @@
 The expected-error model is written on :data:`Tensor` (``drjit.llvm.ad.TensorXf64``): numpy-like tensors with
 broadcasting whose gradients :func:`value_and_gradient` returns.  Small matrices (the N×3 conversion, a 3×3
 covariance) are Python lists of tensors, one per entry, each holding every colour at once.  Dr.Jit's LLVM backend
-needs libLLVM 19 (DESIGN.md); where it is missing the design refuses with one line instead of aborting.
+(drjit 1.5) needs libLLVM 19 — with libLLVM 15 the first kernel it runs aborts the process; where it is missing
+the design refuses with one line instead of aborting.
 """
 from __future__ import annotations
 

@@ -21,9 +21,12 @@ class Optimisation:
 
 
 def optimise(problem, x0: np.ndarray | None = None, max_iterations: int = 80, tolerance: float = 1e-7,
-             log=lambda m: None) -> Optimisation:
-    """Minimise ``problem``'s objective from ``x0`` (default: its start) with L-BFGS-B."""
+             log=lambda m: None, progress: bool = False) -> Optimisation:
+    """Minimise ``problem``'s objective from ``x0`` (default: its start) with L-BFGS-B; ``progress``: a bar
+    over the iterations on a terminal (it only counts: the optimiser's steps are the same)."""
     from scipy.optimize import minimize
+
+    from ..progress import bar
 
     history = []
     best = {"v": np.inf, "x": None, "de": None}
@@ -36,8 +39,10 @@ def optimise(problem, x0: np.ndarray | None = None, max_iterations: int = 80, to
         return v, g
 
     x0 = problem.initial() if x0 is None else np.asarray(x0, float)
-    res = minimize(f, x0, jac=True, method="L-BFGS-B", bounds=problem.bounds(),
-                   options={"maxiter": int(max_iterations), "ftol": float(tolerance), "gtol": 1e-9})
+    with bar(total=int(max_iterations), desc=f"{problem.design} iterations", unit="it", progress=progress) as b:
+        res = minimize(f, x0, jac=True, method="L-BFGS-B", bounds=problem.bounds(),
+                       options={"maxiter": int(max_iterations), "ftol": float(tolerance), "gtol": 1e-9},
+                       callback=(lambda xk: b.update(1)) if progress else None)
     log(f"{problem.design}: {len(history)} evaluations, {res.nit} iterations, training ΔE {best['de']:.4f} "
         f"({res.message if isinstance(res.message, str) else res.message.decode()})")
     msg = res.message if isinstance(res.message, str) else res.message.decode()

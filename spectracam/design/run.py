@@ -135,12 +135,13 @@ def grid_best(problem: DesignProblem) -> dict:
             "grid": rows}
 
 
-def design_one(problem: DesignProblem, spec: DesignSpec, cubes: dict, log=lambda m: None) -> dict:
+def design_one(problem: DesignProblem, spec: DesignSpec, cubes: dict, log=lambda m: None,
+               progress: bool = False) -> dict:
     """Optimise one design and score it every way (see the module); the cameras are returned for the report."""
     from .optimise import optimise
 
     t0 = time.perf_counter()
-    opt = optimise(problem, max_iterations=spec.max_iterations, tolerance=spec.tolerance, log=log)
+    opt = optimise(problem, max_iterations=spec.max_iterations, tolerance=spec.tolerance, log=log, progress=progress)
     t_opt = time.perf_counter() - t0
     designed = problem.camera_of(opt.x)
     paper = problem.camera if not problem.split else problem.camera.with_design(
@@ -190,18 +191,21 @@ def render_cubes(st: Setup, log=lambda m: None) -> dict:
     return cubes
 
 
-def run_design(spec: DesignSpec, base_dir: Path, log=lambda m: None, st: Setup | None = None) -> dict:
+def run_design(spec: DesignSpec, base_dir: Path, log=lambda m: None, st: Setup | None = None,
+               progress: bool = False) -> dict:
     """Every design of ``spec``: the results.json dict, with each design's cameras under ``_cameras`` (``st``:
-    its :func:`setup`, if made already)."""
+    its :func:`setup`, if made already); ``progress``: bars over the designs and each one's iterations."""
+    from ..progress import bar
+
     t0 = time.perf_counter()
     st = st or setup(spec, base_dir)
     cubes = render_cubes(st, log)
     designs = {}
-    for d in spec.designs:
+    for d in bar(spec.designs, desc="designs", unit="design", progress=progress):
         arch = d.partition("/")[0]
         problem = DesignProblem(d, "depths" if arch == "stacked" else spec.filters, spec, st.camera, st.processing,
                                 list(st.scenes), spec.training, spec.held_out)
-        designs[d] = design_one(problem, spec, cubes, log)
+        designs[d] = design_one(problem, spec, cubes, log, progress=progress)
     return {"parameters": {"design_spec": spec.to_dict(), "white_luminance_cd_m2": st.level_cd_m2,
                            "lights": list(st.labels), "camera": st.camera.to_dict(),
                            "processing": st.processing.to_dict(),

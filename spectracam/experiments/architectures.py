@@ -147,6 +147,7 @@ def run_architectures(run: ArchitecturesRun, renderer: str = "mitsuba", use_cach
     import time
 
     from ..cache import cached_render
+    from ..progress import bar
     from ..render import render
     from .architectures_spacetime import run_space, run_time, spacetime_winners
 
@@ -156,28 +157,32 @@ def run_architectures(run: ArchitecturesRun, renderer: str = "mitsuba", use_cach
     seeds = [seed0 + i for i in range(run.seeds)]
     rows = []
     t0 = time.perf_counter()
-    for light, scene in run.scenes(level).items():
-        if use_cache:
-            cube, hit = cached_render(scene, renderer, progress=progress, log=log)
-        else:
-            cube, hit = render(scene, renderer=renderer, progress=progress, log=log), False
-        step(f"render {light}: {'cached' if hit else renderer}")
-        limit = time_limit_s(scene)
-        for factor in run.light_factors:
-            sc, cb = scaled(scene, cube, factor)
-            for design in designs():
-                row = case(sc, cb, design, seeds, None if factor == 1.0 else limit)
-                rows.append({"illuminant": light, "light_factor": factor,
-                             "white_luminance_cd_m2": level * factor, **row})
-            step(f"{light} at {factor:g}× the paper's light: {len(designs())} designs × {len(seeds)} seeds")
+    scenes = run.scenes(level)
+    with bar(total=len(scenes) * len(run.light_factors) * len(designs()), desc="chart cases", unit="case",
+             progress=progress) as cases:
+        for light, scene in scenes.items():
+            if use_cache:
+                cube, hit = cached_render(scene, renderer, progress=progress, log=log)
+            else:
+                cube, hit = render(scene, renderer=renderer, progress=progress, log=log), False
+            step(f"render {light}: {'cached' if hit else renderer}")
+            limit = time_limit_s(scene)
+            for factor in run.light_factors:
+                sc, cb = scaled(scene, cube, factor)
+                for design in designs():
+                    row = case(sc, cb, design, seeds, None if factor == 1.0 else limit)
+                    rows.append({"illuminant": light, "light_factor": factor,
+                                 "white_luminance_cd_m2": level * factor, **row})
+                    cases.update(1)
+                step(f"{light} at {factor:g}× the paper's light: {len(designs())} designs × {len(seeds)} seeds")
     t_chart = time.perf_counter() - t0
     extra = {}
     if spacetime:
         base = exp.base.replace(illuminant=IlluminantSpec("blackbody", exp.calibration_temperature_K, None, level))
-        extra["space"] = run_space(base, renderer, run.quick, log)
+        extra["space"] = run_space(base, renderer, run.quick, log, progress=progress)
         step(f"space: {len(extra['space']['rows'])} designs on the slanted edge and the Siemens star "
              f"({extra['space']['wall_s']:.1f} s)")
-        extra["time"] = run_time(base, renderer, run.quick, log)
+        extra["time"] = run_time(base, renderer, run.quick, log, progress=progress)
         step(f"time: {len({r['design'] for r in extra['time']['rows']})} designs × "
              f"{len({r['speed_px_per_ms'] for r in extra['time']['rows']})} speeds ({extra['time']['wall_s']:.1f} s)")
         extra["spacetime_winners"] = spacetime_winners(extra["space"], extra["time"])

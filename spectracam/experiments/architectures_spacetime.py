@@ -43,7 +43,7 @@ def _experiment_scene(scene, quick: bool):
     return scene.replace(grid=parse_grid({"start_nm": 400, "stop_nm": 700, "step_nm": 20}))
 
 
-def run_space(scene, renderer: str, quick: bool, log=None) -> dict:
+def run_space(scene, renderer: str, quick: bool, log=None, progress: bool = False) -> dict:
     """The spatial experiment on every design (module docstring): its rows and timing."""
     from ..spatial.experiment import SpatialSpec, run_spatial
 
@@ -52,7 +52,7 @@ def run_space(scene, renderer: str, quick: bool, log=None) -> dict:
                        f_numbers=(cam.optics.f_number,), targets=("edge", "star"), demosaics=DEMOSAICS,
                        olpf_separations_px=OLPF_PX, misregistrations_px=(0.0,))
     spec = spec.quick() if quick else spec
-    res = run_spatial(spec, _experiment_scene(scene, quick), renderer, log, keep_images=False)
+    res = run_spatial(spec, _experiment_scene(scene, quick), renderer, log, keep_images=False, progress=progress)
     rows = []
     for label in dict.fromkeys(r.label for r in res["rows"]):
         edge = next(r for r in res["rows"] if r.label == label and r.target == "edge")
@@ -67,7 +67,7 @@ def run_space(scene, renderer: str, quick: bool, log=None) -> dict:
                            "pixel_pitch_um": cam.sensor.pixel_pitch_um, "f_number": cam.optics.f_number}}
 
 
-def run_time(scene, renderer: str, quick: bool, log=None) -> dict:
+def run_time(scene, renderer: str, quick: bool, log=None, progress: bool = False) -> dict:
     """The motion experiment on every design (module docstring): its rows and timing."""
     from ..motion.experiment import MotionSpec, run_motion
 
@@ -76,7 +76,7 @@ def run_time(scene, renderer: str, quick: bool, log=None) -> dict:
                       pixel_pitch_um=cam.sensor.pixel_pitch_um, f_number=cam.optics.f_number)
     spec = spec.quick() if quick else spec
     spec = spec.replace(speeds_px_per_ms=SPEEDS_PX_PER_MS[::2] if quick else SPEEDS_PX_PER_MS)
-    res = run_motion(spec, _experiment_scene(scene, quick), renderer, log, keep_images=False)
+    res = run_motion(spec, _experiment_scene(scene, quick), renderer, log, keep_images=False, progress=progress)
     keys = ("breakup_width_px", "scielab_delta_e", "scielab_delta_e_sd", "cielab_delta_e", "false_colour_still",
             "breakup_width_scene_px", "scielab_delta_e_scene", "mtf50_cy_per_px", "capture_time_ms", "snr_db")
     rows = [{k: v for k, v in r.to_dict().items() if k in ("design", "speed_px_per_ms", *keys)} for r in res["rows"]]

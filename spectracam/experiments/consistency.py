@@ -81,16 +81,19 @@ def _camera_and_processing(exp: PaperExperiment, tables: dict) -> tuple[CameraSp
     return cam, ProcessingSpec.from_dict(tables.get("processing", {}), "consistency", exp.base.processing)
 
 
-def run_consistency(exp: PaperExperiment, renderer: str = "analytic", quick: bool = True, log=lambda m: None) -> dict:
+def run_consistency(exp: PaperExperiment, renderer: str = "analytic", quick: bool = True, log=lambda m: None,
+                    progress: bool = False) -> dict:
     """Every reading's claims.  Radiance is rendered once per wavelength grid and scaled to each
-    reading's calibrated light level (rendering is linear in the light)."""
+    reading's calibrated light level (rendering is linear in the light).  ``progress``: a bar over the
+    readings on a terminal."""
+    from ..progress import bar
     from ..render import render
     from ..scene import parse_grid
 
     t0 = time.perf_counter()
     cube_sets: dict = {}
     rows = []
-    for i, reading in enumerate(readings()):
+    for i, reading in enumerate(bar(readings(), desc="readings", unit="reading", progress=progress)):
         base = exp.base
         if "wavelengths" in reading.tables:
             base = base.replace(grid=parse_grid(reading.tables["wavelengths"]))

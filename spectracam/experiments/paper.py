@@ -233,8 +233,9 @@ def error_budget(cube, scene: Scene, camera: CameraSpec, processing: ProcessingS
 
 
 def comparison(exp: PaperExperiment, cubes: dict, camera: CameraSpec, processing: ProcessingSpec,
-               light_scale: float = 1.0, keep_cases: bool = False) -> tuple[dict, dict]:
-    """Every design under every blackbody, and Figure 6.  ``cubes``: label → (scene, cube)."""
+               light_scale: float = 1.0, keep_cases: bool = False, tick=lambda: None) -> tuple[dict, dict]:
+    """Every design under every blackbody, and Figure 6.  ``cubes``: label → (scene, cube); ``tick`` is
+    called after each case (a progress bar's step: :func:`comparison_cases` of them)."""
     seed = exp.base.render.seed
     res = {"exposure_ms": {}, "channel_exposure_ms": {}, "fig4_white_response": {}, "fig5a_snr_db": {},
            "fig5b_delta_e": {}, "fig5b_delta_e_of_mean": {}, "delta_e_conversion": {}, "delta_e_conversion_p95": {},
@@ -258,12 +259,19 @@ def comparison(exp: PaperExperiment, cubes: dict, camera: CameraSpec, processing
                 res["held_out_library"] = {k: c["held_out"][k] for k in ("library", "samples")}
             if keep_cases:
                 cases[(key, design)] = c
+            tick()
     scene, cube = scaled(*cubes[exp.budget_illuminant], light_scale)
     budget = error_budget(cube, scene, camera, processing, exp.budget_design, seed)
     res["fig6_budget_delta_e"] = [{"step": step.id, "label": step.label, "delta_e": de} for step, de, _, _ in budget]
     if keep_cases:
         cases[(exp.budget_illuminant, "budget")] = budget
+    tick()
     return res, cases
+
+
+def comparison_cases(exp: PaperExperiment) -> int:
+    """How many cases :func:`comparison` runs: every design under every blackbody, and the budget."""
+    return len(exp.temperatures_K) * len(exp.designs) + 1
 
 
 #: ``--quick``: a first look at a quarter of the pixels each way, the same physics.
@@ -302,9 +310,10 @@ def _one_thread():
     os.environ["SPECTRACAM_THREADS"] = "1"  # one process per core already
 
 
-def _alternatives(exp: PaperExperiment, cubes: dict) -> list[dict]:
+def _alternatives(exp: PaperExperiment, cubes: dict, tick=lambda: None) -> list[dict]:
     """Every sensitivity alternative's comparison, in processes forked from this one (they share
-    the cubes; the same seeds, so the same numbers as one after the other), one per core."""
+    the cubes; the same seeds, so the same numbers as one after the other), one per core; ``tick``
+    is called as each one's result arrives (in order)."""
     import multiprocessing
     import os
 
@@ -312,30 +321,40 @@ def _alternatives(exp: PaperExperiment, cubes: dict) -> list[dict]:
     try:
         jobs = range(len(exp.alternatives))
         workers = min(len(jobs), int(os.environ.get("SPECTRACAM_THREADS") or os.cpu_count() or 1))
+        out = []
         if workers < 2 or "fork" not in multiprocessing.get_all_start_methods():
-            return [_alternative(j) for j in jobs]
+            for j in jobs:
+                out.append(_alternative(j))
+                tick()
+            return out
         from concurrent.futures import ProcessPoolExecutor
 
         with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork"),
                                  initializer=_one_thread) as ex:
-            return list(ex.map(_alternative, jobs))
+            for r in ex.map(_alternative, jobs):
+                out.append(r)
+                tick()
+        return out
     finally:
         _SHARED.clear()
 
 
 def run_paper(exp: PaperExperiment, renderer: str = "mitsuba", quick: bool = False, use_cache: bool = True,
               step=lambda msg: None, log=None, progress: bool = False) -> tuple[dict, dict, dict]:
-    """Run the whole experiment; returns (results, cases, cubes).  ``step`` receives one line per step."""
+    """Run the whole experiment; returns (results, cases, cubes).  ``step`` receives one line per step;
+    ``progress``: bars over the lights rendered, the cases and the sensitivity alternatives on a terminal."""
     import time
 
     from ..cache import cached_render
+    from ..progress import bar
     from ..render import render
 
     timings = {}
     t0 = time.perf_counter()
     level = calibrated_luminance(exp, exp.base.camera)
     cubes = {}
-    for key, scene in scenes_for(exp, level, quick).items():
+    scenes = scenes_for(exp, level, quick)
+    for key, scene in bar(scenes.items(), total=len(scenes), desc="render lights", unit="light", progress=progress):
         t = time.perf_counter()
         if use_cache:
             cube, hit = cached_render(scene, renderer, progress=progress, log=log)
@@ -346,7 +365,9 @@ def run_paper(exp: PaperExperiment, renderer: str = "mitsuba", quick: bool = Fal
              f"({time.perf_counter() - t:.1f} s)")
     timings["render_s"] = time.perf_counter() - t0
     t = time.perf_counter()
-    main, cases = comparison(exp, cubes, exp.base.camera, exp.base.processing, keep_cases=True)
+    with bar(total=comparison_cases(exp), desc="paper cases", unit="case", progress=progress) as b:
+        main, cases = comparison(exp, cubes, exp.base.camera, exp.base.processing, keep_cases=True,
+                                 tick=lambda: b.update(1))
     timings["designs_and_budget_s"] = time.perf_counter() - t
     step(f"designs and error budget ({timings['designs_and_budget_s']:.1f} s)")
     from .claims import evaluate, survival
@@ -354,7 +375,9 @@ def run_paper(exp: PaperExperiment, renderer: str = "mitsuba", quick: bool = Fal
     claims = evaluate(main)
     t = time.perf_counter()
     alt_results, alt_claims = {}, {}
-    for alt, r in zip(exp.alternatives, _alternatives(exp, cubes)):
+    with bar(total=len(exp.alternatives), desc="sensitivity", unit="reading", progress=progress) as b:
+        alternatives = _alternatives(exp, cubes, tick=lambda: b.update(1))
+    for alt, r in zip(exp.alternatives, alternatives):
         alt_results[alt.name] = {"reason": alt.reason, **r}
         alt_claims[alt.name] = evaluate(r)
         step(f"sensitivity: {alt.name}")

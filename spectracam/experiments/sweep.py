@@ -408,9 +408,8 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
               stop_after: int | None = None) -> dict:
     """Run (or resume) a sweep; returns timing figures.  ``stop_after`` ends after that many new cells
     (for tests of interruption)."""
-    from tqdm import tqdm
-
     from ..cache import cached_render, render_key
+    from ..progress import bar as progress_bar
 
     if scheduler is not None and not serial:
         probe_scheduler(scheduler)  # before anything is written: a wrong address leaves no half-made sweep
@@ -460,8 +459,7 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
     with open(journal, "ab") as jf:
         import sys
 
-        on_terminal = progress and sys.stderr.isatty()
-        bar = tqdm(total=len(cells), initial=len(done), desc="sweep cells", unit="cell", disable=not on_terminal)
+        bar = progress_bar(total=len(cells), initial=len(done), desc="sweep cells", unit="cell", progress=progress)
         compute, t1, n_new, cluster_start = [], time.perf_counter(), 0, 0.0
         last_sync = [time.perf_counter()]
 

@@ -1,43 +1,104 @@
-"""Adobe DNG 1.4 for every capture, so ordinary raw developers open and develop it.
+"""Adobe DNG 1.4 for every capture, so ordinary raw developers (LibRaw, darktable, RawTherapee) develop it right.
 
 Written with tifffile as one uncompressed image: a colour-filter-array mosaic (PhotometricInterpretation
 32803, CFA tags; any tile of the DNG CFA colours R, G, B, C, M, Y, W — RYYB, CYYM and the four-colour
 RGBW among them, with ``CFAPlaneColor`` naming the planes) or, for full planes (prism,
 field-sequential, stacked, and :func:`dng_image`'s RGBW), LinearRaw (34892, one sample per plane; DNG
-has three or four colour planes, so other counts have no DNG form).  With N colour planes, ``ColorMatrix1`` is N×3 and ``AsShotNeutral``
-N long (DNG 1.4: ColorPlanes × 3).  Tags:
+has three or four colour planes, so other counts have no DNG form).  With N colour planes each
+``ColorMatrix`` is N×3 and ``AsShotNeutral`` N long (DNG 1.4: ColorPlanes × 3).  Tags:
 
-* ``BlackLevel`` = the sensor's pedestal (``camera.sensor.black_level_dn``), ``WhiteLevel`` = 2ⁿ − 1.
+* Levels.  A CFA mosaic holds the ADC's codes: ``BlackLevel`` = the sensor's pedestal
+  (``camera.sensor.black_level_dn``), ``WhiteLevel`` = 2ⁿ − 1.  LinearRaw holds the codes *minus the pedestal*
+  (its whole DN, :func:`linear_raw_pedestal`), clipped at 0: ``BlackLevel`` 0 (or the pedestal's fraction of a
+  DN), ``WhiteLevel`` = 2ⁿ − 1 − pedestal (:func:`dng_levels`).  Why: darktable 4.2 does not subtract a LinearRaw
+  file's ``BlackLevel`` (its rawspeed "sraw" path scales by the white level only), so a pedestal left in the
+  pixels is developed as signal, and the white balance multiplies it unequally: with the default 8-bit camera at
+  3000 K the chart's black developed at L* 28.5 for 20.8 (prism/optimal), and a prism/single capture (its blue
+  channel weak, so multiplied most) with a cast growing toward the black, a* −1.9 → −9.0 and b* −2.6 → −5.6 from
+  grey 20 to the black.  What it costs: noise below the pedestal is clipped at 0 instead of kept negative, which
+  raises the mean of the darkest pixels.  On the chart's darkest grey (black 2, ~3 % reflectance) of the default
+  8-bit camera with prism/optimal or fsc/optimal exposures every channel holds ≥ 7.8 DN there and the clip adds
+  ≤ 0.001 DN: nothing.  It matters only where a channel holds about a DN: prism/single's blue at 3000 K (1.3 DN)
+  gains 0.64 DN and fsc/balanced's channels at 3000 K (0.9 DN) 0.73–0.76 DN — the camera's rendering of that
+  patch moves from b* +6.4 to −4.5, or from L* −6.7 to +4.4, against its noise-free rendering (the flooring ADC's
+  half code is the other half of it; ``tools/dng_developers.py`` prints this per capture).  LibRaw clips the same
+  way after subtracting any ``BlackLevel``, so its development of the black did not change (fsc/balanced at
+  3000 K: L* 25.91 before, 25.90 after).  raw.exr keeps the codes unclipped.  CFA files keep the pedestal in the
+  pixels and in ``BlackLevel``: darktable subtracts it there (the black at 3000 K: L* 20.18 in darktable, 19.96
+  in LibRaw, 20.28 in RawTherapee, the scene 20.83).
 * ``AsShotNeutral`` = the camera's response to the scene white: the expected photo-electrons of each
   channel for a perfect white diffuser under the scene illuminant with the capture's exposure times,
   normalised to a maximum of 1 (for a prism or field-sequential capture with optimal exposures it is
   close to (1, 1, 1): the exposures, metered on the white patch, already balance the white).
-* ``ColorMatrix1`` (XYZ → camera): the inverse of the least-squares fit, on the chart reference's
-  24 patches, from the camera's noise-free responses to the patches' CIE 1931 XYZ under the scene
-  illuminant, constrained so that the camera's white maps exactly onto the illuminant's XYZ; normalised
-  so that ``ColorMatrix1 · XYZ_white = AsShotNeutral`` (maximum 1).  ``CalibrationIlluminant1`` is the
-  scene illuminant (its EXIF LightSource code, 255 "other" for a blackbody).  This is what DNG 1.4
-  chapter 6 asks of a single matrix: the as-shot neutral, mapped through the inverse matrix, is the
-  illuminant's white, so a reader that follows the specification recovers the scene illuminant and
-  adapts from it.
+* Two calibrations, always the same two standard illuminants whatever the scene's light:
+  ``ColorMatrix1`` for CIE Standard Illuminant A (``CalibrationIlluminant1`` = 17) and ``ColorMatrix2`` for D65
+  (``CalibrationIlluminant2`` = 21).  Each is XYZ → camera under *its* illuminant: the inverse of the
+  least-squares fit, on the chart reference's 24 patches lit by that illuminant (same chart, wavelength grid
+  and level as the scene), from the camera's noise-free responses — with the capture's own per-channel exposure
+  times, since a prism or field-sequential capture gives its channels different times and the matrix lives in
+  the file's raw camera space — to the patches' CIE 1931 XYZ, constrained so that the camera's white under that
+  illuminant maps exactly onto the illuminant's white (N×3 for other than three planes: the fit from XYZ to the
+  camera, the white kept the same way).  Each is then scaled as the DNG SDK does on reading
+  (``dng_camera_profile::NormalizeColorMatrix``): the largest camera value of D50's white (the profile
+  connection space, xy 0.3457, 0.3585) is 1, so readers that interpolate the two element by element (by
+  inverse correlated colour temperature, as DNG 1.2+ asks) blend matrices of the same scale.  Before issue 23
+  one matrix was written, fitted under the scene's light, with ``CalibrationIlluminant1`` = the scene's EXIF
+  code — 255, "other", for a blackbody — which darktable 4.2 cannot use (see below).
 * ``Make`` "spectracam", ``Model`` "simulated <design> sensor", ``UniqueCameraModel``; in an Exif IFD
   (where LibRaw, exiv2 and exiftool look for them) ``ExposureTime`` (the capture time), ``FNumber``,
   ``ISOSpeedRatings`` with ``SensitivityType`` 3 (ISO speed): ISO 12232's saturation-based speed
   ``S_sat = 78/H_sat``, ``H_sat = k_v·L_sat·t`` lux·s, the focal-plane exposure of the luminance that
   first fills a channel (:func:`saturation_exposure_lux_s`).
 
-What LibRaw (0.22, ``src/metadata/tiff.cpp`` and ``utils_dcraw.cpp``) does with these: it ignores
-``CalibrationIlluminant1`` when there is one matrix and treats ``ColorMatrix1`` as a D65 matrix
-(``cam_xyz_coeff``: rows normalised so that sRGB's D65 white gives camera (1, 1, 1)); with
-``use_camera_wb`` it multiplies each channel by ``1/AsShotNeutral`` (a von Kries step in camera space
-that carries the as-shot white onto D65, whatever the matrix), then applies the inverse of the
-normalised matrix.  So the scene white always develops neutral; the other colours are adapted to D65 in
-the camera's own channel space.  darktable (``src/common/exif.cc``) reads ``ColorMatrix1`` through exiv2
-and carries it to D65 with a Bradford matrix for the named calibration illuminants (none for 255,
-"other"), then white-balances with ``AsShotNeutral`` in the same way.  ``ForwardMatrix1`` is parsed but
-not used in LibRaw's processing, and darktable's matrix path does not read it, so none is written.
-LibRaw reads ``BlackLevel`` as an integer (a fractional one is truncated); the pedestal is written as the
-integer the ADC adds (see ``mid_step`` in :func:`write_dng` for the half code a flooring ADC leaves).
+What each developer does with these (``tools/dng_developers.py`` develops the default camera's cfa/single,
+prism/optimal and fsc/optimal captures of the chart at 3000 K and 6500 K in all three; none of the three reads
+``ColorMatrix1`` — replacing it by the identity leaves their output bit for bit the same — it is there for
+readers that interpolate between the calibrations, as the DNG SDK does):
+
+* LibRaw (0.22; ``src/metadata/tiff.cpp``, ``utils_dcraw.cpp``) keeps the last ``ColorMatrix`` it parses —
+  ``ColorMatrix2``, the D65 one, which is what it assumes (``cam_xyz_coeff``: rows normalised so that sRGB's D65
+  white gives camera (1, 1, 1)); with ``use_camera_wb`` it multiplies each channel by ``1/AsShotNeutral`` (a
+  von Kries step in camera space that carries the as-shot white onto D65), then applies the inverse of the
+  normalised matrix.  So the scene white always develops neutral; the other colours are adapted to D65 in the
+  camera's own channel space.  It subtracts ``BlackLevel`` from CFA and LinearRaw alike, clipping at 0.
+* darktable 4.2 (``src/common/exif.cc``) reads the matrices through exiv2 and takes the one whose
+  ``CalibrationIlluminant`` is D65 (else the nearest above, carried to D65 with a Bradford matrix).  It has
+  none for 255, "other": with the old single matrix the same file developed differently from run to run (28 of
+  30 runs alike, legacy chromatic adaptation) and, with ``chromatic-adaptation=modern``, with the greys at
+  a* −92…+137, b* −212…+88 (NaN for the CFA).  Legacy chromatic adaptation (what Debian's darktablerc ships)
+  white-balances with ``AsShotNeutral`` and converts with ``ColorMatrix2`` as LibRaw does: on LinearRaw (no
+  demosaicking to differ) its greys 20–24 match LibRaw's within 0.02.  Modern white-balances to the D65
+  "camera reference" of ``ColorMatrix2`` and lets color calibration adapt from the illuminant it derives from
+  ``AsShotNeutral``; there the white patch, metered to 95 % of the well, develops clipped, and darktable's
+  highlight reconstruction makes a pixel or so of it differ between runs (16 and 20 of 30 alike in two series
+  at prism/optimal 3000 K; a copy of the fsc/optimal file with every code halved develops identically 10 times of 10: it is the
+  clipping, not the file).  It subtracts ``BlackLevel`` from CFA mosaics, not from LinearRaw (hence the levels
+  above).
+* RawTherapee 5.9 reads ``ColorMatrix2`` through its dcraw fork and the as-shot neutral for its "camera" white
+  balance, and subtracts ``BlackLevel`` from CFA and LinearRaw alike: on LinearRaw its greys 20–24 match
+  LibRaw's within 0.02.  It refused ("Error loading file") the CFA DNGs of 160×120, 200×150, 240×180, 256×120
+  and 320×64 px and loaded 255×240, 256×192 and larger; LinearRaw of 160×120 loads.
+
+What no file can change, and the tool shows beside each development (the camera's own noise-free rendering:
+its camera → XYZ fit under the scene's light, then Bradford to D65): the block filters render the chart's
+slightly yellow white 3.1 b* yellower at 6500 K (darktable shows it; LibRaw and RawTherapee clip the white,
+which is metered to 95 % of the well, at their output's full scale); and the default 8-bit, one-exposure CFA's
+blue holds a few DN in the dark greys at 3000 K, so the flooring ADC's half code and the developers' handling of
+noise move them by up to 3.0 b* (darktable, grey 23) and 4.8 b* (LibRaw, the black: its clip of negative
+noise; 2.4 and 4.4 with the old single matrix).
+
+What the standard illuminants cost: all three developers convert with the D65 matrix after a von Kries step in
+camera space, whatever the light, where the old single matrix (fitted under the scene's light, read as if it
+were D65) suited the scene.  At 3000 K LibRaw and RawTherapee now develop the chart's 18 chromatic patches at
+mean ΔE*ab 12.8–12.9 (max 26.5–27.0) instead of 8.8–9.0 (max 23.0–23.6) (cfa/single, prism/optimal; LibRaw's
+fsc/optimal too); at 6500 K at 7.54–7.64 as before (7.58–7.66); LibRaw's closed form (noise-free prism/optimal)
+gives 12.7 against 9.7 at 3000 K, 10.2 against 8.5 at 4000 K, 8.4 against 8.2 at 5000 K.  The greys do not move.
+darktable gained: 12.8–12.9 at 3000 K and 7.55 at 6500 K where its fallback matrix gave 15.1–18.2.
+
+``ForwardMatrix`` is parsed but not used in LibRaw's processing, and darktable's matrix path does not read it,
+so none is written.  LibRaw reads ``BlackLevel`` as an integer (a fractional one is truncated); the pedestal
+is written as the integer the ADC adds (see ``mid_step`` in :func:`write_dng` for the half code a flooring ADC
+leaves).
 """
 from __future__ import annotations
 
@@ -56,8 +117,12 @@ from .files import atomic_write
 
 #: DNG CFAPattern colour codes.
 _CFA_CODE = {"R": 0, "G": 1, "B": 2, "C": 3, "M": 4, "Y": 5, "W": 6}
-#: EXIF LightSource codes for DNG CalibrationIlluminant1 (255 = other).
-_ILLUMINANT_CODE = {"A": 17, "B": 18, "C": 19, "D55": 20, "D65": 21, "D75": 22, "D50": 23}
+#: The DNG calibrations, ``(colour-science illuminant name, EXIF LightSource code)``: ColorMatrix1 under CIE
+#: Standard Illuminant A (17), ColorMatrix2 under D65 (21), whatever the scene's light.
+CALIBRATION_ILLUMINANTS = (("A", 17), ("D65", 21))
+#: D50's white, Y = 1 (xy 0.3457, 0.3585): the DNG profile connection space's, on which the DNG SDK normalises
+#: every ColorMatrix (``NormalizeColorMatrix``: the largest camera value of this white is 1).
+D50_XYZ = np.array([0.3457 / 0.3585, 1.0, (1 - 0.3457 - 0.3585) / 0.3585])
 #: The Make tag of every file spectracam writes.
 MAKE = "spectracam"
 #: ISO 12232 saturation-based speed constant: S_sat = 78 / H_sat (H_sat in lux·s).
@@ -108,31 +173,53 @@ def _white_preserving_fit(A: np.ndarray, Y: np.ndarray, a: np.ndarray, y: np.nda
     return np.array(rows)
 
 
+def calibration_reference(reference, name: str):
+    """The chart reference of the same chart, wavelength grid, image and level under the CIE illuminant ``name``
+    (a key of colour-science's ``SDS_ILLUMINANTS``: "A", "D65"); memoised, as :meth:`ChartReference.of` is."""
+    from ..illuminant import IlluminantSpec
+    from ..reference import _reference
+
+    light = IlluminantSpec(kind="cie", temperature_K=None, name=name,
+                           white_luminance_cd_m2=reference.illuminant.white_luminance_cd_m2)
+    return _reference(reference.chart, light, reference.grid, reference.width_px, reference.height_px)
+
+
+def camera_patches(raw: RawCapture, reference) -> np.ndarray:
+    """Expected photo-electrons ``(24, N)`` of the chart's patches under the reference's illuminant with the
+    capture's per-channel exposure times: the camera's raw values of the chart, noise-free."""
+    return reference.patch_rates(raw.camera) * np.asarray(raw.exposure_times_s, float)[None, :]
+
+
 def camera_to_xyz_matrix(raw: RawCapture, reference) -> np.ndarray:
-    """3×3 ``B`` with ``XYZ ≈ B·camera``: least squares over the chart reference's 24 patches
-    (camera = expected photo-electrons with the capture's exposure times), the camera's white mapped
-    exactly onto the illuminant's white (Y = 1)."""
-    cam = reference.patch_rates(raw.camera) * np.asarray(raw.exposure_times_s, float)[None, :]
-    return _white_preserving_fit(cam, reference.patch_xyz, camera_white(raw, reference), reference.white_xyz)
+    """3×3 ``B`` with ``XYZ ≈ B·camera`` under the reference's illuminant: least squares over the chart
+    reference's 24 patches (camera = expected photo-electrons with the capture's exposure times), the camera's
+    white mapped exactly onto the illuminant's white (Y = 1)."""
+    return _white_preserving_fit(camera_patches(raw, reference), reference.patch_xyz, camera_white(raw, reference),
+                                 reference.white_xyz)
+
+
+def normalise_color_matrix(M: np.ndarray) -> np.ndarray:
+    """``M`` scaled as the DNG SDK's ``NormalizeColorMatrix`` does: the largest camera value of D50's white is 1."""
+    return M / (M @ D50_XYZ).max()
 
 
 def xyz_to_camera_matrix(raw: RawCapture, reference) -> np.ndarray:
-    """DNG ``ColorMatrix1``: the inverse of :func:`camera_to_xyz_matrix`, normalised so that the
-    illuminant's white maps onto :func:`as_shot_neutral` (maximum 1).  With other than three channels
-    (N×3: no inverse) the least-squares fit from the patches' XYZ to the camera, white preserved."""
-    n = len(raw.layout.channels)
-    if n == 3:
+    """XYZ → camera under the reference's illuminant: the inverse of :func:`camera_to_xyz_matrix` (so the
+    illuminant's white maps onto the camera's white), scaled by :func:`normalise_color_matrix`.  With other than
+    three channels (N×3: no inverse) the least-squares fit from the patches' XYZ to the camera, white preserved."""
+    if len(raw.layout.channels) == 3:
         M = np.linalg.inv(camera_to_xyz_matrix(raw, reference))
     else:
-        cam = reference.patch_rates(raw.camera) * np.asarray(raw.exposure_times_s, float)[None, :]
-        M = _white_preserving_fit(reference.patch_xyz, cam, reference.white_xyz, camera_white(raw, reference))
-    return M / (M @ reference.white_xyz).max()
+        M = _white_preserving_fit(reference.patch_xyz, camera_patches(raw, reference), reference.white_xyz,
+                                  camera_white(raw, reference))
+    return normalise_color_matrix(M)
 
 
-def calibration_illuminant_code(reference) -> int:
-    """EXIF LightSource code of the scene illuminant (255, "other", for a blackbody or an unlisted one)."""
-    ill = reference.illuminant
-    return _ILLUMINANT_CODE.get(ill.name, 255) if ill.kind == "cie" else 255
+def color_matrices(raw: RawCapture, reference) -> list[tuple[int, np.ndarray]]:
+    """``[(17, ColorMatrix1), (21, ColorMatrix2)]``: :func:`xyz_to_camera_matrix` under CIE A and under D65
+    (:data:`CALIBRATION_ILLUMINANTS`), each fitted on the chart lit by that illuminant."""
+    return [(code, xyz_to_camera_matrix(raw, calibration_reference(reference, name)))
+            for name, code in CALIBRATION_ILLUMINANTS]
 
 
 def saturation_exposure_lux_s(raw: RawCapture, reference) -> float:
@@ -279,16 +366,33 @@ def dng_image(raw: RawCapture) -> tuple[np.ndarray, MosaicLayout | PlanesLayout,
                                                   f"{', '.join(layout.channels)} (bilinear, periodic)"
 
 
+def linear_raw_pedestal(raw: RawCapture, layout=None) -> int:
+    """Digital numbers subtracted from the pixels of the DNG (then clipped at 0): for LinearRaw the pedestal's
+    whole DN (darktable does not subtract a LinearRaw ``BlackLevel``; see the module docstring), for a CFA
+    mosaic 0.  ``layout``: the layout the DNG holds (default the capture's)."""
+    layout = layout or raw.layout
+    return 0 if isinstance(layout, MosaicLayout) else int(np.floor(raw.camera.sensor.black_level_dn))
+
+
+def dng_levels(raw: RawCapture, layout=None, mid_step: bool = False) -> tuple[int, float, int]:
+    """``(pedestal subtracted from the pixels, BlackLevel, WhiteLevel)`` of the DNG: a CFA mosaic ``(0, b,
+    2ⁿ − 1)``; LinearRaw ``(⌊b⌋, b − ⌊b⌋, 2ⁿ − 1 − ⌊b⌋)`` (BlackLevel 0 for a whole-DN pedestal).  With
+    ``mid_step`` the levels are in the LinearizationTable's half-DN units (value 2·pixel + 1): BlackLevel doubled,
+    WhiteLevel 2·top + 1."""
+    bits, b = raw.camera.sensor.adc_bits, raw.camera.sensor.black_level_dn
+    offset = linear_raw_pedestal(raw, layout)
+    black, top = b - offset, 2**bits - 1 - offset
+    if mid_step:  # linear values 2·DN + 1: the centre of each code, in half-DN units
+        return offset, 2 * black, 2 * top + 1
+    return offset, black, top
+
+
 def dng_tags(raw: RawCapture, reference=None, mid_step: bool = False, layout=None) -> list:
     """The tifffile ``extratags`` of a capture's DNG (see the module docstring and :func:`write_dng`);
     ``layout``: the layout the DNG holds (:func:`dng_image`; default the capture's)."""
     layout = layout or raw.layout
     bits = raw.camera.sensor.adc_bits
-    black = raw.camera.sensor.black_level_dn
-    if mid_step:  # linear values 2·DN + 1: the centre of each code, in half-DN units
-        black, white = 2 * black, 2 ** (bits + 1) - 1
-    else:
-        white = 2**bits - 1
+    _, black, white = dng_levels(raw, layout, mid_step)
     mosaic = isinstance(layout, MosaicLayout)
     channels = layout.channels
     n = len(channels)
@@ -314,9 +418,12 @@ def dng_tags(raw: RawCapture, reference=None, mid_step: bool = False, layout=Non
     if mid_step:
         tags.append((50712, 3, 2**bits, tuple(range(1, 2 ** (bits + 1), 2)), True))  # LinearizationTable
     if reference is not None:
-        tags += [(50721, 10, 3 * n, _srational(xyz_to_camera_matrix(raw, reference).ravel()), True),  # ColorMatrix1
-                 (50778, 3, 1, calibration_illuminant_code(reference), True),  # CalibrationIlluminant1
-                 (50728, 5, n, _rational(as_shot_neutral(raw, reference)), True)]  # AsShotNeutral
+        (code1, cm1), (code2, cm2) = color_matrices(raw, reference)
+        tags += [(50721, 10, 3 * n, _srational(cm1.ravel()), True),  # ColorMatrix1
+                 (50722, 10, 3 * n, _srational(cm2.ravel()), True),  # ColorMatrix2
+                 (50728, 5, n, _rational(as_shot_neutral(raw, reference)), True),  # AsShotNeutral
+                 (50778, 3, 1, code1, True),  # CalibrationIlluminant1: Standard Illuminant A
+                 (50779, 3, 1, code2, True)]  # CalibrationIlluminant2: D65
     return tags
 
 
@@ -337,16 +444,18 @@ DNG_MAX_BITS = 16
 
 
 def write_dng(path: str | Path, raw: RawCapture, reference=None, mid_step: bool = False) -> Path:
-    """Write a capture as DNG (temp file, then rename): a CFA mosaic, or LinearRaw for three planes;
-    with the chart ``reference``, the colour matrix, the as-shot neutral and the ISO too.
+    """Write a capture as DNG (temp file, then rename): a CFA mosaic, or LinearRaw for three or four planes
+    (pixels less the pedestal, :func:`dng_levels`); with the chart ``reference``, the two colour matrices (CIE A
+    and D65), the as-shot neutral and the ISO too.
 
-    ``mid_step``: add a ``LinearizationTable`` mapping code DN to ``2·DN + 1`` (BlackLevel ``2·b``,
-    WhiteLevel ``2ⁿ⁺¹ − 1``), so developers take each code at the centre of its quantisation step, as
-    :func:`~spectracam.sensor.adc_inverse` does.  The ADC floors, so a code's mean signal is half a DN
-    above its value; with few DN per channel (8 bits, dark patches, a channel that a white balance
-    multiplies by 2) that half DN tints greys — about +0.2 b* on the chart's light greys of an 8-bit
-    CFA at 5000 K.  Off by default: BlackLevel and WhiteLevel are then the ADC's own codes, and
-    LibRaw's ``raw_image`` the digital numbers themselves.  Only for ADCs of up to 15 bits."""
+    ``mid_step``: add a ``LinearizationTable`` mapping pixel value p to ``2·p + 1`` (BlackLevel ``2·b``,
+    WhiteLevel ``2ⁿ⁺¹ − 1``; LinearRaw: ``2·(b − ⌊b⌋)`` and ``2·(2ⁿ − 1 − ⌊b⌋) + 1``), so developers take each
+    code at the centre of its quantisation step, as :func:`~spectracam.sensor.adc_inverse` does.  The ADC
+    floors, so a code's mean signal is half a DN above its value; with few DN per channel (8 bits, dark
+    patches, a channel that a white balance multiplies by 2) that half DN tints greys — about +0.2 b* on the
+    chart's light greys of an 8-bit CFA at 5000 K.  Off by default: BlackLevel and WhiteLevel are then the ADC's
+    own codes (LinearRaw: less the pedestal), and LibRaw's ``raw_image`` the digital numbers themselves (of a
+    CFA).  Only for ADCs of up to 15 bits."""
     import tifffile
 
     bits = raw.camera.sensor.adc_bits
@@ -355,7 +464,6 @@ def write_dng(path: str | Path, raw: RawCapture, reference=None, mid_step: bool 
                               "raw developers that read it (LibRaw refuses more); the capture is in raw.exr")
     if mid_step and bits > 15:
         raise SpectracamError(f"sensor.adc_bits = {bits}: a mid-step LinearizationTable needs 15 bits or fewer")
-    white_level = 2**bits - 1
     if not isinstance(raw.layout, (MosaicLayout, PlanesLayout)):
         raise SpectracamError(f"capture.architecture = {raw.camera.capture.architecture!r}: its layout "
                               f"{type(raw.layout).__name__} has no DNG form")
@@ -367,13 +475,16 @@ def write_dng(path: str | Path, raw: RawCapture, reference=None, mid_step: bool 
         photometric = 32803
     else:
         image, photometric = np.moveaxis(image, 0, -1), 34892
-    dtype = np.uint16
-    data = np.ascontiguousarray(np.clip(np.round(image), 0, white_level).astype(dtype))
+    offset = linear_raw_pedestal(raw, layout)
+    top = 2**bits - 1 - offset
+    data = np.ascontiguousarray(np.clip(np.round(image) - offset, 0, top).astype(np.uint16))
+    extra = {"dng_image": note} if note else {}
+    if offset:
+        extra["dng_pixels"] = f"digital numbers minus {offset} DN of the pedestal, clipped at 0 (raw.exr: unclipped)"
     description = json.dumps({"spectracam": __version__, "design": raw.design,
                               "exposure_times_s": list(map(float, raw.exposure_times_s)),
                               "capture_time_s": float(raw.capture_time_s), "seed": raw.seed,
-                              "camera": raw.camera.to_dict(), "scene": raw.scene,
-                              **({"dng_image": note} if note else {})}, sort_keys=True)
+                              "camera": raw.camera.to_dict(), "scene": raw.scene, **extra}, sort_keys=True)
     buf = io.BytesIO()
     tifffile.imwrite(buf, data, photometric=photometric, planarconfig="contig" if data.ndim == 3 else None,
                      compression=None, extratags=dng_tags(raw, reference, mid_step, layout), metadata=None, subfiletype=0,

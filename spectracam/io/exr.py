@@ -71,7 +71,7 @@ def write_exr(path: str | Path, channels: dict[str, np.ndarray], attributes: dic
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     for k, v in attributes.items():
         header[k] = json.dumps(v) if isinstance(v, dict) else v
-    # OpenEXR silently writes wrong pixels from non-contiguous views (DESIGN.md): always copy.
+    # OpenEXR's Python binding silently writes wrong pixels from a non-contiguous view (a slice): always copy.
     data = {k: np.ascontiguousarray(v, dtype=np.float16 if half else np.float32) for k, v in channels.items()}
     return atomic_write(path, lambda tmp: OpenEXR.File(header, data).write(tmp))
 

@@ -139,6 +139,36 @@ def staged():
         raise
 
 
+def stage_outputs() -> tuple[list, list]:
+    """The running stage's files (their final paths) and the directories made for them."""
+    stage = _STAGES[-1]
+    return [Path(p) for _, p in stage["files"]], list(stage["dirs"])
+
+
+@contextlib.contextmanager
+def staged_after(outputs: tuple[list, list]):
+    """A stage for files made from ``outputs`` (:func:`stage_outputs` of a stage just put in place): should
+    it fail or a signal come, those outputs and their directories are removed too, so they and what is
+    made from them (``--view``'s page) appear together or not at all."""
+    paths, dirs = outputs
+    made = [str(p) for p in paths]
+    _LIVE.update(made)  # remove_unfinished (a signal) takes them too
+    try:
+        with staged():
+            _STAGES[-1]["dirs"][:0] = dirs  # removed once empty
+            yield
+    except BaseException:
+        for p in made:
+            with contextlib.suppress(OSError):
+                os.unlink(p)
+        for d in reversed(dirs):
+            with contextlib.suppress(OSError):
+                d.rmdir()
+        raise
+    finally:
+        _LIVE.difference_update(made)
+
+
 def _discard(stage: dict, renamed: list) -> None:
     for tmp, _ in stage["files"]:
         _LIVE.discard(tmp)

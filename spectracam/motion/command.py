@@ -9,15 +9,17 @@ from pathlib import Path
 
 import click
 
-from ..cli_options import check_writable, progress_log, output_option, quiet_option, renderer_option, set_option
+from ..cli_options import (check_writable, output_option, progress_log, quiet_option, renderer_option, set_option,
+                           view_option)
 
 
-@click.command("motion")
+@click.command("motion", short_help="Colour breakup of a moving edge, per architecture.")
 @output_option("Directory to write results.json, mtf_curves.json, report.md, the figures and fsc_frames.gif into.")
 @click.option("--quick", is_flag=True, help="A first look: a 64×64 edge, 20-nm bands, 8 speeds, 8 samples per sub-pixel.")
 @renderer_option
 @set_option
 @quiet_option
+@view_option
 def motion_cmd(out_dir: Path, quick: bool, renderer: str, sets, quiet: bool):
     """Motion: a neutral slanted edge moving at a sweep of speeds, captured by cfa/single, prism/optimal,
     fsc/optimal and fsc/balanced with a global and a rolling shutter (time slices rendered by Mitsuba);
@@ -33,7 +35,7 @@ def motion_cmd(out_dir: Path, quick: bool, renderer: str, sets, quiet: bool):
     check_writable(out_dir)
     log = progress_log(quiet)
     t0 = time.perf_counter()
-    result = run_motion(spec, scene, renderer=renderer, log=log)
+    result = run_motion(spec, scene, renderer=renderer, log=log, progress=not quiet)
     command = "spectracam motion -o " + str(out_dir) + (" --quick" if quick else "") \
         + (f" --renderer {renderer}" if renderer != "mitsuba" else "") + "".join(f" --set {s}" for s in sets)
     paths = write_outputs(out_dir, result, command)

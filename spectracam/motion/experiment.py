@@ -517,28 +517,35 @@ def sweep_speeds(setup: MotionSetup, dm: DesignModel, timing, rolling: bool, tim
         yield case
 
 
-def run_motion(spec: MotionSpec, scene, renderer: str = "mitsuba", log=None, keep_images: bool = True) -> dict:
-    """Every design × speed × shutter. Returns ``{"rows": [MotionRow], "images", "timings", ...}``."""
+def run_motion(spec: MotionSpec, scene, renderer: str = "mitsuba", log=None, keep_images: bool = True,
+               progress: bool = False) -> dict:
+    """Every design × speed × shutter. Returns ``{"rows": [MotionRow], "images", "timings", ...}``.
+    ``progress``: a bar over the cases on a terminal (:mod:`spectracam.progress`)."""
+    from ..progress import bar
+
     log = log or (lambda msg: None)
     t_start = time.perf_counter()
     timings = dict.fromkeys(("render", "optics", "capture", "processing", "metrics", "snr"), 0.0)
     setup = prepare(spec, scene, renderer, log, timings)
     rows, images, curves, timing_info = [], {}, [], {}
-    for design in spec.designs:
-        dm = design_model(setup, design, timings)
-        for rolling in spec.rolling_shutter:
-            timing = capture_timing(dm.camera.architecture(), dm.times_s, spec.timing(rolling),
-                                    setup.moving.geometry.height_px, -setup.margin_px)
-            timing_info[f"{design}{' rolling' if rolling else ''}"] = timing.to_dict()
-            for row, curve, case_images in sweep_speeds(setup, dm, timing, rolling, timings):
-                rows.append(row)
-                curves.append(curve)
-                if keep_images:
-                    images[(design, row.speed_px_per_ms, bool(rolling))] = case_images
-            log(f"[{time.perf_counter() - t_start:6.1f} s] {design}{' rolling shutter' if rolling else ''}: "
-                f"{len(spec.speeds_px_per_ms)} speeds ({setup.moving.renders} slice renders so far)")
-        if keep_images:
-            images[(design, "ideal")] = {"xyz": dm.ideal_xyz.astype(np.float32)}
+    with bar(total=len(spec.designs) * len(spec.rolling_shutter) * len(spec.speeds_px_per_ms),
+             desc="motion cases", unit="case", progress=progress) as cases:
+        for design in spec.designs:
+            dm = design_model(setup, design, timings)
+            for rolling in spec.rolling_shutter:
+                timing = capture_timing(dm.camera.architecture(), dm.times_s, spec.timing(rolling),
+                                        setup.moving.geometry.height_px, -setup.margin_px)
+                timing_info[f"{design}{' rolling' if rolling else ''}"] = timing.to_dict()
+                for row, curve, case_images in sweep_speeds(setup, dm, timing, rolling, timings):
+                    rows.append(row)
+                    curves.append(curve)
+                    if keep_images:
+                        images[(design, row.speed_px_per_ms, bool(rolling))] = case_images
+                    cases.update(1)
+                log(f"[{time.perf_counter() - t_start:6.1f} s] {design}{' rolling shutter' if rolling else ''}: "
+                    f"{len(spec.speeds_px_per_ms)} speeds ({setup.moving.renders} slice renders so far)")
+            if keep_images:
+                images[(design, "ideal")] = {"xyz": dm.ideal_xyz.astype(np.float32)}
     return {"rows": rows, "mtf_curves": curves, "images": images, "timings": timings,
             "exposure_timing": timing_info, "display_white": dm.conversion.display_white, "renderer": renderer,
             "render_metadata": setup.moving.metadata, "slice_renders": setup.moving.renders,

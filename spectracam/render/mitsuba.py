@@ -69,7 +69,8 @@ sys.exit(0 if abs(v - 0.5) < 1e-3 else 3)
 
 
 def find_libllvm19() -> str | None:
-    """Path of a libLLVM 19 shared library on this machine, if any (DESIGN.md: drjit needs 19)."""
+    """Path of a libLLVM 19 shared library on this machine, if any (drjit 1.5 needs libLLVM 19; with libLLVM 15
+    the first render aborts the process)."""
     for pattern in _LLVM19_GLOBS:
         hits = sorted(glob.glob(pattern))
         if hits:
@@ -89,7 +90,8 @@ def _jit_env() -> dict:
 def run_probe(variant: str, env: dict) -> bool:
     """Render a 4x4 test scene with ``variant`` in a subprocess with ``env``; True if it gives the right value.
 
-    A subprocess, because a wrong libLLVM aborts the whole process on the first render (DESIGN.md).
+    A subprocess, because with the wrong libLLVM (drjit 1.5 needs 19; 15 aborts) the first render aborts the
+    whole process.
     """
     try:
         r = subprocess.run([sys.executable, "-c", _PROBE, variant], env=env, capture_output=True, timeout=300)
@@ -237,11 +239,10 @@ def render_mitsuba(scene, progress: bool = False, log=None, within_band: str = "
     Float = type(params["board.bsdf.reflectance.values"])  # mi.Float, or a buffer type in scalar variants
     params["board.bsdf.reflectance.values"] = Float(np.full(POINTS_PER_BAND + 1, scene.chart.surround_reflectance))
 
-    from tqdm import tqdm
+    from ..progress import bar
 
     # a bar on a terminal only; a log (stderr redirected) gets the one line the caller writes per stage
-    for b in tqdm(range(B), desc="render bands", unit="band", disable=not (progress and sys.stderr.isatty()),
-                  leave=False):
+    for b in bar(range(B), desc="render bands", unit="band", progress=progress):
         if within_band == "sampled":
             params["light.irradiance.values"] = Float(E(lam[b]).astype(np.float32))
             for p, (_, rho) in enumerate(reflectances):

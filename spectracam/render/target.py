@@ -11,8 +11,6 @@ per band in the one compiled scene.
 """
 from __future__ import annotations
 
-import sys
-
 import numpy as np
 
 from ..illuminant import spectral_irradiance
@@ -53,10 +51,9 @@ def render_target_mitsuba(scene, progress: bool = False, log=None) -> RadianceCu
     params = mi.traverse(mi_scene)
     Float = type(params["light.irradiance.values"])
     cube = np.empty((H, W, B), dtype=np.float32)
-    from tqdm import tqdm
+    from ..progress import bar
 
-    for b in tqdm(range(B), desc="render bands", unit="band", disable=not (progress and sys.stderr.isatty()),
-                  leave=False):
+    for b in bar(range(B), desc="render bands", unit="band", progress=progress):
         params["light.irradiance.values"] = Float(np.full(POINTS_PER_BAND + 1, light_band[b], np.float32))
         params["target.bsdf.reflectance.data"] = mi.TensorXf(rho[labels, b][..., None])
         params.update()

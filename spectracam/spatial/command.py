@@ -9,16 +9,18 @@ from pathlib import Path
 
 import click
 
-from ..cli_options import check_writable, progress_log, output_option, quiet_option, renderer_option, set_option
+from ..cli_options import (check_writable, output_option, progress_log, quiet_option, renderer_option, set_option,
+                           view_option)
 
 
-@click.command("spatial")
+@click.command("spatial", short_help="Compare the architectures' spatial fidelity: MTF, colour.")
 @output_option("Directory to write results.json, mtf_curves.json, report.md, the figures and maps/ into.")
 @click.option("--quick", is_flag=True, help="A first look: half-size images, 20-nm bands, 2 samples per sub-pixel.")
 @renderer_option
 @click.option("--no-maps", is_flag=True, help="Skip cases/: every design's image of every case and target (EXR, PNG, error map).")
 @set_option
 @quiet_option
+@view_option
 def spatial_cmd(out_dir: Path, quick: bool, renderer: str, no_maps: bool, sets, quiet: bool):
     """Spatial comparison: slanted edge, Siemens star and tilted chart through diffraction, the pixel
     aperture and each design (CFA + demosaicking, prism aligned/misaligned, FSC); e-SFR MTF50, false
@@ -34,7 +36,7 @@ def spatial_cmd(out_dir: Path, quick: bool, renderer: str, no_maps: bool, sets, 
     check_writable(out_dir)
     log = progress_log(quiet)
     t0 = time.perf_counter()
-    result = run_spatial(spec, scene, renderer=renderer, log=log)
+    result = run_spatial(spec, scene, renderer=renderer, log=log, progress=not quiet)
     command = "spectracam spatial -o " + str(out_dir) + (" --quick" if quick else "") \
         + (f" --renderer {renderer}" if renderer != "mitsuba" else "") + "".join(f" --set {s}" for s in sets)
     paths = write_outputs(out_dir, result, command, maps=not no_maps)

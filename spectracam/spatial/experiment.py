@@ -364,23 +364,30 @@ class Case:
         return {"pixel_pitch_um": float(self.pixel_pitch_um), "f_number": float(self.f_number)}
 
 
-def run_spatial(spec: SpatialSpec, scene, renderer: str = "mitsuba", log=None, keep_images: bool = True) -> dict:
+def run_spatial(spec: SpatialSpec, scene, renderer: str = "mitsuba", log=None, keep_images: bool = True,
+                progress: bool = False) -> dict:
     """Run every case × target × design. Returns ``{"rows": [SpatialRow], "mtf_curves", "timings",
-    "images", "closed_form", ...}``."""
+    "images", "closed_form", ...}``.  ``progress``: a bar over the cases' targets on a terminal."""
+    from ..progress import bar
+
     run = _Run(spec, scene, renderer, log or (lambda msg: None), keep_images, ChartReference.of(scene),
                spec.spatial_designs(), {t: dict.fromkeys(STAGES, 0.0) for t in spec.targets})
     t_start = time.perf_counter()
-    for pitch in spec.pixel_pitches_um:
-        # one margin per pitch (flat targets are rendered once per pitch): wide enough for the slowest lens
-        margin = max(sopt.margin_px(pitch, N, scene.grid.edges_nm[-1], max(spec.misregistrations_px))
-                     for N in spec.f_numbers)
-        for N in spec.f_numbers:
-            camera = case_camera(scene, spec, pitch, N)
-            case = Case(float(pitch), float(N), camera, *channel_columns(camera, scene.grid, spec.designs), margin)
-            for tname in spec.targets:
-                run_target(run, case, tname)
-                run.log(f"[{time.perf_counter() - t_start:6.1f} s] {pitch:g} µm, f/{N:g}, {tname}: "
-                        f"{len(run.designs)} designs scored")
+    with bar(total=len(spec.pixel_pitches_um) * len(spec.f_numbers) * len(spec.targets), desc="spatial cases",
+             unit="target", progress=progress) as targets:
+        for pitch in spec.pixel_pitches_um:
+            # one margin per pitch (flat targets are rendered once per pitch): wide enough for the slowest lens
+            margin = max(sopt.margin_px(pitch, N, scene.grid.edges_nm[-1], max(spec.misregistrations_px))
+                         for N in spec.f_numbers)
+            for N in spec.f_numbers:
+                camera = case_camera(scene, spec, pitch, N)
+                case = Case(float(pitch), float(N), camera, *channel_columns(camera, scene.grid, spec.designs),
+                            margin)
+                for tname in spec.targets:
+                    run_target(run, case, tname)
+                    run.log(f"[{time.perf_counter() - t_start:6.1f} s] {pitch:g} µm, f/{N:g}, {tname}: "
+                            f"{len(run.designs)} designs scored")
+                    targets.update(1)
     return _result(run, time.perf_counter() - t_start)
 
 

@@ -104,7 +104,8 @@ def find_contents(directory: Path) -> Contents:
             if isinstance(results, dict):
                 c.parameters = results.get("parameters") or c.parameters
     c.kind = _kind_of(d, results if isinstance(results, dict) else None)
-    if not (c.cases or c.figures or c.markdown or c.json_files or c.tables):
-        raise SpectracamError(f"directory = {str(d)!r}: holds nothing spectracam wrote (no EXR, figure, report or "
+    # figures and tables alone (any PNG or CSV) are not enough: spectracam's EXR files, reports or results
+    if not (c.cases or c.markdown or c.json_files or any(t.suffix == ".parquet" for t in c.tables)):
+        raise SpectracamError(f"directory = {str(d)!r}: holds nothing spectracam wrote (no spectracam EXR, report or "
                               "results file)")
     return c

@@ -290,7 +290,7 @@ def write_page(directory: Path, log=None) -> Path:
         try:
             cases.append(load_case(name, files.get("radiance"), files.get("raw"), files.get("rendered"), share))
         except SpectracamError as e:
-            raise SpectracamError(f"{name}: {e}") from None
+            raise SpectracamError(f"case {name}: {e}" if name != "." else str(e)) from None
     page = build_page(c, cases)
     out = atomic_write(Path(directory) / "index.html", page.encode())
     if log:
