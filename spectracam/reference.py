@@ -59,6 +59,11 @@ class ChartReference:
         trials score the same scene many times)."""
         return _reference(scene.chart, scene.illuminant, scene.grid, scene.image.width, scene.image.height)
 
+    def lit_by(self, illuminant: IlluminantSpec) -> "ChartReference":
+        """The same chart, grid and image under another light (memoised as :meth:`of`): the DNG's
+        calibrations under CIE A and D65."""
+        return _reference(self.chart, illuminant, self.grid, self.width_px, self.height_px)
+
     @property
     def white_box(self) -> tuple[slice, slice]:
         """The white patch's pixels: where exposure is metered (paper 4.5)."""

@@ -177,11 +177,9 @@ def calibration_reference(reference, name: str):
     """The chart reference of the same chart, wavelength grid, image and level under the CIE illuminant ``name``
     (a key of colour-science's ``SDS_ILLUMINANTS``: "A", "D65"); memoised, as :meth:`ChartReference.of` is."""
     from ..illuminant import IlluminantSpec
-    from ..reference import _reference
 
-    light = IlluminantSpec(kind="cie", temperature_K=None, name=name,
-                           white_luminance_cd_m2=reference.illuminant.white_luminance_cd_m2)
-    return _reference(reference.chart, light, reference.grid, reference.width_px, reference.height_px)
+    return reference.lit_by(IlluminantSpec(kind="cie", temperature_K=None, name=name,
+                                           white_luminance_cd_m2=reference.illuminant.white_luminance_cd_m2))
 
 
 def camera_patches(raw: RawCapture, reference) -> np.ndarray:
