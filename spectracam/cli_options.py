@@ -58,21 +58,11 @@ def progress_log(quiet: bool):
 _SHIPPED_ONLY = {"experiment file": ("paper",), "design file": ("design",)}
 
 
-def shipped_dir() -> Path | None:
-    """The directory of the shipped scene, sweep, experiment and design files: the package's
-    ``spectracam/scenes`` (in a wheel), else the checkout's ``scenes/``."""
-    from importlib.resources import files
-
-    d = files("spectracam") / "scenes"
-    if d.is_dir():
-        return Path(str(d))
-    here = Path(__file__).resolve().parent.parent / "scenes"
-    return here if here.is_dir() else None
-
-
 def shipped_files(what: str) -> dict[str, Path]:
     """``name → path`` of the shipped files an argument of kind ``what`` may name (``"scene file"``,
     ``"sweep file"``, ``"experiment file"``, ``"design file"``); a sweep's name is ``sweeps/NAME``."""
+    from .scene import shipped_dir
+
     root = shipped_dir()
     if root is None:
         return {}

@@ -292,14 +292,21 @@ def load_camera_config(path: str | Path, base: CameraSpec | None = None) -> Came
     return CameraSpec.from_dict(read_toml(path, "config file"), source=str(path), base=base)
 
 
-def shipped_scene_file(name: str) -> Path:
-    """A scene file shipped with spectracam (``spectracam/scenes/NAME``, or the checkout's ``scenes/``)."""
+def shipped_dir() -> Path | None:
+    """The directory of the shipped scene, sweep, experiment and design files: the package's
+    ``spectracam/scenes`` (in a wheel), else the checkout's ``scenes/``."""
     from importlib.resources import files
 
-    shipped = files("spectracam") / "scenes" / name
-    if shipped.is_file():
-        return Path(str(shipped))
-    here = Path(__file__).resolve().parent.parent / "scenes" / name
-    if not here.is_file():
+    d = files("spectracam") / "scenes"
+    if d.is_dir():
+        return Path(str(d))
+    here = Path(__file__).resolve().parent.parent / "scenes"
+    return here if here.is_dir() else None
+
+
+def shipped_scene_file(name: str) -> Path:
+    """A scene file shipped with spectracam (``spectracam/scenes/NAME``, or the checkout's ``scenes/``)."""
+    root = shipped_dir()
+    if root is None or not (root / name).is_file():
         raise ConfigError("scene", name, "not shipped with this installation")
-    return here
+    return root / name
