@@ -36,18 +36,9 @@ def progress_log(quiet: bool):
     goes above the bar instead of through it."""
     if quiet:
         return lambda msg: None
+    from .progress import note
 
-    def log(msg: str) -> None:
-        import sys
-
-        tqdm = sys.modules.get("tqdm")
-        if tqdm is not None and getattr(tqdm.tqdm, "_instances", None):  # a bar is drawn (spectracam.progress)
-            from .progress import note
-
-            note(msg)
-        else:
-            click.echo(msg, err=True)
-    return log
+    return note
 
 
 # ------------------------------------------------------------------------------------------------

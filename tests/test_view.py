@@ -248,10 +248,10 @@ def test_spatial_and_motion_pages(outputs, browser, name, figures):
     pixels, names = read_oiio(case)
     rgb = pixels[last["y"], last["x"], [names.index(c) for c in "RGB"]]
     from spectracam.color import display_rgb_to_xyz
+    from spectracam.io.exr import read_exr_header
     from spectracam.metrics import xyz_to_lab
 
-    display = json.loads(__import__("spectracam.io.exr", fromlist=["read_exr"]).read_exr(case)[1]
-                         ["spectracamParameters"]).get("processing", {}).get("display", "crt")
+    display = json.loads(read_exr_header(case)["spectracamParameters"]).get("processing", {}).get("display", "crt")
     M = display_rgb_to_xyz(display)
     assert last["rendered_lab"] == pytest.approx(xyz_to_lab(rgb @ M.T, M.sum(axis=1)).tolist(), abs=1e-3)
     page = (d / "index.html").read_text()

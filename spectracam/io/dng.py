@@ -79,21 +79,10 @@ readers that interpolate between the calibrations, as the DNG SDK does):
   LibRaw's within 0.02.  It refused ("Error loading file") the CFA DNGs of 160×120, 200×150, 240×180, 256×120
   and 320×64 px and loaded 255×240, 256×192 and larger; LinearRaw of 160×120 loads.
 
-What no file can change, and the tool shows beside each development (the camera's own noise-free rendering:
-its camera → XYZ fit under the scene's light, then Bradford to D65): the block filters render the chart's
-slightly yellow white 3.1 b* yellower at 6500 K (darktable shows it; LibRaw and RawTherapee clip the white,
-which is metered to 95 % of the well, at their output's full scale); and the default 8-bit, one-exposure CFA's
-blue holds a few DN in the dark greys at 3000 K, so the flooring ADC's half code and the developers' handling of
-noise move them by up to 3.0 b* (darktable, grey 23) and 4.8 b* (LibRaw, the black: its clip of negative
-noise; 2.4 and 4.4 with the old single matrix).
-
-What the standard illuminants cost: all three developers convert with the D65 matrix after a von Kries step in
-camera space, whatever the light, where the old single matrix (fitted under the scene's light, read as if it
-were D65) suited the scene.  At 3000 K LibRaw and RawTherapee now develop the chart's 18 chromatic patches at
-mean ΔE*ab 12.8–12.9 (max 26.5–27.0) instead of 8.8–9.0 (max 23.0–23.6) (cfa/single, prism/optimal; LibRaw's
-fsc/optimal too); at 6500 K at 7.54–7.64 as before (7.58–7.66); LibRaw's closed form (noise-free prism/optimal)
-gives 12.7 against 9.7 at 3000 K, 10.2 against 8.5 at 4000 K, 8.4 against 8.2 at 5000 K.  The greys do not move.
-darktable gained: 12.8–12.9 at 3000 K and 7.55 at 6500 K where its fallback matrix gave 15.1–18.2.
+What no file can change (the camera's own colour error on the chart's white, the developers' clip of
+negative noise on a CFA's weak channel) and what the standard illuminants cost (all three developers convert
+with the D65 matrix whatever the light) are measured by ``tools/dng_developers.py``; the figures are in the
+README ("Raw developers").
 
 ``ForwardMatrix`` is parsed but not used in LibRaw's processing, and darktable's matrix path does not read it,
 so none is written.  LibRaw reads ``BlackLevel`` as an integer (a fractional one is truncated); the pedestal

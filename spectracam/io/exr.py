@@ -93,6 +93,17 @@ def read_exr(path: str | Path) -> tuple[dict[str, np.ndarray], dict]:
     return channels, header
 
 
+def read_exr_header(path: str | Path) -> dict:
+    """The header attributes of a single-part EXR file, without its pixels (``dataWindow``: ((x0, y0), (x1, y1)))."""
+    import OpenEXR
+
+    try:
+        with _library_output_held():
+            return dict(OpenEXR.File(str(path), header_only=True).header())
+    except Exception as e:  # as read_exr: one line
+        raise SpectracamError(f"file = {str(path)!r}: not a readable OpenEXR file ({str(e).splitlines()[0]})") from None
+
+
 @contextlib.contextmanager
 def _library_output_held():
     """Hold what the OpenEXR C library prints on file descriptors 1 and 2 while a file is read: a

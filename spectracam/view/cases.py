@@ -62,10 +62,11 @@ def _stride(width: int, height: int, bands: int, share: float = 1.0) -> int:
 
 
 def srgb8(linear: np.ndarray) -> np.ndarray:
-    """IEC 61966-2-1 sRGB encoding of linear RGB in [0, 1] (clipped), uint8."""
+    """8-bit sRGB of linear RGB (clipped to [0, 1]; NaN as 0), colour-science's sRGB encoding, as rendered.png."""
+    import colour
+
     x = np.clip(np.nan_to_num(linear, nan=0.0), 0.0, 1.0)
-    v = np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
-    return np.round(255 * v).astype(np.uint8)
+    return (np.clip(colour.cctf_encoding(x, "sRGB"), 0, 1) * 255 + 0.5).astype(np.uint8)
 
 
 def rgba(rgb8: np.ndarray) -> np.ndarray:
@@ -192,7 +193,7 @@ def _chart_lab(case: Case, scene) -> np.ndarray | None:
 def load_case(name: str, radiance: Path | None, raw: Path | None, rendered: Path | None, share: float = 1.0) -> Case:
     """A case from its files (any of them may be missing); ``share``: its part of the page's budget
     (:func:`_stride`)."""
-    from ..io.exr import read_exr, read_radiance_exr
+    from ..io.exr import read_exr_header, read_radiance_exr
 
     cube = read_radiance_exr(radiance)[0] if radiance is not None else None
     if cube is not None:
@@ -201,8 +202,8 @@ def load_case(name: str, radiance: Path | None, raw: Path | None, rendered: Path
         first = raw if raw is not None else rendered
         if first is None:
             raise SpectracamError(f"case {name!r}: no file")
-        height, width = next(iter(read_exr(first)[0].values())).shape[-2:]
-        bands = 0
+        (x0, y0), (x1, y1) = read_exr_header(first)["dataWindow"]  # the size only: the pixels are read once, below
+        height, width, bands = int(y1 - y0 + 1), int(x1 - x0 + 1), 0
     case = Case(name=name, width=int(width), height=int(height), stride=_stride(width, height, bands, share))
     scene, grid = (None, None)
     if cube is not None:

@@ -51,11 +51,12 @@ def _kind_of(d: Path, results: dict | None) -> str:
 
 
 def _is_rendering(path: Path) -> bool:
-    from ..io.exr import read_exr
+    """Is ``path`` an EXR spectracam wrote (its header says, the pixels are not read)?"""
+    from ..io.exr import read_exr_header
 
     try:
-        return read_exr(path)[1].get("spectracamKind") in ("rendered", "raw", "radiance")
-    except Exception:  # noqa: BLE001 - an unreadable or foreign EXR is simply not a case
+        return read_exr_header(path).get("spectracamKind") in ("rendered", "raw", "radiance")
+    except SpectracamError:  # an unreadable or foreign EXR is simply not a case
         return False
 
 

@@ -19,6 +19,7 @@ import numpy as np
 
 from .. import __version__
 from ..errors import SpectracamError
+from ..io.report import DELTA_E_VMAX  # the ΔE*ab colour scale of the scores' delta_e.png
 from .cases import CHANNEL_COLOURS, Case, load_case
 from .contents import Contents, find_contents
 
@@ -28,8 +29,6 @@ EMBED_BYTES = 40_000_000
 TABLE_ROWS = 200
 #: Characters of a JSON file shown.
 JSON_CHARS = 200_000
-#: Upper end of the ΔE*ab colour scale (the scores' delta_e.png use the same).
-DELTA_E_VMAX = 20.0
 IMAGE_ROLES = (("scene", "scene (sRGB preview of the radiance)"), ("raw", "raw digital numbers (channel colours)"),
                ("rendered", "rendered (display → sRGB)"), ("error", "ΔE*ab, rendered against the scene"))
 
@@ -52,16 +51,19 @@ def _hex(rgb) -> str:
     return "#%02x%02x%02x" % tuple(int(round(255 * v)) for v in rgb)
 
 
+def curve_colours(case: Case) -> dict:
+    """The colour of each responsivity curve: its channel's, black for QE × IR cut."""
+    return {**{c: _hex(CHANNEL_COLOURS.get(c, (0.45, 0.45, 0.45))) for c in case.channels}, "QE × IR cut": "#000000"}
+
+
 def case_json(case: Case) -> dict:
     """The per-pixel data the probe reads (see page.js)."""
     rows, cols = case.images[next(iter(case.images))].shape[:2] if case.images else (0, 0)
-    colours = {c: _hex(CHANNEL_COLOURS.get(c, (0.45, 0.45, 0.45))) for c in case.channels}
-    colours["QE × IR cut"] = "#000000"
     return {"name": case.name, "design": case.design, "width": case.width, "height": case.height,
             "stride": case.stride, "rows": int(rows), "cols": int(cols),
             "bands": 0 if case.spectra is None else int(case.spectra.shape[-1]),
             "wavelengths_nm": [float(w) for w in case.wavelengths_nm], "channels": list(case.channels),
-            "colours": colours, "responsivities": case.responsivities, "notes": case.notes,
+            "colours": curve_colours(case), "responsivities": case.responsivities, "notes": case.notes,
             "spectra": _b64(case.spectra), "dn": _b64(case.dn), "scene_lab": _b64(case.scene_lab),
             "rendered_lab": _b64(case.rendered_lab), "error": _b64(case.images.get("error"))}
 
@@ -122,7 +124,7 @@ def interactive(cases: list[Case]):
     spectrum.add_layout(LinearAxis(y_range_name="resp", axis_label="R_k(λ) = filter × QE × IR cut (e⁻/photon)"),
                         "right")
     names = list(first.responsivities)
-    colour_of = case_json(first)["colours"]
+    colour_of = curve_colours(first)
     resp = ColumnDataSource({"xs": [wl] * len(names), "ys": [first.responsivities[n] for n in names],
                              "color": [colour_of.get(n, "#444444") for n in names], "label": names},
                             name="responsivities")
@@ -203,7 +205,7 @@ def table_html(path: Path) -> str:
 
 
 def _figures_html(c: Contents) -> str:
-    parts, embedded, folder = [], 0, None
+    parts, embedded, folder, linked = [], 0, None, False
     for p in c.figures:
         rel = p.relative_to(c.directory)
         if rel.parent != folder:
@@ -214,11 +216,10 @@ def _figures_html(c: Contents) -> str:
             embedded += size
             src = _data_uri(p)
         else:
-            src = html.escape(str(rel))
+            src, linked = html.escape(str(rel)), True
         parts.append(f'<figure><img loading="lazy" src="{src}" alt="{html.escape(str(rel))}">'
                      f"<figcaption>{html.escape(str(rel))}</figcaption></figure>")
-    if embedded >= EMBED_BYTES or any(not s.startswith("<figure><img loading=\"lazy\" src=\"data:") for s in parts
-                                      if s.startswith("<figure>")):
+    if linked:
         parts.insert(0, f"<p class=note>figures past {EMBED_BYTES // 1_000_000} MB are linked beside the page, "
                         "not embedded</p>")
     if c.more_figures:
