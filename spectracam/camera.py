@@ -57,8 +57,23 @@ class CaptureSpec(Spec):
     #: The ``split`` exposure scheme's shares: each channel's exposure as a fraction (0, 1] of the single
     #: exposure's time, capped at its saturation (a designed split: ``spectracam design``).
     exposure_split: tuple = ()
+    #: How the exposure is metered (issue 33; spectracam.metering.METERING_METHODS): "white_patch" (the chart's
+    #: white patch: the paper's reading, an oracle), "average", "percentile", or "auto" (the camera's:
+    #: processing.camera).
+    metering: str = "auto"
+    #: ``average`` metering: the reflectance the image's mean is taken to be (ISO 2720's 18 % grey).
+    metering_target: float = 0.18
+    #: ``percentile`` metering: the percentile of each channel taken as the white (99: 1 % of the pixels may
+    #: exceed white_fill, so a few specular highlights do not darken the picture).
+    metering_percentile: float = 99.0
 
     def validate(self) -> None:
+        from .metering import METERING_METHODS
+
+        if self.metering != "auto":
+            self.choice("metering", METERING_METHODS)
+        self.number("metering_target", 0.01, 1.0)
+        self.number("metering_percentile", 50.0, 100.0)
         self.choice("architecture", ARCHITECTURES)
         self.choice("exposure", EXPOSURE_SCHEMES)
         self.choice("cfa_pattern", CFA_PATTERNS)

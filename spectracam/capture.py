@@ -53,11 +53,17 @@ def capture(cube, camera: CameraSpec, seed: int, metering_box: tuple[slice, slic
     """Capture a :class:`~spectracam.render.RadianceCube` with ``camera``; exposure is metered on
     the mean rates of the pixels in ``metering_box`` (the white patch, paper 4.5) or, for any other
     white (:mod:`spectracam.metering`), on the rates of its radiance ``white_radiance`` ``(B,)``,
-    recorded as ``metering``; ``seed`` fixes every random draw (fixed pattern and temporal noise)."""
+    recorded as ``metering``; a camera that meters itself (``capture.metering`` average or percentile,
+    :mod:`spectracam.metering`) ignores both and meters a preview of the cube; ``seed`` fixes every random draw (fixed pattern and temporal noise)."""
     arch = camera.architecture()
     weights = band_weights(camera, cube.grid)
     rates = SpectralRates(cube.radiance, weights)  # computed in the sensor's pass
-    if white_radiance is not None:
+    if camera.capture.metering not in ("auto", "white_patch"):   # the camera meters its own preview (issue 33)
+        from .metering import metered_white_rates, metering_record
+
+        white_rate = metered_white_rates(cube.radiance, weights.astype(np.float64), camera.capture)
+        metering = metering_record(camera.capture)
+    elif white_radiance is not None:
         white_rate = np.asarray(white_radiance, np.float64) @ weights.astype(np.float64)
     else:
         white_rate = rates.mean(*metering_box)

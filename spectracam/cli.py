@@ -1,6 +1,8 @@
 """The ``spectracam`` command line: arguments → the same loaders as Python → the library."""
 from __future__ import annotations
 
+import dataclasses
+
 import sys
 import time
 from pathlib import Path
@@ -293,11 +295,12 @@ def _write_display(out_dir: Path, raw, scene) -> list[Path]:
             write_png(out_dir / "rendered.png", srgb_preview(rgb, scene.processing.display))]
 
 
-def _score_and_write(raw, scene, out_dir: Path, log):
+def _score_and_write(raw, scene, out_dir: Path, log, cube=None):
     from .io.report import write_score_outputs
-    from .pipeline import score
+    from .pipeline import both_ways, score
 
     result = score(raw, scene)
+    result = dataclasses.replace(result, both_ways=both_ways(raw, scene, cube, result))   # report.json's two blocks
     if scene.target.textured:
         from .io.report import write_target_outputs
 
@@ -307,6 +310,7 @@ def _score_and_write(raw, scene, out_dir: Path, log):
         log(f"{raw.design}: {h['kind']} of {h['library']} ({what}), {h['pixels']} pixels, {h['samples']} samples: "
             f"ΔE*ab per pixel mean {h['delta_e_mean']:.2f}, 95th percentile {h['delta_e_p95']:.2f}; S-CIELAB mean "
             f"{h['s_cielab_mean']:.2f} (the conversion on the chart it was fitted on: {t['delta_e_mean']:.2f})")
+        _log_both_ways(result.both_ways, log)
         log("wrote " + ", ".join(map(str, paths)))
         return
     paths = write_score_outputs(out_dir, result)
@@ -314,12 +318,21 @@ def _score_and_write(raw, scene, out_dir: Path, log):
     log(f"{raw.design}: mean ΔE*ab {c.delta_e_mean:.2f} per pixel, {c.delta_e_of_mean:.2f} of patch means "
         f"({c.delta_e_conversion:.2f} from the conversion alone); SNR "
         + ("∞ (noise-free)" if c.snr_combined_db is None else f"{c.snr_combined_db:.1f} dB"))
+    _log_both_ways(result.both_ways, log)
     if result.held_out is not None:
         h = result.held_out
         log(f"conversion on colours it was not fitted on ({h['library']}, {h['samples']} samples): mean ΔE "
             f"{h['delta_e_mean']:.2f}, 95th percentile {h['delta_e_p95']:.2f} (on the chart it was fitted on: "
             f"{result.training['delta_e_mean']:.2f}, {result.training['delta_e_p95']:.2f})")
     log("wrote " + ", ".join(map(str, paths)))
+
+
+def _log_both_ways(bw: dict, log) -> None:
+    o, d = bw["oracle"], bw["developed"]
+    log(f"oracle camera (told the light) / developed camera (finds its own white): mean ΔE*ab "
+        f"{o['delta_e_mean']:.2f} / {d['delta_e_mean']:.2f}, CIEDE2000 {o['delta_e2000_mean']:.2f} / "
+        f"{d['delta_e2000_mean']:.2f}; the developed camera's white is {d['awb_recovery_deg']:.2f}° off "
+        f"(metering: {bw['metering']})")
 
 
 @main.command("score", short_help="Render a raw capture on a display and score it.")
@@ -383,7 +396,7 @@ def simulate_cmd(scene_file, out_dir, renderer, arch, exposure, config_file, see
     write_radiance_exr(out_dir / "radiance.exr", cube)
     raw = capture(cube, seed=seed, scene=scene)
     _write_capture(out_dir, raw, scene)
-    _score_and_write(raw, scene, out_dir, log)
+    _score_and_write(raw, scene, out_dir, log, cube)
 
 
 @main.command("paper", short_help="Reproduce the paper's Figures 4, 5a, 5b and 6.")

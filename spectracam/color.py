@@ -48,9 +48,41 @@ class ProcessingSpec(Spec):
     #: spectracam.reflectances, "file:PATH" (a CSV of spectra), or "none".  CIE 224:2017's 99 samples
     #: span natural and manufactured colours evenly and ship with colour-science.
     held_out: str = "cfi99"
+    #: The whole camera (issue 33; spectracam.processing.CAMERAS): "oracle" (told the light: the paper's reading)
+    #: or "developed" (percentile metering, a trained white-balance estimator, the DNG's dual-illuminant
+    #: calibration).  Each step below is overridable; "auto" takes the camera's.
+    camera: str = "oracle"
+    #: How the light's neutral is found (spectracam.processing.white_balance): oracle, grey_world, white_patch,
+    #: shades_of_grey, grey_edge, corrected_moments, or "auto".
+    white_balance: str = "auto"
+    #: Minkowski p of shades_of_grey and grey_edge (6: Finlayson & Trezzi 2004's best on their set).
+    white_balance_p: float = 6.0
+    #: grey_edge's Gaussian, pixels (van de Weijer et al. 2007 use σ = 1–2 on full-resolution images).
+    white_balance_sigma_px: float = 1.0
+    #: The reflectance library corrected_moments is trained on (never the scored scene's colours: those are
+    #: removed).  rawtoaces' 190 (skin, foliage, paints and more) ships with colour-science.
+    white_balance_training: str = "rawtoaces190"
+    #: How camera space becomes XYZ given the neutral (spectracam.processing.calibration): scene_light,
+    #: dual_illuminant, or "auto".
+    calibration: str = "auto"
 
     def validate(self) -> None:
+        from .processing import CALIBRATIONS, CAMERAS, WHITE_BALANCE_METHODS
         from .reflectances import LIBRARIES
+
+        self.choice("camera", tuple(CAMERAS))
+        for name, registry in (("white_balance", WHITE_BALANCE_METHODS), ("calibration", CALIBRATIONS)):
+            if getattr(self, name) != "auto":
+                self.choice(name, registry)
+        self.number("white_balance_p", 1.0, 64.0)
+        self.number("white_balance_sigma_px", 0.3, 16.0)
+        lib = self.white_balance_training
+        if not isinstance(lib, str) or not (lib in LIBRARIES or (lib.startswith("file:") and len(lib) > 5)):
+            raise self.error("white_balance_training", "must be one of " + ", ".join(LIBRARIES) + " or 'file:PATH'")
+        if self.white_balance_method == "corrected_moments":
+            from .reflectances import check_available
+
+            check_available(lib, "processing.white_balance_training")
 
         self.choice("demosaic", DEMOSAIC_METHODS)
         self.choice("display", DISPLAYS)
@@ -65,6 +97,26 @@ class ProcessingSpec(Spec):
 
         if self.held_out != "none":
             check_available(self.held_out, "processing.held_out")   # before any work: a missing file or luxpy
+
+
+    @property
+    def white_balance_method(self) -> str:
+        """``white_balance`` with ``auto`` resolved by ``camera``."""
+        from .processing import CAMERAS
+
+        return CAMERAS[self.camera]["white_balance"] if self.white_balance == "auto" else self.white_balance
+
+    @property
+    def calibration_method(self) -> str:
+        """``calibration`` with ``auto`` resolved by ``camera``."""
+        from .processing import CAMERAS
+
+        return CAMERAS[self.camera]["calibration"] if self.calibration == "auto" else self.calibration
+
+    @property
+    def told_the_light(self) -> bool:
+        """The paper's chain (oracle white, conversion fitted under the scene's light): computed as it always was."""
+        return self.white_balance_method == "oracle" and self.calibration_method == "scene_light"
 
 
 @DISPLAYS.register("srgb")

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import ConfigError, SpectracamError
+from .registry import Registry
 from .spectra import cmf_band_weights
 
 #: u′v′ distance from the illuminant's white within which a pixel counts as neutral: the
@@ -124,3 +125,54 @@ def metered_radiance(cube, white: WhiteSpec, scene=None) -> np.ndarray:
     chosen = neutral & (xyz[..., 1] >= np.quantile(Y, 1 - BRIGHTEST_SHARE))
     return r[chosen].mean(axis=0, dtype=np.float64)
 
+
+
+# ---- The camera's own metering (issue 33): ``capture.metering`` -------------------------------------------------
+#: Metering methods: name → function ``(preview rates (h, w, N) e⁻/s, capture spec) → implied white (N,) e⁻/s``: the
+#: rates the camera takes for a perfect white diffuser, which the exposure scheme (single/optimal/balanced/split)
+#: then fills to ``capture.white_fill`` of the well.  ``white_patch`` (the chart's white patch, the paper's reading,
+#: an oracle: the camera could not identify it) is done by the pipeline from the chart reference, not from pixels.
+METERING_METHODS: Registry = Registry("capture.metering", "metering method")
+#: The camera meters on a preview: every :data:`METERING_STRIDE` th pixel along each axis (1/16 of the pixels), as a
+#: camera's metering reads a reduced frame.
+METERING_STRIDE = 4
+
+
+@METERING_METHODS.register("white_patch")
+def _white_patch_metering(preview, spec):
+    """The chart's white patch (the pipeline passes its box; the oracle)."""
+    raise SpectracamError("capture.metering = 'white_patch' is metered on the chart reference's white patch, "
+                          "not on pixels")
+
+
+@METERING_METHODS.register("average")
+def _average_metering(preview, spec):
+    """Average metering: the image's mean is taken as a grey of reflectance ``capture.metering_target`` (ISO 2720's
+    18 % grey by default), so the implied white is ``mean/target`` per channel."""
+    return preview.reshape(-1, preview.shape[-1]).mean(axis=0, dtype=np.float64) / spec.metering_target
+
+
+@METERING_METHODS.register("percentile")
+def _percentile_metering(preview, spec):
+    """Highlight-protecting metering: each channel's ``capture.metering_percentile`` th percentile is taken as the
+    white (so at most 100 − p % of the pixels exceed ``white_fill`` of the well in the channel that ends the
+    exposure, the brightest)."""
+    return np.percentile(preview.reshape(-1, preview.shape[-1]), spec.metering_percentile, axis=0).astype(np.float64)
+
+
+def metered_white_rates(radiance: np.ndarray, weights: np.ndarray, spec) -> np.ndarray:
+    """``(N,)`` the implied white's rates by ``spec.metering`` on the preview of a radiance cube ``(H, W, B)``
+    through the camera's band weights ``(B, N)``."""
+    preview = np.ascontiguousarray(radiance[::METERING_STRIDE, ::METERING_STRIDE])
+    rates = preview.reshape(-1, preview.shape[-1]) @ weights
+    return METERING_METHODS[spec.metering](rates.reshape(*preview.shape[:2], -1), spec)
+
+
+def metering_record(spec) -> dict:
+    """What a capture records of the camera's own metering."""
+    out = {"kind": "camera", "method": spec.metering, "preview_stride": METERING_STRIDE}
+    if spec.metering == "average":
+        out["target"] = spec.metering_target
+    if spec.metering == "percentile":
+        out["percentile"] = spec.metering_percentile
+    return out

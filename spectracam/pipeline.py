@@ -59,6 +59,10 @@ def capture(cube: RadianceCube, camera: CameraSpec | None = None, seed: int | No
         scene = scene or scene_of(cube)
         check_cube_matches(cube, scene)
     camera = camera or scene.camera
+    if not foreign:   # capture.metering "auto": the metering of processing.camera (spectracam.processing)
+        from .processing import metered_camera
+
+        camera = metered_camera(camera, scene.processing)
     if sensor is not None:
         camera = camera.replace(sensor=sensor)
     if design is not None:
@@ -252,3 +256,51 @@ def simulate(scene: Scene, renderer: str = "mitsuba", seed: int | None = None):
     cube = render(scene, renderer)
     raw = capture(cube, seed=seed, scene=scene)
     return cube, raw, score(raw, scene)
+
+
+#: What every command reports for each camera, oracle and developed, side by side (issue 33).
+BOTH_WAYS_FIELDS = ("delta_e_mean", "delta_e_p95", "delta_e2000_mean", "held_out_delta_e", "held_out_delta_e_p95",
+                    "awb_recovery_deg", "awb_reproduction_deg", "metered_exposure_ms")
+
+
+def score_row(result) -> dict:
+    """The :data:`BOTH_WAYS_FIELDS` of a :class:`ChartScore` or a textured target's score (whose per-pixel scores are
+    on colours the conversion was not fitted on, and which adds its S-CIELAB mean)."""
+    if isinstance(result, ChartScore):
+        c, held = result.summary, result.held_out or {}
+        return {"delta_e_mean": c.delta_e_mean, "delta_e_p95": c.delta_e_p95, "delta_e2000_mean": c.delta_e2000_mean,
+                "held_out_delta_e": held.get("delta_e_mean"), "held_out_delta_e_p95": held.get("delta_e_p95"),
+                "awb_recovery_deg": c.awb_recovery_deg, "awb_reproduction_deg": c.awb_reproduction_deg,
+                "metered_exposure_ms": c.capture_time_ms}
+    h = result.held_out
+    return {"delta_e_mean": h["delta_e_mean"], "delta_e_p95": h["delta_e_p95"],
+            "delta_e2000_mean": h["delta_e2000_mean"], "held_out_delta_e": h.get("sample_delta_e_conversion_mean"),
+            "held_out_delta_e_p95": h.get("sample_delta_e_conversion_p95"), "awb_recovery_deg": h["awb_recovery_deg"],
+            "awb_reproduction_deg": h["awb_reproduction_deg"], "metered_exposure_ms": result.capture_time_ms,
+            "s_cielab_mean": h["s_cielab_mean"]}
+
+
+def camera_processing(processing: ProcessingSpec, camera: str) -> ProcessingSpec:
+    """``processing`` as the named camera (spectracam.processing.CAMERAS) runs it: the scene's own chain when it is
+    that camera (its overridden steps kept), else that camera's steps."""
+    if processing.camera == camera:
+        return processing
+    return processing.replace(camera=camera, white_balance="auto", calibration="auto")
+
+
+def both_ways(raw: RawCapture, scene: Scene, cube: RadianceCube | None = None, result=None) -> dict:
+    """``{"oracle": row, "developed": row}`` (:func:`score_row`): the capture scored by the oracle camera and by the
+    developed one.  With the ``cube``, each camera captures it with its own metering (same seed); without it (a raw
+    file), both develop the same capture, metered as it was.  ``result``: the score of ``raw`` under the scene's own
+    processing, reused for its camera's row."""
+    out = {}
+    for name in ("oracle", "developed"):
+        processing = camera_processing(scene.processing, name)
+        if result is not None and processing == scene.processing:
+            out[name] = score_row(result)
+            continue
+        s = scene.replace(processing=processing)
+        r = capture(cube, seed=raw.seed, scene=s) if cube is not None else raw
+        out[name] = score_row(score(r, s, processing))
+    out["metering"] = "each camera's own (captured anew)" if cube is not None else "as the capture was metered"
+    return out

@@ -85,6 +85,14 @@ class ChartSummary:
     snr_undefined_patches: int = 0
     #: The patches' mean rendered-luminance SNR (:attr:`PatchScore.snr_rendered_db`).
     snr_rendered_db: float | None = None
+    #: 95th percentile of the per-pixel ΔE (processing.delta_e) over every patch's pixels.
+    delta_e_p95: float | None = None
+    #: The chart average of each patch's mean per-pixel CIEDE2000 (beside ΔE*ab whatever processing.delta_e is).
+    delta_e2000_mean: float | None = None
+    #: The white balance's recovery and reproduction angular errors, degrees (0 for the oracle;
+    #: spectracam.processing.white_balance).
+    awb_recovery_deg: float | None = None
+    awb_reproduction_deg: float | None = None
 
 
 #: The metrics a sweep can record: every field of :class:`ChartSummary`.
@@ -104,11 +112,19 @@ class ChartScore:
     training: dict | None = None
     #: The same on colours it was not fitted on (processing.held_out), or None.
     held_out: dict | None = None
+    #: The neutral the camera used, the true one and the angular errors (spectracam.processing.develop).
+    white_balance: dict | None = None
+    #: The oracle camera's and the developed camera's scores side by side (spectracam.pipeline.both_ways).
+    both_ways: dict | None = None
 
     def to_dict(self) -> dict:
         """The strict-JSON report (report.json)."""
         out = {"parameters": self.parameters, "patches": [dataclasses.asdict(p) for p in self.patches],
                "chart": dataclasses.asdict(self.summary)}
+        if self.white_balance is not None:
+            out["white_balance"] = self.white_balance
+        if self.both_ways is not None:
+            out["both_ways"] = self.both_ways
         if self.training is not None:
             out["training"] = self.training
         if self.held_out is not None:
@@ -198,11 +214,28 @@ def conversion_matrix(reference: ChartReference, camera, processing: ProcessingS
 
 
 def display_rgb(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec) -> tuple[np.ndarray, np.ndarray]:
-    """``(rendered (H, W, 3) linear display RGB, conversion matrix)``: demosaicked, exposure-normalised
-    rates through the conversion fitted on ``reference`` (which need not be the captured scene: a
-    spectral image from another tool is shown through the chart's conversion)."""
-    M = conversion_matrix(reference, raw.camera, processing)
+    """``(rendered (H, W, 3) linear display RGB, conversion matrix)`` (:func:`developed_rgb` without its white-balance
+    block)."""
+    rgb, M, _ = developed_rgb(raw, reference, processing)
+    return rgb, M
+
+
+def developed_rgb(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec,
+                  target_reference=None) -> tuple[np.ndarray, np.ndarray, dict]:
+    """``(rendered (H, W, 3) linear display RGB, conversion matrix, white-balance block)``: demosaicked,
+    exposure-normalised rates through the conversion — for the paper's camera (``processing.told_the_light``) the one
+    fitted on ``reference`` under its own light (which need not be the captured scene: a spectral image from another
+    tool is shown through the chart's conversion); for a camera that finds its own white, the matrix it develops from
+    this image (:func:`spectracam.processing.develop`)."""
+    from .processing import develop, oracle_block
+
     rgb = camera_rates(raw, processing)
+    if processing.told_the_light:
+        M = conversion_matrix(reference, raw.camera, processing)
+        block = oracle_block(reference, raw.camera, processing)
+    else:
+        dev = develop(rgb, raw, reference, processing, target_reference)
+        M, block = dev.matrix, dev.white_balance
     if rgb.shape[-1] == 3:   # in place, a band of rows at a time: no second full-size image
         for i in range(0, rgb.shape[0], 256):
             rgb[i:i + 256] = rgb[i:i + 256] @ M
@@ -210,7 +243,7 @@ def display_rgb(raw: RawCapture, reference: ChartReference, processing: Processi
         rgb = np.concatenate([rgb[i:i + 256] @ M for i in range(0, rgb.shape[0], 256)])
     if processing.gamut_clip:
         np.clip(rgb, 0.0, 1.0, out=rgb)
-    return rgb, M
+    return rgb, M, block
 
 
 #: How far a chart capture's exposure times may lie from those its scene's white patch meters (the
@@ -292,7 +325,7 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
     chart_rates = reference.patch_rates(camera)
     M_disp = display_rgb_to_xyz(processing.display)
     display_white = M_disp.sum(axis=1)
-    rgb, M = display_rgb(raw, reference, processing)
+    rgb, M, wb = developed_rgb(raw, reference, processing)
     scene_lab = xyz_to_lab(reference.patch_xyz, reference.white_xyz)
     conversion_lab = xyz_to_lab(chart_rates @ M @ M_disp.T, display_white)
     against = scene_lab if delta_e_reference == "scene" else conversion_lab
@@ -306,10 +339,11 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
     times_s = np.asarray(raw.exposure_times_s, float)
     mean_labs = xyz_to_lab(np.stack([rgb[r, c].reshape(-1, 3).mean(axis=0) for r, c in boxes]) @ M_disp.T,
                            display_white)
-    patches = []
+    patches, de2000 = [], []
     for p, (r, c), lab_box in zip(range(len(boxes)), boxes, _box_labs(rgb, boxes, M_disp, display_white)):
         de = delta_e(lab_box, against[p], method)
         de_map[r, c] = de
+        de2000.append(float(np.mean(de if method == "ciede2000" else delta_e(lab_box, against[p], "ciede2000"))))
         with np.errstate(divide="ignore", invalid="ignore"):  # noise-free: infinite; mean ≤ 0: undefined (named)
             snr = snr_db(means[p], stds[p])
             combined = combine_snr_db(means[p], stds[p], processing.snr_combination)
@@ -334,7 +368,9 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
         capture_time_ms=1e3 * float(raw.capture_time_s),
         **{f"exposure_{k}_ms": float(times_ms[channels.index(k)]) if k in channels else None for k in "RGB"},
         snr_undefined_patches=int(sum(len(p.snr_undefined) for p in patches)),
-        snr_rendered_db=_mean_or_none([p.snr_rendered_db for p in patches]))
+        snr_rendered_db=_mean_or_none([p.snr_rendered_db for p in patches]),
+        delta_e_p95=float(np.nanpercentile(de_map, 95)), delta_e2000_mean=float(np.mean(de2000)),
+        awb_recovery_deg=wb["recovery_deg"], awb_reproduction_deg=wb["reproduction_deg"])
     parameters = {
         "scene": raw.scene, "camera": camera.to_dict(), "processing": processing.to_dict(), "seed": raw.seed,
         "delta_e_reference": delta_e_reference, "conversion_matrix": M.tolist(),
@@ -350,4 +386,4 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
         training = error_summary([p.delta_e_conversion for p in patches], "the chart (training: the conversion is "
                                  "fitted on it)")
         held_out = held_out_block(processing.held_out, reference.illuminant, reference.grid, camera, M, processing)
-    return ChartScore(summary, tuple(patches), parameters, rgb.astype(np.float32), de_map, training, held_out)
+    return ChartScore(summary, tuple(patches), parameters, rgb.astype(np.float32), de_map, training, held_out, wb)

@@ -32,7 +32,7 @@ from .heldout import conversion_errors
 from .heldout import summary as error_summary
 from .metrics import delta_e, xyz_to_lab
 from .reference import ChartReference, TargetReference, library_colours
-from .score import check_exposure_matches, check_raw, display_rgb
+from .score import check_exposure_matches, check_raw, developed_rgb
 
 #: Fewest interior pixels for a sample's mean colour to be scored.
 MIN_SAMPLE_PX = 4
@@ -67,9 +67,15 @@ class TargetScore:
     rendered_rgb: np.ndarray       # (H, W, 3) linear display RGB
     delta_e_map: np.ndarray        # (H, W), NaN on the surround
     scielab_map: np.ndarray        # (H, W), NaN on the surround
+    #: The neutral the camera used, the true one and the angular errors (spectracam.processing.develop).
+    white_balance: dict | None = None
+    #: The oracle camera's and the developed camera's scores side by side (spectracam.pipeline.both_ways).
+    both_ways: dict | None = None
 
     def to_dict(self) -> dict:
         return {"parameters": self.parameters, "training": self.training, "held_out": self.held_out,
+                **({"white_balance": self.white_balance} if self.white_balance is not None else {}),
+                **({"both_ways": self.both_ways} if self.both_ways is not None else {}),
                 "capture": {"capture_time_ms": self.capture_time_ms,
                             **{f"exposure_{k}_ms": t for k, t in zip(self.parameters.get("channels", "RGB"),
                                                                      self.exposure_ms)}},
@@ -113,12 +119,14 @@ def score_target(raw: RawCapture, chart: ChartReference, ref: TargetReference, t
     method = processing.delta_e
     M_disp = display_rgb_to_xyz(processing.display)
     display_white = M_disp.sum(axis=1)
-    rgb, M = display_rgb(raw, chart, processing)
+    rgb, M, wb = developed_rgb(raw, chart, processing, ref)
     rendered_xyz = rgb.astype(np.float64) @ M_disp.T
     truth_xyz = ref.pixel_mean(ref.xyz)
     labels = ref.pixel_labels()
     scored = labels != ref.surround
-    de_map = delta_e(xyz_to_lab(rendered_xyz, display_white), xyz_to_lab(truth_xyz, ref.white_xyz), method)
+    rendered_lab, truth_lab_px = xyz_to_lab(rendered_xyz, display_white), xyz_to_lab(truth_xyz, ref.white_xyz)
+    de_map = delta_e(rendered_lab, truth_lab_px, method)
+    de2000 = de_map if method == "ciede2000" else delta_e(rendered_lab[scored], truth_lab_px[scored], "ciede2000")
     to_display = adaptation_matrix(ref.white_xyz, display_white, processing.adaptation)
     spd = samples_per_degree(target.viewing_distance_m, target.display_pixel_pitch_mm * 1e-3)
     sc_map = scielab(rendered_xyz, truth_xyz @ to_display.T, display_white, spd, method)
@@ -159,6 +167,8 @@ def score_target(raw: RawCapture, chart: ChartReference, ref: TargetReference, t
                 "fitted_on_these": CHART_LIBRARIES.get(ref.library) == chart.chart.dataset,
                 **dict(zip(("delta_e_mean", "delta_e_p95", "delta_e_max"), _stats(de_px))),
                 **dict(zip(("s_cielab_mean", "s_cielab_p95", "s_cielab_max"), _stats(sc_px))),
+                "delta_e2000_mean": float(np.nanmean(de2000[scored] if method == "ciede2000" else de2000)),
+                "awb_recovery_deg": wb["recovery_deg"], "awb_reproduction_deg": wb["reproduction_deg"],
                 "samples_scored": len(samples)}
     for field in ("delta_e_of_mean", "delta_e_conversion"):
         if samples:
@@ -171,4 +181,4 @@ def score_target(raw: RawCapture, chart: ChartReference, ref: TargetReference, t
         parameters["channels"] = list(raw.layout.channels)
     times = tuple(float(1e3 * t) for t in raw.exposure_times_s)
     return TargetScore(parameters, training, held_out, tuple(samples), 1e3 * float(raw.capture_time_s), times,
-                       rgb.astype(np.float32), de_map, sc_map)
+                       rgb.astype(np.float32), de_map, sc_map, wb)

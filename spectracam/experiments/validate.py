@@ -16,6 +16,11 @@ metered on the white patch, no clipping); each patch's raw rates are the means o
   score on colours the conversion was not fitted on.
 * **ΔE*ab of the least-squares fit**: a 3×3 fitted on the same 24 patches and scored on them — a
   *training* score, shown beside it as the lower bound a linear conversion reaches.
+
+Beside these, the cameras' own measurements shipped by Debian packages, where installed
+(:mod:`spectracam.experiments.validate_wb`): the simulated neutral under the light of each firmware
+white-balance preset (darktable's ``wb_presets.json``) and RawTherapee's measured DCP profiles' matrices
+against spectracam's fits; skipped, with the reason, where the files are absent.
 """
 from __future__ import annotations
 
@@ -95,8 +100,10 @@ def validate_camera(name: str, renderer: str = "analytic") -> dict:
 
 def run_validate(renderer: str = "analytic") -> dict:
     """Every shipped camera with a published matrix, and the library as ``spectracam cameras`` lists it."""
-    rows = [validate_camera(n, renderer) for n in CAMERAS
-            if library_curves(n).matrix in PUBLISHED_MATRICES and _usable(n)]
+    from .validate_wb import run_validate_wb
+
+    names = [n for n in CAMERAS if library_curves(n).matrix in PUBLISHED_MATRICES and _usable(n)]
+    rows = [validate_camera(n, renderer) for n in names]
     return {"renderer": renderer, "illuminant": "CIE D65", "chart": validation_scene(CAMERAS[0]).chart.dataset,
             "definitions": {
                 "neutral": "raw R/G and B/G of the ColorChecker's white patch (noise-free capture) against "
@@ -105,7 +112,9 @@ def run_validate(renderer: str = "analytic") -> dict:
                                      "scene's XYZ, CIELAB relative to D65; M was not fitted on these patches",
                 "delta_e_fit": "CIE 1976 ΔE*ab of a 3×3 least-squares fit raw→XYZ on the same 24 patches (a training "
                                "score)"},
-            "cameras": rows, "library": library_table()}
+            "cameras": rows, "library": library_table(),
+            # the cameras' own measurements from Debian packages (darktable, rawtherapee-data), or why skipped
+            "real_camera_data": run_validate_wb(names)}
 
 
 def _usable(name: str) -> bool:
@@ -134,6 +143,10 @@ def validate_markdown(result: dict, command: str) -> str:
                           f"{r['white_BG_equal_gains']:.3f} against the published {r['white_RG_published']:.3f}, "
                           f"{r['white_BG_published']:.3f} — the gains must be restored."]
     lines += ["", "## Definitions", ""] + [f"* **{k}**: {v}" for k, v in result["definitions"].items()]
+    if "real_camera_data" in result:  # white-balance presets and DCP profiles (validate_wb)
+        from .validate_wb import wb_markdown
+
+        lines += [""] + wb_markdown(result["real_camera_data"])
     lines += ["", "## The library", "", "| camera | range, nm | normalisation | gains | published matrix | source |",
               "|---|---|---|---|---|---|"]
     for c in result["library"]:
