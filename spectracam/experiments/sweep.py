@@ -223,16 +223,18 @@ def run_cell(index: int, cell: dict, scene: Scene, cube, trials: int, sweep_seed
              sweep_digest: str = "") -> dict:
     """One cell: capture and score every trial.  Runs on a Dask worker (or in-process)."""
     from ..capture import capture
+    from ..processing import metered_camera
     from ..reference import ChartReference
     from ..score import score
 
     t0 = time.perf_counter()
     params = _flatten(scene.to_dict())
     reference = ChartReference.of(scene)
+    camera = metered_camera(scene.camera, scene.processing)   # capture.metering "auto": processing.camera's
     rows = []
     for trial in range(trials):
         seed = trial_seed(sweep_seed, trial)
-        raw = capture(cube, scene.camera, seed, reference.white_box)
+        raw = capture(cube, camera, seed, reference.white_box)
         result = score(raw, reference, scene.processing)
         values = dataclasses.asdict(result.summary)
         if result.held_out is not None:

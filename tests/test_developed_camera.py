@@ -1,0 +1,298 @@
+"""Issue 33: a camera that finds its own white — metering, white-balance estimators, the DNG's dual-illuminant
+calibration, and every score reported for the oracle and the developed camera."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import spectracam as sc
+from spectracam import pipeline
+from spectracam.color import ProcessingSpec
+from spectracam.errors import ConfigError, SpectracamError
+from spectracam.processing import CAMERAS, metered_camera
+from spectracam.processing.calibration import D50_XYZ, dual_illuminant_matrices, xy_to_cct
+from spectracam.processing.white_balance import (WHITE_BALANCE_METHODS, Estimation, estimate_neutral,
+                                                 minkowski_mean, recovery_error_deg, reproduction_error_deg)
+from spectracam.reference import ChartReference
+from spectracam.render import RadianceCube
+from spectracam.scene import shipped_dir
+
+NEUTRAL = np.array([0.31, 0.55, 0.77])
+
+
+def _estimate(method: str, image: np.ndarray, valid=None, **proc) -> np.ndarray:
+    p = ProcessingSpec(camera="developed", white_balance=method, **proc)
+    valid = np.ones(image.shape[:2], bool) if valid is None else valid
+    return estimate_neutral(Estimation(image, valid, p))
+
+
+def _unit(v):
+    return np.asarray(v, float) / np.linalg.norm(v)
+
+
+def test_grey_world_on_an_exactly_grey_world_returns_the_neutral():
+    rng = np.random.default_rng(1)
+    values = rng.uniform(0.05, 1.0, 64 * 48)
+    # every channel holds the same values in another order: each channel's mean is the same grey
+    image = np.stack([NEUTRAL[k] * rng.permutation(values) for k in range(3)], axis=-1).reshape(64, 48, 3) * 1e4
+    assert np.max(np.abs(_estimate("grey_world", image) - _unit(NEUTRAL))) < 1e-9
+    # a world that is not grey on average is not returned as the neutral
+    tinted = image * np.array([1.2, 1.0, 1.0])
+    assert recovery_error_deg(_estimate("grey_world", tinted), NEUTRAL) > 1.0
+
+
+def test_white_patch_ignores_a_hot_pixel():
+    rng = np.random.default_rng(2)
+    image = rng.uniform(0.0, 0.6, (100, 100, 3)) * NEUTRAL * 1e4          # coloured surfaces below the white
+    image[:5, :40] = NEUTRAL * 1e4                                        # a white patch: 2 % of the pixels
+    image[70, 70] = np.array([50.0, 0.1, 0.1]) * 1e4                      # a hot red pixel, far brighter
+    assert np.max(np.abs(_estimate("white_patch", image) - _unit(NEUTRAL))) < 1e-12
+    # the plain maximum (max-RGB) would be fooled by it
+    assert recovery_error_deg(image.reshape(-1, 3).max(axis=0), NEUTRAL) > 30
+
+
+def test_grey_edge_on_a_known_gradient_returns_the_neutral():
+    y, x = np.mgrid[0:60, 0:80].astype(float)
+    ramp = 3.0 * x + 0.5 * y + 7.0 * np.sin(x / 9.0)
+    offsets = np.array([900.0, 50.0, 4000.0])      # flat colour: invisible to an edge-based estimator
+    image = ramp[..., None] * NEUTRAL + offsets
+    assert np.max(np.abs(_estimate("grey_edge", image) - _unit(NEUTRAL))) < 1e-9
+    # grey world is misled by the flat colour
+    assert recovery_error_deg(_estimate("grey_world", image), NEUTRAL) > 5
+
+
+def test_shades_of_grey_spans_grey_world_to_max():
+    rng = np.random.default_rng(3)
+    px = rng.uniform(0, 1, (5000, 3))
+    assert np.allclose(minkowski_mean(px, 1.0), px.mean(axis=0), rtol=1e-12)
+    assert np.allclose(minkowski_mean(px, 2.0), np.sqrt((px ** 2).mean(axis=0)), rtol=1e-12)
+    assert np.all(np.abs(minkowski_mean(px, 64.0) - px.max(axis=0)) < 0.1)
+    image = px.reshape(50, 100, 3)
+    assert np.allclose(_estimate("shades_of_grey", image, white_balance_p=1.0), _estimate("grey_world", image))
+
+
+def test_angular_errors_by_hand():
+    assert recovery_error_deg(np.array([1.0, 0.0, 0.0]), np.array([1.0, 1.0, 0.0])) == pytest.approx(45.0)
+    assert recovery_error_deg(np.array([2.0, 4.0, 6.0]), np.array([1.0, 2.0, 3.0])) == pytest.approx(0.0, abs=1e-6)
+    # reproduction: the true white divided by the estimate, (1, 1, 0.5), against the achromatic (1, 1, 1)
+    want = np.degrees(np.arccos(2.5 / (1.5 * np.sqrt(3))))
+    assert reproduction_error_deg(np.array([1.0, 1.0, 2.0]), np.ones(3)) == pytest.approx(want, rel=1e-12)
+    # the two differ in general, and both vanish for the right neutral at any scale
+    assert reproduction_error_deg(3 * NEUTRAL, NEUTRAL) == pytest.approx(0.0, abs=1e-6)
+
+
+def _scene(name="d65", **proc):
+    scene = sc.load_scene(str(shipped_dir() / f"{name}.toml"))
+    scene = scene.replace(image=scene.image.replace(width=160, height=120))
+    return scene.replace(processing=scene.processing.replace(**proc)) if proc else scene
+
+
+def test_dual_illuminant_equals_each_calibration_at_its_light_and_is_monotone():
+    scene = _scene()
+    ref = ChartReference.of(scene)
+    dual = dual_illuminant_matrices(ref, scene.camera, "xyz_scaling")
+    t_a, t_d65 = dual.cct_K
+    assert t_a == pytest.approx(2856, abs=3) and t_d65 == pytest.approx(6504, abs=3)
+    assert np.array_equal(dual.forward_matrix(t_a), dual.forward_matrices[0])
+    assert np.array_equal(dual.forward_matrix(t_d65), dual.forward_matrices[1])
+    assert np.array_equal(dual.forward_matrix(2000.0), dual.forward_matrices[0])   # clamped outside
+    assert np.array_equal(dual.forward_matrix(9000.0), dual.forward_matrices[1])
+    temps = np.linspace(t_a, t_d65, 40)
+    w = np.array([dual.weight(t) for t in temps])
+    assert np.all(np.diff(w) < 0) and w[0] == 1.0 and w[-1] == 0.0
+    # linear in 1/CCT: halfway in mired is weight 1/2
+    assert dual.weight(2.0 / (1 / t_a + 1 / t_d65)) == pytest.approx(0.5, abs=1e-12)
+    # every element of the interpolated matrix moves monotonically between the two
+    fm = np.stack([dual.forward_matrix(t) for t in temps])
+    d = np.diff(fm, axis=0)
+    assert np.all((d <= 1e-15) | (d >= -1e-15)) and np.all(np.sign(d).std(axis=0) < 1e-12)
+    # a ForwardMatrix maps the balanced neutral to D50 exactly (DNG 1.6 chapter 6)
+    for FM in dual.forward_matrices:
+        assert np.max(np.abs(np.ones(3) @ FM - D50_XYZ)) < 1e-12
+
+
+def test_a_luther_camera_finds_the_light_it_was_calibrated_under():
+    scene = _scene()
+    cam = scene.camera.replace(filters=scene.camera.filters.replace(kind="xyz", qe="flat"))
+    ref = ChartReference.of(scene)
+    dual = dual_illuminant_matrices(ref, cam, "xyz_scaling")
+    for neutral, t in zip(dual.neutrals, dual.cct_K):
+        xy, cct, _ = dual.neutral_to_xy(neutral)
+        assert cct == pytest.approx(t, abs=15)
+    assert xy_to_cct([0.3127, 0.3290]) == pytest.approx(6504, abs=2)
+
+
+def test_oracle_is_the_papers_chain_and_developed_differs():
+    scene = _scene()
+    cube = pipeline.render(scene, "analytic")
+    raw = pipeline.capture(cube, scene=scene)
+    assert raw.metering is None      # the oracle meters the white patch as before
+    oracle = pipeline.score(raw, scene)
+    from spectracam.score import conversion_matrix
+
+    M = conversion_matrix(ChartReference.of(scene), raw.camera, scene.processing)
+    assert np.array_equal(np.asarray(oracle.parameters["conversion_matrix"]), M)
+    assert oracle.white_balance["recovery_deg"] == 0.0 and oracle.summary.awb_recovery_deg == 0.0
+    # ΔE2000 and the 95th percentile beside ΔE*ab
+    assert 0 < oracle.summary.delta_e2000_mean < oracle.summary.delta_e_mean < oracle.summary.delta_e_p95
+    dev_scene = _scene(camera="developed")
+    dev_raw = pipeline.capture(cube, scene=dev_scene)
+    assert dev_raw.metering["method"] == "percentile"
+    dev = pipeline.score(dev_raw, dev_scene)
+    assert dev.white_balance["method"] == "corrected_moments"
+    assert dev.white_balance["calibration"] == "dual_illuminant"
+    assert 0 < dev.summary.awb_recovery_deg < 20
+    assert dev.summary.delta_e_mean > oracle.summary.delta_e_mean
+    # the trained estimator never trained on the chart: every training reflectance that matches a patch is removed
+    assert dev.white_balance["training"]["samples"] + dev.white_balance["training"]["excluded_as_scored_colours"] == 190
+
+
+def test_oracle_white_with_scene_light_calibration_is_the_oracle_chain():
+    p = ProcessingSpec(camera="developed", white_balance="oracle", calibration="scene_light")
+    assert p.told_the_light
+    assert not ProcessingSpec(camera="developed").told_the_light
+    for cam, steps in CAMERAS.items():
+        q = ProcessingSpec(camera=cam)
+        assert (q.white_balance_method, q.calibration_method) == (steps["white_balance"], steps["calibration"])
+
+
+def test_scene_light_calibration_with_the_true_white_reproduces_the_oracle_colours():
+    """Estimated white = true white through the scene-light matrix: the same colours up to the brightness, which a
+    camera that is not told the light takes from its metered white (the white patch, shown at Y = 1)."""
+    scene = _scene(camera="developed", white_balance="oracle", calibration="scene_light")
+    scene = scene.replace(processing=scene.processing.replace(white_balance="oracle"))
+    cube = pipeline.render(scene, "analytic")
+    oracle_scene = _scene()
+    raw = pipeline.capture(cube, scene=oracle_scene)
+    M0 = np.asarray(pipeline.score(raw, oracle_scene).parameters["conversion_matrix"])
+    # white balance by the truth, calibration under the scene light, metering on the white patch: the oracle
+    assert np.array_equal(np.asarray(pipeline.score(raw, scene).parameters["conversion_matrix"]), M0)
+    est = scene.replace(processing=scene.processing.replace(white_balance="white_patch"))
+    M1 = np.asarray(pipeline.score(raw, est).parameters["conversion_matrix"])
+    ratio = M1 / M0
+    # only the rows (channels) are rescaled: diag(e/ê)·M, times one brightness factor
+    assert np.allclose(ratio, ratio[:, :1], rtol=1e-9)
+
+
+def _uniform_cube(scene, reflectance_of_pixels):
+    from spectracam.illuminant import white_diffuser_radiance
+
+    white = white_diffuser_radiance(scene.illuminant, scene.grid)
+    rad = (np.asarray(reflectance_of_pixels, float)[..., None] * white).astype(np.float32)
+    return RadianceCube(rad, scene.grid.centres_nm, {"renderer": None})
+
+
+@pytest.mark.parametrize("method", ["average", "percentile"])
+def test_metering_finds_the_implied_white(method):
+    from spectracam.camera import band_weights
+    from spectracam.metering import metered_white_rates
+
+    scene = _scene()
+    cap = scene.camera.capture.replace(metering=method)
+    rng = np.random.default_rng(4)
+    if method == "average":   # a uniform grey of the target reflectance: its white is the perfect white
+        refl = np.full((40, 40), cap.metering_target)
+    else:                     # 5 % of the pixels a perfect white, the rest darker: the 99th percentile is white
+        refl = rng.uniform(0.05, 0.8, (40, 40))
+        refl[:2] = 1.0
+    cube = _uniform_cube(scene, refl)
+    w = band_weights(scene.camera, scene.grid).astype(np.float64)
+    white = _uniform_cube(scene, np.ones((1, 1))).radiance[0, 0].astype(np.float64) @ w
+    got = metered_white_rates(cube.radiance, w, cap)
+    assert np.allclose(got, white, rtol=1e-6)
+
+
+def test_metering_auto_follows_the_camera_and_an_explicit_one_wins():
+    scene = _scene(camera="developed")
+    assert metered_camera(scene.camera, scene.processing).capture.metering == "percentile"
+    assert metered_camera(scene.camera, ProcessingSpec()).capture.metering == "white_patch"
+    cam = scene.camera.replace(capture=scene.camera.capture.replace(metering="average"))
+    assert metered_camera(cam, scene.processing).capture.metering == "average"
+
+
+@pytest.mark.parametrize("field,value", [("processing.camera", "guess"), ("processing.white_balance", "max"),
+                                         ("processing.calibration", "triple"), ("capture.metering", "spot"),
+                                         ("processing.white_balance_p", 0.5), ("capture.metering_percentile", 101),
+                                         ("capture.metering_target", 0), ("processing.white_balance_sigma_px", -1),
+                                         ("processing.white_balance_training", "nosuch")])
+def test_bad_values_name_the_field(field, value):
+    from spectracam.scene import Scene
+
+    table, key = field.split(".")
+    with pytest.raises(ConfigError, match=field.replace(".", r"\.")):
+        Scene.from_dict({table: {key: value}})
+
+
+def test_a_trained_estimator_with_nothing_left_to_train_on_is_refused():
+    scene = _scene(camera="developed", white_balance_training="colorchecker24")
+    cube = pipeline.render(scene, "analytic")
+    raw = pipeline.capture(cube, scene=scene)
+    with pytest.raises(SpectracamError, match="white_balance_training.*remain"):
+        pipeline.score(raw, scene)
+
+
+def test_every_estimator_runs_on_a_chart_and_beats_chance():
+    scene = _scene(camera="developed")
+    cube = pipeline.render(scene, "analytic")
+    raw = pipeline.capture(cube, scene=scene)
+    for method in WHITE_BALANCE_METHODS:
+        s = scene.replace(processing=scene.processing.replace(white_balance=method))
+        r = pipeline.score(raw, s)
+        assert r.white_balance["method"] == method
+        assert 0 <= r.summary.awb_recovery_deg < 15, method
+        assert np.isfinite(r.summary.delta_e_mean)
+
+
+def test_simulate_reports_both_cameras(tmp_path):
+    from click.testing import CliRunner
+
+    from spectracam.cli import main
+
+    out = tmp_path / "d65"
+    res = CliRunner().invoke(main, ["simulate", "d65", "-o", str(out), "--renderer", "analytic", "--quiet",
+                                    "--set", "image.width=160", "--set", "image.height=120"])
+    assert res.exit_code == 0, res.output
+    report = json.loads((out / "report.json").read_text())
+    bw = report["both_ways"]
+    assert set(bw) >= {"oracle", "developed"}
+    assert bw["oracle"]["delta_e_mean"] == report["chart"]["delta_e_mean"]
+    assert bw["oracle"]["awb_recovery_deg"] == 0.0 and bw["developed"]["awb_recovery_deg"] > 0
+    for k in ("delta_e_mean", "delta_e_p95", "delta_e2000_mean", "held_out_delta_e", "metered_exposure_ms"):
+        assert bw["developed"][k] > 0
+    assert report["white_balance"]["method"] == "oracle"
+
+
+def test_a_sweep_over_the_white_balance(tmp_path):
+    from pathlib import Path
+
+    import pyarrow.parquet as pq
+
+    from spectracam.experiments.sweep import load_sweep, run_sweep
+
+    base = (Path(__file__).parent.parent / "scenes" / "blackbody_5000K.toml").resolve()
+    p = tmp_path / "sweep.toml"
+    p.write_text(f"""
+base_scene = "{base}"
+renderer = "analytic"
+trials = 1
+seed = 3
+metrics = ["delta_e_mean", "delta_e2000_mean", "awb_recovery_deg", "capture_time_ms"]
+[scene]
+image = {{ width = 96, height = 72 }}
+processing = {{ camera = "developed" }}
+[axes]
+"illuminant.temperature_K" = [3000, 6500]
+"processing.white_balance" = ["oracle", "grey_world", "white_patch", "corrected_moments"]
+""")
+    run_sweep(load_sweep(p), tmp_path / "out", serial=True, progress=False)
+    rows = pq.read_table(tmp_path / "out" / "results.parquet").to_pylist()
+    assert len(rows) == 8
+    by = {(r["illuminant.temperature_K"], r["processing.white_balance"]): r for r in rows}
+    for T in (3000, 6500):
+        assert by[(T, "oracle")]["awb_recovery_deg"] == 0.0
+        assert all(by[(T, m)]["awb_recovery_deg"] > 0 for m in ("grey_world", "white_patch", "corrected_moments"))
+        # the developed camera meters its own preview: percentile metering, the same for every estimator
+        assert len({by[(T, m)]["capture_time_ms"] for m in ("oracle", "grey_world")}) == 1
+        assert by[(T, "grey_world")]["delta_e_mean"] != by[(T, "oracle")]["delta_e_mean"]
