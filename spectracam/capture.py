@@ -49,12 +49,14 @@ class RawCapture:
 
 
 def capture(cube, camera: CameraSpec, seed: int, metering_box: tuple[slice, slice] | None = None, *,
-            white_radiance: np.ndarray | None = None, metering: dict | None = None) -> RawCapture:
+            white_radiance: np.ndarray | None = None, metering: dict | None = None,
+            time_limit_s: float | None = None) -> RawCapture:
     """Capture a :class:`~spectracam.render.RadianceCube` with ``camera``; exposure is metered on
     the mean rates of the pixels in ``metering_box`` (the white patch, paper 4.5) or, for any other
     white (:mod:`spectracam.metering`), on the rates of its radiance ``white_radiance`` ``(B,)``,
     recorded as ``metering``; a camera that meters itself (``capture.metering`` average or percentile,
-    :mod:`spectracam.metering`) ignores both and meters a preview of the cube; ``seed`` fixes every random draw (fixed pattern and temporal noise)."""
+    :mod:`spectracam.metering`) ignores both and meters a preview of the cube, and with ``time_limit_s`` (a hand-held
+    limit) shortens its metered exposures in proportion so the capture lasts at most that long; ``seed`` fixes every random draw (fixed pattern and temporal noise)."""
     arch = camera.architecture()
     weights = band_weights(camera, cube.grid)
     rates = SpectralRates(cube.radiance, weights)  # computed in the sensor's pass
@@ -69,6 +71,10 @@ def capture(cube, camera: CameraSpec, seed: int, metering_box: tuple[slice, slic
         white_rate = rates.mean(*metering_box)
     times = exposure_times_s(camera.capture.exposure, white_rate, camera.sensor, arch, camera.capture.white_fill,
                              camera.capture.exposure_split)
+    if time_limit_s is not None and metering is not None and metering.get("kind") == "camera":
+        scale = min(1.0, time_limit_s / arch.capture_time_s(times))
+        times = times * scale
+        metering = {**metering, "time_limit_ms": 1e3 * time_limit_s, "shortened_by": scale}
     digital, expected = arch.record(rates, times, camera.sensor, seed)
     return RawCapture(digital=digital, expected_e=expected, exposure_times_s=times,
                       capture_time_s=arch.capture_time_s(times), layout=arch.layout, camera=camera, seed=seed,

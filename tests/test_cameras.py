@@ -218,6 +218,12 @@ def test_validate_reproduces_the_published_neutrals_and_matrices(tmp_path):
     assert rows["Nikon D5100"]["delta_e_fit_mean"] == pytest.approx(1.62, abs=0.05)
     assert rows["Nikon D5100"]["white_RG_equal_gains"] > 1.3 * rows["Nikon D5100"]["white_RG_published"]
     assert rows["Sigma SD1 Merrill"]["delta_e_published_mean"] == pytest.approx(12.92, abs=0.05)
+    # the cameras' own data from Debian packages (tests/test_validate_wb.py): tables, or the reason they were skipped
+    md = (tmp_path / "v" / "validate.md").read_text()
+    for key, title in (("wb_presets", "White-balance presets"), ("dcp_profiles", "DCP profiles")):
+        part = res["real_camera_data"][key]
+        assert part["status"] in ("ok", "skipped") and title in md
+        assert (part["status"] == "ok") == ("cameras" in part) and (part["status"] == "ok") != ("reason" in part)
     for f in ("validate.md", "validate.png", "validate.svg"):
         assert (tmp_path / "v" / f).stat().st_size > 1000
 

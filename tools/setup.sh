@@ -109,6 +109,55 @@ if ! venv_ok; then
   fi
 fi
 
+# --test: real cameras' own measurements for `spectracam validate` (tests/test_validate_wb.py): darktable's
+# wb_presets.json and rawtherapee-data's DCP profiles.  Only these data files are taken: `apt-get download` and
+# `dpkg-deb -x` of the two packages into .venv/share/spectracam/debian (darktable itself would pull in ~100
+# libraries; the two .deb are 21 MB and this step takes a few seconds).  Skipped with the reason where apt-get
+# cannot fetch them; the tests then skip.  The system's /usr/share copies are used when installed.
+debian_data() {
+  local dest=.venv/share/spectracam/debian wb=share/darktable/wb_presets.json dcp=share/rawtherapee/dcpprofiles
+  local pkgs="" p tmp member
+  [ -f "/usr/$wb" ] || [ -f "$dest/usr/$wb" ] || pkgs="$pkgs darktable"
+  [ -d "/usr/$dcp" ] || [ -d "$dest/usr/$dcp" ] || pkgs="$pkgs rawtherapee-data"
+  [ -n "$pkgs" ] || return 0
+  local skip="the white-balance-preset and DCP checks of spectracam validate will be skipped (they need Debian's$pkgs)"
+  if ! command -v apt-get >/dev/null 2>&1 || ! command -v dpkg-deb >/dev/null 2>&1; then
+    echo "setup: warning: no apt-get/dpkg-deb: $skip" >&2
+    return 0
+  fi
+  if ! can_apt; then
+    echo "setup: warning: this user may not run apt-get (apt-get download$pkgs): $skip" >&2
+    return 0
+  fi
+  echo "setup: fetching the data files of$pkgs (spectracam validate's real-camera checks)"
+  tmp=$(mktemp -d)
+  # (as root, apt warns that it downloads unsandboxed into a directory _apt cannot write: harmless, kept quiet)
+  # shellcheck disable=SC2086
+  if ! (cd "$tmp" && $SUDO apt-get download -qq $pkgs) >/dev/null 2>"$tmp/err"; then
+    apt_update
+    # shellcheck disable=SC2086
+    if ! (cd "$tmp" && $SUDO apt-get download -qq $pkgs) >/dev/null 2>"$tmp/err"; then
+      echo "setup: warning: apt-get download$pkgs failed ($(grep -v '^W:' "$tmp/err" | tr -s '\n' ' ' | cut -c1-200)): $skip" >&2
+      $SUDO rm -rf "$tmp"
+      return 0
+    fi
+  fi
+  mkdir -p "$dest"
+  for p in "$tmp"/*.deb; do
+    case "$p" in
+      */darktable_*) member="./usr/$wb" ;;
+      */rawtherapee-data_*) member="./usr/$dcp" ;;
+      *) continue ;;
+    esac
+    dpkg-deb --fsys-tarfile "$p" | tar -x -C "$dest" "$member" \
+      || echo "setup: warning: $(basename "$p") has no $member: $skip" >&2
+  done
+  $SUDO rm -rf "$tmp"
+}
+if [ "$extras" = "exr,test" ]; then
+  debian_data
+fi
+
 stamp=.venv/.spectracam-setup
 want="$(pwd) $(sha256sum pyproject.toml | cut -c1-64)"
 have=$(cat "$stamp" 2>/dev/null || true)

@@ -128,6 +128,7 @@ def case(scene, cube, design: str, seeds, limit_s: float | None = None) -> dict:
            "exposure_ms": [1e3 * float(t) for t in raw.exposure_times_s],
            "delta_e_training": s0.summary.delta_e_conversion}
     for key, get in (("delta_e_mean", lambda s: s.summary.delta_e_mean),
+                     ("delta_e2000_mean", lambda s: s.summary.delta_e2000_mean),
                      ("delta_e_of_mean", lambda s: s.summary.delta_e_of_mean),
                      ("snr_db", lambda s: s.summary.snr_combined_db),
                      ("snr_rendered_db", lambda s: s.summary.snr_rendered_db)):
@@ -137,6 +138,32 @@ def case(scene, cube, design: str, seeds, limit_s: float | None = None) -> dict:
         row["held_out_delta_e_p95"] = s0.held_out["delta_e_p95"]
         row["held_out_library"] = s0.held_out["library"]
     row["conversion_matrix"] = s0.parameters["conversion_matrix"]
+    row.update(developed_case(scene, cube, design, seeds, limit_s))
+    return row
+
+
+def developed_case(scene, cube, design: str, seeds, limit_s: float | None = None) -> dict:
+    """The same case with the developed camera (issue 33): it meters a preview itself (shortened to ``limit_s`` when
+    dimmed), estimates its white and interpolates its calibration; ``developed_*`` fields."""
+    from ..pipeline import camera_processing
+    from ..processing import metered_camera
+
+    processing = camera_processing(scene.processing, "developed")
+    camera = metered_camera(scene.camera.with_design(design), processing)
+    reference = ChartReference.of(scene)
+    scores, raw = [], None
+    for seed in seeds:
+        raw = capture(cube, camera, seed, time_limit_s=limit_s)
+        scores.append(score(raw, reference, processing))
+    row = {"developed_capture_time_ms": 1e3 * float(raw.capture_time_s)}
+    for key, get in (("delta_e_mean", lambda s: s.summary.delta_e_mean),
+                     ("delta_e2000_mean", lambda s: s.summary.delta_e2000_mean),
+                     ("delta_e_p95", lambda s: s.summary.delta_e_p95),
+                     ("awb_recovery_deg", lambda s: s.summary.awb_recovery_deg),
+                     ("snr_rendered_db", lambda s: s.summary.snr_rendered_db)):
+        row[f"developed_{key}"], row[f"developed_{key}_sd"] = _stats([get(s) for s in scores])
+    if scores[0].held_out is not None:
+        row["developed_held_out_delta_e"] = _stats([s.held_out["delta_e_mean"] for s in scores])[0]
     return row
 
 
@@ -211,7 +238,8 @@ def winners(rows: list[dict]) -> list[dict]:
     for light in dict.fromkeys(r["illuminant"] for r in rows):
         for factor in dict.fromkeys(r["light_factor"] for r in rows):
             group = [r for r in rows if r["illuminant"] == light and r["light_factor"] == factor]
-            for metric, best in (("delta_e_mean", min), ("snr_rendered_db", max)):
+            for metric, best in (("delta_e_mean", min), ("snr_rendered_db", max), ("developed_delta_e_mean", min),
+                                 ("developed_delta_e2000_mean", min)):
                 scored = [r for r in group if r.get(metric) is not None]
                 if scored:
                     w = best(scored, key=lambda r: r[metric])

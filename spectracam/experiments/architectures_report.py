@@ -165,6 +165,31 @@ def _fmt(v, sd=None, digits=2):
     return f"{v:.{digits}f}" + (f" ± {sd:.{digits}f}" if sd is not None else "")
 
 
+def _rank(rows, key) -> dict:
+    order = sorted((r for r in rows if r.get(key) is not None), key=lambda r: r[key])
+    return {r["design"]: i + 1 for i, r in enumerate(order)}
+
+
+def _both_ways_table(rows) -> list[str]:
+    """The oracle camera (told the light) beside the developed one (finds its own white), with each one's rank."""
+    ro, rd = _rank(rows, "delta_e_mean"), _rank(rows, "developed_delta_e_mean")
+    out = ["The same designs with a camera that is told the light (oracle) and one that finds its own white "
+           "(developed: percentile metering, corrected-moments white balance, dual-illuminant calibration):", "",
+           "| design | ΔE*ab oracle (rank) | ΔE*ab developed (rank) | CIEDE2000 oracle / developed | "
+           "white error ° ± sd | held-out ΔE oracle / developed | developed capture ms |",
+           "|---|---:|---:|---:|---:|---:|---:|"]
+    for r in sorted(rows, key=lambda r: r["developed_delta_e_mean"] if r["developed_delta_e_mean"] is not None
+                    else float("inf")):
+        out.append(f"| {r['design']} | {_fmt(r['delta_e_mean'], r['delta_e_mean_sd'])} ({ro.get(r['design'], '–')}) | "
+                   f"{_fmt(r['developed_delta_e_mean'], r['developed_delta_e_mean_sd'])} "
+                   f"({rd.get(r['design'], '–')}) | {_fmt(r.get('delta_e2000_mean'))} / "
+                   f"{_fmt(r['developed_delta_e2000_mean'])} | "
+                   f"{_fmt(r['developed_awb_recovery_deg'], r['developed_awb_recovery_deg_sd'])} | "
+                   f"{_fmt(r.get('held_out_delta_e'))} / {_fmt(r.get('developed_held_out_delta_e'))} | "
+                   f"{r['developed_capture_time_ms']:.2f} |")
+    return out + [""]
+
+
 def report_markdown(results: dict, command: str) -> str:
     """report.md: the setup, one table per light and level, and what wins where."""
     p = results["parameters"]
@@ -188,6 +213,8 @@ def report_markdown(results: dict, command: str) -> str:
                              f"{_fmt(r['delta_e_training'])} | {_fmt(r.get('held_out_delta_e'))} "
                              f"({_fmt(r.get('held_out_delta_e_p95'))}) |")
             lines.append("")
+            if rows and "developed_delta_e_mean" in rows[0]:
+                lines += _both_ways_table(rows)
     lines += ["## What wins where", "", "| light | level | metric | design | value |", "|---|---:|---|---|---:|"]
     for w in results["winners"]:
         lines.append(f"| {w['illuminant']} | {w['light_factor']:g}× | {w['metric']} | {w['design']} | "

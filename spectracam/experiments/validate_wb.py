@@ -176,7 +176,8 @@ _CANON = ("Canon EOS instruction manuals' white-balance table (EOS 5D Mark II an
           "Speedlite sends no colour temperature)")
 _NIKON = ("Nikon D5100 User's Manual, 'Color Temperature' (all figures approximate: incandescent 3000 K, direct "
           "sunlight 5200 K, flash 5400 K, cloudy 6000 K, shade 8000 K; fluorescent: sodium-vapor 2700 K, warm-white "
-          "3000 K, white 3700 K, cool-white 4200 K, day white 5000 K, daylight 6500 K, high temp. mercury-vapor 7200 K)")
+          "3000 K, white 3700 K, cool-white 4200 K, day white 5000 K, daylight 6500 K, high temp. mercury-vapor "
+          "7200 K)")
 _DAY = "on the CIE daylight locus (the D series), which daylight and a xenon flash follow"
 _TUNG = "on the Planckian locus: an incandescent lamp is a thermal radiator (CIE A is one at 2856 K)"
 
@@ -594,7 +595,7 @@ def dcp_rows(camera_name: str, dcp: DcpProfile) -> dict:
         n_sim = simulated_neutral(scene, ill)
         n_pub = pm.neutral(w_std)
         row = {"calibration_illuminant": code, "illuminant": CALIBRATION_LIGHTS[code][0],
-               "color_matrix_dcp": (cm_dcp / (cm_dcp @ D50_XYZ).max()).round(6).tolist(),
+               "color_matrix_dcp": normalise_color_matrix(cm_dcp).round(6).tolist(),
                "color_matrix_spectracam": cm_sc.round(6).tolist(),
                "delta_e_between_mean": float(de_between.mean()), "delta_e_between_max": float(de_between.max()),
                "delta_e_dcp_mean": float(de_dcp.mean()), "delta_e_dcp_max": float(de_dcp.max()),
@@ -631,12 +632,14 @@ DEFINITIONS = {
     "shape %": "the same with each neutral divided by its own daylight preset's: independent of the channels' gains",
     "effective K": "the temperature on the light's locus whose neutral (simulated camera, or the published XYZ(D65)→"
                    "camera matrix M) is nearest to the preset's, and the rms relative distance left there",
-    "DCP ΔE between": "mean CIE 1976 ΔE*ab on the 24 patches between XYZ = CM_dcp⁻¹·raw and XYZ = CM_spectracam⁻¹·raw "
-                      "(raw = the chart's noise-free simulated response under the calibration illuminant, each "
-                      "scaled to the white patch's Y), CIELAB relative to the illuminant's white; CM_spectracam is "
-                      "what the DNG writer fits (white-preserving least squares on the same chart, a training fit)",
-    "DCP neutral ratio": "CM_dcp·XYZ(illuminant white, 360–830 nm) normalised to G, divided by the simulated neutral "
-                         "(= CM_spectracam's), per channel",
+    "DCP ΔE between": "mean CIE 1976 ΔE*ab on the 24 patches between XYZ = CM_dcp⁻¹·raw and XYZ = "
+                      "CM_spectracam⁻¹·raw (raw = the chart's noise-free simulated response under the calibration "
+                      "illuminant, each scaled to the white patch's Y), CIELAB relative to the illuminant's white; "
+                      "CM_spectracam is what the DNG writer fits (white-preserving least squares on the same chart, "
+                      "a training fit)",
+    "DCP neutral ratio": "CM_dcp·XYZ(illuminant white, 360–830 nm) normalised to G, divided by the simulated "
+                         "neutral (= CM_spectracam's), per channel; beside it the same over the published "
+                         "XYZ(D65)→camera matrix M's neutral (a D65 calibration: far from D65 only indicative)",
     "DCP forward ΔE": "FM·diag(1/simulated neutral)·raw against the chart's XYZ adapted to D50 by Bradford (DNG's "
                       "white-balanced camera → PCS path), CIELAB relative to D50",
 }
@@ -680,10 +683,6 @@ def run_validate_wb(cameras: list[str]) -> dict:
     return {"wb_presets": out.pop("wb_presets"), **out}
 
 
-def _f(x, fmt=".3f"):
-    return "–" if x is None else format(x, fmt)
-
-
 def wb_markdown(part: dict) -> list[str]:
     """The markdown lines of both tables (part = :func:`run_validate_wb`'s result)."""
     lines = ["## White-balance presets (darktable's wb_presets.json)", ""]
@@ -699,8 +698,8 @@ def wb_markdown(part: dict) -> list[str]:
                 continue
             lines += [f"Gains: {cam['gains']}. Which check is independent: {cam['independence']}.", "",
                       f"Lights from the {cam['lights_source']}.", "",
-                      "| preset | light | R/G sim / preset (%) | B/G sim / preset (%) | ≤ 3 % | DCP R/G, B/G / preset "
-                      "(%) | shape R/G, B/G % | effective K, sim (rms %) | effective K, published M (rms %) |",
+                      "| preset | light | R/G sim / preset (%) | B/G sim / preset (%) | ≤ 3 % | DCP R/G, B/G / "
+                      "preset (%) | shape R/G, B/G % | effective K, sim (rms %) | effective K, published M (rms %) |",
                       "|---|---|---|---|---|---|---|---|---|"]
             for r in cam["presets"]:
                 ok = ("yes" if r["within_3_percent"] else "**no**") if r["target"] else "(not in target)"
@@ -723,8 +722,8 @@ def wb_markdown(part: dict) -> list[str]:
         return lines
     lines += [f"From `{dc['directory']}` (Debian package {dc['package']}).", "",
               "| camera | calibration | ΔE*ab DCP CM vs spectracam CM (mean / max) | ΔE*ab DCP CM / spectracam CM vs "
-              "truth (mean) | neutral DCP / simulated (R, B) | neutral DCP / published M (R, B) | ΔE*ab DCP FM alone vs "
-              "truth, D50 (mean / max) |", "|---|---|---|---|---|---|---|"]
+              "truth (mean) | neutral DCP / simulated (R, B) | neutral DCP / published M (R, B) | ΔE*ab DCP FM alone "
+              "vs truth, D50 (mean / max) |", "|---|---|---|---|---|---|---|"]
     notes = []
     for cam in dc["cameras"]:
         if "skipped" in cam:

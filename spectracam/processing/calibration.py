@@ -70,19 +70,31 @@ def white_neutral(illuminant, grid, camera) -> np.ndarray:
 
 
 def constrained_lstsq(A: np.ndarray, B: np.ndarray, c: np.ndarray, d: np.ndarray) -> np.ndarray:
-    """``X`` minimising ‖A·X − B‖² subject to ``c·X = d`` (one row constraint, every column): the KKT system.
+    """``X`` minimising ‖A·X − B‖² subject to ``c·X = d`` (one row constraint on every column), by eliminating the
+    constraint: ``X = X₀ + N·Z`` with ``X₀ = cᵀd/|c|²`` and ``N`` an orthonormal basis of ``c``'s null space.  With
+    more than three channels the reduced problem is solved as :func:`spectracam.color.fit_conversion` solves the
+    conversion (columns at unit norm, singular values below ``CONVERSION_RCOND`` dropped: a W channel that is the
+    sum of R, G and B leaves the plain solution undetermined).
 
     >>> A = np.eye(3); X = constrained_lstsq(A, np.eye(3), np.ones(3), np.array([1.0, 1.0, 1.0]))
     >>> np.allclose(np.ones(3) @ X, 1.0)
     True
     """
-    n = A.shape[1]
-    K = np.zeros((n + 1, n + 1))
-    K[:n, :n] = A.T @ A
-    K[:n, n] = c
-    K[n, :n] = c
-    rhs = np.vstack([A.T @ B, np.asarray(d, float)[None]])
-    return np.linalg.solve(K, rhs)[:n]
+    from ..color import CONVERSION_RCOND
+
+    c = np.asarray(c, float)
+    X0 = np.outer(c, np.asarray(d, float)) / (c @ c)
+    _, _, vt = np.linalg.svd(c[None, :])
+    N = vt[1:].T                                            # (n, n − 1), orthonormal, c·N = 0
+    R = B - A @ X0
+    AN = A @ N
+    if A.shape[1] <= 3:
+        Z, *_ = np.linalg.lstsq(AN, R, rcond=None)
+    else:
+        scale = np.linalg.norm(AN, axis=0)
+        Z, *_ = np.linalg.lstsq(AN / scale, R, rcond=CONVERSION_RCOND)
+        Z = Z / scale[:, None]
+    return X0 + N @ Z
 
 
 @dataclass(frozen=True, eq=False)
