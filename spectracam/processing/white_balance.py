@@ -14,10 +14,10 @@ scene's light, up to scale.  The truth ``e`` is that response computed from the 
 ``grey_edge``       ``ê_k = (mean_x |∇(G_σ * ρ_k)|^p)^(1/p)``: first-order grey edge (van de Weijer, Gevers &
                     Gijsenij, IEEE TIP 16(9) 2007) with a Gaussian of σ = ``processing.white_balance_sigma_px``.
 ``corrected_moments`` a trained estimator (Finlayson, "Corrected-moment illuminant estimation", ICCV 2013): the
-                    moments ``f = [SoG_1, SoG_2, SoG_4, SoG_8, max]`` (each ``(N,)``, together ``(5N,)``, scaled to
-                    unit norm) map to the neutral by one linear correction ``ê = f·C`` fitted by least squares on
-                    training scenes made of a reflectance library (``processing.white_balance_training``) under
-                    :data:`TRAINING_LIGHTS`; a training sample that matches any colour of the scored scene (spectral
+                    moments ``f = [SoG_1, SoG_2, SoG_4, SoG_8, max, GE_1, GE_2, GE_6]`` of the pixels and of their
+                    edges (each ``(N,)`` and scaled to unit norm) map to the neutral by one linear correction
+                    ``ê = f·C`` fitted by least squares on training Mondrians made of a reflectance library
+                    (``processing.white_balance_training``) under :data:`TRAINING_LIGHTS`; a training sample that matches any colour of the scored scene (spectral
                     rms < :data:`EXCLUDE_RMS`) is removed, so the estimator is never trained on what it is scored on.
 
 Errors (degrees), both against the true neutral ``e``:
@@ -45,8 +45,12 @@ WHITE_PATCH_PERCENTILE = 99.9
 #: A pixel whose recorded charge reaches this share of the full well in any channel is clipped: no estimator uses
 #: it (its ratio of channels is the well's, not the light's).
 CLIP_SHARE = 0.98
-#: Moments of the trained estimator (Finlayson 2013 uses moments up to order 8 and the maximum).
+#: Moments of the trained estimator: of the pixels (Finlayson 2013 uses moments up to order 8 and the maximum) and of
+#: the edges (his edge-based corrected moments; the grey-edge family of van de Weijer et al. 2007).
 MOMENT_ORDERS = (1.0, 2.0, 4.0, 8.0)
+EDGE_ORDERS = (1.0, 2.0, 6.0)
+#: Borders per surface in a training Mondrian (a surface of a tiling meets about four others).
+TRAINING_EDGES_PER_SURFACE = 2
 
 #: The trained estimator's lights: the Planckian locus 2500–9000 K every 500 K and CIE daylights D50–D75, the prior a
 #: camera maker trains on.  No fluorescent or LED light is in it, so those are held-out lights for the estimator.
@@ -138,8 +142,29 @@ def _shades_of_grey(ctx: Estimation) -> np.ndarray:
 
 @WHITE_BALANCE_METHODS.register("grey_edge")
 def _grey_edge(ctx: Estimation) -> np.ndarray:
-    """Minkowski p-mean of each channel's Gaussian-derivative gradient magnitude over the pixels whose 3×3
-    neighbourhood is usable (an edge into a clipped pixel is the well's, not the scene's)."""
+    """Minkowski p-mean of each channel's edge magnitudes (:func:`edge_magnitudes`)."""
+    return minkowski_mean(edge_magnitudes(ctx), ctx.processing.white_balance_p)
+
+
+def moment_features(pixels: np.ndarray, edges: np.ndarray, weights: np.ndarray | None = None,
+                    edge_weights: np.ndarray | None = None) -> np.ndarray:
+    """``((len(MOMENT_ORDERS) + 1 + len(EDGE_ORDERS))·N,)`` the corrected-moments features: the Minkowski moments
+    of the pixels ``(n, N)``, their maximum (the :data:`WHITE_PATCH_PERCENTILE` th percentile of an image) and the
+    Minkowski moments of the edge magnitudes ``(m, N)`` (optionally weighted), each moment scaled to unit norm (so
+    an image's pixel and edge moments, whose scales differ from a training scene's, enter by their directions)."""
+    x = np.maximum(np.asarray(pixels, float), 0.0)
+    if weights is None:
+        top = np.percentile(x, WHITE_PATCH_PERCENTILE, axis=0)
+    else:
+        top = x[np.asarray(weights) > 0].max(axis=0)
+    groups = [minkowski_mean(x, p, weights) for p in MOMENT_ORDERS] + [top]
+    groups += [minkowski_mean(edges, p, edge_weights) for p in EDGE_ORDERS]
+    return np.concatenate([_unit(g) for g in groups])
+
+
+def edge_magnitudes(ctx: Estimation) -> np.ndarray:
+    """``(m, N)`` each channel's Gaussian-derivative gradient magnitude (σ = ``processing.white_balance_sigma_px``)
+    at the pixels whose 3×3 neighbourhood is usable (an edge into a clipped pixel is the well's, not the scene's)."""
     from scipy.ndimage import binary_erosion, gaussian_gradient_magnitude
 
     sigma = ctx.processing.white_balance_sigma_px
@@ -148,19 +173,8 @@ def _grey_edge(ctx: Estimation) -> np.ndarray:
     grads = np.stack([gaussian_gradient_magnitude(image[..., k], sigma, mode="nearest")[keep]
                       for k in range(image.shape[-1])], axis=-1)
     if grads.shape[0] == 0:
-        raise SpectracamError("white balance 'grey_edge': no usable pixel with usable neighbours")
-    return minkowski_mean(grads, ctx.processing.white_balance_p)
-
-
-def moment_features(pixels: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
-    """``(5N,)`` the corrected-moments features of pixels ``(n, N)`` (optionally area-weighted), unit norm."""
-    x = np.maximum(np.asarray(pixels, float), 0.0)
-    if weights is None:
-        top = np.percentile(x, WHITE_PATCH_PERCENTILE, axis=0)
-    else:
-        top = x[np.asarray(weights) > 0].max(axis=0)
-    f = np.concatenate([minkowski_mean(x, p, weights) for p in MOMENT_ORDERS] + [top])
-    return _unit(f)
+        raise SpectracamError("white balance: no usable pixel with usable neighbours to find edges on")
+    return grads
 
 
 @WHITE_BALANCE_METHODS.register("corrected_moments")
@@ -170,7 +184,7 @@ def _corrected_moments(ctx: Estimation) -> np.ndarray:
 
     model = trained_correction(training_camera(ctx.camera), ctx.grid, ctx.processing.white_balance_training,
                                _exclusion_key(ctx.scored_reflectances))
-    return moment_features(ctx.pixels()) @ model.correction
+    return moment_features(ctx.pixels(), edge_magnitudes(ctx)) @ model.correction
 
 
 @dataclass(frozen=True, eq=False)
@@ -236,7 +250,13 @@ def trained_correction(camera, grid, library: str, exclusion: tuple = ()) -> Tra
             k = int(rng.integers(TRAINING_SURFACES[0], min(TRAINING_SURFACES[1], len(refl)) + 1))
             pick = rng.choice(len(refl), k, replace=False)
             w = rng.dirichlet(np.ones(k))
-            feats.append(moment_features(rates[pick], w))
+            # a Mondrian: TRAINING_EDGES_PER_SURFACE borders per surface between random pairs, each as long as the
+            # two surfaces are large; a border's magnitude is the difference of the two (a step seen through the
+            # image's Gaussian derivative keeps its direction in camera space)
+            a, b = rng.integers(0, k, (2, TRAINING_EDGES_PER_SURFACE * k))
+            a, b = a[a != b], b[a != b]
+            edges = np.abs(rates[pick[a]] - rates[pick[b]])
+            feats.append(moment_features(rates[pick], edges, w, np.sqrt(w[a] * w[b])))
             truth.append(_unit(e))
     F, E = np.asarray(feats), np.asarray(truth)
     A = F.T @ F
