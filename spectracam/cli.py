@@ -562,6 +562,16 @@ def validate_cmd(out_dir, renderer, quiet):
             f"{r['white_BG_published']:.3f}, {r['white_BG_error_percent']:+.1f} %); ΔE*ab with the published matrix "
             f"{r['delta_e_published_mean']:.2f} mean / {r['delta_e_published_max']:.2f} max (LS fit, training: "
             f"{r['delta_e_fit_mean']:.2f} / {r['delta_e_fit_max']:.2f})")
+    wb = result.get("real_camera_data", {}).get("wb_presets", {})
+    if wb.get("status") != "ok":
+        log(f"  white-balance presets: skipped ({wb.get('reason', 'not run')})")
+    for cam in wb.get("cameras", []):
+        if not cam.get("presets"):
+            log(f"  {cam['camera']}: no firmware preset in darktable's file to compare with")
+            continue
+        log(f"  {cam['camera']} against its firmware presets (simulated / preset R/G, B/G): " + "; ".join(
+            f"{p['preset']} {p['RG_simulated']:.3f}/{p['RG_preset']:.3f}, {p['BG_simulated']:.3f}/{p['BG_preset']:.3f}"
+            for p in cam.get("presets", [])))
     log("wrote " + ", ".join(str(p) for p in paths if p.suffix != ".svg"))
 
 
