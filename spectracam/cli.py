@@ -226,7 +226,18 @@ def _write_capture(out_dir: Path, raw, scene) -> list[Path]:
         click.echo(f"raw.dng not written: a {raw.camera.sensor.adc_bits}-bit capture does not fit a DNG that raw "
                    f"developers read (at most {DNG_MAX_BITS} bits); it is in raw.exr", err=True)
         return paths
-    return paths + [write_dng(out_dir / "raw.dng", raw, ChartReference.of(scene))]
+    reference, neutral = ChartReference.of(scene), None
+    if not scene.processing.told_the_light and raw.scene is not None:   # AsShotNeutral: the camera's own white
+        from .processing import develop
+        from .score import camera_rates
+
+        target = None
+        if scene.target.textured:
+            from .reference import TargetReference
+
+            target = TargetReference.of(scene)
+        neutral = develop(camera_rates(raw, scene.processing), raw, reference, scene.processing, target).neutral
+    return paths + [write_dng(out_dir / "raw.dng", raw, reference, neutral_rates=neutral)]
 
 
 @main.command("capture", short_help="Capture a spectral EXR with a simulated sensor.")

@@ -296,3 +296,36 @@ processing = {{ camera = "developed" }}
         # the developed camera meters its own preview: percentile metering, the same for every estimator
         assert len({by[(T, m)]["capture_time_ms"] for m in ("oracle", "grey_world")}) == 1
         assert by[(T, "grey_world")]["delta_e_mean"] != by[(T, "oracle")]["delta_e_mean"]
+
+
+@pytest.mark.parametrize("camera", ["oracle", "developed"])
+def test_dng_carries_forward_matrices_and_the_cameras_own_neutral(tmp_path, camera):
+    import tifffile
+    from click.testing import CliRunner
+
+    from spectracam.cli import main
+
+    out = tmp_path / camera
+    res = CliRunner().invoke(main, ["simulate", "blackbody_3000K", "-o", str(out), "--renderer", "analytic", "--quiet",
+                                    "--set", "image.width=160", "--set", "image.height=120",
+                                    "--set", f"processing.camera={camera}"])
+    assert res.exit_code == 0, res.output
+    report = json.loads((out / "report.json").read_text())
+    with tifffile.TiffFile(out / "raw.dng") as t:
+        tags = t.pages[0].tags
+
+        def rationals(code):
+            v = np.asarray(tags[code].value, float)
+            return v[0::2] / v[1::2]
+
+        for code in (50964, 50965):   # ForwardMatrix1, 2: XYZ_D50 = FM·balanced camera, the neutral onto D50
+            fm = rationals(code).reshape(3, 3)
+            assert np.allclose(fm @ np.ones(3), D50_XYZ, atol=3e-6)
+        assert (tags[50778].value, tags[50779].value) == (17, 21)   # CIE A and D65
+        asn = rationals(50728)
+    times = np.asarray([report["chart"][f"exposure_{k}_ms"] for k in "RGB"])
+    want = np.asarray(report["white_balance"]["neutral"]) * times
+    assert np.allclose(asn, want / want.max(), atol=2e-6)
+    if camera == "developed":   # the camera's own white, not the truth
+        truth = np.asarray(report["white_balance"]["true_neutral"]) * times
+        assert np.max(np.abs(asn - truth / truth.max())) > 1e-3

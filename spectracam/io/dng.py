@@ -84,8 +84,10 @@ negative noise on a CFA's weak channel) and what the standard illuminants cost (
 with the D65 matrix whatever the light) are measured by ``tools/dng_developers.py``; the figures are in the
 README ("Raw developers").
 
-``ForwardMatrix`` is parsed but not used in LibRaw's processing, and darktable's matrix path does not read it,
-so none is written.  LibRaw reads ``BlackLevel`` as an integer (a fractional one is truncated); the pedestal
+``ForwardMatrix1``/``ForwardMatrix2`` (issue 33; :func:`forward_matrices`) are written for readers that use them
+(the DNG SDK, Adobe's converters, RawTherapee's DCP path): LibRaw parses them but does not use them, and darktable's
+matrix path does not read them.  ``AsShotNeutral`` is the oracle's (the true white) for the oracle camera and the
+camera's own estimate for a camera that finds its white (``processing.camera = "developed"``).  LibRaw reads ``BlackLevel`` as an integer (a fractional one is truncated); the pedestal
 is written as the integer the ADC adds (see ``mid_step`` in :func:`write_dng` for the half code a flooring ADC
 leaves).
 """
@@ -102,6 +104,7 @@ from .. import __version__
 from ..architecture import MosaicLayout, PlanesLayout
 from ..capture import RawCapture
 from ..errors import SpectracamError
+from ..processing.calibration import D50_XYZ  # the profile connection space's white (the DNG SDK's normalisation)
 from .files import atomic_write
 
 #: DNG CFAPattern colour codes.
@@ -109,9 +112,6 @@ _CFA_CODE = {"R": 0, "G": 1, "B": 2, "C": 3, "M": 4, "Y": 5, "W": 6}
 #: The DNG calibrations, ``(colour-science illuminant name, EXIF LightSource code)``: ColorMatrix1 under CIE
 #: Standard Illuminant A (17), ColorMatrix2 under D65 (21), whatever the scene's light.
 CALIBRATION_ILLUMINANTS = (("A", 17), ("D65", 21))
-#: D50's white, Y = 1 (xy 0.3457, 0.3585): the DNG profile connection space's, on which the DNG SDK normalises
-#: every ColorMatrix (``NormalizeColorMatrix``: the largest camera value of this white is 1).
-D50_XYZ = np.array([0.3457 / 0.3585, 1.0, (1 - 0.3457 - 0.3585) / 0.3585])
 #: The Make tag of every file spectracam writes.
 MAKE = "spectracam"
 #: ISO 12232 saturation-based speed constant: S_sat = 78 / H_sat (H_sat in lux·s).
@@ -145,10 +145,26 @@ def camera_white(raw: RawCapture, reference) -> np.ndarray:
     return white_rates(raw.camera, reference) * np.asarray(raw.exposure_times_s, float)
 
 
-def as_shot_neutral(raw: RawCapture, reference) -> np.ndarray:
-    """DNG ``AsShotNeutral``: :func:`camera_white` normalised to a maximum of 1."""
-    w = camera_white(raw, reference)
+def as_shot_neutral(raw: RawCapture, reference, neutral_rates: np.ndarray | None = None) -> np.ndarray:
+    """DNG ``AsShotNeutral``: :func:`camera_white` (the oracle's: the true white) normalised to a maximum of 1, or,
+    given the camera's own estimate ``neutral_rates`` (e⁻/s, any scale; :func:`spectracam.processing.develop`),
+    that estimate with the capture's exposure times, normalised the same way."""
+    if neutral_rates is None:
+        w = camera_white(raw, reference)
+    else:
+        w = np.asarray(neutral_rates, float) * np.asarray(raw.exposure_times_s, float)
     return w / w.max()
+
+
+def forward_matrices(raw: RawCapture, reference) -> list[np.ndarray]:
+    """``[ForwardMatrix1, ForwardMatrix2]`` (3×N, DNG orientation: XYZ_D50 = FM·balanced camera) under CIE A and
+    D65: :func:`spectracam.processing.calibration.dual_illuminant_matrices` with Bradford adaptation to D50 (the
+    DNG SDK's), each mapping the balanced neutral (1, …, 1) onto D50's white exactly.  The balanced camera space
+    (camera / neutral) is the same for rates and for the file's exposures, so the rates' fit is the file's."""
+    from ..processing.calibration import dual_illuminant_matrices
+
+    dual = dual_illuminant_matrices(reference, raw.camera, "bradford")
+    return [np.ascontiguousarray(fm.T) for fm in dual.forward_matrices]
 
 
 def _white_preserving_fit(A: np.ndarray, Y: np.ndarray, a: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -374,9 +390,11 @@ def dng_levels(raw: RawCapture, layout=None, mid_step: bool = False) -> tuple[in
     return offset, black, top
 
 
-def dng_tags(raw: RawCapture, reference=None, mid_step: bool = False, layout=None) -> list:
+def dng_tags(raw: RawCapture, reference=None, mid_step: bool = False, layout=None,
+             neutral_rates: np.ndarray | None = None) -> list:
     """The tifffile ``extratags`` of a capture's DNG (see the module docstring and :func:`write_dng`);
-    ``layout``: the layout the DNG holds (:func:`dng_image`; default the capture's)."""
+    ``layout``: the layout the DNG holds (:func:`dng_image`; default the capture's); ``neutral_rates``: the camera's
+    own estimate of the white for ``AsShotNeutral`` (default: the oracle's)."""
     layout = layout or raw.layout
     bits = raw.camera.sensor.adc_bits
     _, black, white = dng_levels(raw, layout, mid_step)
@@ -406,11 +424,14 @@ def dng_tags(raw: RawCapture, reference=None, mid_step: bool = False, layout=Non
         tags.append((50712, 3, 2**bits, tuple(range(1, 2 ** (bits + 1), 2)), True))  # LinearizationTable
     if reference is not None:
         (code1, cm1), (code2, cm2) = color_matrices(raw, reference)
+        fm1, fm2 = forward_matrices(raw, reference)
         tags += [(50721, 10, 3 * n, _srational(cm1.ravel()), True),  # ColorMatrix1
                  (50722, 10, 3 * n, _srational(cm2.ravel()), True),  # ColorMatrix2
-                 (50728, 5, n, _rational(as_shot_neutral(raw, reference)), True),  # AsShotNeutral
+                 (50728, 5, n, _rational(as_shot_neutral(raw, reference, neutral_rates)), True),  # AsShotNeutral
                  (50778, 3, 1, code1, True),  # CalibrationIlluminant1: Standard Illuminant A
-                 (50779, 3, 1, code2, True)]  # CalibrationIlluminant2: D65
+                 (50779, 3, 1, code2, True),  # CalibrationIlluminant2: D65
+                 (50964, 10, 3 * n, _srational(fm1.ravel()), True),  # ForwardMatrix1
+                 (50965, 10, 3 * n, _srational(fm2.ravel()), True)]  # ForwardMatrix2
     return tags
 
 
@@ -430,10 +451,12 @@ def exif_entries(raw: RawCapture, reference=None) -> list[tuple[int, str, tuple]
 DNG_MAX_BITS = 16
 
 
-def write_dng(path: str | Path, raw: RawCapture, reference=None, mid_step: bool = False) -> Path:
+def write_dng(path: str | Path, raw: RawCapture, reference=None, mid_step: bool = False,
+              neutral_rates: np.ndarray | None = None) -> Path:
     """Write a capture as DNG (temp file, then rename): a CFA mosaic, or LinearRaw for three or four planes
-    (pixels less the pedestal, :func:`dng_levels`); with the chart ``reference``, the two colour matrices (CIE A
-    and D65), the as-shot neutral and the ISO too.
+    (pixels less the pedestal, :func:`dng_levels`); with the chart ``reference``, the two colour and forward
+    matrices (CIE A and D65), the as-shot neutral (the oracle's, or the camera's own estimate ``neutral_rates``)
+    and the ISO too.
 
     ``mid_step``: add a ``LinearizationTable`` mapping pixel value p to ``2·p + 1`` (BlackLevel ``2·b``,
     WhiteLevel ``2ⁿ⁺¹ − 1``; LinearRaw: ``2·(b − ⌊b⌋)`` and ``2·(2ⁿ − 1 − ⌊b⌋) + 1``), so developers take each
@@ -474,6 +497,6 @@ def write_dng(path: str | Path, raw: RawCapture, reference=None, mid_step: bool 
                               "camera": raw.camera.to_dict(), "scene": raw.scene, **extra}, sort_keys=True)
     buf = io.BytesIO()
     tifffile.imwrite(buf, data, photometric=photometric, planarconfig="contig" if data.ndim == 3 else None,
-                     compression=None, extratags=dng_tags(raw, reference, mid_step, layout), metadata=None, subfiletype=0,
+                     compression=None, extratags=dng_tags(raw, reference, mid_step, layout, neutral_rates), metadata=None, subfiletype=0,
                      description=description, software=f"spectracam {__version__}", byteorder="<")
     return atomic_write(path, _append_exif_ifd(buf.getvalue(), exif_entries(raw, reference)))

@@ -52,6 +52,8 @@ class Development:
 
     matrix: np.ndarray
     white_balance: dict
+    #: The estimated neutral ``(N,)``, e⁻/s up to scale (unit norm): the DNG's AsShotNeutral.
+    neutral: np.ndarray | None = None
 
 
 def scored_reflectances(reference, target_reference=None) -> tuple:
@@ -111,7 +113,7 @@ def develop(image: np.ndarray, raw, reference, processing, target_reference=None
 
         block["training"] = trained_correction(training_camera(camera), reference.grid, processing.white_balance_training,
                                                _exclusion_key(ctx.scored_reflectances)).to_dict()
-    return Development(M, block)
+    return Development(M, block, estimate)
 
 
 def oracle_block(reference, camera, processing) -> dict:

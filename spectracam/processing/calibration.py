@@ -42,8 +42,9 @@ CALIBRATIONS: Registry = Registry("processing.calibration", "colour calibration"
 
 #: The DNG's two calibration lights (EXIF LightSource 17 = Standard light A, 21 = D65), as spectracam names them.
 CALIBRATION_LIGHTS = ("A", "D65")
-#: The DNG profile connection space's white: D50 (CIE 1931 2°, ICC's value), Y = 1.
-D50_XYZ = np.array([0.9642, 1.0, 0.8249])
+#: The DNG profile connection space's white, D50 at xy (0.3457, 0.3585) (the DNG SDK's), Y = 1: ForwardMatrices map
+#: the balanced neutral onto it, and the SDK normalises every ColorMatrix on it (``NormalizeColorMatrix``).
+D50_XYZ = np.array([0.3457 / 0.3585, 1.0, (1 - 0.3457 - 0.3585) / 0.3585])
 #: Iterations of the neutral → xy search, and its tolerance in xy.
 NEUTRAL_XY_ITERATIONS = 30
 NEUTRAL_XY_TOLERANCE = 1e-7
