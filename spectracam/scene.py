@@ -141,6 +141,17 @@ class Scene(Spec):
 
             load(self.target.library, "target.library").check_covers(float(grid.edges_nm[0]),
                                                                        float(grid.edges_nm[-1]), "target.library")
+        proc = self.processing
+        if proc.white_balance_method == "corrected_moments":   # never trained on what is scored (issue 33)
+            from .target_score import CHART_LIBRARIES
+
+            lib = proc.white_balance_training
+            scored = {self.target.library} if self.target.textured else set()
+            scored |= {name for name, dataset in CHART_LIBRARIES.items() if dataset == chart.dataset}
+            if lib in scored:
+                raise ConfigError("processing.white_balance_training", lib,
+                                  "is the scored scene's own library (" + ", ".join(sorted(scored)) + "); the trained "
+                                  "white balance must be trained on other colours, e.g. 'rawtoaces190'")
         d_lo, d_hi = dataset_range_nm(chart.dataset)
         if grid.edges_nm[0] < d_lo or grid.edges_nm[-1] > d_hi:
             raise ConfigError("wavelengths", f"{grid.centres_nm[0]:g}–{grid.centres_nm[-1]:g} nm",

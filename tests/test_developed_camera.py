@@ -225,8 +225,20 @@ def test_bad_values_name_the_field(field, value):
         Scene.from_dict({table: {key: value}})
 
 
-def test_a_trained_estimator_with_nothing_left_to_train_on_is_refused():
-    scene = _scene(camera="developed", white_balance_training="colorchecker24")
+def test_a_trained_estimator_with_nothing_left_to_train_on_is_refused(tmp_path):
+    # by name, before any work: the scored chart's own library
+    with pytest.raises(ConfigError, match="white_balance_training.*scored scene's own library"):
+        _scene(camera="developed", white_balance_training="colorchecker24")
+    # by content: a file of the chart's own spectra (a copy under another name) leaves nothing once they are removed
+    from spectracam.chart import patch_reflectances
+
+    scene = _scene(camera="developed")
+    lam = np.arange(380.0, 781.0, 5.0)
+    rows = np.stack([rho(lam) for _, rho in patch_reflectances(scene.chart)])
+    csv = tmp_path / "copy.csv"
+    csv.write_text("wavelength_nm," + ",".join(f"p{i}" for i in range(24)) + "\n"
+                   + "\n".join(f"{w:g}," + ",".join(f"{v:.6f}" for v in rows[:, j]) for j, w in enumerate(lam)) + "\n")
+    scene = _scene(camera="developed", white_balance_training=f"file:{csv}")
     cube = pipeline.render(scene, "analytic")
     raw = pipeline.capture(cube, scene=scene)
     with pytest.raises(SpectracamError, match="white_balance_training.*remain"):

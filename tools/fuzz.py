@@ -36,9 +36,12 @@ FIELDS = ["illuminant.temperature_K", "illuminant.white_luminance_cd_m2", "image
           "sensor.black_level_DN", "sensor.adc_full_scale_V", "sensor.dsnu_fraction", "filters.cutoffs_nm",
           "filters.qe", "filters.collection_depth_um", "filters.stacked_depths_um", "optics.f_number", "capture.architecture",
           "capture.exposure", "processing.demosaic", "wavelengths.step_nm", "chart.mask_margin", "sensor.nosuch",
-          "filters.camera", "filters.camera_unit", "capture.white_fill"]
+          "filters.camera", "filters.camera_unit", "capture.white_fill", "capture.metering", "capture.metering_target",
+          "capture.metering_percentile", "processing.camera", "processing.white_balance", "processing.white_balance_p",
+          "processing.white_balance_sigma_px", "processing.white_balance_training", "processing.calibration"]
 VALUES = ["0", "-1", "1e308", "nan", "inf", "-inf", "1.5", "true", '"text"', "[1, 2]", "[]", "{}", "3", "7",
-          "2147483648", "0.001", "bilinear", "fsc", "optimal", "photodiode"]
+          "2147483648", "0.001", "bilinear", "fsc", "optimal", "photodiode", "developed", "percentile", "grey_edge",
+          "dual_illuminant", "corrected_moments", "colorchecker24"]
 
 
 #: A case that runs longer than this hangs (counted as such, then killed).
@@ -754,10 +757,44 @@ def case_view(rng, d: Path):
     return _with_fault(rng, cmd, False)
 
 
+def case_developed(rng, d: Path):
+    """Issue 33: the camera that finds its own white — bad metering/white-balance/calibration values, contradicting
+    combinations (a trained estimator whose training set is the scored chart, so nothing is left to train on; an
+    empty or damaged training CSV), and good developed runs (simulate, capture + score, a sweep over the white
+    balance) under a full disk or SIGTERM."""
+    dev = ["--set", "processing.camera='developed'"]
+    sim = ["simulate", "s.toml", "-o", "out", "--renderer", "analytic", "--quiet"]
+    empty = d / "empty.csv"
+    empty.write_text(rng.choice(["wavelength_nm\n", "wavelength_nm,a\n400,0.5\n", "", "\x00\xff",
+                                 "wavelength_nm,a,b\n400,0.5\n700,x,0.2\n"]))
+    sweep = d / "wb_sweep.toml"
+    sweep.write_text((d / "sw.toml").read_text().split("[axes]")[0] + '[scene]\nprocessing = { camera = "developed" }\n'
+                     '[axes]\n"processing.white_balance" = ["grey_world", "grey_edge"]\n')
+    cases = [
+        (sim + ["--set", "processing.camera='nosuch'"], True),
+        (sim + ["--set", "processing.white_balance='max_rgb'"], True),
+        (sim + ["--set", "processing.calibration='triple'"], True),
+        (sim + ["--set", "capture.metering='spot'"], True),
+        (sim + ["--set", "capture.metering_percentile=101"], True),
+        (sim + ["--set", "capture.metering_target=0"], True),
+        (sim + ["--set", "processing.white_balance_p=nan"], True),
+        (sim + dev + ["--set", "processing.white_balance_training='colorchecker24'"], True),
+        (sim + dev + ["--set", f"processing.white_balance_training='file:{empty}'"], True),
+        (sim + dev, False),
+        (sim + dev + ["--set", "processing.white_balance='grey_edge'", "--set", "capture.metering='average'"], False),
+        (sim + ["--set", "processing.white_balance='white_patch'", "--set", "processing.calibration='dual_illuminant'"],
+         False),
+        (["capture", "r/radiance.exr", "-o", "out", "--quiet"] + dev, False),
+        (["score", "c/raw.exr", "-o", "out", "--quiet"] + dev, False),
+        (["sweep", str(sweep), "-o", "out", "--serial", "--quiet"], False),
+    ]
+    return _with_fault(rng, *rng.choice(cases))
+
+
 CASES = [case_damaged_file, case_scene_value, case_environment, case_garbage_text, case_camera_file, case_foreign_exr,
          case_new_commands, case_signal, case_full_disk, case_memory_limit, case_raw_attributes, case_journal,
          case_experiment_values, case_group_signal, case_scheduler_peer, case_read_only, case_reflectances,
-         case_target, case_architectures, case_spacetime, case_design, case_view]
+         case_target, case_architectures, case_spacetime, case_design, case_view, case_developed]
 
 
 def one(i: int, seed: int, base: Path, cycle: bool = False) -> tuple[str, dict]:
