@@ -341,3 +341,85 @@ def test_dng_carries_forward_matrices_and_the_cameras_own_neutral(tmp_path, came
     if camera == "developed":   # the camera's own white, not the truth
         truth = np.asarray(report["white_balance"]["true_neutral"]) * times
         assert np.max(np.abs(asn - truth / truth.max())) > 1e-3
+
+
+# ---- the design with an estimated white ------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def paper_design():
+    from spectracam.design.spec import DesignSpec
+    from spectracam.experiments.paper import calibrated_luminance, load_experiment
+    from spectracam.illuminant import IlluminantSpec
+    from spectracam.scene import shipped_scene_file
+
+    exp = load_experiment(shipped_scene_file("paper.toml"))
+    level = calibrated_luminance(exp, exp.base.camera)
+    base = exp.base.replace(image=exp.base.image.replace(width=160, height=120))
+    scenes = [base.replace(illuminant=IlluminantSpec("blackbody", 3000.0, None, level))]
+    return exp, scenes, DesignSpec
+
+
+def _design_problem(paper_design, **settings):
+    from spectracam.design.problem import DesignProblem
+
+    exp, scenes, DesignSpec = paper_design
+    return DesignProblem("cfa/single", "gaussian", DesignSpec(filters="gaussian", **settings), exp.base.camera,
+                         exp.base.processing, scenes, "tcs14", "vs15")
+
+
+def test_design_white_penalty_is_the_numpy_computation(paper_design):
+    from spectracam.design.ad import numpy as tnumpy
+    from spectracam.design.ad import tensor
+    from spectracam.metrics import xyz_to_lab
+
+    p = _design_problem(paper_design, white_balance="shades_of_grey", white_balance_p=6.0)
+    x = p.initial()
+    res = p.evaluate(tensor(x))[0]
+    got = tnumpy(res.white_penalty["tcs14"])
+    # the same in numpy from the model's own inputs
+    R = np.stack([tnumpy(r) for r in p.responsivities(tensor(x))])          # (N, B)
+    light, wm = p.lights[0], p.white[0]["tcs14"]
+    cs = light.sets["tcs14"]
+    rates = cs.weights @ R.T                                                 # (S, N)
+    M = np.array([[float(tnumpy(m).reshape(-1)[0]) for m in row] for row in res.conversion])   # (N, 3)
+    e = wm.white_weights @ R.T
+    est = (wm.weights @ (rates / e) ** 6.0 / wm.weights.sum(axis=1)[:, None]) ** (1 / 6.0) * e   # (K, N)
+    Md = p.model.display_matrix
+    y = M @ Md[1]
+    g = e / est
+    g *= (e @ y) / ((g * e) @ y)[:, None]
+    white = Md.sum(axis=1)
+    truth = cs.lab
+    plain = np.linalg.norm(xyz_to_lab(rates @ M @ Md.T, white) - truth, axis=-1).mean()
+    want = np.array([np.linalg.norm(xyz_to_lab((rates * gj) @ M @ Md.T, white) - truth, axis=-1).mean() - plain
+                     for gj in g])
+    np.testing.assert_allclose(got, want, rtol=1e-7, atol=1e-9)
+    assert np.all(np.isfinite(want)) and want.mean() > 0.05     # an estimated white costs something
+
+
+def test_design_objective_adds_the_white_penalty_and_its_gradient_is_exact(paper_design):
+    from spectracam.design.ad import numpy as tnumpy
+    from spectracam.design.ad import tensor
+
+    oracle = _design_problem(paper_design)
+    est = _design_problem(paper_design, white_balance="grey_world")
+    x = oracle.initial()
+    v0, _, de0 = oracle.value_and_gradient(x)
+    v1, g, de1 = est.value_and_gradient(x)
+    pen = tnumpy(est.evaluate(tensor(x), sets=("tcs14",))[0].white_penalty["tcs14"]).mean()
+    assert v1 == pytest.approx(v0 + pen, rel=1e-9) and de1 == pytest.approx(de0 + pen, rel=1e-9)
+    for i in (0, 2, x.size - 1):
+        h = 1e-4 * max(1.0, abs(x[i]))
+        xp, xm = x.copy(), x.copy()
+        xp[i] += h
+        xm[i] -= h
+        fd = (est.value_and_gradient(xp)[0] - est.value_and_gradient(xm)[0]) / (2 * h)
+        assert abs(g[i] - fd) <= 1e-4 * max(abs(fd), 1e-3), (i, g[i], fd)
+
+
+def test_design_white_balance_values_are_checked():
+    from spectracam.design.spec import DesignSpec
+
+    with pytest.raises(ConfigError, match="white_balance"):
+        DesignSpec(white_balance="corrected_moments")
+    with pytest.raises(ConfigError, match="white_balance_p"):
+        DesignSpec(white_balance_p=0.5)

@@ -295,6 +295,51 @@ def expected_delta_e(mean_rgb: list, cov_rgb: list, lab_true: np.ndarray, cam: C
     return dr.mean(dr.sqrt(d2 + 1e-12), axis=1)
 
 
+@dataclass(frozen=True, eq=False)
+class WhiteModel:
+    """A camera that must find its own white (issue 33), for the design: training Mondrians of the training colours
+    under the light, each a weighted set of its colours (``weights (K, S)``), the estimator's Minkowski order ``p``
+    (1: grey world; 6: shades of grey), and the light's perfect white diffuser (``white_weights (B,)``)."""
+
+    weights: np.ndarray
+    p: float
+    white_weights: np.ndarray
+
+
+def white_balance_penalty(R: list, rates: list, M: list, lab_true: np.ndarray, wm: WhiteModel, cam: CameraModel):
+    """``(K,)`` the extra noise-free ΔE*ab of the colours (``rates`` per channel, ``(S,)``) when the camera balances
+    by the neutral its estimator finds in each training Mondrian instead of the true one: the estimate
+    ``ê_jk = (Σ_s W_js ρ_sk^p / Σ_s W_js)^(1/p)``, the gains ``e/ê_j`` scaled so the white keeps its luminance, the
+    colours through ``diag(g_j)·M`` against their truth, minus the same through ``M``.  Differentiable in ``R``."""
+    dr, _ = backend()
+    n = len(R)
+    e = [dr.sum(tensor(wm.white_weights) * r) for r in R]                    # the true neutral, e⁻/s
+    W = tensor(wm.weights)                                                   # (K, S)
+    wsum = tensor(wm.weights.sum(axis=1))
+    est = []
+    for k in range(n):
+        x = rates[k] / fresh(e[k])                                            # ≈ reflectance scale: no overflow
+        est.append(dr.power(dr.sum(W * dr.power(x, wm.p)[None, :], axis=1) / wsum, 1.0 / wm.p) * fresh(e[k]))
+    Md = [[float(v) for v in row] for row in cam.display_matrix]
+    white = cam.display_matrix.sum(axis=1)
+    y_disp = [sum(fresh(M[k][c]) * Md[1][c] for c in range(3)) for k in range(n)]   # luminance per unit of channel k
+    y_true = sum(e[k] * y_disp[k] for k in range(n))
+    g = [fresh(e[k]) / est[k] for k in range(n)]                              # (K,) per channel
+    y_est = sum(g[k] * fresh(e[k] * y_disp[k]) for k in range(n))
+    g = [gk * fresh(y_true) / y_est for gk in g]
+
+    def lab_of(gains):
+        rgb = [sum(rates[k][None, :] * (gains[k][:, None] if gains else 1.0) * fresh(M[k][c]) for k in range(n))
+               for c in range(3)]
+        X, Y, Z = (Md[i][0] * rgb[0] + Md[i][1] * rgb[1] + Md[i][2] * rgb[2] for i in range(3))
+        return xyz_to_lab(X, Y, Z, white)
+
+    def delta_e(lab):
+        return dr.sqrt(sum((lab[i] - tensor(lab_true[:, i])[None, :]) ** 2 for i in range(3)) + 1e-12)
+
+    return dr.mean(delta_e(lab_of(g)), axis=1) - dr.mean(delta_e(lab_of(None)), axis=1)
+
+
 @dataclass
 class LightResult:
     """The model's answer for one light: tensors (differentiable) per colour set."""
@@ -305,10 +350,13 @@ class LightResult:
     snr_db: dict        # set → (S,) combined SNR
     channel_snr_db: dict
     clipped: dict       # set → number of colours whose mean + 3σ passes the well
+    #: set → (K,) the extra ΔE*ab of an estimated white per training Mondrian (:func:`white_balance_penalty`)
+    white_penalty: dict = field(default_factory=dict)
 
 
-def evaluate(R: list, light: LightModel, cam: CameraModel, split=None, sets=None) -> LightResult:
-    """The expected-error model for responsivities ``R`` (N tensors of shape (B,), electrons per photon)."""
+def evaluate(R: list, light: LightModel, cam: CameraModel, split=None, sets=None, estimated=None) -> LightResult:
+    """The expected-error model for responsivities ``R`` (N tensors of shape (B,), electrons per photon); with
+    ``estimated`` (set name → :class:`WhiteModel`), the estimated white's penalty for those sets too."""
     dr, _ = backend()
     chart = _rates(light.chart_weights, R)
     M = conversion(chart, light.target_rgb)
@@ -335,6 +383,8 @@ def evaluate(R: list, light: LightModel, cam: CameraModel, split=None, sets=None
                     cov[c][d] = cov[d][c] = acc + (1e-14 if c == d else 0.0)
             des.append(expected_delta_e(mean_rgb, cov, cs.lab, cam))
         res.delta_e[name] = sum(des[1:], des[0]) / len(des)
+        if estimated and name in estimated:
+            res.white_penalty[name] = white_balance_penalty(R, rates, M, cs.lab, estimated[name], cam)
         ln10 = float(np.log(10.0))
         ch = [10.0 * dr.log(pk * pk / v) / ln10 for pk, v in zip(p, var)]
         res.channel_snr_db[name] = ch

@@ -47,6 +47,32 @@ def light_model(scene, camera, processing, sets=(CHART,), label: str | None = No
                       chart_w[WHITE_PATCH], out)
 
 
+#: Training Mondrians per light for a design whose camera estimates its white, and the surfaces in each (as the
+#: trained estimator's: spectracam.processing.white_balance).
+DESIGN_MONDRIANS = 24
+
+
+def white_models(scene, camera, light: LightModel, sets, settings) -> dict:
+    """Set name → :class:`~spectracam.design.model.WhiteModel`: Mondrians of that set's colours under the light
+    (fixed draws), the estimator's order, and the light's perfect white diffuser through the optics."""
+    from ..illuminant import white_diffuser_radiance
+    from ..processing.white_balance import TRAINING_SEED, TRAINING_SURFACES
+    from .model import WhiteModel
+
+    p = 1.0 if settings.white_balance == "grey_world" else float(settings.white_balance_p)
+    white = white_diffuser_radiance(scene.illuminant, scene.grid) * photon_weights(scene, camera)
+    out = {}
+    for name in dict.fromkeys(sets):
+        n = light.sets[name].weights.shape[0]
+        rng = np.random.default_rng(TRAINING_SEED)
+        W = np.zeros((DESIGN_MONDRIANS, n))
+        for j in range(DESIGN_MONDRIANS):
+            k = int(rng.integers(min(TRAINING_SURFACES[0], n), min(TRAINING_SURFACES[1], n) + 1))
+            W[j, rng.choice(n, k, replace=False)] = rng.dirichlet(np.ones(k))
+        out[name] = WhiteModel(W, p, white)
+    return out
+
+
 class DesignProblem:
     """One architecture's design: its parametrisation, the optional IR-cut edge and exposure split, the lights,
     and the objective — the mean expected ΔE*ab over the training colours × lights, plus the realisability
@@ -72,6 +98,8 @@ class DesignProblem:
         self.training, self.held_out = training, held_out
         self.lights = [light_model(s, self.camera, processing, sets=tuple(dict.fromkeys((CHART, training, held_out))))
                        for s in scenes]
+        self.white = [white_models(s, self.camera, light, (training, held_out), settings) for s, light in
+                      zip(scenes, self.lights)] if getattr(settings, "white_balance", "oracle") != "oracle" else None
         self.n_param = self.param.initial().size
         self.evaluations = 0
 
@@ -134,7 +162,8 @@ class DesignProblem:
 
         R = self.responsivities(x)
         split = self.shares(x)
-        return [evaluate(R, light, self.model, split, sets) for light in self.lights]
+        white = self.white or [None] * len(self.lights)
+        return [evaluate(R, light, self.model, split, sets, w) for light, w in zip(self.lights, white)]
 
     def objective(self, x):
         """``(value, aux)``: the scalar the optimiser minimises (see the class), and the training ΔE."""
@@ -143,6 +172,8 @@ class DesignProblem:
         dr, _ = backend()
         results = self.evaluate(x, sets=(self.training,))
         de = sum(dr.mean(r.delta_e[self.training]) for r in results) / len(results)
+        if self.white:   # the camera finds its own white: the estimator's extra error on the training colours
+            de = de + sum(dr.mean(r.white_penalty[self.training]) for r in results) / len(results)
         value = de + self.param.penalty(x)
         if self.settings.snr_weight:
             snr = sum(dr.mean(r.snr_db[self.training]) for r in results) / len(results)

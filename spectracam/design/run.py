@@ -78,7 +78,8 @@ def predicted(problem: DesignProblem, x=None, camera=None) -> dict:
         same = (camera.capture.architecture == problem.camera.capture.architecture
                 and camera.capture.exposure == problem.model.exposure)
         model = problem.model if same else CameraModel.of(camera, problem.processing)   # the demosaic's factors once
-        results = [evaluate(R, light, model, None) for light in problem.lights]
+        white = problem.white or [None] * len(problem.lights)
+        results = [evaluate(R, light, model, None, None, w) for light, w in zip(problem.lights, white)]
     else:
         results = problem.evaluate(tensor(np.asarray(x, float)))
     out = {"by_light": {}}
@@ -91,7 +92,16 @@ def predicted(problem: DesignProblem, x=None, camera=None) -> dict:
             "chart_snr_db": float(numpy(r.snr_db[CHART]).mean()),
             "exposure_ms": [1e3 * float(numpy(t).reshape(-1)[0]) for t in r.times_s],
             "clipped_training_colours": r.clipped[problem.training]}
-    for k in ("training", "held_out", "held_out_p95", "chart", "chart_snr_db"):
+        if problem.white:   # the estimated white's extra error, and the totals the objective saw
+            for k, name in (("training", problem.training), ("held_out", problem.held_out)):
+                pen = float(numpy(r.white_penalty[name]).mean())
+                out["by_light"][light.label][f"{k}_white_penalty"] = pen
+                out["by_light"][light.label][f"{k}_estimated_white"] = out["by_light"][light.label][k] + pen
+    keys = ["training", "held_out", "held_out_p95", "chart", "chart_snr_db"]
+    if problem.white:
+        keys += ["training_white_penalty", "training_estimated_white", "held_out_white_penalty",
+                 "held_out_estimated_white"]
+    for k in keys:
         out[k] = float(np.mean([v[k] for v in out["by_light"].values()]))
     return out
 
@@ -156,12 +166,20 @@ def design_one(problem: DesignProblem, spec: DesignSpec, cubes: dict, log=lambda
     entry["held_out_delta_e"] = p_opt["held_out"]
     t1 = time.perf_counter()
     entry["monte_carlo_delta_e"] = monte_carlo(designed, cubes, problem.processing, spec.seeds)
+    developed = None
+    if spec.developed:   # the same cameras developed by a camera that finds its own white (issue 33)
+        from ..pipeline import camera_processing
+
+        developed = camera_processing(problem.processing, "developed")
+        entry["monte_carlo_developed_delta_e"] = monte_carlo(designed, cubes, developed, spec.seeds)
     log(f"{problem.design}: Monte Carlo {entry['monte_carlo_delta_e']['mean']:.3f} ΔE (chart, {spec.seeds} seeds) "
         f"against the model's {p_opt['chart']:.3f}")
     paper_pred = predicted(problem, camera=paper)
     entry["paper_filters"] = {"design": paper.design, "predicted_delta_e": paper_pred,
                               "held_out_delta_e": paper_pred["held_out"],
                               "monte_carlo_delta_e": monte_carlo(paper, cubes, problem.processing, spec.seeds)}
+    if developed is not None:
+        entry["paper_filters"]["monte_carlo_developed_delta_e"] = monte_carlo(paper, cubes, developed, spec.seeds)
     if spec.luther and not problem.param.stacked:
         luther = paper.replace(filters=paper.filters.replace(kind="xyz"))
         lp = predicted(problem, camera=luther)
@@ -211,6 +229,10 @@ def run_design(spec: DesignSpec, base_dir: Path, log=lambda m: None, st: Setup |
                            "processing": st.processing.to_dict(),
                            "objective": "mean expected ΔE*ab (CIE 1976) over the training library × lights, the "
                                         "conversion fitted on the chart under each light (paper 3.5)"
+                                        + ("" if spec.white_balance == "oracle" else
+                                           f", plus the extra noise-free ΔE*ab of balancing by the white "
+                                           f"{spec.white_balance} finds in training Mondrians of the training colours "
+                                           "(docs/metrics.md, 'The design with an estimated white')")
                                         + (f", minus {spec.snr_weight:g} × mean combined SNR (dB)"
                                            if spec.snr_weight else ""),
                            "monte_carlo": f"chart ΔE*ab (paper Fig. 5b) through capture → score, {spec.seeds} seeds "

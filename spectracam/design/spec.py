@@ -18,7 +18,11 @@ from .variables import PARAMETRISATIONS
 DESIGN_KEYS = ("experiment", "lights", "training", "held_out", "designs", "filters", "start_cutoffs_nm",
                "edge_width_nm", "start_centres_nm", "start_fwhm_nm", "knot_step_nm", "min_transmittance",
                "smoothness", "design_ir_cut", "start_ir_cut_nm", "snr_weight", "max_iterations", "tolerance",
-               "seeds", "renderer", "image_px", "grid", "luther")
+               "seeds", "renderer", "image_px", "grid", "luther", "white_balance", "white_balance_p", "developed")
+
+
+#: The whites the design's model can balance by (:attr:`DesignSpec.white_balance`).
+DESIGN_WHITE_BALANCES = ("oracle", "grey_world", "shades_of_grey")
 
 
 @dataclass(frozen=True)
@@ -53,6 +57,15 @@ class DesignSpec(Spec):
     start_ir_cut_nm: float = 680.0
     #: ΔE per dB of mean combined SNR traded in the objective (0: ΔE alone).
     snr_weight: float = 0.0
+    #: The white the objective's camera balances by (issue 33): "oracle" (told the light: the paper's) or an
+    #: estimator the model differentiates through — "grey_world" or "shades_of_grey" (Minkowski p =
+    #: white_balance_p) over training Mondrians of the training colours under each light: the expected ΔE then
+    #: includes the estimator's error, so the filters are designed for a camera that must find its own white.
+    white_balance: str = "oracle"
+    white_balance_p: float = 6.0
+    #: Also verify every design by Monte Carlo with the developed camera (its own metering, trained white balance,
+    #: dual-illuminant calibration) beside the oracle.
+    developed: bool = True
     max_iterations: int = 80
     #: L-BFGS-B stops when the objective changes by less than this (relative).
     tolerance: float = 1e-7
@@ -113,6 +126,9 @@ class DesignSpec(Spec):
         self.boolean("design_ir_cut", "grid", "luther")
         self.number("start_ir_cut_nm", 550, 800, unit="nm")
         self.number("snr_weight", 0, 10)
+        self.choice("white_balance", DESIGN_WHITE_BALANCES)
+        self.number("white_balance_p", 1, 16)
+        self.boolean("developed")
         self.integer("max_iterations", 1, 10000)
         self.number("tolerance", 0, 1, lo_open=True)
         self.integer("seeds", 1, 100)

@@ -202,6 +202,10 @@ def scaled(scene: Scene, cube: RadianceCube, factor: float) -> tuple[Scene, Radi
 def design_case(cube, scene: Scene, camera: CameraSpec, processing: ProcessingSpec, design: str, seed: int):
     """One design under one light: its capture, score and the numbers the figures show."""
     cam = camera.with_design(design)
+    if not processing.told_the_light:   # a camera that finds its own white meters itself too (issue 33)
+        from ..processing import metered_camera
+
+        cam = metered_camera(cam, processing)
     reference = ChartReference.of(scene)
     raw = capture(cube, cam, seed, reference.white_box)
     result = score(raw, reference, processing)
