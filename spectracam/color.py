@@ -65,6 +65,9 @@ class ProcessingSpec(Spec):
     #: How camera space becomes XYZ given the neutral (spectracam.processing.calibration): scene_light,
     #: dual_illuminant, or "auto".
     calibration: str = "auto"
+    #: How the written pictures (rendered.png, the page) map linear display RGB to 8 bits
+    #: (spectracam.processing.tone): "srgb" (clipped, sRGB-encoded) or "filmic"; never inside a score.
+    tone_curve: str = "srgb"
 
     def validate(self) -> None:
         from .processing import CALIBRATIONS, CAMERAS, WHITE_BALANCE_METHODS
@@ -75,6 +78,9 @@ class ProcessingSpec(Spec):
             if getattr(self, name) != "auto":
                 self.choice(name, registry)
         self.number("white_balance_p", 1.0, 64.0)
+        from .processing.tone import TONE_CURVES
+
+        self.choice("tone_curve", TONE_CURVES)
         self.number("white_balance_sigma_px", 0.3, 16.0)
         lib = self.white_balance_training
         if not isinstance(lib, str) or not (lib in LIBRARIES or (lib.startswith("file:") and len(lib) > 5)):

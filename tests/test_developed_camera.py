@@ -423,3 +423,28 @@ def test_design_white_balance_values_are_checked():
         DesignSpec(white_balance="corrected_moments")
     with pytest.raises(ConfigError, match="white_balance_p"):
         DesignSpec(white_balance_p=0.5)
+
+
+def test_tone_curve_changes_the_picture_never_the_score(tmp_path):
+    from click.testing import CliRunner
+    from PIL import Image
+
+    from spectracam.cli import main
+    from spectracam.processing.tone import tone_map
+
+    out = {}
+    for tone in ("srgb", "filmic"):
+        d = tmp_path / tone
+        res = CliRunner().invoke(main, ["simulate", "d65", "-o", str(d), "--renderer", "analytic", "--quiet",
+                                        "--set", "image.width=160", "--set", "image.height=120",
+                                        "--set", "processing.camera='developed'",
+                                        "--set", f"processing.tone_curve='{tone}'"])
+        assert res.exit_code == 0, res.output
+        out[tone] = (json.loads((d / "report.json").read_text()), np.asarray(Image.open(d / "rendered.png")))
+    (a, png_a), (b, png_b) = out["srgb"], out["filmic"]
+    assert a["chart"] == b["chart"] and a["both_ways"] == b["both_ways"]
+    assert np.abs(png_a.astype(int) - png_b.astype(int)).max() > 20
+    # the developed camera shows its metered white at Y = 1: sRGB clips it, filmic keeps it below the top code
+    x = np.array([0.0, 0.18, 1.0, 4.0])
+    s, f = tone_map(x, "srgb"), tone_map(x, "filmic")
+    assert s.tolist() == [0.0, 0.18, 1.0, 1.0] and f[0] == 0 and np.all(np.diff(f) > 0) and f[-1] < 1

@@ -32,12 +32,16 @@ def display_chromaticities(display: str) -> tuple[float, ...]:
     return tuple(float(v) for c in xy for v in c)
 
 
-def srgb_preview(rendered_rgb: np.ndarray, display: str, adapt_white: bool = True) -> np.ndarray:
+def srgb_preview(rendered_rgb: np.ndarray, display: str, adapt_white: bool = True, tone_curve: str = "srgb"
+                 ) -> np.ndarray:
     """8-bit sRGB of linear display RGB: display RGB → XYZ → (``adapt_white``: Bradford from the
     display's white to sRGB's D65, so that what is neutral on the display looks neutral on an sRGB
-    screen) → linear sRGB, clipped, sRGB-encoded.  ``adapt_white=False`` shows the display's colours
-    as they are (the CRT's white, x, y = 0.289, 0.313, about 8300 K, stays bluish)."""
+    screen) → linear sRGB, through ``tone_curve`` (:mod:`spectracam.processing.tone`; ``srgb``: clipped),
+    sRGB-encoded.  ``adapt_white=False`` shows the display's colours as they are (the CRT's white, x, y = 0.289,
+    0.313, about 8300 K, stays bluish)."""
     import colour
+
+    from ..processing.tone import tone_map
 
     M = display_rgb_to_xyz(display)
     srgb = colour.RGB_COLOURSPACES["sRGB"]
@@ -46,7 +50,7 @@ def srgb_preview(rendered_rgb: np.ndarray, display: str, adapt_white: bool = Tru
         d65 = np.asarray(srgb.matrix_RGB_to_XYZ).sum(axis=1)
         to_srgb = to_srgb @ adaptation_matrix(M.sum(axis=1), d65, "bradford")
     lin = rendered_rgb @ (to_srgb @ M).T
-    return (np.clip(colour.cctf_encoding(np.clip(lin, 0, 1), "sRGB"), 0, 1) * 255 + 0.5).astype(np.uint8)
+    return (np.clip(colour.cctf_encoding(tone_map(lin, tone_curve), "sRGB"), 0, 1) * 255 + 0.5).astype(np.uint8)
 
 
 def write_png(path: Path, rgb8: np.ndarray) -> Path:
@@ -139,7 +143,8 @@ def write_score_outputs(out_dir: str | Path, result: ChartScore, adapt_white: bo
     params = result.parameters
     display = params["processing"]["display"]
     paths = [write_rendered_exr(out / "rendered.exr", result),
-             write_png(out / "rendered.png", srgb_preview(result.rendered_rgb, display, adapt_white))]
+             write_png(out / "rendered.png", srgb_preview(result.rendered_rgb, display, adapt_white,
+                                                                params["processing"].get("tone_curve", "srgb")))]
     c = result.summary
     snr = "∞" if c.snr_combined_db is None else f"{c.snr_combined_db:.1f}"
     name = (params.get("scene") or {}).get("name", "")
@@ -172,7 +177,8 @@ def write_target_outputs(out_dir: str | Path, result, adapt_white: bool = True) 
     params = result.parameters
     display = params["processing"]["display"]
     paths = [write_display_exr(out / "rendered.exr", result.rendered_rgb, params),
-             write_png(out / "rendered.png", srgb_preview(result.rendered_rgb, display, adapt_white))]
+             write_png(out / "rendered.png", srgb_preview(result.rendered_rgb, display, adapt_white,
+                                                                params["processing"].get("tone_curve", "srgb")))]
     h = result.held_out
     design = f"{params['camera']['capture']['architecture']}/{params['camera']['capture']['exposure']}"
     name = (params.get("scene") or {}).get("name", "")

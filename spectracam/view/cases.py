@@ -171,7 +171,8 @@ def _rendered(case: Case, path: Path):
     M = display_rgb_to_xyz(display)
     xyz = rgb @ M.T
     case.rendered_lab = xyz_to_lab(xyz, M.sum(axis=1)).astype(np.float32)
-    case.images["rendered"] = rgba(srgb_preview(rgb, display))  # as rendered.png shows it
+    tone = (params.get("processing") or {}).get("tone_curve", "srgb")
+    case.images["rendered"] = rgba(srgb_preview(rgb, display, tone_curve=tone))  # as rendered.png shows it
     return params
 
 
