@@ -274,6 +274,11 @@ def test_simulate_reports_both_cameras(tmp_path):
     for k in ("delta_e_mean", "delta_e_p95", "delta_e2000_mean", "held_out_delta_e", "metered_exposure_ms"):
         assert bw["developed"][k] > 0
     assert report["white_balance"]["method"] == "oracle"
+    # the page shows the two cameras side by side
+    from spectracam.view.page import both_ways_table
+
+    table = both_ways_table(report)
+    assert "oracle (told the light)" in table and f"{bw['developed']['delta_e_mean']:.2f}" in table
 
 
 def test_a_sweep_over_the_white_balance(tmp_path):

@@ -175,6 +175,29 @@ def patch_table(report: dict) -> str:
             "<th>ΔE*ab of the conversion</th><th>SNR (dB)</th></tr>" + "".join(rows) + "</table>")
 
 
+#: The rows of the oracle / developed table (report.json's ``both_ways``; docs/metrics.md).
+BOTH_WAYS_ROWS = (("delta_e_mean", "mean ΔE*ab per pixel", 2), ("delta_e_p95", "95th percentile ΔE*ab", 2),
+                  ("delta_e2000_mean", "mean CIEDE2000", 2), ("held_out_delta_e", "held-out ΔE*ab (noise-free)", 2),
+                  ("awb_recovery_deg", "white's recovery error (°)", 2),
+                  ("awb_reproduction_deg", "white's reproduction error (°)", 2),
+                  ("metered_exposure_ms", "metered capture time (ms)", 2))
+
+
+def both_ways_table(report: dict) -> str:
+    """report.json's ``both_ways``: the camera told the light (oracle) beside the one that finds its own white."""
+    bw = report.get("both_ways")
+    if not isinstance(bw, dict) or not isinstance(bw.get("oracle"), dict) or not isinstance(bw.get("developed"), dict):
+        return ""
+
+    def cell(v, digits):
+        return "–" if not isinstance(v, (int, float)) else f"{v:.{digits}f}"
+
+    rows = "".join(f"<tr><td>{label}</td><td>{cell(bw['oracle'].get(k), d)}</td>"
+                   f"<td>{cell(bw['developed'].get(k), d)}</td></tr>" for k, label, d in BOTH_WAYS_ROWS)
+    return ("<table><tr><th></th><th>oracle (told the light)</th><th>developed (finds its own white)</th></tr>"
+            + rows + f"</table><p class=note>metering: {html.escape(str(bw.get('metering', '')))}</p>")
+
+
 def _data_uri(path: Path) -> str:
     mime = {".png": "image/png", ".gif": "image/gif", ".svg": "image/svg+xml"}.get(path.suffix.lower(), "image/png")
     return f"data:{mime};base64," + base64.b64encode(path.read_bytes()).decode()
@@ -251,9 +274,13 @@ def build_page(c: Contents, cases: list[Case]) -> str:
     for p in c.json_files:
         if p.name == "report.json":
             try:
-                table = patch_table(json.loads(p.read_text()))
+                report = json.loads(p.read_text())
+                both = both_ways_table(report)
+                table = patch_table(report)
             except (ValueError, KeyError, TypeError, IndexError):
-                table = ""
+                both = table = ""
+            if both:
+                body += [f"<h2>two cameras ({html.escape(str(p.relative_to(c.directory)))})</h2>", both]
             if table:
                 body += [f"<h2>patches ({html.escape(str(p.relative_to(c.directory)))})</h2>", table]
     for p in c.markdown:
