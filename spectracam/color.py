@@ -170,6 +170,15 @@ def _bradford(white_from, white_to):
     return np.asarray(colour.adaptation.matrix_chromatic_adaptation_VonKries(white_from, white_to, transform="Bradford"))
 
 
+@ADAPTATIONS.register("cat16")
+def _cat16(white_from, white_to):
+    """von Kries in CAT16's sharpened cone space (Li et al., Color Res. Appl. 42(6) 2017; CIECAM16's), full
+    adaptation, colour-science's implementation."""
+    import colour
+
+    return np.asarray(colour.adaptation.matrix_chromatic_adaptation_VonKries(white_from, white_to, transform="CAT16"))
+
+
 def adaptation_matrix(white_from: np.ndarray, white_to: np.ndarray, method: str) -> np.ndarray:
     """3×3 matrix carrying XYZ seen under ``white_from`` to the corresponding XYZ under ``white_to``.
 

@@ -453,3 +453,18 @@ def test_tone_curve_changes_the_picture_never_the_score(tmp_path):
     x = np.array([0.0, 0.18, 1.0, 4.0])
     s, f = tone_map(x, "srgb"), tone_map(x, "filmic")
     assert s.tolist() == [0.0, 0.18, 1.0, 1.0] and f[0] == 0 and np.all(np.diff(f) > 0) and f[-1] < 1
+
+
+@pytest.mark.parametrize("adaptation", ["xyz_scaling", "bradford", "cat16"])
+def test_every_adaptation_carries_white_to_white_and_the_developed_camera_runs_with_it(adaptation):
+    from spectracam.color import adaptation_matrix
+
+    a, b = np.array([1.0985, 1.0, 0.3558]), np.array([0.9505, 1.0, 1.0888])   # CIE A, D65
+    A = adaptation_matrix(a, b, adaptation)
+    assert np.allclose(A @ a, b, atol=1e-9)
+    if adaptation == "cat16":   # not the Bradford matrix: a named, different transform
+        assert not np.allclose(A, adaptation_matrix(a, b, "bradford"), atol=1e-3)
+    scene = _scene("blackbody_3000K", camera="developed", white_balance="oracle", adaptation=adaptation)
+    cube = pipeline.render(scene, "analytic")
+    r = pipeline.score(pipeline.capture(cube, scene=scene), scene)
+    assert r.white_balance["calibration"] == "dual_illuminant" and np.isfinite(r.summary.delta_e_mean)
