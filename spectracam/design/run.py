@@ -78,7 +78,7 @@ def predicted(problem: DesignProblem, x=None, camera=None) -> dict:
         same = (camera.capture.architecture == problem.camera.capture.architecture
                 and camera.capture.exposure == problem.model.exposure)
         model = problem.model if same else CameraModel.of(camera, problem.processing)   # the demosaic's factors once
-        white = problem.white or [None] * len(problem.lights)
+        white = getattr(problem, "white", None) or [None] * len(problem.lights)
         results = [evaluate(R, light, model, None, None, w) for light, w in zip(problem.lights, white)]
     else:
         results = problem.evaluate(tensor(np.asarray(x, float)))
