@@ -791,10 +791,33 @@ def case_developed(rng, d: Path):
     return _with_fault(rng, *rng.choice(cases))
 
 
+def case_white_balance(rng, d: Path):
+    """Issue 33: ``spectracam white-balance`` — bad --seeds, --renderer and --set values, a trained estimator whose
+    training set is too small once the scored colours are removed, a grid the Sigma's curves leave one band of; a
+    small quick run under a full disk or SIGTERM (nothing half-written)."""
+    quick = ["white-balance", "-o", "out", "--quick", "--set", "image.width=64", "--set", "image.height=48"]
+    (d / "tiny_library.csv").write_text("wavelength_nm,a,b,c\n380,0.1,0.5,0.9\n580,0.2,0.5,0.8\n780,0.3,0.5,0.7\n")
+    cases = [
+        (quick + ["--seeds", "0"], True), (quick + ["--seeds", "x"], True), (quick + ["--seeds", "1e9"], True),
+        (quick + ["--renderer", "nosuch"], True), (quick + ["--set", "sensor.nosuch=1"], True),
+        (quick + ["--set", "processing.white_balance_p=0"], True),
+        (quick + ["--set", "processing.white_balance_sigma_px=nan"], True),
+        (quick + ["--set", "processing.white_balance_training='nosuch'"], True),
+        (quick + ["--set", "processing.white_balance_training='cfi99'"], True),
+        (quick + ["--set", "processing.white_balance_training='file:nosuch.csv'"], True),
+        (quick + ["--set", "processing.white_balance_training='file:tiny_library.csv'"], True),
+        (quick + ["--set", "wavelengths.start_nm=670"], True), (quick + ["--set", "image.width=0"], True),
+        (quick + ["--set", "illuminant.white_luminance_cd_m2=-1"], True),
+        (quick, False), (quick + ["--seeds", "2", "--set", "processing.white_balance_p=2"], False),
+    ]
+    return _with_fault(rng, *rng.choice(cases))
+
+
 CASES = [case_damaged_file, case_scene_value, case_environment, case_garbage_text, case_camera_file, case_foreign_exr,
          case_new_commands, case_signal, case_full_disk, case_memory_limit, case_raw_attributes, case_journal,
          case_experiment_values, case_group_signal, case_scheduler_peer, case_read_only, case_reflectances,
-         case_target, case_architectures, case_spacetime, case_design, case_view, case_developed]
+         case_target, case_architectures, case_spacetime, case_design, case_view, case_developed,
+         case_white_balance]
 
 
 def one(i: int, seed: int, base: Path, cycle: bool = False) -> tuple[str, dict]:

@@ -219,8 +219,6 @@ def training_lights():
 def trained_correction(camera, grid, library: str, exclusion: tuple = ()) -> TrainedCorrection:
     """The corrected-moments correction for ``camera`` on ``grid``, trained on ``library`` under
     :data:`TRAINING_LIGHTS` minus the scored colours ``exclusion`` (memoised)."""
-    from ..camera import photo_electron_rates
-    from ..illuminant import white_diffuser_radiance
     from ..reflectances import load
 
     rset = load(library, "processing.white_balance_training")
@@ -239,7 +237,19 @@ def trained_correction(camera, grid, library: str, exclusion: tuple = ()) -> Tra
         raise SpectracamError(f"processing.white_balance_training = {library!r}: {int(keep.sum())} of its {len(refl)} "
                               f"reflectances remain once those matching the scored scene's colours are removed; the "
                               f"trained estimator needs at least {TRAINING_SURFACES[0]}: train on another library")
-    refl = refl[keep]
+    return _trained(camera, grid, library, keep.tobytes())
+
+
+@lru_cache(maxsize=32)
+def _trained(camera, grid, library: str, kept: bytes) -> TrainedCorrection:
+    """The training itself, memoised on the samples kept (scored sets that remove the same samples share it)."""
+    from ..camera import photo_electron_rates
+    from ..illuminant import white_diffuser_radiance
+    from ..reflectances import load
+
+    refl_all = band_reflectance(load(library, "processing.white_balance_training"), grid)
+    keep = np.frombuffer(kept, bool)
+    refl = refl_all[keep]
     rng = np.random.default_rng(TRAINING_SEED)
     feats, truth = [], []
     for light in training_lights():
