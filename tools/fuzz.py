@@ -708,6 +708,9 @@ def case_design(rng, d: Path):
         (quick + ["--set", "seeds=0"], True), (quick + ["--set", "max_iterations=0"], True),
         (quick + ["--set", "tolerance=0"], True), (quick + ["--set", "nosuch=1"], True),
         (["design", str(bad_file), "-o", "out"], True), (["design", "nosuch.toml", "-o", "out"], True),
+        (quick + ["--set", "white_balance='corrected_moments'"], True), (quick + ["--set", "white_balance_p=0"], True),
+        (quick + ["--set", "developed=2"], True),
+        (quick + ["--set", "white_balance='shades_of_grey'", "--set", "developed=false"], False),
         (quick, False), (quick + ["--set", "filters='block'", "--set", "designs=['fsc/split', 'stacked/single']"], False),
     ]
     return _with_fault(rng, *rng.choice(cases))
