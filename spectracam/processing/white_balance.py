@@ -251,24 +251,41 @@ def _trained(camera, grid, library: str, kept: bytes) -> TrainedCorrection:
     keep = np.frombuffer(kept, bool)
     refl = refl_all[keep]
     rng = np.random.default_rng(TRAINING_SEED)
+    n, S = len(refl), TRAINING_SCENES_PER_LIGHT
     feats, truth = [], []
     for light in training_lights():
         white = white_diffuser_radiance(light, grid)                                 # (B,)
         rates = photo_electron_rates((refl * white[None]).astype(np.float32), grid, camera).astype(np.float64)
         e = photo_electron_rates(white[None].astype(np.float32), grid, camera)[0].astype(np.float64)
-        for _ in range(TRAINING_SCENES_PER_LIGHT):
-            k = int(rng.integers(TRAINING_SURFACES[0], min(TRAINING_SURFACES[1], len(refl)) + 1))
-            pick = rng.choice(len(refl), k, replace=False)
+        # the draws, scene by scene; the moments of all S scenes at once.  A scene is a Mondrian of k surfaces with
+        # areas W[j] and TRAINING_EDGES_PER_SURFACE·k borders between random pairs, each as long as the two surfaces
+        # are large; a border's magnitude is the difference of the two (a step seen through the image's Gaussian
+        # derivative keeps its direction in camera space)
+        W = np.zeros((S, n))
+        scene_of, a_all, b_all, w_edge = [], [], [], []
+        for j in range(S):
+            k = int(rng.integers(TRAINING_SURFACES[0], min(TRAINING_SURFACES[1], n) + 1))
+            pick = rng.choice(n, k, replace=False)
             w = rng.dirichlet(np.ones(k))
-            # a Mondrian: TRAINING_EDGES_PER_SURFACE borders per surface between random pairs, each as long as the
-            # two surfaces are large; a border's magnitude is the difference of the two (a step seen through the
-            # image's Gaussian derivative keeps its direction in camera space)
+            W[j, pick] = w
             a, b = rng.integers(0, k, (2, TRAINING_EDGES_PER_SURFACE * k))
             a, b = a[a != b], b[a != b]
-            edges = np.abs(rates[pick[a]] - rates[pick[b]])
-            feats.append(moment_features(rates[pick], edges, w, np.sqrt(w[a] * w[b])))
-            truth.append(_unit(e))
-    F, E = np.asarray(feats), np.asarray(truth)
+            scene_of.append(np.full(a.size, j))
+            a_all.append(pick[a])
+            b_all.append(pick[b])
+            w_edge.append(np.sqrt(w[a] * w[b]))
+        scene_of, a_all, b_all, w_edge = (np.concatenate(v) for v in (scene_of, a_all, b_all, w_edge))
+        y = np.maximum(rates, 0.0) / e                     # ≤ ~1 (reflectance scale): no overflow at p = 8
+        edges = np.abs(y[a_all] - y[b_all])
+        edge_sum = np.bincount(scene_of, w_edge, minlength=S)
+        groups = [(W @ y ** p / W.sum(axis=1)[:, None]) ** (1.0 / p) for p in MOMENT_ORDERS]
+        groups.append(np.where(W[:, :, None] > 0, y[None], -np.inf).max(axis=1))
+        groups += [(np.stack([np.bincount(scene_of, w_edge * edges[:, c] ** p, minlength=S)
+                              for c in range(y.shape[1])], axis=-1) / edge_sum[:, None]) ** (1.0 / p)
+                   for p in EDGE_ORDERS]
+        feats.append(np.concatenate([_unit(g * e) for g in groups], axis=-1))   # as moment_features(rates …)
+        truth.append(np.repeat(_unit(e)[None], S, axis=0))
+    F, E = np.concatenate(feats), np.concatenate(truth)
     A = F.T @ F
     C = np.linalg.solve(A + TRAINING_RIDGE * np.trace(A) / len(A) * np.eye(len(A)), F.T @ E)
     errs = recovery_error_deg(F @ C, E)
