@@ -56,7 +56,8 @@ def capture(cube, camera: CameraSpec, seed: int, metering_box: tuple[slice, slic
     white (:mod:`spectracam.metering`), on the rates of its radiance ``white_radiance`` ``(B,)``,
     recorded as ``metering``; a camera that meters itself (``capture.metering`` average or percentile,
     :mod:`spectracam.metering`) ignores both and meters a preview of the cube, and with ``time_limit_s`` (a hand-held
-    limit) shortens its metered exposures in proportion so the capture lasts at most that long; ``seed`` fixes every random draw (fixed pattern and temporal noise)."""
+    limit) shortens its metered exposures in proportion so the capture lasts at most that long; ``seed`` fixes every
+    random draw (fixed pattern and temporal noise)."""
     arch = camera.architecture()
     weights = band_weights(camera, cube.grid)
     rates = SpectralRates(cube.radiance, weights)  # computed in the sensor's pass

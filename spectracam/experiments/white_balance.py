@@ -221,12 +221,12 @@ def training_block(scene) -> dict:
     """The trained estimator's training block for ``scene``'s sensor and scored colours (memoised: trained once per
     process for each sensor, grid and set of scored colours)."""
     from ..processing import scored_reflectances, training_camera
-    from ..processing.white_balance import _exclusion_key, trained_correction
+    from ..processing.white_balance import exclusion_key, trained_correction
     from ..reference import ChartReference, TargetReference
 
     scored = scored_reflectances(ChartReference.of(scene), TargetReference.of(scene) if scene.target.textured else None)
     return trained_correction(training_camera(scene.camera), scene.grid, scene.processing.white_balance_training,
-                              _exclusion_key(scored)).to_dict()
+                              exclusion_key(scored)).to_dict()
 
 
 def run_job(run: WhiteBalanceRun, job: tuple, tick=lambda: None) -> tuple[list[dict], dict]:

@@ -109,10 +109,11 @@ def develop(image: np.ndarray, raw, reference, processing, target_reference=None
              "reproduction_deg": float(reproduction_error_deg(estimate, true)),
              "pixels_used": int(ctx.valid.sum()), **info}
     if processing.white_balance_method == "corrected_moments":
-        from .white_balance import _exclusion_key, trained_correction
+        from .white_balance import exclusion_key, trained_correction
 
-        block["training"] = trained_correction(training_camera(camera), reference.grid, processing.white_balance_training,
-                                               _exclusion_key(ctx.scored_reflectances)).to_dict()
+        block["training"] = trained_correction(training_camera(camera), reference.grid,
+                                               processing.white_balance_training,
+                                               exclusion_key(ctx.scored_reflectances)).to_dict()
     return Development(M, block, estimate)
 
 
