@@ -23,7 +23,10 @@ design's own still capture), with the paper's pixel pitch and f-number.
 Per row: the per-pixel ΔE against the scene (mean and spread over seeds), the raw channels' combined
 SNR and the rendered luminance SNR (after the colour conversion, so its noise amplification
 counts; docs/metrics.md), the conversion's noise-free error on the 24 patches it is fitted on
-(training) and on held-out colours (``processing.held_out``), and the capture time.
+(training) and on held-out colours (``processing.held_out``), and the capture time; and the same case captured
+and developed by a camera that finds its own white (issue 33, :func:`developed_case`: ``developed_*`` fields —
+its own percentile metering, held to the same time limit when dimmed, the trained white balance and the
+dual-illuminant calibration), ranked beside the oracle's.
 """
 from __future__ import annotations
 
