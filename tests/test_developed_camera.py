@@ -468,3 +468,15 @@ def test_every_adaptation_carries_white_to_white_and_the_developed_camera_runs_w
     cube = pipeline.render(scene, "analytic")
     r = pipeline.score(pipeline.capture(cube, scene=scene), scene)
     assert r.white_balance["calibration"] == "dual_illuminant" and np.isfinite(r.summary.delta_e_mean)
+
+
+def test_the_shipped_two_cameras_sweep_loads_every_estimator():
+    from spectracam.experiments.sweep import load_sweep
+    from spectracam.processing.white_balance import WHITE_BALANCE_METHODS
+    from spectracam.scene import shipped_scene_file
+
+    sw = load_sweep(shipped_scene_file("sweeps/two_cameras.toml"))
+    axes = dict(sw.axes)
+    assert set(axes["processing.white_balance"]) == set(WHITE_BALANCE_METHODS)
+    assert len(sw.cells()) == 2 * 3 * len(WHITE_BALANCE_METHODS)
+    assert sw.base["processing"]["camera"] == "developed"
