@@ -14,9 +14,11 @@ import numpy as np
 
 from .architecture import MosaicLayout
 from .capture import RawCapture
-from .color import ProcessingSpec, adaptation_matrix, demosaic, display_rgb_to_xyz, fit_conversion
+from .color import ProcessingSpec, demosaic, display_rgb_to_xyz
 from .errors import SpectracamError
 from .metrics import SNR_COMBINATIONS, combine_snr_db, delta_e, snr_db, xyz_to_lab
+from .processing import develop, oracle_block
+from .processing.calibration import conversion_matrix, conversion_target_rgb  # noqa: F401  (the paper's 3.5)
 from .reference import ChartReference
 from .sensor import adc_full_scale_dn, adc_inverse
 
@@ -199,20 +201,6 @@ def check_raw(raw: RawCapture) -> None:
                               f"{', '.join(raw.layout.channels)}; got {t.tolist()}")
 
 
-def conversion_target_rgb(reference: ChartReference, processing: ProcessingSpec) -> np.ndarray:
-    """``(24, 3)`` what the conversion aims at (paper 3.5): the display RGB that shows each patch's XYZ carried
-    from the light's white to the display's."""
-    M_disp = display_rgb_to_xyz(processing.display)
-    to_display_xyz = adaptation_matrix(reference.white_xyz, M_disp.sum(axis=1), processing.adaptation)
-    return reference.patch_xyz @ to_display_xyz.T @ np.linalg.inv(M_disp).T
-
-
-def conversion_matrix(reference: ChartReference, camera, processing: ProcessingSpec) -> np.ndarray:
-    """The N×3 colour conversion (paper 3.5; 3×3 for three channels): least squares from the chart's noise-free camera rates
-    to :func:`conversion_target_rgb`."""
-    return fit_conversion(reference.patch_rates(camera), conversion_target_rgb(reference, processing))
-
-
 def display_rgb(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec) -> tuple[np.ndarray, np.ndarray]:
     """``(rendered (H, W, 3) linear display RGB, conversion matrix)`` (:func:`developed_rgb` without its white-balance
     block)."""
@@ -227,8 +215,6 @@ def developed_rgb(raw: RawCapture, reference: ChartReference, processing: Proces
     fitted on ``reference`` under its own light (which need not be the captured scene: a spectral image from another
     tool is shown through the chart's conversion); for a camera that finds its own white, the matrix it develops from
     this image (:func:`spectracam.processing.develop`)."""
-    from .processing import develop, oracle_block
-
     rgb = camera_rates(raw, processing)
     if processing.told_the_light:
         M = conversion_matrix(reference, raw.camera, processing)

@@ -2,7 +2,7 @@
 scored, as the constant arrays of :class:`~spectracam.design.model.LightModel`.
 
 The conversion is fitted on the scene's ColorChecker, as the capture → score pipeline fits it
-(:func:`spectracam.score.conversion_matrix`), and the exposure metered on its white patch; the colour sets are
+(:func:`spectracam.processing.calibration.conversion_matrix`), and the exposure metered on its white patch; the colour sets are
 the chart itself (``chart``) or measured reflectance libraries (:mod:`spectracam.reflectances`) under the same
 light, their truth the CIE 1931 colorimetry of :func:`spectracam.reference.library_colours`.
 """
@@ -15,7 +15,7 @@ from ..filters import logistic_scale_nm
 from ..metrics import xyz_to_lab
 from ..optics import radiance_to_photon_irradiance
 from ..reference import ChartReference, library_colours
-from ..score import conversion_target_rgb
+from ..processing.calibration import conversion_target_rgb
 from .ad import tensor
 from .model import ColourSet, LightModel
 

@@ -189,15 +189,7 @@ def validate_figure(result: dict):
 
 def write_validate_outputs(out_dir, result: dict, command: str) -> list:
     """validate.json, validate.md and validate.png/.svg, atomically."""
-    import json
-    from pathlib import Path
+    from ..io.report import write_figure_json_markdown
 
-    from ..io.files import atomic_write
-    from ..io.plots import save_figure
-
-    out = Path(out_dir)
-    paths = save_figure(validate_figure(result), out / "validate.png", out / "validate.svg")
-    paths.append(atomic_write(out / "validate.json",
-                              json.dumps({**result, "command": command}, indent=1, allow_nan=False).encode()))
-    paths.append(atomic_write(out / "validate.md", validate_markdown(result, command).encode()))
-    return paths
+    return write_figure_json_markdown(out_dir, "validate", validate_figure(result), "validate.json", result, command,
+                                      "validate.md", validate_markdown(result, command))

@@ -522,18 +522,10 @@ def white_balance_figure(result: dict):
 
 def write_white_balance_outputs(out_dir, result: dict, command: str) -> list:
     """results.json, report.md and white_balance.png/.svg, atomically."""
-    import json
-    from pathlib import Path
+    from ..io.report import write_figure_json_markdown
 
-    from ..io.files import atomic_write
-    from ..io.plots import save_figure
-
-    out = Path(out_dir)
-    paths = save_figure(white_balance_figure(result), out / "white_balance.png", out / "white_balance.svg")
-    paths.append(atomic_write(out / "results.json",
-                              json.dumps({**result, "command": command}, indent=1, allow_nan=False).encode()))
-    paths.append(atomic_write(out / "report.md", white_balance_markdown(result, command).encode()))
-    return paths
+    return write_figure_json_markdown(out_dir, "white_balance", white_balance_figure(result), "results.json", result,
+                                      command, "report.md", white_balance_markdown(result, command))
 
 
 def summary_line(result: dict, key: str) -> str:

@@ -104,7 +104,7 @@ from .. import __version__
 from ..architecture import MosaicLayout, PlanesLayout
 from ..capture import RawCapture
 from ..errors import SpectracamError
-from ..processing.calibration import D50_XYZ  # the profile connection space's white (the DNG SDK's normalisation)
+from ..processing.calibration import D50_XYZ, constrained_lstsq, white_neutral  # D50: the DNG SDK's normalisation
 from .files import atomic_write
 
 #: DNG CFAPattern colour codes.
@@ -131,12 +131,9 @@ def white_radiance(reference) -> np.ndarray:
 
 
 def white_rates(camera, reference) -> np.ndarray:
-    """Noise-free photo-electron rates ``(3,)`` (e⁻/s) of a perfect white diffuser under the scene
-    illuminant (no dark charge)."""
-    from ..camera import photo_electron_rates
-
-    rad = white_radiance(reference)[None].astype(np.float32)
-    return photo_electron_rates(rad, reference.grid, camera)[0].astype(np.float64)
+    """Noise-free photo-electron rates ``(N,)`` (e⁻/s) of a perfect white diffuser under the scene
+    illuminant (no dark charge): :func:`spectracam.processing.calibration.white_neutral`."""
+    return white_neutral(reference.illuminant, reference.grid, camera)
 
 
 def camera_white(raw: RawCapture, reference) -> np.ndarray:
@@ -167,17 +164,6 @@ def forward_matrices(raw: RawCapture, reference) -> list[np.ndarray]:
     return [np.ascontiguousarray(fm.T) for fm in dual.forward_matrices]
 
 
-def _white_preserving_fit(A: np.ndarray, Y: np.ndarray, a: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """``B`` ``(m, k)`` minimising ``‖A·Bᵀ − Y‖²`` subject to ``B·a = y`` exactly (one Lagrange
-    multiplier per output row); ``A`` ``(n, k)`` inputs, ``Y`` ``(n, m)`` targets."""
-    k = A.shape[1]
-    K = np.zeros((k + 1, k + 1))
-    K[:k, :k] = 2 * A.T @ A
-    K[:k, k] = K[k, :k] = a
-    rows = [np.linalg.solve(K, np.concatenate([2 * A.T @ Y[:, j], [y[j]]]))[:k] for j in range(Y.shape[1])]
-    return np.array(rows)
-
-
 def calibration_reference(reference, name: str):
     """The chart reference of the same chart, wavelength grid, image and level under the CIE illuminant ``name``
     (a key of colour-science's ``SDS_ILLUMINANTS``: "A", "D65"); memoised, as :meth:`ChartReference.of` is."""
@@ -197,8 +183,8 @@ def camera_to_xyz_matrix(raw: RawCapture, reference) -> np.ndarray:
     """3×3 ``B`` with ``XYZ ≈ B·camera`` under the reference's illuminant: least squares over the chart
     reference's 24 patches (camera = expected photo-electrons with the capture's exposure times), the camera's
     white mapped exactly onto the illuminant's white (Y = 1)."""
-    return _white_preserving_fit(camera_patches(raw, reference), reference.patch_xyz, camera_white(raw, reference),
-                                 reference.white_xyz)
+    return constrained_lstsq(camera_patches(raw, reference), reference.patch_xyz, camera_white(raw, reference),
+                             reference.white_xyz).T
 
 
 def normalise_color_matrix(M: np.ndarray) -> np.ndarray:
@@ -213,8 +199,8 @@ def xyz_to_camera_matrix(raw: RawCapture, reference) -> np.ndarray:
     if len(raw.layout.channels) == 3:
         M = np.linalg.inv(camera_to_xyz_matrix(raw, reference))
     else:
-        M = _white_preserving_fit(reference.patch_xyz, camera_patches(raw, reference), reference.white_xyz,
-                                  camera_white(raw, reference))
+        M = constrained_lstsq(reference.patch_xyz, camera_patches(raw, reference), reference.white_xyz,
+                              camera_white(raw, reference)).T
     return normalise_color_matrix(M)
 
 

@@ -117,6 +117,18 @@ def write_display_exr(path: str | Path, rgb: np.ndarray, params: dict) -> Path:
     return write_exr(path, {"R": rgb[..., 0], "G": rgb[..., 1], "B": rgb[..., 2]}, attrs, half=True)
 
 
+def write_figure_json_markdown(out_dir, stem: str, figure, json_name: str, result: dict, command: str,
+                               md_name: str, markdown: str) -> list[Path]:
+    """An experiment's three outputs, each written atomically: ``stem``.png/.svg of ``figure``, ``json_name`` (the
+    result with the command that made it, strict JSON) and ``md_name``."""
+    out = Path(out_dir)
+    paths = save_figure(figure, out / f"{stem}.png", out / f"{stem}.svg")
+    paths.append(atomic_write(out / json_name,
+                              json.dumps({**result, "command": command}, indent=1, allow_nan=False).encode()))
+    paths.append(atomic_write(out / md_name, markdown.encode()))
+    return paths
+
+
 def report_csv(result: ChartScore) -> bytes:
     """One row per patch and a chart-average row."""
     buf = io.StringIO()

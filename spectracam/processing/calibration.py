@@ -2,7 +2,7 @@
 XYZ, given the neutral the camera estimated.
 
 ``scene_light``      the paper's conversion (section 3.5) fitted on the chart under the scene's own light
-                     (:func:`spectracam.score.conversion_matrix`), applied after carrying the estimated neutral to the
+                     (:func:`conversion_matrix`), applied after carrying the estimated neutral to the
                      true one: ``M = diag(e/ê)·M_scene``.  With the oracle's neutral it is the paper's reading.
 ``dual_illuminant``  the DNG model (Adobe DNG Specification 1.6, chapter 6, "Mapping Camera Color Space to CIE
                      XYZ Space"): for each calibration light i ∈ {CIE A, D65} (:data:`CALIBRATION_LIGHTS`)
@@ -200,11 +200,27 @@ def xyz_to_display_rgb(processing) -> tuple[np.ndarray, np.ndarray]:
     return np.linalg.inv(M_disp), M_disp.sum(axis=1)
 
 
+def conversion_target_rgb(reference, processing) -> np.ndarray:
+    """``(24, 3)`` what the conversion aims at (paper 3.5): the display RGB that shows each patch's XYZ carried
+    from the light's white to the display's."""
+    from ..color import adaptation_matrix, display_rgb_to_xyz
+
+    M_disp = display_rgb_to_xyz(processing.display)
+    to_display_xyz = adaptation_matrix(reference.white_xyz, M_disp.sum(axis=1), processing.adaptation)
+    return reference.patch_xyz @ to_display_xyz.T @ np.linalg.inv(M_disp).T
+
+
+def conversion_matrix(reference, camera, processing) -> np.ndarray:
+    """The N×3 colour conversion (paper 3.5; 3×3 for three channels): least squares from the chart's noise-free
+    camera rates to :func:`conversion_target_rgb` — the paper's camera's, fitted under the scene's own light."""
+    from ..color import fit_conversion
+
+    return fit_conversion(reference.patch_rates(camera), conversion_target_rgb(reference, processing))
+
+
 @CALIBRATIONS.register("scene_light")
 def _scene_light(ctx: Calibration, neutral: np.ndarray):
     """The conversion fitted under the scene's light, applied after carrying ê to the true neutral (in display RGB)."""
-    from ..score import conversion_matrix
-
     M = conversion_matrix(ctx.reference, ctx.camera, ctx.processing)         # rates → display RGB
     e = ctx.true_neutral / np.linalg.norm(ctx.true_neutral)
     return (e / neutral)[:, None] * M, {"fitted_under": ctx.reference.illuminant.label}

@@ -111,14 +111,13 @@ def _unit(v: np.ndarray) -> np.ndarray:
     return v / n
 
 
-def minkowski_mean(pixels: np.ndarray, p: float, weights: np.ndarray | None = None) -> np.ndarray:
-    """``(Σ w x^p / Σ w)^(1/p)`` over the first axis (the shades-of-grey moment), stably for large p."""
+def minkowski_mean(pixels: np.ndarray, p: float) -> np.ndarray:
+    """``(mean x^p)^(1/p)`` over the first axis (the shades-of-grey moment), stably for large p."""
     x = np.asarray(pixels, float)
-    w = np.ones(x.shape[0]) if weights is None else np.asarray(weights, float)
     top = x.max(axis=0)
     top = np.where(top > 0, top, 1.0)
     y = x / top  # ≤ 1: no overflow at p = 8 on e⁻/s values of 1e6
-    return top * (np.tensordot(w, y ** p, axes=(0, 0)) / w.sum()) ** (1.0 / p)
+    return top * np.mean(y ** p, axis=0) ** (1.0 / p)
 
 
 @WHITE_BALANCE_METHODS.register("oracle")
@@ -151,19 +150,15 @@ def _grey_edge(ctx: Estimation) -> np.ndarray:
     return minkowski_mean(edge_magnitudes(ctx), ctx.processing.white_balance_p)
 
 
-def moment_features(pixels: np.ndarray, edges: np.ndarray, weights: np.ndarray | None = None,
-                    edge_weights: np.ndarray | None = None) -> np.ndarray:
-    """``((len(MOMENT_ORDERS) + 1 + len(EDGE_ORDERS))·N,)`` the corrected-moments features: the Minkowski moments
-    of the pixels ``(n, N)``, their maximum (the :data:`WHITE_PATCH_PERCENTILE` th percentile of an image) and the
-    Minkowski moments of the edge magnitudes ``(m, N)`` (optionally weighted), each moment scaled to unit norm (so
-    an image's pixel and edge moments, whose scales differ from a training scene's, enter by their directions)."""
+def moment_features(pixels: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """``((len(MOMENT_ORDERS) + 1 + len(EDGE_ORDERS))·N,)`` the corrected-moments features of an image: the Minkowski
+    moments of its pixels ``(n, N)``, their :data:`WHITE_PATCH_PERCENTILE` th percentile (the maximum) and the
+    Minkowski moments of its edge magnitudes ``(m, N)``, each moment scaled to unit norm (so an image's pixel and edge
+    moments, whose scales differ from a training scene's, enter by their directions; the training computes the same
+    for all its scenes at once, :func:`trained_correction`)."""
     x = np.maximum(np.asarray(pixels, float), 0.0)
-    if weights is None:
-        top = np.percentile(x, WHITE_PATCH_PERCENTILE, axis=0)
-    else:
-        top = x[np.asarray(weights) > 0].max(axis=0)
-    groups = [minkowski_mean(x, p, weights) for p in MOMENT_ORDERS] + [top]
-    groups += [minkowski_mean(edges, p, edge_weights) for p in EDGE_ORDERS]
+    groups = [minkowski_mean(x, p) for p in MOMENT_ORDERS] + [np.percentile(x, WHITE_PATCH_PERCENTILE, axis=0)]
+    groups += [minkowski_mean(edges, p) for p in EDGE_ORDERS]
     return np.concatenate([_unit(g) for g in groups])
 
 
@@ -288,7 +283,7 @@ def _trained(camera, grid, library: str, kept: bytes) -> TrainedCorrection:
         groups += [(np.stack([np.bincount(scene_of, w_edge * edges[:, c] ** p, minlength=S)
                               for c in range(y.shape[1])], axis=-1) / edge_sum[:, None]) ** (1.0 / p)
                    for p in EDGE_ORDERS]
-        feats.append(np.concatenate([_unit(g * e) for g in groups], axis=-1))   # as moment_features(rates …)
+        feats.append(np.concatenate([_unit(g * e) for g in groups], axis=-1))   # as moment_features does
         truth.append(np.repeat(_unit(e)[None], S, axis=0))
     F, E = np.concatenate(feats), np.concatenate(truth)
     A = F.T @ F
