@@ -38,10 +38,11 @@ FIELDS = ["illuminant.temperature_K", "illuminant.white_luminance_cd_m2", "image
           "capture.exposure", "processing.demosaic", "wavelengths.step_nm", "chart.mask_margin", "sensor.nosuch",
           "filters.camera", "filters.camera_unit", "capture.white_fill", "capture.metering", "capture.metering_target",
           "capture.metering_percentile", "processing.camera", "processing.white_balance", "processing.white_balance_p",
-          "processing.white_balance_sigma_px", "processing.white_balance_training", "processing.calibration"]
+          "processing.white_balance_sigma_px", "processing.white_balance_training", "processing.calibration",
+          "processing.tone_curve"]
 VALUES = ["0", "-1", "1e308", "nan", "inf", "-inf", "1.5", "true", '"text"', "[1, 2]", "[]", "{}", "3", "7",
           "2147483648", "0.001", "bilinear", "fsc", "optimal", "photodiode", "developed", "percentile", "grey_edge",
-          "dual_illuminant", "corrected_moments", "colorchecker24"]
+          "dual_illuminant", "corrected_moments", "colorchecker24", "filmic"]
 
 
 #: A case that runs longer than this hangs (counted as such, then killed).
