@@ -21,6 +21,10 @@ RENDER_TABLES = ("chart", "illuminant", "wavelengths", "image", "render")
 #: Bumped whenever a renderer's method changes what it writes for the same scene, so older entries
 #: are never served: 2 = Mitsuba renders light-weighted band-constant spectra (issue 17).
 RENDER_METHOD = 2
+#: The same for a textured target (spectracam.render.target), whose ``[target]`` table is keyed too (a chart
+#: scene's key is unchanged): 3 = every band traced through the same sample positions, one per texel centre
+#: (issue 34; before, each band drew new positions and an edge pixel was no mixture of its texels).
+TEXTURED_RENDER_METHOD = 3
 
 
 def cache_dir() -> Path:
@@ -31,7 +35,9 @@ def render_key(scene, renderer: str) -> tuple[str, dict]:
     import mitsuba
 
     d = scene.to_dict()
-    ident = {"scene": {k: d[k] for k in RENDER_TABLES}, "renderer": renderer, "method": RENDER_METHOD,
+    tables = ("target", *RENDER_TABLES) if "target" in d else RENDER_TABLES   # to_dict has it when textured
+    ident = {"scene": {k: d[k] for k in tables}, "renderer": renderer,
+             "method": TEXTURED_RENDER_METHOD if "target" in d else RENDER_METHOD,
              "spectracam": __version__, "mitsuba": mitsuba.__version__ if renderer == "mitsuba" else None}
     text = json.dumps(ident, sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:32], ident

@@ -219,11 +219,57 @@ def to_electrons_per_photon(wl_nm: np.ndarray, values: np.ndarray, unit: str, qe
     return per_photon * (qe_peak / per_photon.max())
 
 
+#: Relative tolerance within which three channel peaks count as equal, i.e. normalised one by one
+#: (measured curves published with their gains differ by far more: the Canon's peaks are 0.48/1/0.69).
+PEAK_TOLERANCE = 1e-3
+
+
+def peak_normalised(values: np.ndarray) -> bool:
+    """True when the three channels of ``(n, 3)`` curves share one peak value (to 1, 100 … one by one):
+    their relative gains were thrown away (module docstring)."""
+    peaks = np.asarray(values, float).max(axis=0)
+    return bool(peaks.max() > 0 and (peaks.max() - peaks.min()) <= PEAK_TOLERANCE * peaks.max())
+
+
+def file_gains(spec, wl_nm: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """``(3,)`` multipliers of a ``filters.camera_file``'s R, G, B columns: ``camera_gains`` as given; else, for
+    relative curves normalised per channel, the gains that give the D65 neutral of ``camera_xyz_to_camera``
+    (as :func:`restored_gains` does for shipped cameras); else ones (the curves keep their gains)."""
+    if spec.camera_gains:
+        return np.asarray(spec.camera_gains, float)
+    if (spec.camera_xyz_to_camera and spec.camera_unit == "relative" and not spec.camera_gains_kept
+            and peak_normalised(values)):
+        m = PublishedMatrix("camera_file", tuple(spec.camera_xyz_to_camera), "filters.camera_xyz_to_camera")
+        return m.neutral(d65_white_xyz()) / d65_response(np.asarray(wl_nm, float), np.asarray(values, float))
+    return np.ones(3)
+
+
+#: A condition number beyond this is a singular matrix in double precision (its channels are linearly dependent).
+SINGULAR_CONDITION = 1e12
+
+
+def channel_condition(wl_nm: np.ndarray, values: np.ndarray) -> float:
+    """Condition number of ``(n, 3)`` curves resampled at 1 nm over their range, each channel scaled to a sum of
+    1 (white-balanced on an equal-energy white): how much a colour conversion must amplify noise in its worst
+    direction against its best (∞ for identical or all-zero channels; the shipped cameras 1.9–11)."""
+    wl = np.asarray(wl_nm, float)
+    lam = np.arange(wl[0], wl[-1] + 0.5, 1.0) if wl[-1] - wl[0] >= 2 else wl
+    q = np.stack([np.interp(lam, wl, np.asarray(values, float)[:, k]) for k in range(3)], axis=1)
+    s = q.sum(axis=0)
+    if not np.all(s > 0):
+        return float("inf")
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+        kappa = float(np.linalg.cond(q / s[None, :]))
+    return kappa if np.isfinite(kappa) and kappa < SINGULAR_CONDITION else float("inf")
+
+
 def camera_curves_of(spec) -> tuple[np.ndarray, np.ndarray, str]:
-    """``(wavelengths_nm, (n, 3) electrons per photon, what)`` of a filter spec's camera."""
+    """``(wavelengths_nm, (n, 3) electrons per photon, what)`` of a filter spec's camera (a file's curves
+    times :func:`file_gains`)."""
     if spec.camera == FROM_FILE:
         wl = np.asarray(spec.camera_curve_nm, float)
-        R = to_electrons_per_photon(wl, np.asarray(spec.camera_curve, float), spec.camera_unit, spec.qe_peak)
+        v = np.asarray(spec.camera_curve, float)
+        R = to_electrons_per_photon(wl, v * file_gains(spec, wl, v)[None, :], spec.camera_unit, spec.qe_peak)
         return wl, R, "filters.camera_file"
     wl, v = energy_sensitivities(spec.camera)
     return wl, to_electrons_per_photon(wl, v, "relative", spec.qe_peak), "filters.camera"
@@ -241,7 +287,9 @@ def load_camera_csv(path, what: str = "filters.camera_file") -> tuple[tuple, tup
     """``(wavelengths_nm, rows of (R, G, B))`` from a CSV: a header row is allowed, ``#`` comments,
     comma- or whitespace-separated; exactly four columns (wavelength in nm, then R, G, B).  Every
     number is checked: finite, non-negative, increasing wavelengths, at least 2 rows."""
-    p = Path(path)
+    from .io.files import regular_file
+
+    p = regular_file(path, what)
     try:
         text = p.read_bytes().decode("utf-8")
     except (OSError, UnicodeDecodeError) as e:

@@ -341,10 +341,15 @@ def _score_and_write(raw, scene, out_dir: Path, log, cube=None):
 
 def _log_both_ways(bw: dict, log) -> None:
     o, d = bw["oracle"], bw["developed"]
+
+    def pair(key: str, unit: str = "") -> str:   # a score may be undefined (None): an image with no signal
+        return " / ".join("undefined" if c.get(key) is None else f"{c[key]:.2f}{unit}" for c in (o, d))
+
     log(f"oracle camera (told the light) / developed camera (finds its own white): mean ΔE*ab "
-        f"{o['delta_e_mean']:.2f} / {d['delta_e_mean']:.2f}, CIEDE2000 {o['delta_e2000_mean']:.2f} / "
-        f"{d['delta_e2000_mean']:.2f}; the developed camera's white is {d['awb_recovery_deg']:.2f}° off "
-        f"(metering: {bw['metering']})")
+        f"{pair('delta_e_mean')}, S-CIELAB {pair('s_cielab_mean')}, CIEDE2000 {pair('delta_e2000_mean')}; the "
+        f"developed camera's white is "
+        + ("undefined" if d.get("awb_recovery_deg") is None else f"{d['awb_recovery_deg']:.2f}°")
+        + f" off (metering: {bw['metering']})")
 
 
 @main.command("score", short_help="Render a raw capture on a display and score it.")
@@ -461,10 +466,17 @@ def paper_cmd(out_dir, experiment_file, renderer, quick, no_cache, save_cubes, s
 @click.option("--seeds", type=click.IntRange(1, 100), default=None,
               help="Noise seeds per case [default: 5; 2 with --quick].")
 @click.option("--no-cache", is_flag=True, help="Render again even if the render cache has the scene.")
+@click.option("--min-white-snr-db", type=float, default=None,
+              help="A case whose white patch's rendered SNR is below this is no usable image and never a winner "
+                   "[default: 20, ISO 12232's 'acceptable' SNR 10].")
+@click.option("--max-s-cielab", type=float, default=None,
+              help="A case whose mean S-CIELAB ΔE*ab is above this is no usable image [default: 40, a flat grey "
+                   "image of the chart's mean lightness].")
 @set_option
 @quiet_option
 @view_option
-def architectures_cmd(out_dir, experiment_file, renderer, quick, seeds, no_cache, sets, quiet):
+def architectures_cmd(out_dir, experiment_file, renderer, quick, seeds, no_cache, min_white_snr_db, max_s_cielab,
+                      sets, quiet):
     """Every registered architecture and exposure scheme at the paper's camera, light and noise, at 1, 1/10
     and 1/100 of its light: SNR, ΔE (training and held-out), capture time; then each architecture on the
     slanted edge and star (MTF50, false colour, S-CIELAB; with and without an optical low-pass filter) and
@@ -475,7 +487,12 @@ def architectures_cmd(out_dir, experiment_file, renderer, quick, seeds, no_cache
     from .pipeline import check_memory
 
     exp = load_experiment(experiment_file or default_experiment(), sets)
-    run = ArchitecturesRun(exp, quick=quick, seeds=seeds or (2 if quick else SEEDS))
+    from .experiments.usability import UsabilitySpec
+
+    limits = {k: v for k, v in (("min_white_snr_db", min_white_snr_db), ("max_s_cielab_mean", max_s_cielab))
+              if v is not None}
+    usability = UsabilitySpec.from_dict(limits, "the command line") if limits else UsabilitySpec()
+    run = ArchitecturesRun(exp, quick=quick, seeds=seeds or (2 if quick else SEEDS), usability=usability)
     base = quick_scene(exp.base, quick)
     check_memory(base, copies=2, what=", two lights and a scaled copy held at once")
     check_writable(out_dir)
@@ -488,10 +505,13 @@ def architectures_cmd(out_dir, experiment_file, renderer, quick, seeds, no_cache
     command = "spectracam architectures -o " + str(out_dir) \
         + _given("--experiment", "experiment_file", experiment_file) \
         + (f" --renderer {renderer}" if renderer != "mitsuba" else "") + (" --quick" if quick else "") \
-        + (f" --seeds {seeds}" if seeds else "") + "".join(f" --set {s}" for s in sets)
+        + (f" --seeds {seeds}" if seeds else "") \
+        + (f" --min-white-snr-db {min_white_snr_db:g}" if min_white_snr_db is not None else "") \
+        + (f" --max-s-cielab {max_s_cielab:g}" if max_s_cielab is not None else "") + "".join(f" --set {s}" for s in sets)
     write_architectures_outputs(out_dir, results, command, step)
     for w in results["winners"]:
-        log(f"  {w['illuminant']:>7} {w['light_factor']:>5g}x  {w['metric']:<16} {w['design']:<18} {w['value']:.3g}")
+        log(f"  {w['illuminant']:>7} {w['light_factor']:>5g}x  {w['metric']:<16} "
+            + (f"{w['design']:<18} {w['value']:.3g}" if w["design"] is not None else w.get("note", "no usable image")))
 
 
 @main.command("emva", short_help="Measure the simulated camera by EMVA 1288.")
@@ -557,16 +577,44 @@ def cameras_cmd(as_json: bool):
 @main.command("validate", short_help="Check the shipped cameras against published matrices.")
 @output_option("Directory to write validate.json, validate.md and validate.png/.svg into.")
 @renderer_option
+@click.option("--camera-file", type=click.Path(exists=True, dir_okay=False, path_type=Path), default=None,
+              help="Check your own camera instead: its curves as filters.camera_file takes them (wavelength nm, R, G, B).")
+@click.option("--matrix", default=None, metavar="9 NUMBERS|FILE",
+              help="With --camera-file: its published XYZ(D65)→camera matrix, row-major (e.g. Adobe's ColorMatrix2 "
+                   "×10⁴), or a text file holding it; it also restores the gains of per-channel-normalised curves.")
+@click.option("--camera-unit", type=click.Choice(["relative", "A/W", "electrons_per_photon"]), default="relative",
+              show_default=True, help="With --camera-file: the curves' unit (filters.camera_unit).")
+@click.option("--camera-gains", default=None, metavar="R,G,B",
+              help="With --camera-file: the channels' gains (filters.camera_gains) instead of restoring them.")
+@click.option("--gains-kept", is_flag=True, help="With --camera-file: its equal channel peaks are real "
+                                                 "(filters.camera_gains_kept).")
 @quiet_option
 @view_option
-def validate_cmd(out_dir, renderer, quiet):
+def validate_cmd(out_dir, renderer, camera_file, matrix, camera_unit, camera_gains, gains_kept, quiet):
     """Check every shipped camera with a published XYZ(D65)→camera matrix: the simulated white's R/G and B/G against
-    the matrix's neutral, and ΔE*ab of the published matrix on the simulated raw (beside a least-squares fit's)."""
-    from .experiments.validate import run_validate, write_validate_outputs
+    the matrix's neutral, and ΔE*ab of the published matrix on the simulated raw (beside a least-squares fit's).
+    With --camera-file and --matrix, check your own camera the same way."""
+    from .experiments.validate import parse_matrix, run_validate, write_validate_outputs
 
+    user, command = None, f"spectracam validate -o {out_dir} --renderer {renderer}"
+    if (camera_file is None) != (matrix is None) or (camera_file is None and (camera_gains or gains_kept)):
+        raise ConfigError("--camera-file" if camera_file is None else "--matrix", str(camera_file or matrix or camera_gains),
+                          "--camera-file and --matrix go together (your camera's curves and its published "
+                          "XYZ(D65)→camera matrix); --camera-unit, --camera-gains and --gains-kept need them")
+    if camera_file is not None:
+        gains = None
+        if camera_gains:
+            try:
+                gains = tuple(float(x) for x in camera_gains.replace(",", " ").split())
+            except ValueError:
+                gains = (camera_gains,)
+        user = {"camera_file": camera_file, "matrix": parse_matrix(matrix), "unit": camera_unit, "gains": gains,
+                "gains_kept": gains_kept}
+        command += f" --camera-file {camera_file} --matrix '{matrix}' --camera-unit {camera_unit}" + \
+            (f" --camera-gains {camera_gains}" if camera_gains else "") + (" --gains-kept" if gains_kept else "")
     check_writable(out_dir)
-    result = run_validate(renderer)
-    paths = write_validate_outputs(out_dir, result, f"spectracam validate -o {out_dir} --renderer {renderer}")
+    result = run_validate(renderer, user)
+    paths = write_validate_outputs(out_dir, result, command)
     log = progress_log(quiet)
     for r in result["cameras"]:
         log(f"  {r['camera']}: white R/G {r['white_RG_simulated']:.3f} (published {r['white_RG_published']:.3f}, "
@@ -575,7 +623,7 @@ def validate_cmd(out_dir, renderer, quiet):
             f"{r['delta_e_published_mean']:.2f} mean / {r['delta_e_published_max']:.2f} max (LS fit, training: "
             f"{r['delta_e_fit_mean']:.2f} / {r['delta_e_fit_max']:.2f})")
     wb = result.get("real_camera_data", {}).get("wb_presets", {})
-    if wb.get("status") != "ok":
+    if wb.get("status") != "ok" and user is None:
         log(f"  white-balance presets: skipped ({wb.get('reason', 'not run')})")
     for cam in wb.get("cameras", []):
         if not cam.get("presets"):
@@ -686,7 +734,7 @@ def sweep_cmd(sweep_file, out_dir, scheduler, workers, serial, resume, max_cells
 
     if serial and scheduler:
         raise SpectracamError("--serial and --scheduler: choose one")
-    sweep = load_sweep(sweep_file, sets, max_cells=max_cells, log=progress_log(quiet))
+    sweep = load_sweep(sweep_file, sets, max_cells=max_cells, log=progress_log(quiet), progress=not quiet)
     from .pipeline import check_memory
 
     check_memory(sweep.largest_scene, copies=sweep.distinct_renders,

@@ -70,22 +70,42 @@ def shipped_files(what: str) -> dict[str, Path]:
     return out
 
 
-def resolve_shipped(value: str | Path, what: str = "scene file") -> Path:
-    """A path that exists, else the shipped file ``value`` names — with or without ``.toml``, with or
-    without the checkout's ``scenes/`` (``d65``, ``scenes/d65.toml``, ``cfa_cutoffs``,
-    ``scenes/sweeps/cfa_cutoffs.toml``); else one line listing what ships."""
-    p = Path(value)
-    if p.exists():
-        return p
+def shipped_named(value: str | Path, what: str = "scene file") -> Path | None:
+    """The shipped file of kind ``what`` that ``value`` names — with or without ``.toml``, with or without
+    the checkout's ``scenes/`` — or None.  (``--experiment paper`` and a design file's ``experiment =
+    "paper"`` both name files through this.)"""
     shipped = shipped_files(what)
     name = str(value).strip().removeprefix("./").removeprefix("scenes/").removesuffix(".toml")
     if name in shipped:
         return shipped[name]
-    by_stem = {k.rsplit("/", 1)[-1]: v for k, v in shipped.items()}
-    if name in by_stem:
-        return by_stem[name]
+    return {k.rsplit("/", 1)[-1]: v for k, v in shipped.items()}.get(name)
+
+
+def resolve_shipped(value: str | Path, what: str = "scene file") -> Path:
+    """A path that exists, else the shipped file ``value`` names — with or without ``.toml``, with or
+    without the checkout's ``scenes/`` (``d65``, ``scenes/d65.toml``, ``cfa_cutoffs``,
+    ``scenes/sweeps/cfa_cutoffs.toml``); else one line listing what ships.
+
+    A bare name (no ``/``, no ``.toml``) of a shipped file when ``NAME.toml`` is also in the working
+    directory (``d65`` with a ``d65.toml`` here) is refused as ambiguous, naming both: neither may silently
+    win, because the command a report records keeps the name as typed (``spectracam simulate d65``) and
+    must mean one file wherever it is run again.  ``./d65.toml`` (a
+    path) says the local file, ``scenes/d65`` the shipped one."""
+    p = Path(value)
+    if p.exists():
+        return p
+    text = str(value).strip()
+    found = shipped_named(value, what)
+    local = Path(text + ".toml")
+    if found is not None and "/" not in text and not text.endswith(".toml") and local.is_file() \
+            and local.resolve() != found.resolve():
+        kind = what.split()[0]
+        raise ConfigError(what, text, f"ambiguous: names both {local} here and the shipped {kind} {text} ({found}); "
+                          f"write ./{local} for yours or scenes/{text} for the shipped one")
+    if found is not None:
+        return found
     kind = what.split()[0]
-    names = ", ".join(by_stem) or "none in this installation"
+    names = ", ".join(k.rsplit("/", 1)[-1] for k in shipped_files(what)) or "none in this installation"
     raise ConfigError(what, str(value), f"no such file, and not the name of a shipped {kind} (shipped: {names})")
 
 

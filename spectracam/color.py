@@ -9,6 +9,7 @@ methods").  Demosaicking dispatches on the capture's layout, never on the archit
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -28,6 +29,13 @@ DEMOSAIC_METHODS: Registry = Registry("processing.demosaic", "demosaicking metho
 DISPLAYS: Registry = Registry("processing.display", "display")
 #: Chromatic adaptations: name → function ``(white_from, white_to) → 3×3`` matrix on XYZ.
 ADAPTATIONS: Registry = Registry("processing.adaptation", "chromatic adaptation")
+
+
+#: The samples per degree the chart's S-CIELAB accepts (ProcessingSpec.viewing_distance_m with display_pixel_pitch_mm).
+#: 1: below it the 1° kernel support is one pixel and S-CIELAB is plain CIELAB; 300: above a 600-dpi print read
+#: at 0.7 m (289) — a finer sampling than any display viewed normally (a 120-dpi monitor at 0.5 m: 41), and the
+#: filters' cost grows with the number of samples in their support.
+SCIELAB_SAMPLES_PER_DEGREE = (1.0, 300.0)
 
 
 @dataclass(frozen=True)
@@ -68,6 +76,13 @@ class ProcessingSpec(Spec):
     #: How the written pictures (rendered.png, the page) map linear display RGB to 8 bits
     #: (spectracam.processing.tone): "srgb" (clipped, sRGB-encoded) or "filmic"; never inside a score.
     tone_curve: str = "srgb"
+    #: How far the viewer's eye is from the display the chart's S-CIELAB (ChartSummary.s_cielab_*) assumes, metres:
+    #: 0.5 m, a desk monitor at arm's length, the default of the reference S-CIELAB code (ISETCam's scParams) and of
+    #: the textured targets (spectracam.target.TargetSpec).
+    viewing_distance_m: float = 0.5
+    #: The display's pixel pitch, mm (one image pixel per display pixel): 25.4/120 mm, a 120-dpi monitor, the same
+    #: default; with 0.5 m it gives 41.2 samples per degree (spectracam.spatial.scielab.samples_per_degree).
+    display_pixel_pitch_mm: float = 25.4 / 120
 
     def validate(self) -> None:
         from .processing import CALIBRATIONS, CAMERAS, WHITE_BALANCE_METHODS
@@ -103,7 +118,26 @@ class ProcessingSpec(Spec):
 
         if self.held_out != "none":
             check_available(self.held_out, "processing.held_out")   # before any work: a missing file or luxpy
+        # the eye's filters (S-CIELAB): an eye closer than 5 cm cannot focus (the near point is ~10 cm even in
+        # childhood), 100 m is beyond any display; a pitch from 1 µm (a print at 25 000 dpi) to 10 mm (an LED wall)
+        self.number("viewing_distance_m", 0.05, 100.0, unit="m")
+        self.number("display_pixel_pitch_mm", 0.001, 10.0, unit="mm")
+        # spectracam.spatial.scielab.samples_per_degree's formula, here without its scipy import (0.5 s at start-up)
+        spd = 1.0 / math.degrees(2.0 * math.atan(self.display_pixel_pitch_mm * 1e-3 / (2.0 * self.viewing_distance_m)))
+        if not SCIELAB_SAMPLES_PER_DEGREE[0] <= spd <= SCIELAB_SAMPLES_PER_DEGREE[1]:
+            lo, hi = SCIELAB_SAMPLES_PER_DEGREE
+            raise self.error("viewing_distance_m", f"with display_pixel_pitch_mm = {self.display_pixel_pitch_mm:g} "
+                             f"that is {spd:.3g} samples per degree; the S-CIELAB filters need between {lo:g} and "
+                             f"{hi:g} (fewer: the 1° kernel is one pixel, S-CIELAB is CIELAB; more: a kernel of more "
+                             "pixels than any display viewed normally gives, and its cost grows with it)")
 
+    @property
+    def samples_per_degree(self) -> float:
+        """Display pixels per degree of visual angle at ``viewing_distance_m`` and ``display_pixel_pitch_mm``
+        (:func:`spectracam.spatial.scielab.samples_per_degree`): what the chart's S-CIELAB filters are sampled at."""
+        from .spatial.scielab import samples_per_degree
+
+        return samples_per_degree(self.viewing_distance_m, self.display_pixel_pitch_mm * 1e-3)
 
     @property
     def white_balance_method(self) -> str:

@@ -81,9 +81,25 @@ class FilterSpec(Spec):
     #: IR-cut filter: width of its edge from 90 % to 10 % transmittance, nm (a logistic edge).
     ir_cut_width_nm: float = 20.0
     #: Stacked photodiodes (architecture "stacked"): the boundaries of the collection windows below
-    #: the surface, µm — a surface dead layer, then one window per photodiode from the top (n + 1
-    #: numbers for n layers).  Defaults fitted to the Sigma SD1 Merrill (spectracam.architectures.stacked).
-    stacked_depths_um: tuple = (0.33, 1.34, 3.08, 6.0)
+    #: the surface, µm — a surface dead layer, then one window per photodiode from the top (4 numbers
+    #: for 3 layers, 5 for 4).  Defaults fitted, with the IR cut below, to the Sigma SD1 Merrill
+    #: (spectracam.architectures.stacked); layers that cannot form a colour image are refused.
+    stacked_depths_um: tuple = (0.245, 1.15, 2.61, 4.34)
+    #: The IR-cut filter in front of a stacked sensor, 50 % point, nm ("none": no filter): the SD1 Merrill's,
+    #: read off NPL's measured curves (they fall from 92 % to 18 % of their peaks between 650 and 660 nm).
+    #: Only the stacked architecture reads it; ``ir_cut_nm``, if set, is a second filter in series.
+    stacked_ir_cut_nm: float | None = 655.0
+    #: Its edge from 90 % to 10 % transmittance, nm (the measured curves: about 10 nm).
+    stacked_ir_cut_width_nm: float = 10.0
+    #: ``camera_file`` curves normalised to a peak of 1 per channel lose their gains: give them here
+    #: (R, G, B multipliers of the file's columns) ...
+    camera_gains: tuple = ()
+    #: ... or the camera's published XYZ(D65)→camera matrix (9 numbers, row-major, e.g. Adobe's ColorMatrix2
+    #: ×10⁴ as dcraw tabulates it), from whose D65 neutral the gains are restored as for the shipped cameras
+    #: (spectracam.cameras); with curves that keep their gains it is only what ``spectracam validate`` checks.
+    camera_xyz_to_camera: tuple = ()
+    #: ... or say that the file's equal channel peaks are real (its gains are as measured).
+    camera_gains_kept: bool = False
 
     def validate(self) -> None:
         self.choice("kind", FILTER_KINDS)
@@ -106,13 +122,27 @@ class FilterSpec(Spec):
         if self.ir_cut_nm is not None:
             self.number("ir_cut_nm", 300, 1200, unit="nm")
         self.number("ir_cut_width_nm", 0.1, 500, unit="nm")
+        if isinstance(self.stacked_ir_cut_nm, str) and self.stacked_ir_cut_nm.lower() == "none":
+            object.__setattr__(self, "stacked_ir_cut_nm", None)
+        if self.stacked_ir_cut_nm is not None:
+            if not isinstance(self.stacked_ir_cut_nm, (int, float)) or isinstance(self.stacked_ir_cut_nm, bool):
+                raise self.error("stacked_ir_cut_nm", "must be a number between 300 and 1200 nm, or \"none\"")
+            self.number("stacked_ir_cut_nm", 300, 1200, unit="nm")
+        self.number("stacked_ir_cut_width_nm", 0.1, 500, unit="nm")
+        from .architectures.stacked import LAYER_COUNTS, check_layers
+
         depths = self.stacked_depths_um
-        if not isinstance(depths, (tuple, list)) or not 3 <= len(depths) <= 7:
-            raise self.error("stacked_depths_um", "must be 3 to 7 depths in µm (a dead layer, then the bottom of "
-                                                  "each of 2 to 6 stacked photodiodes)")
+        lo, hi = LAYER_COUNTS[0] + 1, LAYER_COUNTS[-1] + 1
+        if not isinstance(depths, (tuple, list)) or not lo <= len(depths) <= hi:
+            raise self.error("stacked_depths_um", f"must be {lo} or {hi} depths in µm (a dead layer, then the bottom of "
+                                                  f"each of {LAYER_COUNTS[0]} or {LAYER_COUNTS[-1]} stacked photodiodes: "
+                                                  "a colour needs three layers, a DNG holds four colour planes at most)",
+                             list(depths) if isinstance(depths, (tuple, list)) else depths)
         self.numbers("stacked_depths_um", len(depths), 0, increasing=True, unit="µm")
-        if depths[-1] > 100:
-            raise self.error("stacked_depths_um", "the deepest window must end within 100 µm of the surface")
+        if self.stacked_depths_um[-1] > 100:
+            raise self.error("stacked_depths_um", "the deepest window must end within 100 µm of the surface",
+                             list(self.stacked_depths_um))
+        check_layers(self)
 
 
 def check_curve(spec: Spec, wl_field: str, value_field: str, required: bool) -> None:
@@ -156,10 +186,18 @@ def _check_transmittance(spec: FilterSpec) -> None:
 def _check_camera_curve(spec: FilterSpec) -> None:
     """``camera = "file"`` needs curves (wavelengths and rows of R, G, B), and curves need it."""
     wl, rows = spec.camera_curve_nm, spec.camera_curve
+    spec.boolean("camera_gains_kept")
     if spec.camera != FROM_FILE:
         if wl or rows:
             raise spec.error("camera_curve", f"curves are given, so filters.camera must be {FROM_FILE!r}", "…")
+        for name in ("camera_gains", "camera_xyz_to_camera"):
+            if getattr(spec, name):
+                raise spec.error(name, "applies only to a camera of your own (filters.camera_file)",
+                                 list(getattr(spec, name)))
         return
+    if spec.kind != "camera":  # the curves would be read and then ignored
+        raise spec.error("kind", "curves are given (filters.camera_file), so filters.kind must be 'camera' (or leave "
+                                 "kind out: camera_file implies it)")
     if not wl:
         raise spec.error("camera", "needs filters.camera_file (a CSV: wavelength nm, R, G, B)")
     try:
@@ -173,6 +211,7 @@ def _check_camera_curve(spec: FilterSpec) -> None:
                                          "sensitivities ≥ 0 (R, G, B)", "…")
     object.__setattr__(spec, "camera_curve_nm", tuple(w.tolist()))
     object.__setattr__(spec, "camera_curve", tuple(tuple(r) for r in a.tolist()))
+    _check_camera_gains(spec, w, a)
     if spec.camera_unit != "relative":  # absolute curves: no photodiode gives more than 1 electron a photon
         from .cameras import to_electrons_per_photon
 
@@ -184,12 +223,76 @@ def _check_camera_curve(spec: FilterSpec) -> None:
                                             "'relative'?")
 
 
+def _check_camera_gains(spec: FilterSpec, w: np.ndarray, a: np.ndarray) -> None:
+    """A user's curves keep their gains between channels, or say how to get them (spectracam.cameras):
+    ``camera_gains`` (3 numbers > 0), ``camera_xyz_to_camera`` (9 numbers, an invertible matrix whose D65 neutral
+    is positive), or ``camera_gains_kept``; curves in "relative" units whose three channels peak at the same value
+    (peak-normalised, each to 1 or 100 …) with none of these are refused.  Then the channels must be able to
+    form a colour: their condition number (spectracam.cameras.channel_condition) at most that of the stacked
+    sensor's bound."""
+    from .architectures.stacked import MAX_CONDITION
+    from .cameras import channel_condition, file_gains, peak_normalised
+
+    gains, matrix = spec.camera_gains, spec.camera_xyz_to_camera
+    if gains:
+        ok = (isinstance(gains, tuple) and len(gains) == 3 and all(_is_real(g) for g in gains)
+              and all(0 < g < float("inf") for g in gains))
+        if not ok:
+            raise spec.error("camera_gains", "must be 3 finite numbers > 0 (the R, G, B columns' multipliers)",
+                             list(gains) if isinstance(gains, tuple) else gains)
+        object.__setattr__(spec, "camera_gains", tuple(float(g) for g in gains))
+    if matrix:
+        flat = matrix
+        if isinstance(matrix, tuple) and len(matrix) == 3 and all(isinstance(r, (tuple, list)) for r in matrix):
+            flat = tuple(x for r in matrix for x in r)  # a 3×3 table
+        ok = isinstance(flat, tuple) and len(flat) == 9 and all(_is_real(x) for x in flat) \
+            and np.all(np.isfinite(np.asarray(flat, float)))
+        if not ok:
+            raise spec.error("camera_xyz_to_camera", "must be 9 finite numbers: the XYZ(D65)→camera matrix, row-major "
+                                                     "(rows R, G, B)", list(matrix) if isinstance(matrix, tuple) else matrix)
+        m = np.asarray(flat, float).reshape(3, 3)
+        if np.linalg.cond(m) > 1e8:
+            raise spec.error("camera_xyz_to_camera", "must be an invertible 3×3 matrix (this one is singular)", list(flat))
+        from .cameras import d65_white_xyz
+
+        n = m @ d65_white_xyz()
+        if not np.all(n > 0):
+            raise spec.error("camera_xyz_to_camera", f"gives the D65 white a raw neutral {np.round(n, 4).tolist()}: every "
+                                                     "channel of a white must be > 0 — is it XYZ→camera, rows R, G, B?",
+                             list(flat))
+        object.__setattr__(spec, "camera_xyz_to_camera", tuple(float(x) for x in flat))
+    if gains and matrix:
+        raise spec.error("camera_gains", "give the gains or the matrix to restore them from (camera_xyz_to_camera), "
+                                         "not both", list(gains))
+    if spec.camera_unit == "relative" and peak_normalised(a) and not (gains or matrix or spec.camera_gains_kept):
+        raise spec.error("camera_file", "its three channels all peak at the same value, so they were normalised one "
+                                        "by one and the gains between them are lost (a D65 white would read wrong); "
+                                        "give filters.camera_gains = [R, G, B], or filters.camera_xyz_to_camera = "
+                                        "[9 numbers] (the camera's published XYZ(D65)→camera matrix, to restore them "
+                                        "from), or filters.camera_gains_kept = true if the equal peaks are real",
+                         f"{w[0]:g}–{w[-1]:g} nm, peaks {np.round(a.max(axis=0), 6).tolist()}")
+    g = file_gains(spec, w, a)
+    kappa = channel_condition(w, a * g[None, :])
+    if kappa > MAX_CONDITION:
+        shown = "∞" if kappa == float("inf") else format(kappa, ".3g")
+        raise spec.error("camera_file", f"its channels are so alike (condition number {shown}; identical channels "
+                                        f"give ∞) that no colour conversion can separate them; allowed ≤ "
+                                        f"{MAX_CONDITION:g} (the shipped cameras: 1.9–11)",
+                         f"{w[0]:g}–{w[-1]:g} nm")
+
+
+def _is_real(x) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool)
+
+
 def load_curve(path, what: str) -> tuple[tuple, tuple]:
     """``(wavelengths_nm, values)`` from a CSV (two columns, ``#`` comments, an optional header) or a
     TOML file (``wavelength_nm = [...]``, ``values = [...]``)."""
     from pathlib import Path
 
-    p = Path(path)
+    from .io.files import regular_file
+
+    p = regular_file(path, what)
     try:
         text = p.read_bytes().decode("utf-8")
     except (OSError, UnicodeDecodeError) as e:

@@ -150,6 +150,33 @@ class IlluminantSpec(Spec):
         return super().from_dict({"kind": kind, "temperature_K": None, **merged}, source)
 
 
+#: The keys of an ``[illuminant]`` table that belong to one type (the level keys belong to every type).
+TYPE_KEYS = {"blackbody": ("temperature_K",), "cie": ("name",), "measured": ("name", "wavelengths_nm", "values",
+                                                                            "file")}
+
+
+def switched_table(table: dict, key: str, value, kept=frozenset()) -> dict:
+    """The ``[illuminant]`` table with ``key`` (``type``, or ``file``: a measured SPD) set to ``value`` by
+    the override path.  A new type (or a new SPD file) drops the keys of the type the table had — those
+    the user did not set in the same overrides (``kept``) — so ``--set illuminant.file=spd.csv`` works on
+    a blackbody or CIE scene as a ``file =`` line does in the scene file; the level stays.
+
+    >>> switched_table({"type": "cie", "name": "D65", "white_luminance_cd_m2": 50.0}, "file", "spd.csv")
+    {'type': 'measured', 'white_luminance_cd_m2': 50.0, 'file': 'spd.csv'}
+    >>> switched_table({"type": "cie", "name": "D65"}, "type", "blackbody", {"temperature_K"})
+    {'type': 'blackbody'}
+    """
+    t = dict(table)
+    new_type = "measured" if key == "file" else value
+    if key == "file" or t.get("type", IlluminantSpec.kind) != new_type:
+        for k in {k for keys in TYPE_KEYS.values() for k in keys} - set(kept):
+            t.pop(k, None)
+        if key == "file" and "type" not in kept:
+            t["type"] = "measured"
+    t[key] = value
+    return t
+
+
 def relative_spd(spec: IlluminantSpec) -> Spectrum:
     """The illuminant's spectral shape (arbitrary scale)."""
     return ILLUMINANTS[spec.kind](spec)

@@ -22,6 +22,9 @@ from .errors import ConfigError
 PATH = re.compile(r"^([A-Za-z_][A-Za-z_0-9]*)(?:\.([A-Za-z_][A-Za-z_0-9]*))?(?:\[(\d+)\])?$")
 #: "arch/scheme" in one value, so an invalid pair is one error, never two half-applied fields.
 DESIGN_PATH = "capture.design"
+#: Keys that say what kind of thing their table describes: set to another kind, the old kind's keys go
+#: (``--set illuminant.file=spd.csv`` turns a blackbody or CIE scene into a measured SPD; issue 34).
+SWITCHES = {"illuminant": ("type", "file")}
 
 
 def parse_value(text: str):
@@ -43,9 +46,11 @@ def parse_assignment(text: str, source: str = "--set") -> tuple[str, object]:
 
 
 def apply_override(data: dict, path: str, value, defaults: Callable[[], dict] | None = None,
-                   source: str | None = None) -> dict:
+                   source: str | None = None, kept: Iterable[str] = ()) -> dict:
     """A copy of ``data`` with ``path`` set to ``value``.  ``defaults()`` supplies a list that the
-    file leaves at its default when one element of it is set."""
+    file leaves at its default when one element of it is set.  A key that chooses what the rest of its
+    table means (:data:`SWITCHES`: ``illuminant.type``, ``illuminant.file``) set to another kind drops
+    the old kind's keys, except those named in ``kept`` (paths the same overrides set earlier)."""
     m = PATH.match(path) if isinstance(path, str) else None
     if not m:
         raise ConfigError(path, value, "not a path: use 'table.field', 'table.field[i]' or 'key'", source)
@@ -56,6 +61,12 @@ def apply_override(data: dict, path: str, value, defaults: Callable[[], dict] | 
 
         arch, scheme = split_design(value, DESIGN_PATH)
         out.setdefault("capture", {}).update(architecture=arch, exposure=scheme)
+        return out
+    if index is None and key in SWITCHES.get(table, ()) and isinstance(out.get(table, {}), dict):
+        from .illuminant import switched_table
+
+        mine = {p.split(".", 1)[1].split("[")[0] for p in kept if p.startswith(table + ".")}
+        out[table] = switched_table(out.get(table, {}), key, value, mine)
         return out
     if key is None:
         if index is None:
@@ -88,7 +99,9 @@ def apply_override(data: dict, path: str, value, defaults: Callable[[], dict] | 
 def apply_overrides(data: dict, overrides: Iterable, defaults: Callable[[], dict] | None = None,
                     source: str = "--set") -> dict:
     """Apply ``overrides`` (``"path=value"`` strings or ``(path, value)`` pairs) in order."""
+    done: list[str] = []
     for o in overrides:
         path, value = parse_assignment(o, source) if isinstance(o, str) else o
-        data = apply_override(data, path, value, defaults, source)
+        data = apply_override(data, path, value, defaults, source, kept=done)
+        done.append(path)
     return data

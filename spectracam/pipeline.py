@@ -260,24 +260,26 @@ def simulate(scene: Scene, renderer: str = "mitsuba", seed: int | None = None):
 
 #: What every command reports for each camera, oracle and developed, side by side (issue 33).
 BOTH_WAYS_FIELDS = ("delta_e_mean", "delta_e_p95", "delta_e2000_mean", "held_out_delta_e", "held_out_delta_e_p95",
-                    "awb_recovery_deg", "awb_reproduction_deg", "metered_exposure_ms")
+                    "awb_recovery_deg", "awb_reproduction_deg", "metered_exposure_ms", "s_cielab_mean", "s_cielab_p95")
 
 
 def score_row(result) -> dict:
     """The :data:`BOTH_WAYS_FIELDS` of a :class:`ChartScore` or a textured target's score (whose per-pixel scores are
-    on colours the conversion was not fitted on, and which adds its S-CIELAB mean)."""
+    on colours the conversion was not fitted on); S-CIELAB beside the per-pixel ΔE in both (the chart's at
+    processing.viewing_distance_m, the target's at its own viewing geometry)."""
     if isinstance(result, ChartScore):
         c, held = result.summary, result.held_out or {}
         return {"delta_e_mean": c.delta_e_mean, "delta_e_p95": c.delta_e_p95, "delta_e2000_mean": c.delta_e2000_mean,
                 "held_out_delta_e": held.get("delta_e_mean"), "held_out_delta_e_p95": held.get("delta_e_p95"),
                 "awb_recovery_deg": c.awb_recovery_deg, "awb_reproduction_deg": c.awb_reproduction_deg,
-                "metered_exposure_ms": c.capture_time_ms}
+                "metered_exposure_ms": c.capture_time_ms, "s_cielab_mean": c.s_cielab_mean,
+                "s_cielab_p95": c.s_cielab_p95}
     h = result.held_out
     return {"delta_e_mean": h["delta_e_mean"], "delta_e_p95": h["delta_e_p95"],
             "delta_e2000_mean": h["delta_e2000_mean"], "held_out_delta_e": h.get("sample_delta_e_conversion_mean"),
             "held_out_delta_e_p95": h.get("sample_delta_e_conversion_p95"), "awb_recovery_deg": h["awb_recovery_deg"],
             "awb_reproduction_deg": h["awb_reproduction_deg"], "metered_exposure_ms": result.capture_time_ms,
-            "s_cielab_mean": h["s_cielab_mean"]}
+            "s_cielab_mean": h["s_cielab_mean"], "s_cielab_p95": h["s_cielab_p95"]}
 
 
 def camera_processing(processing: ProcessingSpec, camera: str) -> ProcessingSpec:

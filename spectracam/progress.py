@@ -65,3 +65,93 @@ def close_bars() -> None:
             b.close()
         except Exception:  # noqa: BLE001 - a bar that cannot close must not hide the error being reported
             pass
+
+
+def duration_text(seconds: float) -> str:
+    """``"3 h 05 min"``, ``"12 min 40 s"``, ``"9 s"``: a time left, to the precision that matters."""
+    s = max(0, int(round(seconds)))
+    if s >= 3600:
+        return f"{s // 3600} h {s % 3600 // 60:02d} min"
+    if s >= 60:
+        return f"{s // 60} min {s % 60:02d} s"
+    return f"{s} s"
+
+
+class Counter:
+    """Work counted toward a total, said so that a long run is never silent: on a terminal, a bar
+    (:func:`bar`: done/total, rate, time left); with stderr piped or redirected (a log file, CI), where no
+    bar is drawn, a line through ``log`` at most every ``every_s`` seconds —
+    ``sweep cells: 1200 of 99999 cells, 45.1 cells/s, about 36 min 30 s left``.  Once, as soon as a rate is
+    known (``estimate_after_s`` in, or after ``estimate_after_n`` units), it says the estimate up front
+    (``sweep cells: 99999 cells, about 36 min (45.1 cells/s)``) when the work will take longer than
+    ``announce_over_s``.  ``progress`` off (``--quiet``): nothing at all.  Like a bar, it only counts."""
+
+    def __init__(self, total: int, *, desc: str, unit: str, log=None, progress: bool = True, initial: int = 0,
+                 every_s: float = 30.0, estimate_after_s: float = 2.0, estimate_after_n: int = 50,
+                 announce_over_s: float = 10.0):
+        import time
+
+        self._clock = time.monotonic
+        self.total, self.desc, self.unit = int(total), desc, unit
+        self.done = self.initial = int(initial)
+        self.log = log if (log is not None and progress) else (lambda msg: None)
+        self.bar = bar(total=total, initial=initial, desc=desc, unit=unit, progress=progress)
+        self.lines = bool(progress) and self.bar.disable   # no bar drawn: say it in lines
+        self.every_s, self.announce_over_s = every_s, announce_over_s
+        self.estimate_after_s, self.estimate_after_n = estimate_after_s, estimate_after_n
+        self.t0 = self.last = self._clock()
+        self.first: tuple | None = None   # (time, done) at the first update: the rate leaves out a warm-up
+        self.announced = False
+
+    def rate(self) -> float | None:
+        """Units per second since the first unit was done (the first one pays for compiling and caches), or
+        since the start while only one update has come; None before the first."""
+        now = self._clock()
+        if self.first is not None and self.done > self.first[1] and now > self.first[0]:
+            return (self.done - self.first[1]) / (now - self.first[0])
+        n, dt = self.done - self.initial, now - self.t0
+        return n / dt if n > 0 and dt > 0 else None
+
+    def left_s(self) -> float | None:
+        r = self.rate()
+        return (self.total - self.done) / r if r else None
+
+    def update(self, n: int = 1) -> None:
+        self.done += n
+        self.bar.update(n)
+        now = self._clock()
+        if self.first is None:
+            self.first = (now, self.done)
+            return
+        left = self.left_s()
+        if not self.announced and left is not None and (now - self.first[0] >= self.estimate_after_s
+                                                        or self.done - self.first[1] >= self.estimate_after_n):
+            self.announced = True
+            if left > self.announce_over_s:
+                self.log(f"{self.desc}: {self.total - self.done} {self.unit}s to go, estimated {duration_text(left)} "
+                         f"({self._rate_text()})")
+                self.last = now
+        if self.lines and self.announced and now - self.last >= self.every_s and self.done < self.total:
+            self.log(self.line())
+            self.last = now
+
+    def _rate_text(self) -> str:
+        r = self.rate() or 0.0
+        return f"{r:.3g} {self.unit}s/s" if r >= 1 else f"{1 / r:.3g} s a {self.unit}" if r > 0 else "no rate yet"
+
+    def line(self) -> str:
+        left = self.left_s()
+        return (f"{self.desc}: {self.done} of {self.total} {self.unit}s, {self._rate_text()}"
+                + (f", about {duration_text(left)} left" if left is not None else ""))
+
+    def close(self) -> None:
+        self.bar.close()
+
+    def iterate(self, items):
+        """``items``, each counted once the loop's body is done with it; closed when the loop ends."""
+        try:
+            for x in items:
+                yield x
+                self.update()
+        finally:
+            self.close()

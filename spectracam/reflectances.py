@@ -140,6 +140,9 @@ def _luxpy_table(name: str, filename: str, key: str | None = None) -> Reflectanc
 
 def read_csv(path: str | Path) -> ReflectanceSet:
     """:func:`_read_csv`, read once per version of the file (every sweep cell validates its scene)."""
+    from .io.files import regular_file
+
+    regular_file(path, "reflectances file")
     try:
         st = Path(path).stat()
         version = (st.st_mtime_ns, st.st_size)
@@ -182,6 +185,9 @@ LUXPY_LIBRARIES = ("munsell1269", "tm30_4880", "capbone100k")
 def check_available(name: str, what: str = "held_out") -> None:
     """Refuse, before any work, a library that cannot be read here (a missing file, luxpy absent)."""
     if name.startswith("file:"):
+        from .io.files import regular_file
+
+        regular_file(name[5:], what)   # a FIFO is no missing file: said as what it is
         if not Path(name[5:]).is_file():
             raise SpectracamError(f"{what} = {name!r}: no such file (a CSV of spectra: wavelength_nm, then one "
                                   "column per sample)")

@@ -204,7 +204,9 @@ def parse_scene(data: dict, source: str | None = None) -> Scene:
 
 def read_toml(path: str | Path, what: str) -> dict:
     """Parse a TOML file; an unreadable or invalid file is one ConfigError naming ``what``."""
-    p = Path(path)
+    from .io.files import regular_file
+
+    p = regular_file(path, what)
     try:
         text = p.read_bytes().decode("utf-8")
     except OSError as e:
@@ -242,7 +244,9 @@ def resolve_curve_files(data: dict, base_dir: Path) -> dict:
                 raise ConfigError(f"{table}.{key}", path, "must be a path to a CSV or TOML file")
             t[wl_field], t[value_field] = load_curve(Path(base_dir) / path, f"{table}.{key}")
             if table == "illuminant":   # a measured SPD, named after its file
-                t.setdefault("type", "measured")
+                if t.setdefault("type", "measured") != "measured":
+                    raise ConfigError("illuminant.type", t["type"], f"contradicts illuminant.file = {path!r} (a "
+                                      "measured SPD): leave type out or make it 'measured'")
                 t.setdefault("name", Path(path).name)
             if table == "filters":
                 t.setdefault("qe", "data")

@@ -9,11 +9,13 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
 from .architecture import MosaicLayout
 from .capture import RawCapture
+from .chart import WHITE_PATCH
 from .color import ProcessingSpec, demosaic, display_rgb_to_xyz
 from .errors import SpectracamError
 from .metrics import SNR_COMBINATIONS, combine_snr_db, delta_e, snr_db, xyz_to_lab
@@ -64,6 +66,8 @@ class PatchScore:
     #: independent (so the conversion's noise amplification counts and no demosaicker's smoothing
     #: does; docs/metrics.md).
     snr_rendered_db: float | None = None
+    #: The mean per-pixel S-CIELAB ΔE over the patch's scored pixels (:func:`chart_scielab_map`).
+    s_cielab_mean: float | None = None
 
 
 @dataclass(frozen=True)
@@ -95,6 +99,15 @@ class ChartSummary:
     #: spectracam.processing.white_balance).
     awb_recovery_deg: float | None = None
     awb_reproduction_deg: float | None = None
+    #: S-CIELAB (Zhang & Wandell; :func:`chart_scielab_map`): the rendered image and the scene's truth image through
+    #: the eye's filters at processing.viewing_distance_m and display_pixel_pitch_mm, then ΔE (processing.delta_e) per
+    #: pixel on the same pixels as delta_e_mean: the chart average of each patch's mean, and the 95th percentile over
+    #: every patch's pixels.  Always against the scene.
+    s_cielab_mean: float | None = None
+    s_cielab_p95: float | None = None
+    #: The white patch's rendered luminance SNR (:attr:`PatchScore.snr_rendered_db` of chart.WHITE_PATCH): what the
+    #: usability rule reads (spectracam.experiments.usability); ``None``: noise-free or undefined.
+    snr_white_rendered_db: float | None = None
 
 
 #: The metrics a sweep can record: every field of :class:`ChartSummary`.
@@ -288,6 +301,112 @@ def _pixels(box) -> int:
     return (r.stop - r.start) * (c.stop - c.start)
 
 
+def chart_truth_xyz(reference: ChartReference, rows: slice, cols: slice) -> np.ndarray:
+    """``(h, w, 3)`` CIE 1931 XYZ of the scene's pixels ``[rows, cols]`` under its light (the light's white has Y = 1):
+    each patch's reference colour (``reference.patch_xyz``) over the part of the pixel it covers
+    (:func:`spectracam.chart.patch_coverage`, what a box-filtered render converges to), the surround's
+    (``chart.surround_reflectance`` × the white) over the rest."""
+    from .chart import View, patch_coverage
+
+    cy, cx = patch_coverage(reference.chart, View.fit(reference.chart, reference.width_px, reference.height_px))
+    surround = reference.chart.surround_reflectance * np.asarray(reference.white_xyz, float)
+    step = np.asarray(reference.patch_xyz, float) - surround                     # (24, 3)
+    cy, cx = cy[:, rows], cx[:, cols]
+    # (h, w·3): Σ_p cy·cx·(XYZ_p − XYZ_s)
+    mix = cy.T @ (cx[:, :, None] * step[:, None, :]).reshape(len(step), -1)
+    return surround + mix.reshape(cy.shape[1], cx.shape[1], 3)
+
+
+#: Pixels of the chart's S-CIELAB filtered at once: a band of rows (with the kernel's reach above and below) at a
+#: time, so a 12-Mpx chart never holds a full-size opponent image; a 640×480 chart is one band.
+SCIELAB_CHUNK_PIXELS = 1 << 20
+
+
+def _scored_mask(reference: ChartReference) -> np.ndarray:
+    mask = np.zeros((reference.height_px, reference.width_px), bool)
+    for r, c in reference.boxes:
+        mask[r, c] = True
+    return mask
+
+
+def _scielab_bands(reference: ChartReference, spd: float):
+    """``(reach px, crop (rows, cols), input cols, [(out rows, in rows)])``: the scored pixels' bounding box, the
+    columns its filters read, and its bands of output rows with the input rows each needs (the kernel's reach either
+    side, within the image): filtering a band's input gives its output rows exactly as filtering the whole image
+    would."""
+    from .spatial.scielab import scielab_kernels
+
+    reach = scielab_kernels(spd)[0].shape[0] // 2
+    boxes = [(r, c) for r, c in reference.boxes if r.stop > r.start and c.stop > c.start]
+    r0, r1 = min(r.start for r, _ in boxes), max(r.stop for r, _ in boxes)
+    c0, c1 = min(c.start for _, c in boxes), max(c.stop for _, c in boxes)
+    cols_in = slice(max(0, c0 - reach), min(reference.width_px, c1 + reach))
+    band = max(1, SCIELAB_CHUNK_PIXELS // (cols_in.stop - cols_in.start))
+    bands = [(slice(lo, min(lo + band, r1)), slice(max(0, lo - reach), min(reference.height_px, min(lo + band, r1)
+                                                                          + reach))) for lo in range(r0, r1, band)]
+    return reach, (slice(r0, r1), slice(c0, c1)), cols_in, bands
+
+
+def _filtered_lab(xyz: np.ndarray, out_rows: slice, in_rows: slice, out_cols: slice, cols_in: slice, keep: np.ndarray,
+                  spd: float, white: np.ndarray) -> np.ndarray:
+    """CIELAB (against ``white``) of the S-CIELAB-filtered ``xyz`` (the band's input) at the ``keep`` pixels of
+    its output rows and columns."""
+    from .spatial.scielab import scielab_filter_fft
+
+    f = scielab_filter_fft(xyz, spd)   # float64 FFT: the row and column passes' result to 1e-15, 2× faster
+    f = f[out_rows.start - in_rows.start:out_rows.stop - in_rows.start,
+          out_cols.start - cols_in.start:out_cols.stop - cols_in.start]
+    return xyz_to_lab(f[keep], white)
+
+
+@lru_cache(maxsize=2)
+def _truth_scielab_lab(reference: ChartReference, display: str, adaptation: str, spd: float) -> np.ndarray:
+    """``(n, 3)``: CIELAB against the display white of the scene's truth image carried to the display white
+    (``processing.adaptation``) and through the S-CIELAB filters, at the scored pixels in row-major order.
+    Memoised: every capture of a scene (designs, seeds, noise steps) is scored against the same truth."""
+    from .color import adaptation_matrix
+
+    M_disp = display_rgb_to_xyz(display)
+    white = M_disp.sum(axis=1)
+    to_display = adaptation_matrix(reference.white_xyz, white, adaptation)
+    _, (_, cols), cols_in, bands = _scielab_bands(reference, spd)
+    mask = _scored_mask(reference)
+    out = [_filtered_lab(chart_truth_xyz(reference, in_rows, cols_in) @ to_display.T, rows, in_rows, cols, cols_in,
+                         mask[rows, cols], spd, white) for rows, in_rows in bands]
+    lab = np.concatenate(out)
+    lab.flags.writeable = False
+    return lab
+
+
+def chart_scielab_map(rgb: np.ndarray, reference: ChartReference, processing: ProcessingSpec) -> np.ndarray:
+    """``(H, W)`` float32 S-CIELAB ΔE (Zhang & Wandell 1997; :mod:`spectracam.spatial.scielab`) of a chart's
+    rendering, NaN outside the patches' scoring boxes (the pixels the per-pixel ΔE is scored on).
+
+    The rendered display XYZ (``rgb`` through the display) and the scene's truth (:func:`chart_truth_xyz`, carried to
+    the display white by ``processing.adaptation``, as the target scores do) pass through the same opponent-channel
+    filters sampled at ``processing.samples_per_degree`` (the viewing distance and the display's pixel pitch, one
+    image pixel per display pixel); then CIELAB against the display white and ΔE (``processing.delta_e``) per pixel.
+    On a uniform area (wider than the filters' 1° support) it equals the per-pixel ΔE (with the default XYZ-scaling
+    adaptation, exactly); noise is averaged as the eye averages it.  Separable Gaussians on the scored pixels'
+    bounding box and the filters' reach only, a band of rows at a time; no random numbers."""
+    spd = processing.samples_per_degree
+    M_disp = display_rgb_to_xyz(processing.display)
+    white = M_disp.sum(axis=1)
+    truth = _truth_scielab_lab(reference, processing.display, processing.adaptation, spd)
+    _, (_, cols), cols_in, bands = _scielab_bands(reference, spd)
+    mask = _scored_mask(reference)
+    out = np.full(mask.shape, np.nan, np.float32)
+    start = 0
+    for rows, in_rows in bands:
+        keep = mask[rows, cols]
+        lab = _filtered_lab(rgb[in_rows, cols_in] @ M_disp.T, rows, in_rows, cols, cols_in, keep, spd, white)
+        block = out[rows, cols]
+        block[keep] = delta_e(lab, truth[start:start + len(lab)], processing.delta_e)
+        out[rows, cols] = block
+        start += len(lab)
+    return out
+
+
 def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec,
           delta_e_reference: str = "scene") -> ChartScore:
     """Render a capture on the display and score it against the chart reference (see the module
@@ -325,6 +444,7 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
     times_s = np.asarray(raw.exposure_times_s, float)
     mean_labs = xyz_to_lab(np.stack([rgb[r, c].reshape(-1, 3).mean(axis=0) for r, c in boxes]) @ M_disp.T,
                            display_white)
+    sc_map = chart_scielab_map(rgb, reference, processing)
     patches, de2000 = [], []
     for p, (r, c), lab_box in zip(range(len(boxes)), boxes, _box_labs(rgb, boxes, M_disp, display_white)):
         de = delta_e(lab_box, against[p], method)
@@ -343,7 +463,8 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
             **{f"snr_{k}_db": _finite(by_name[k]) if k in by_name else None for k in "RGB"},
             snr_combined_db=_finite(combined), pixels=int((r.stop - r.start) * (c.stop - c.start)),
             snr_undefined=tuple(k for k, m, sd in zip(channels, means[p], stds[p]) if m <= 0 and sd > 0),
-            snr_by_channel_db={k: _finite(v) for k, v in by_name.items()}, snr_rendered_db=_finite(rendered)))
+            snr_by_channel_db={k: _finite(v) for k, v in by_name.items()}, snr_rendered_db=_finite(rendered),
+            s_cielab_mean=float(sc_map[r, c].mean(dtype=np.float64))))
     times_ms = 1e3 * np.asarray(raw.exposure_times_s, float)
     summary = ChartSummary(
         delta_e_mean=float(np.mean([p.delta_e_mean for p in patches])),
@@ -356,13 +477,22 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
         snr_undefined_patches=int(sum(len(p.snr_undefined) for p in patches)),
         snr_rendered_db=_mean_or_none([p.snr_rendered_db for p in patches]),
         delta_e_p95=float(np.nanpercentile(de_map, 95)), delta_e2000_mean=float(np.mean(de2000)),
-        awb_recovery_deg=wb["recovery_deg"], awb_reproduction_deg=wb["reproduction_deg"])
+        awb_recovery_deg=wb["recovery_deg"], awb_reproduction_deg=wb["reproduction_deg"],
+        s_cielab_mean=float(np.mean([p.s_cielab_mean for p in patches])),
+        s_cielab_p95=float(np.nanpercentile(sc_map, 95)), snr_white_rendered_db=patches[WHITE_PATCH].snr_rendered_db)
     parameters = {
         "scene": raw.scene, "camera": camera.to_dict(), "processing": processing.to_dict(), "seed": raw.seed,
         "delta_e_reference": delta_e_reference, "conversion_matrix": M.tolist(),
         "snr_definition": "20*log10(mean/std) of the dark-subtracted electrons of each channel's own pixels in "
                           "the patch mask; combined: "
                           + (SNR_COMBINATIONS[processing.snr_combination].__doc__ or processing.snr_combination),
+        "s_cielab": {"viewing_distance_m": processing.viewing_distance_m,
+                     "display_pixel_pitch_mm": processing.display_pixel_pitch_mm,
+                     "samples_per_degree": processing.samples_per_degree,
+                     "definition": "S-CIELAB (Zhang & Wandell 1997): the rendered display XYZ and the scene's truth "
+                                   "(each patch's reference XYZ over its pixel area, the surround's elsewhere, carried "
+                                   "to the display white) through the eye's opponent-channel filters, then "
+                                   f"{processing.delta_e} per pixel on the patches' scored pixels; docs/metrics.md"},
     }
     training = held_out = None
     if processing.held_out != "none":

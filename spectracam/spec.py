@@ -23,6 +23,7 @@ spectracam.errors.ConfigError: lens.f_number = 0.1: must be a number between 0.5
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import typing
 from typing import Any, ClassVar
@@ -43,6 +44,13 @@ def _range_text(lo: float, hi: float, lo_open: bool, unit: str) -> str:
     return f"between {lo:g} and {hi:g}{u}"
 
 
+@functools.lru_cache(maxsize=None)
+def _type_hints(cls) -> dict:
+    """``typing.get_type_hints`` of a spec class, once per class: it compiles every annotation string anew
+    each call, which was 60 % of building a scene (a 100 000-cell sweep validates 100 000 scenes)."""
+    return typing.get_type_hints(cls)
+
+
 class Spec:
     """Base of every stage's spec.  Subclasses are ``@dataclass(frozen=True)`` and set ``TABLE``
     (the TOML table / dotted prefix that names their fields in errors)."""
@@ -50,7 +58,7 @@ class Spec:
     TABLE: ClassVar[str] = ""
 
     def __post_init__(self) -> None:
-        hints = typing.get_type_hints(type(self))
+        hints = _type_hints(type(self))
         for f in dataclasses.fields(self):
             v = getattr(self, f.name)
             hint = hints.get(f.name)

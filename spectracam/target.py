@@ -155,6 +155,9 @@ def photo_path(photo: str) -> Path:
 
 def file_sha256(path: Path, what: str) -> str:
     """The file's SHA-256, read once per version of the file (a scene is validated several times a run)."""
+    from .io.files import regular_file
+
+    regular_file(path, what)
     try:
         st = path.stat()
         return _sha256(str(path), st.st_mtime_ns, st.st_size)
@@ -237,23 +240,112 @@ def _paint(kind: str, spec: TargetSpec, n: int, shape: tuple[int, int]) -> np.nd
     return labels
 
 
-def _read_photo(path: Path) -> np.ndarray:
-    """Linear sRGB ``(h, w, 3)`` in 0–1 of an 8- or 16-bit image file; one line if it is not one."""
-    from PIL import Image, UnidentifiedImageError
+#: Most pixels a photograph may have: 8192 × 8192 (64 Mpx, as many as the largest texel grid, MAX_TEXELS); it
+#: is box-filtered down to the texel grid anyway, and decoding it takes 16 bytes a colour a pixel.  A header
+#: declaring more (a "decompression bomb", PIL's DecompressionBombError) is refused before any pixel is read.
+MAX_PHOTO_PIXELS = 1 << 26
+_TIFF_MAGIC = (b"II*\x00", b"MM\x00*", b"II+\x00", b"MM\x00+")
+
+
+def _photo_error(path: Path, why: str) -> SpectracamError:
+    return SpectracamError(f"target.photo = {str(path)!r}: {why}")
+
+
+def _check_photo_size(path: Path, width: int, height: int) -> None:
+    if width * height > MAX_PHOTO_PIXELS:
+        raise _photo_error(path, f"{width}x{height} px ({width * height / 1e6:.0f} Mpx) is larger than the "
+                           f"{MAX_PHOTO_PIXELS} px (8192x8192) a photograph may have; reduce it first")
+
+
+def _read_float_tiff(path: Path) -> np.ndarray:
+    """A TIFF PIL cannot read (floating-point RGB: PIL reads float only as one channel) with tifffile:
+    ``(h, w)`` or ``(h, w, samples)``, its size checked before its pixels are read."""
+    import tifffile
 
     try:
-        with Image.open(path) as im:
-            im.load()
-            arr = np.asarray(im.convert("RGB") if im.mode not in ("I;16", "I;16B", "RGB") else im)
+        with tifffile.TiffFile(path) as tif:
+            page = tif.pages[0]
+            axes, shape = page.axes, page.shape
+            h = shape[axes.index("Y")] if "Y" in axes else 0
+            w = shape[axes.index("X")] if "X" in axes else 0
+            _check_photo_size(path, w, h)
+            arr = page.asarray()
+    except SpectracamError:
+        raise
+    except Exception as e:  # noqa: BLE001 - tifffile's errors for a damaged file are of many types
+        why = str(e).splitlines()[0] if str(e) else type(e).__name__
+        raise _photo_error(path, f"not a TIFF file tifffile can read ({why})") from None
+    if "S" in axes and axes.index("S") < axes.index("Y"):    # planar configuration: samples first
+        arr = np.moveaxis(arr, axes.index("S"), -1)
+    if arr.dtype.kind != "f":
+        raise _photo_error(path, f"a TIFF of {arr.dtype} samples PIL cannot read; give 8- or 16-bit integer or "
+                           "32-bit float RGB")
+    return arr
+
+
+def _read_photo(path: Path) -> np.ndarray:
+    """Linear sRGB ``(h, w, 3)`` in 0–1 of an image file: 8- or 16-bit (sRGB-encoded: decoded here), or a
+    floating-point TIFF (linear light already, 1 = white: read as is, its values checked); one line if it
+    is not one, or is larger than :data:`MAX_PHOTO_PIXELS` (checked on its header, before its pixels)."""
+    import warnings
+
+    from PIL import Image, UnidentifiedImageError
+
+    from .io.files import regular_file
+
+    path = regular_file(path, "target.photo")
+    try:
+        with open(path, "rb") as f:
+            magic = f.read(4)
     except FileNotFoundError:
-        raise SpectracamError(f"target.photo = {str(path)!r}: no such file") from None
-    except (UnidentifiedImageError, OSError, SyntaxError, ValueError) as e:
-        raise SpectracamError(f"target.photo = {str(path)!r}: not an image file PIL can read ({e}); give a PNG, "
-                              "JPEG or TIFF") from None
+        raise _photo_error(path, "no such file") from None
+    except OSError as e:
+        raise _photo_error(path, f"cannot be read ({e.strerror})") from None
+    linear = None
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            with Image.open(path) as im:
+                _check_photo_size(path, *im.size)
+                im.load()
+                if im.mode == "F":   # 32-bit float (one channel): linear light; convert("RGB") would clip it to 0/1
+                    linear = np.asarray(im, dtype=np.float64)
+                else:
+                    arr = np.asarray(im.convert("RGB") if im.mode not in ("I;16", "I;16B", "RGB") else im)
+    except FileNotFoundError:
+        raise _photo_error(path, "no such file") from None
+    except Image.DecompressionBombError as e:   # a header declaring more pixels than PIL will decode at all
+        import re
+
+        m = re.search(r"\((\d+) pixels\)", str(e))
+        size = f"{int(m.group(1)) / 1e6:.0f} Mpx" if m else "more pixels than PIL decodes"
+        raise _photo_error(path, f"declares {size}, larger than the {MAX_PHOTO_PIXELS} px (8192x8192) a photograph "
+                           "may have; reduce it first") from None
+    except UnidentifiedImageError as e:
+        if magic not in _TIFF_MAGIC:
+            raise _photo_error(path, f"not an image file PIL can read ({e}); give a PNG, JPEG or TIFF") from None
+        linear = _read_float_tiff(path).astype(np.float64)
+    except (OSError, SyntaxError, ValueError) as e:
+        raise _photo_error(path, f"not an image file PIL can read ({e}); give a PNG, JPEG or TIFF") from None
+    if linear is not None:
+        arr = linear
     if arr.ndim == 2:
         arr = np.repeat(arr[:, :, None], 3, axis=2)
+    if arr.ndim != 3 or arr.shape[2] not in (1, 3, 4):
+        raise _photo_error(path, f"an image of shape {arr.shape}; give grey, RGB or RGBA")
+    if arr.shape[2] == 1:
+        arr = np.repeat(arr, 3, axis=2)
+    arr = arr[:, :, :3]
     if arr.shape[0] < 2 or arr.shape[1] < 2:
-        raise SpectracamError(f"target.photo = {str(path)!r}: {arr.shape[1]}x{arr.shape[0]} px; at least 2x2 needed")
+        raise _photo_error(path, f"{arr.shape[1]}x{arr.shape[0]} px; at least 2x2 needed")
+    if linear is not None:   # floating point: linear light, 1 = a perfect white; nothing is clipped unsaid
+        if not np.all(np.isfinite(arr)):
+            raise _photo_error(path, "a floating-point image with NaN or infinite values")
+        lo, hi = float(arr.min()), float(arr.max())
+        if lo < 0 or hi > 1:
+            raise _photo_error(path, f"a floating-point image is read as linear light 0–1 (1 = white); this one "
+                               f"spans {lo:.4g}–{hi:.4g}: scale it into 0–1")
+        return np.ascontiguousarray(arr, dtype=np.float64)
     encoded = arr.astype(np.float64) / (65535.0 if arr.dtype == np.uint16 or arr.max() > 255 else 255.0)
     # IEC 61966-2-1 decoding
     return np.where(encoded <= 0.04045, encoded / 12.92, ((encoded + 0.055) / 1.055) ** 2.4)

@@ -103,8 +103,8 @@ def test_a_camera_without_gains_or_reference_is_refused(monkeypatch):
 
 def test_camera_curves_must_cover_the_scene_and_exclude_a_second_qe():
     sigma_range = WavelengthGrid(np.arange(405.0, 700.0, 10.0))
-    spec = FilterSpec(kind="camera", camera="file", camera_curve_nm=(400.0, 680.0),
-                      camera_curve=((1.0, 1.0, 1.0), (1.0, 1.0, 1.0)))
+    spec = FilterSpec(kind="camera", camera="file", camera_curve_nm=(400.0, 550.0, 680.0),
+                      camera_curve=((0.1, 0.2, 0.9), (0.3, 0.8, 0.2), (0.6, 0.3, 0.1)))
     with pytest.raises(ConfigError, match="cover 400–680 nm but the scene's bands span 400–700 nm"):
         responsivities(spec, sigma_range)
     with pytest.raises(ConfigError, match="filters.qe = 'photodiode': measured camera curves already include"):
@@ -149,7 +149,7 @@ BAD_CSVS = {
     "negative": ("wl,R,G,B\n400,1,1,1\n500,-0.1,1,1\n700,1,1,1\n", "must be ≥ 0"),
     "short": ("wl,R,G,B\n400,1,1,1\n", "need ≥ 2 rows"),
     "columns": ("wl,R,G\n400,1,1\n700,1,1\n", "need 4 numbers"),
-    "narrow": ("wl,R,G,B\n450,1,1,1\n650,1,1,1\n", "cover 450–650 nm"),
+    "narrow": ("wl,R,G,B\n450,0.1,0.4,0.9\n550,0.4,0.8,0.3\n650,0.7,0.3,0.1\n", "cover 450–650 nm"),
     "dark": ("wl,R,G,B\n400,1,0,1\n700,1,0,1\n", "needs a sensitivity > 0"),
 }
 
@@ -358,3 +358,137 @@ def test_metering_on_a_region_a_level_and_the_patch(chart_exr):
                      ("0,0,9999,9", "outside the 160x120 image"), ("grey", "must be 'patch'")):
         with pytest.raises(ConfigError, match=msg):
             capture(cube, white=bad)
+
+
+# ---------------------------------------------------------------- a user's curves must keep their gains (issue 34)
+NIKON_M = "8198,-2239,-724,-4871,12389,2798,-1043,2050,7181"
+
+
+def nikon_npl_csv(path, columns=(0, 1, 2)):
+    """colour-science's Nikon 5100 (NPL) curves as published — each channel normalised to a peak of 1 — as the
+    README's camera CSV (``columns`` picks the file's R, G, B from the curves' channels)."""
+    import colour
+
+    m = colour.MSDS_CAMERA_SENSITIVITIES["Nikon 5100 (NPL)"]
+    v = np.asarray(m.values)[:, list(columns)]
+    path.write_text("wavelength_nm,R,G,B\n" + "\n".join(f"{w:g},{a:.9g},{b:.9g},{c:.9g}" for w, (a, b, c)
+                                                         in zip(m.wavelengths, v)) + "\n")
+    return path
+
+
+def test_peak_normalised_curves_are_refused_naming_the_fix(tmp_path):
+    csv = nikon_npl_csv(tmp_path / "n.csv")
+    r = run("simulate", "scenes/d65.toml", "-o", tmp_path / "o", "--renderer", "analytic", *SMALL,
+            "--set", f'filters.camera_file="{csv}"')
+    one_line_error(r, "filters.camera_file", "peaks [1.0, 1.0, 1.0]", "gains between them are lost",
+                   "filters.camera_gains", "filters.camera_xyz_to_camera", "filters.camera_gains_kept = true")
+    assert not (tmp_path / "o").exists()
+    # the same refusal for any common peak (a percentage), none for curves with their gains (the Canon's)
+    wl, S = energy_sensitivities("Nikon 5100 (NPL)")
+    with pytest.raises(ConfigError, match="all peak at the same value"):
+        FilterSpec(kind="camera", camera="file", camera_curve_nm=tuple(wl), camera_curve=tuple(map(tuple, 100 * S /
+                                                                                                   S.max(0))))
+    FilterSpec(kind="camera", camera="file", camera_curve_nm=tuple(wl), camera_curve=tuple(map(tuple, S)))
+
+
+def test_a_matrix_or_gains_restore_a_user_camera_to_the_shipped_one(tmp_path):
+    """The Nikon's NPL curves with Adobe's matrix (or with the gains it implies) are the shipped Nikon exactly;
+    kept at equal gains on request, the D65 white reads R/G 0.582 where the matrix implies 0.443 (the defect,
+    made explicit)."""
+    from spectracam.cameras import d65_response
+    from spectracam.scene import resolve_curve_files
+
+    csv = nikon_npl_csv(tmp_path / "n.csv")
+    shipped = responsivities(FilterSpec(kind="camera", camera="Nikon 5100 (NPL)"), GRID)
+    m = tuple(float(x) for x in NIKON_M.split(","))
+    g = restored_gains("Nikon 5100 (NPL)")
+    for extra in ({"camera_xyz_to_camera": m}, {"camera_xyz_to_camera": [list(m[:3]), list(m[3:6]), list(m[6:])]},
+                  {"camera_gains": list(g * 7.0)}):
+        data = resolve_curve_files({"filters": {"camera_file": str(csv), **extra}}, tmp_path)
+        np.testing.assert_allclose(responsivities(FilterSpec(**data["filters"]), GRID), shipped, rtol=1e-6)
+    data = resolve_curve_files({"filters": {"camera_file": str(csv), "camera_gains_kept": True}}, tmp_path)
+    kept = FilterSpec(**data["filters"])
+    r = d65_response(np.asarray(kept.camera_curve_nm), np.asarray(kept.camera_curve))
+    assert r[0] == pytest.approx(0.582, abs=0.002)
+    assert PUBLISHED_MATRICES["Nikon D5100"].neutral(d65_white_xyz())[0] == pytest.approx(0.441, abs=0.001)
+
+
+@pytest.mark.parametrize("extra, message", [
+    ({"camera_gains": [1, 0, 1]}, "filters.camera_gains = [1, 0, 1]: must be 3 finite numbers > 0"),
+    ({"camera_gains": [1, 1]}, "must be 3 finite numbers > 0"),
+    ({"camera_xyz_to_camera": [1, 2, 3]}, "must be 9 finite numbers"),
+    ({"camera_xyz_to_camera": [1, 0, 0, 1, 0, 0, 0, 0, 1]}, "must be an invertible 3×3 matrix"),
+    ({"camera_xyz_to_camera": [-1, 0, 0, 0, 1, 0, 0, 0, 1]}, "every channel of a white must be > 0"),
+    ({"camera_gains": [1, 1, 1], "camera_xyz_to_camera": [1, 0, 0, 0, 1, 0, 0, 0, 1]}, "not both"),
+    ({"kind": "block", "camera_gains_kept": True}, "filters.kind = 'block': curves are given"),
+    ({"camera_gains_kept": "yes"}, "filters.camera_gains_kept = 'yes': must be true or false"),
+])
+def test_bad_gain_options_are_one_line(tmp_path, extra, message):
+    from spectracam.scene import resolve_curve_files
+
+    data = resolve_curve_files({"filters": {"camera_file": str(nikon_npl_csv(tmp_path / "n.csv")), **extra}}, tmp_path)
+    with pytest.raises(ConfigError, match=message.replace("[", "\\[").replace("]", "\\]")):
+        FilterSpec(**data["filters"])
+
+
+def test_gain_options_need_a_camera_file():
+    with pytest.raises(ConfigError, match="filters.camera_gains.*applies only to a camera of your own"):
+        FilterSpec(kind="camera", camera_gains=(1.0, 1.0, 1.0))
+
+
+def test_camera_file_with_block_filters_is_refused_not_ignored(tmp_path):
+    csv = canon_csv(tmp_path / "c.csv")
+    r = run("simulate", "scenes/d65.toml", "-o", tmp_path / "o", "--renderer", "analytic", *SMALL,
+            "--set", f'filters.camera_file="{csv}"', "--set", "filters.kind=block")
+    one_line_error(r, "filters.kind = 'block'", "filters.kind must be 'camera'")
+
+
+def test_identical_channels_are_refused_in_one_line(tmp_path):
+    """Three copies of one channel cannot form a colour (before issue 34: LinAlgError: Singular matrix)."""
+    csv = nikon_npl_csv(tmp_path / "same.csv", columns=(1, 1, 1))
+    r = run("simulate", "scenes/d65.toml", "-o", tmp_path / "o", "--renderer", "analytic", *SMALL,
+            "--set", f'filters.camera_file="{csv}"', "--set", "filters.camera_gains_kept=true")
+    one_line_error(r, "filters.camera_file", "channels are so alike", "allowed ≤ 100")
+    assert not (tmp_path / "o").exists()
+
+
+def test_channel_condition_of_the_shipped_cameras():
+    from spectracam.cameras import channel_condition
+
+    k = {n: channel_condition(library_curves(n).wavelengths_nm, library_curves(n).values) for n in CAMERAS}
+    assert k["Nikon 5100 (NPL)"] == pytest.approx(1.93, abs=0.01)
+    assert k["Canon EOS 5D Mark II (rawtoaces)"] == pytest.approx(2.07, abs=0.01)
+    assert k["Sigma SDMerill (NPL)"] == pytest.approx(11.4, abs=0.05)
+    wl = np.arange(400.0, 701.0)
+    assert channel_condition(wl, np.stack([np.exp(-((wl - 550) / 40) ** 2)] * 3, axis=1)) == float("inf")
+
+
+def test_validate_checks_a_users_camera_as_a_shipped_one(tmp_path):
+    """The Nikon's NPL curves and Adobe's matrix given on the command line give the shipped Nikon's row."""
+    csv = nikon_npl_csv(tmp_path / "n.csv")
+    (tmp_path / "m.txt").write_text("# Nikon D5100, Adobe ColorMatrix2 x 1e4\n[[8198, -2239, -724],\n"
+                                    "[-4871, 12389, 2798], [-1043, 2050, 7181]]\n")
+    r = run("validate", "-o", tmp_path / "v", "--renderer", "analytic", "--camera-file", csv, "--matrix",
+            tmp_path / "m.txt")
+    assert r.returncode == 0, r.stderr
+    res = json.loads((tmp_path / "v" / "validate.json").read_text())
+    (row,) = res["cameras"]
+    assert row["white_RG_simulated"] == pytest.approx(0.444, abs=0.001)
+    assert row["white_RG_published"] == pytest.approx(0.443, abs=0.001)
+    assert row["delta_e_published_mean"] == pytest.approx(1.87, abs=0.05)
+    assert row["delta_e_fit_mean"] == pytest.approx(1.62, abs=0.05)
+    assert row["white_RG_equal_gains"] > 1.3 * row["white_RG_published"]
+    assert row["gains"].startswith("restored") and "real_camera_data" not in res
+    assert "equal gains" in (tmp_path / "v" / "validate.md").read_text()
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--matrix", "1,2,3"], "--matrix = '1,2,3': must be 9 finite numbers"),
+    ([], "--camera-file and --matrix go together"),
+    (["--matrix", NIKON_M, "--camera-gains", "1,x,1"], "filters.camera_gains"),
+    (["--matrix", "0,0,0,0,0,0,0,0,0"], "must be an invertible 3×3 matrix"),
+])
+def test_validate_refuses_bad_user_input_in_one_line(tmp_path, args, message):
+    csv = nikon_npl_csv(tmp_path / "n.csv")
+    one_line_error(run("validate", "-o", tmp_path / "v", "--camera-file", csv, *args), message)
+    assert not (tmp_path / "v").exists()

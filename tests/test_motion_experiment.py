@@ -14,7 +14,8 @@ TINY = ("edge_size_px=[48, 32]", "speeds_px_per_ms=[0.0, 0.05, 0.2]", "samples_p
 
 #: The keys of a row of results.json, in order: what readers of the file rely on.
 ROW_KEYS = ["design", "speed_px_per_ms", "speed_mm_per_s", "rolling_shutter", "breakup_width_px", "max_added_chroma",
-            "breakup_width_scene_px", "false_colour_still", "scielab_delta_e", "cielab_delta_e",
+            "breakup_width_scene_px", "false_colour_still", "channel_edge_shift_px", "edge_blur_px",
+            "breakup_threshold_width_px", "breakup_threshold_width_scene_px", "scielab_delta_e", "cielab_delta_e",
             "scielab_delta_e_scene", "cielab_delta_e_scene", "mtf50_cy_per_px", "scielab_delta_e_sd",
             "cielab_delta_e_sd", "scielab_delta_e_scene_sd", "cielab_delta_e_scene_sd", "mtf50_cy_per_px_sd",
             "scielab_delta_e_by_seed", "seeds", "snr_db", "blur_px", "capture_time_ms", "exposure_ms", "slices",

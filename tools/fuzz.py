@@ -7,13 +7,19 @@ Cases: damaged EXR files, wrong scene values, unwritable outputs, garbage TOML, 
 contradicting their scene, units, --white), the validate/cameras commands, SIGTERM mid-run, textured
 targets (issue 19: their values, damaged photographs and measured SPD files), and the architectures of
 issue 20 (stacked depths, schemes and demosaickers that do not apply, the architectures command), and the
-page of issue 23 (``view DIR`` on bad directories, ``--view`` under faults).
+page of issue 23 (``view DIR`` on bad directories, ``--view`` under faults), and issue 34's new user: each of ten
+faults in its bad form (case_user_faults), the same inputs in their valid forms, which must be accepted with their
+files written (case_valid), and results checked for physical possibility (case_physical, impossible_outputs).
+``--only user_faults,valid,physical`` runs only those classes.
 
 Each case runs one real command in a fresh directory and is judged:
   traceback      a Python traceback on stderr (every failure must be one line);
   partial files  a failed command left something in its output directory (temporary files included);
-  silent wrong   the command succeeded on input known to be bad, or wrote a non-finite number.
-The last line prints the counts; all three must be 0.
+  silent wrong   the command succeeded on input known to be bad, or wrote a non-finite number;
+  valid refused  a valid input (case_valid, case_physical) was refused, or a file it must write is missing;
+  impossible     a ΔE < 0, non-finite or > 400, a non-finite SNR, an exposure time <= 0, a digital number
+                 outside [0, 2^bits - 1], a charge above the full well (impossible_outputs).
+The last line prints the counts; every one must be 0.
 """
 from __future__ import annotations
 
@@ -39,10 +45,13 @@ FIELDS = ["illuminant.temperature_K", "illuminant.white_luminance_cd_m2", "image
           "filters.camera", "filters.camera_unit", "capture.white_fill", "capture.metering", "capture.metering_target",
           "capture.metering_percentile", "processing.camera", "processing.white_balance", "processing.white_balance_p",
           "processing.white_balance_sigma_px", "processing.white_balance_training", "processing.calibration",
-          "processing.tone_curve"]
+          "processing.tone_curve", "processing.viewing_distance_m", "processing.display_pixel_pitch_mm",
+          "filters.stacked_ir_cut_nm", "filters.stacked_ir_cut_width_nm", "filters.camera_gains",
+          "filters.camera_xyz_to_camera", "filters.camera_gains_kept"]
 VALUES = ["0", "-1", "1e308", "nan", "inf", "-inf", "1.5", "true", '"text"', "[1, 2]", "[]", "{}", "3", "7",
           "2147483648", "0.001", "bilinear", "fsc", "optimal", "photodiode", "developed", "percentile", "grey_edge",
-          "dual_illuminant", "corrected_moments", "colorchecker24", "filmic"]
+          "dual_illuminant", "corrected_moments", "colorchecker24", "filmic", '"none"', "[5.9, 5.95, 6.0, 6.05]",
+          "[1, 0, 1]", "[0.0001, 0.0002, 0.0003, 100]"]
 
 
 #: A case that runs longer than this hangs (counted as such, then killed).
@@ -817,19 +826,296 @@ def case_white_balance(rng, d: Path):
     return _with_fault(rng, *rng.choice(cases))
 
 
+# -- issue 34: what a new user hits — faults refused in one line, valid inputs accepted, results possible ------
+
+SPD_CSV = "wavelength_nm,value\n380,1\n500,2\n780,1.5\n"
+SIM = ["--renderer", "analytic", "--quiet"]
+
+
+def _photo_scene(d: Path, photo: str) -> str:
+    (d / "ph.toml").write_text(f'[target]\nkind = "photo"\nphoto = "file:{photo}"\nlibrary = "cfi99"\nsupersampling = 1\n'
+                               '[image]\nwidth = 64\nheight = 48\n')
+    return "ph.toml"
+
+
+def _png_declaring(path: Path, width: int, height: int) -> None:
+    """A PNG whose header declares width × height pixels and holds almost nothing (a decompression bomb)."""
+    import struct
+    import zlib
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+
+    path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0))
+                     + chunk(b"IDAT", zlib.compress(b"\0" * 16)) + chunk(b"IEND", b""))
+
+
+def case_user_faults(rng, d: Path):
+    """Issue 34, item 7: each fault a new user hit, in its bad form — refused in one line (exit 2), never a traceback
+    or a hang: (1) illuminant.type contradicting --set illuminant.file, (2) a PNG declaring 20000² px, a float TIFF
+    out of 0–1, (3) a number for spatial's olpf_separations_px, (4) view of a report.json that is a list, (5) an EXR
+    whose spectracamScene is '[1, 2, 3]', (6) plot-sweep naming an axis its table lacks, (7) a sweep over more cells
+    than --max-cells, (8) a FIFO as any input file, (9) a bare scene name matching a local and a shipped file, (10) a
+    design file's experiment naming no experiment."""
+    import numpy as np
+
+    (d / "spd.csv").write_text(SPD_CSV)
+    fault = rng.choice(["illuminant_file", "photo_bomb", "float_tiff", "olpf", "view_list", "exr_scene", "plot_axis",
+                        "max_cells", "fifo", "shadowed", "design_experiment"])
+    if fault == "illuminant_file":
+        return ["render", "s.toml", "-o", "out", *SIM, "--set", "illuminant.type=cie", "--set",
+                "illuminant.file=spd.csv"], True, "34.1 illuminant.type contradicts --set illuminant.file"
+    if fault == "photo_bomb":
+        _png_declaring(d / "bomb.png", 20000, 20000)
+        return ["render", _photo_scene(d, "bomb.png"), "-o", "out", *SIM], True, "34.2 a PNG declaring 20000x20000 px"
+    if fault == "float_tiff":
+        import tifffile
+
+        tifffile.imwrite(d / "hdr.tif", np.full((48, 64, 3), rng.choice([3.0, -0.5, np.nan]), np.float32),
+                         photometric="rgb")
+        return ["render", _photo_scene(d, "hdr.tif"), "-o", "out", *SIM], True, "34.2 a float TIFF outside 0-1"
+    if fault == "olpf":
+        v = rng.choice(["1", "'x'", "[]", "[1, 'a']", "[9]"])
+        return ["spatial", "-o", "out", "--quick", "--renderer", "analytic", "--set", f"olpf_separations_px={v}"], True, \
+            f"34.3 spatial olpf_separations_px={v}"
+    if fault == "view_list":
+        (d / "out").mkdir()
+        (d / "out" / "report.json").write_text(rng.choice(["[1, 2, 3]", "3", '"text"', "null"]))
+        return ["view", "out"], True, "34.4 view: report.json not an object"
+    if fault == "exr_scene":
+        from spectracam.io.exr import read_exr, write_exr
+
+        ch, at = read_exr(d / "r" / "radiance.exr")
+        keep = {k: v for k, v in at.items() if k in ("spectralLayoutVersion", "emissiveUnits") or k.startswith("spectracam")}
+        keep[rng.choice(["spectracamScene", "spectracamRender"])] = rng.choice(["[1, 2, 3]", "3", '"x"', "null"])
+        write_exr(d / "bad.exr", ch, keep)
+        return ["capture", "bad.exr", "-o", "out", "--quiet"], True, "34.5 EXR scene attribute not an object"
+    if fault == "plot_axis":
+        shutil.copytree(d / "sw", d / "out")
+        meta = json.loads((d / "out" / "sweep.json").read_text())
+        meta["axes"][0][0] = "optics.f_number"
+        (d / "out" / "sweep.json").write_text(json.dumps(meta))
+        return ["plot-sweep", "out"], True, "34.6 plot-sweep: an axis the table lacks"
+    if fault == "max_cells":
+        return ["sweep", "sw.toml", "-o", "out", "--serial", "--quiet", "--max-cells", "2"], True, \
+            "34.7 a sweep over more cells than --max-cells"
+    if fault == "fifo":
+        name = rng.choice(["f.toml", "f.exr", "f.csv", "f.png"])
+        os.mkfifo(d / name)
+        cmd = {"f.toml": rng.choice([["simulate", "f.toml", "-o", "out"], ["sweep", "f.toml", "-o", "out"],
+                                     ["design", "f.toml", "-o", "out"]]),
+               "f.exr": rng.choice([["capture", "f.exr", "-o", "out"], ["score", "f.exr", "-o", "out"],
+                                    ["inspect", "f.exr"]]),
+               "f.csv": ["render", "s.toml", "-o", "out", *SIM, "--set", rng.choice(
+                   ["illuminant.file=f.csv", 'filters.camera_file="f.csv"', "processing.held_out=file:f.csv"])],
+               "f.png": ["render", _photo_scene(d, "f.png"), "-o", "out", *SIM]}[name]
+        return cmd, True, f"34.8 a FIFO as {name}: {cmd[0]}"
+    if fault == "shadowed":
+        (d / "d65.toml").write_text(SCENE)
+        return ["render", "d65", "-o", "out", *SIM], True, "34.9 d65 names ./d65.toml and the shipped d65"
+    (d / "dz.toml").write_text(f'experiment = "{rng.choice(["nosuch", "d65", "paper.tom"])}"\n')
+    return ["design", "dz.toml", "-o", "out", "--quick"], True, "34.10 a design file's experiment names none"
+
+
+#: Issue 34: camera files whose channels lost their gains or cannot form a colour (refused unless a fix is given).
+PEAK_NORMALISED_CSV = "wl,R,G,B\n380,0.1,0.2,1\n500,0.3,1,0.5\n600,1,0.6,0.1\n780,0.4,0.1,0.05\n"
+IDENTICAL_CSV = "wl,R,G,B\n380,0.1,0.1,0.1\n550,0.9,0.9,0.9\n780,0.2,0.2,0.2\n"
+#: Adobe's ColorMatrix2 of the Nikon D5100 (×10⁴, as dcraw tabulates it): a valid XYZ→camera matrix.
+NIKON_MATRIX = "8198,-2239,-724,-4871,12389,2798,-1043,2050,7181"
+
+
+def case_honest_scores(rng, d: Path):
+    """Issue 34's new options: stacked depths that cannot form a colour image, the stacked IR cut, a user's
+    peak-normalised or degenerate curves and their fixes (gains, a matrix, kept), ``validate`` on a user's camera,
+    the design's ``objective``, the S-CIELAB viewing geometry, and a motion run too large for memory."""
+    (d / "peak.csv").write_text(PEAK_NORMALISED_CSV)
+    (d / "same.csv").write_text(IDENTICAL_CSV)
+    (d / "m.txt").write_text(NIKON_MATRIX.replace(",", " ") + "\n")
+    (d / "bad_m.txt").write_bytes(rng.choice([b"", b"1 2 3\n", b"\x00\xff\xfe", b"nan " * 9]))
+    sim = ["simulate", "s.toml", "-o", "out", "--renderer", "analytic", "--quiet"]
+    stacked = sim + ["--set", "capture.architecture='stacked'"]
+    cam = sim + ["--set", "filters.camera_file='peak.csv'"]
+    val = ["validate", "-o", "out", "--renderer", "analytic"]
+    design = ["design", "design.toml", "-o", "out", "--quick", "--set", "renderer='analytic'", "--set",
+              "max_iterations=3", "--set", "designs=['cfa/single']"]
+    cases = [
+        (stacked + ["--set", "filters.stacked_depths_um=[5.9, 5.95, 6.0, 6.05]"], True),
+        (stacked + ["--set", "filters.stacked_depths_um=[0.0001, 0.0002, 0.0003, 100]"], True),
+        (stacked + ["--set", "filters.stacked_depths_um=[0.2, 1.0, 3.0]"], True),
+        (stacked + ["--set", "filters.stacked_depths_um=[0.2, 0.6, 1.2, 2.0, 3.0, 4.0, 5.0]"], True),
+        (stacked + ["--set", "filters.stacked_ir_cut_nm=" + rng.choice(["-5", "1e9", "nan", "true", "'off'"])], True),
+        (stacked + ["--set", f"filters.stacked_ir_cut_width_nm={rng.choice(['0', '-1', '1e6'])}"], True),
+        (stacked + ["--set", "filters.stacked_ir_cut_nm='none'"], False), (stacked, False),
+        (cam, True), (sim + ["--set", "filters.camera_file='same.csv'"], True),
+        (cam + ["--set", "filters.kind='block'"], True),
+        (cam + ["--set", f"filters.camera_gains={rng.choice(['[1, 0, 1]', '[1, 1]', '[inf, 1, 1]'])}"], True),
+        (cam + ["--set", "filters.camera_xyz_to_camera=[1, 2, 3, 4, 5, 6, 7, 8]"], True),
+        (cam + ["--set", "filters.camera_gains_kept='yes'"], True),
+        (cam + ["--set", "filters.camera_gains=[0.5, 1, 0.8]", "--set", f"filters.camera_xyz_to_camera=[{NIKON_MATRIX}]"],
+         True),
+        (sim + ["--set", "filters.camera_gains=[0.5, 1, 0.8]"], True),
+        (cam + ["--set", "filters.camera_gains=[0.5, 1, 0.8]"], False),
+        (cam + ["--set", f"filters.camera_xyz_to_camera=[{NIKON_MATRIX}]"], False),
+        (cam + ["--set", "filters.camera_gains_kept=true"], False),
+        (val + ["--camera-file", "peak.csv"], True), (val + ["--matrix", NIKON_MATRIX], True),
+        (val + ["--camera-file", "peak.csv", "--matrix", "bad_m.txt"], True),
+        (val + ["--camera-file", "peak.csv", "--matrix", "1,2,3,4,5,6,7,8"], True),
+        (val + ["--camera-file", "peak.csv", "--matrix", "out"], True),
+        (val + ["--camera-file", "peak.csv", "--matrix", "m.txt", "--camera-gains", "1,x"], True),
+        (val + ["--camera-file", "peak.csv", "--matrix", "m.txt"], False),
+        (design + ["--set", "objective=" + rng.choice(["'nosuch'", "1", "true", "[1]", "''", "'s-cielab'"])], True),
+        (design + ["--set", "objective='s_cielab'"], False),
+        (sim + ["--set", f"processing.viewing_distance_m={rng.choice(['0', '-1', 'nan', '1e9'])}"], True),
+        (sim + ["--set", "processing.viewing_distance_m=2.0", "--set", "processing.display_pixel_pitch_mm=0.1"], False),
+        (["architectures", "-o", "out", "--quick", rng.choice(["--min-white-snr-db", "--max-s-cielab"]),
+          rng.choice(["99", "nan", "-inf", "0.1", "x"])], True),
+    ]
+    cmd, bad = rng.choice(cases)
+    if rng.random() < 0.1:   # a motion run whose slice renders cannot fit: refused up front, nothing written
+        return (["motion", "--quick", "-o", "out", "--renderer", "analytic", "--set", "slices=100000"], False,
+                "motion slices=100000 under 2 GiB", {"address_space": 2 * 2**30})
+    return _with_fault(rng, cmd, bad)
+
+
+def case_valid(rng, d: Path):
+    """Issue 34: valid but unusual inputs must be accepted — exit 0 and the expected files present: each fault of
+    case_user_faults in its valid form (illuminant.file via --set on a blackbody and a CIE scene, a float TIFF and a
+    16-bit PNG photograph, spatial's OLPF list, view and plot-sweep of real outputs, a capture of a recorded EXR, a
+    sweep with its progress, a local scene file by path, and ``experiment = "paper"`` in a design file)."""
+    import numpy as np
+
+    (d / "spd.csv").write_text(SPD_CSV)
+    kind = rng.choice(["illuminant_file", "float_tiff", "png16", "olpf", "view", "capture", "plot", "sweep",
+                       "local_scene", "design_experiment"])
+    if kind == "illuminant_file":
+        scene = rng.choice(["s.toml", "d65", "blackbody_3000K"])
+        return (["simulate", scene, "-o", "out", *SIM, "--set", "image.width=64", "--set", "image.height=48", "--set",
+                 "illuminant.file=spd.csv"], False, f"valid: --set illuminant.file on {scene}",
+                {"expect": ["out/radiance.exr", "out/raw.exr", "out/report.json"], "physical": True})
+    if kind in ("float_tiff", "png16"):
+        from PIL import Image
+
+        linear = np.clip(np.random.default_rng(rng.randrange(1000)).random((48, 64, 3)), 0.0, 1.0).astype(np.float32)
+        if kind == "float_tiff":
+            import tifffile
+
+            tifffile.imwrite(d / "p.tif", linear, photometric="rgb")
+            name = "p.tif"
+        else:
+            Image.fromarray((linear[..., 0] * 65535).astype(np.uint16)).save(d / "p.png")
+            name = "p.png"
+        return ["simulate", _photo_scene(d, name), "-o", "out", *SIM], False, f"valid: a {kind} photograph", \
+            {"expect": ["out/radiance.exr", "out/raw.exr", "out/report.json"], "physical": True}
+    if kind == "olpf":
+        return (["spatial", "-o", "out", "--quick", "--renderer", "analytic", "--set", "pixel_pitches_um=[10]",
+                 "--set", "f_numbers=[1.4]", "--set", "designs=['cfa/single']", "--set", "demosaics=['bilinear']",
+                 "--set", "olpf_separations_px=[0, 1]", "--set", "targets=['edge']"], False,
+                "valid: spatial olpf_separations_px=[0, 1]", {"expect": ["out/report.md"], "physical": True})
+    if kind == "view":
+        shutil.copytree(d / rng.choice(["r", "c", "sw"]), d / "out")
+        return ["view", "out"], False, "valid: view of real outputs", {"expect": ["out/index.html"]}
+    if kind == "capture":
+        return ["capture", "r/radiance.exr", "-o", "out", "--quiet"], False, "valid: capture of a recorded EXR", \
+            {"expect": ["out/raw.exr"], "physical": True}
+    if kind == "plot":
+        shutil.copytree(d / "sw", d / "out")
+        return ["plot-sweep", "out"], False, "valid: plot-sweep", {"expect": ["out/plots/delta_e_mean.png"]}
+    if kind == "sweep":
+        return ["sweep", "sw.toml", "-o", "out", "--serial"], False, "valid: a sweep with its progress", \
+            {"expect": ["out/results.parquet", "out/results.csv", "out/sweep.json"], "physical": True}
+    if kind == "local_scene":
+        (d / "d65.toml").write_text(SCENE)
+        return ["simulate", rng.choice(["./d65.toml", "d65.toml"]), "-o", "out", *SIM], False, \
+            "valid: a local d65.toml by path", {"expect": ["out/report.json", "out/raw.exr"], "physical": True}
+    (d / "dz.toml").write_text('experiment = "paper"\n')
+    return (["design", "dz.toml", "-o", "out", "--quick", "--set", "renderer='analytic'", "--set", "max_iterations=2",
+             "--set", "designs=['cfa/single']", "--quiet"], False, "valid: experiment = \"paper\" in a design file",
+            {"expect": ["out/results.json"]})
+
+
+def case_physical(rng, d: Path):
+    """Issue 34: results must be physically possible (:func:`impossible_outputs`) on quick runs of every kind — a
+    simulate under another design, ADC, light or noise switch; a capture and a score of the base files."""
+    sets = rng.choice([["capture.design=fsc/optimal"], ["capture.design=prism/balanced"], ["sensor.adc_bits=12"],
+                       ["sensor.adc_bits=6"], ["illuminant.type=cie", "illuminant.name=A"],
+                       ["illuminant.white_luminance_cd_m2=5"], ["sensor.read_noise=false", "sensor.shot_noise=false"],
+                       ["optics.f_number=8"], ["illuminant.white_luminance_cd_m2=3000"]])
+    cmd = rng.choice([["simulate", "s.toml", "-o", "out", *SIM] + [a for s in sets for a in ("--set", s)],
+                      ["capture", "r/radiance.exr", "-o", "out", "--quiet", "--seed", str(rng.randrange(100))],
+                      ["score", "c/raw.exr", "-o", "out", "--quiet"]])
+    expect = {"simulate": ["out/report.json", "out/raw.exr"], "capture": ["out/raw.exr"],
+              "score": ["out/report.json"]}[cmd[0]]
+    return cmd, False, f"physical: {' '.join(cmd[:2])} {' '.join(sets) if cmd[0] == 'simulate' else ''}", \
+        {"expect": expect, "physical": True}
+
+
+#: The largest ΔE*ab a result may hold: L* spans 0–100 and a*, b* of any colour a display or a surface shows stay
+#: within about ±200, so two such colours are never more than ~400 apart; a larger one is a wrong number.
+DELTA_E_BOUND = 400.0
+
+
+def impossible_outputs(out: Path) -> str:
+    """What is physically impossible in a run's outputs ("" if nothing): in reports, a ΔE that is negative,
+    non-finite or above :data:`DELTA_E_BOUND`, an SNR that is not finite (null: noise-free, allowed), an exposure or
+    capture time ≤ 0; in raw EXRs, digital numbers outside [0, 2^bits − 1], charges (DN − black level)/K above the
+    full well or a mean charge below 0, exposure times ≤ 0."""
+    import math
+
+    import numpy as np
+
+    for p in out.rglob("*.json"):
+        try:
+            d = json.loads(p.read_text())
+        except ValueError:
+            continue
+        stack = [("", d)]
+        while stack:
+            key, x = stack.pop()
+            if isinstance(x, dict):
+                stack.extend(x.items())
+            elif isinstance(x, list):
+                stack.extend((key, v) for v in x)
+            elif isinstance(x, (int, float)) and not isinstance(x, bool) and isinstance(key, str):
+                k = key.lower()
+                if (k.startswith(("delta_e", "s_cielab")) or k.endswith("delta_e")) and \
+                        not (math.isfinite(x) and 0 <= x <= DELTA_E_BOUND):
+                    return f"{p.name}: {key} = {x} (ΔE must be finite, 0–{DELTA_E_BOUND:g})"
+                if "snr" in k and not math.isfinite(x):
+                    return f"{p.name}: {key} = {x} (an SNR must be finite)"
+                if k.startswith(("exposure", "capture_time")) and k.endswith(("_s", "_ms")) and \
+                        not (math.isfinite(x) and x > 0):
+                    return f"{p.name}: {key} = {x} (an exposure time must be > 0)"
+    from spectracam.io.exr import read_raw_exr
+
+    for p in out.rglob("raw.exr"):
+        raw = read_raw_exr(p)
+        s = raw.camera.sensor
+        dn = np.asarray(raw.digital, np.float64)
+        if dn.min() < 0 or dn.max() > 2**s.adc_bits - 1:
+            return f"{p}: digital numbers {dn.min():g}–{dn.max():g} outside 0–{2**s.adc_bits - 1}"
+        charge = (dn - s.black_level_dn) * s.quantization_step_e
+        if charge.max() > s.q_max_e * (1 + 1e-6) or charge.mean() < 0:
+            return f"{p}: charges up to {charge.max():g} e (full well {s.q_max_e:g}), mean {charge.mean():g} e"
+        t = np.asarray(raw.exposure_times_s, np.float64)
+        if not (np.all(np.isfinite(t)) and np.all(t > 0) and raw.capture_time_s > 0):
+            return f"{p}: exposure times {t.tolist()} s"
+    return ""
+
+
 CASES = [case_damaged_file, case_scene_value, case_environment, case_garbage_text, case_camera_file, case_foreign_exr,
          case_new_commands, case_signal, case_full_disk, case_memory_limit, case_raw_attributes, case_journal,
          case_experiment_values, case_group_signal, case_scheduler_peer, case_read_only, case_reflectances,
          case_target, case_architectures, case_spacetime, case_design, case_view, case_developed,
-         case_white_balance]
+         case_white_balance, case_user_faults, case_valid, case_physical, case_honest_scores]
 
 
-def one(i: int, seed: int, base: Path, cycle: bool = False) -> tuple[str, dict]:
+def one(i: int, seed: int, base: Path, cycle: bool = False, classes=None) -> tuple[str, dict]:
     rng = random.Random(seed * 100003 + i)
+    classes = classes or CASES
     with tempfile.TemporaryDirectory() as t:
         d = Path(t)
         shutil.copytree(base, d, dirs_exist_ok=True)
-        make = CASES[i % len(CASES)] if cycle else rng.choice(CASES)
+        make = classes[i % len(classes)] if cycle else rng.choice(classes)
         cmd, known_bad, label, *extra = make(rng, d)
         opts = extra[0] if extra and isinstance(extra[0], dict) else ({"kill": extra[0]} if extra else {})
         before = snapshot(d / "out")
@@ -839,10 +1125,20 @@ def one(i: int, seed: int, base: Path, cycle: bool = False) -> tuple[str, dict]:
         if "chmod" in opts:
             os.chmod(d / "out", 0o755)
         res = judge(r, d / "out", known_bad, before, cmd[0]) | {"status": r.returncode, "stderr": r.stderr[-400:]}
+        if "expect" in opts:   # a valid input: accepted, and what it writes is there
+            missing = [p for p in opts["expect"] if not (d / p).exists()]
+            res["valid_refused"] = r.returncode != 0 or bool(missing)
+            if missing and r.returncode == 0:
+                res["stderr"] = f"missing {', '.join(missing)}; " + res["stderr"]
+        if opts.get("physical") and r.returncode == 0:
+            why = impossible_outputs(d / "out")
+            res["impossible"] = bool(why)
+            if why:
+                res["stderr"] = why + "; " + res["stderr"]
         return label, res | {"orphans": orphans, "hang": hung, "command": cmd[0]}
 
 
-KINDS = ("traceback", "partial", "silent_wrong", "multi_line", "orphans", "hang")
+KINDS = ("traceback", "partial", "silent_wrong", "multi_line", "orphans", "hang", "valid_refused", "impossible")
 
 
 def main(argv=None) -> int:
@@ -852,26 +1148,37 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--random-classes", action="store_true",
                     help="draw each case's class at random [default: every class in turn]")
+    ap.add_argument("--only", default=None, metavar="CLASS,...",
+                    help="run only these classes, e.g. user_faults,valid,physical [default: all]")
     a = ap.parse_args(argv)
+    classes = CASES
+    if a.only:
+        by_name = {c.__name__.removeprefix("case_"): c for c in CASES}
+        unknown = [n for n in a.only.split(",") if n not in by_name]
+        if unknown:
+            ap.error(f"--only: no class {', '.join(unknown)}; classes: {', '.join(by_name)}")
+        classes = [by_name[n] for n in a.only.split(",")]
     with tempfile.TemporaryDirectory() as t:
         base = Path(t)
         make_base(base)
         with ThreadPoolExecutor(a.jobs) as ex:
-            results = list(ex.map(lambda i: one(i, a.seed, base, cycle=not a.random_classes), range(a.cases)))
-    counts = {k: sum(bool(r[k]) for _, r in results) for k in KINDS}
+            results = list(ex.map(lambda i: one(i, a.seed, base, cycle=not a.random_classes, classes=classes),
+                                  range(a.cases)))
+    counts = {k: sum(bool(r.get(k)) for _, r in results) for k in KINDS}
     for label, r in results:
-        if any(r[k] for k in KINDS):
-            print(f"  {label}: status {r['status']}, " + ", ".join(k for k in KINDS if r[k]) + f"\n    {r['stderr']}")
+        if any(r.get(k) for k in KINDS):
+            print(f"  {label}: status {r['status']}, " + ", ".join(k for k in KINDS if r.get(k)) + f"\n    {r['stderr']}")
     print(f"{'command':<12} {'cases':>5} {'ok':>4} {'refused':>7} " + " ".join(f"{k:>12}" for k in KINDS))
     for cmd in sorted({r["command"] for _, r in results}):
         rs = [r for _, r in results if r["command"] == cmd]
         ok = sum(r["status"] == 0 for r in rs)
-        print(f"{cmd:<12} {len(rs):>5} {ok:>4} {len(rs) - ok:>7} " + " ".join(f"{sum(bool(r[k]) for r in rs):>12}"
+        print(f"{cmd:<12} {len(rs):>5} {ok:>4} {len(rs) - ok:>7} " + " ".join(f"{sum(bool(r.get(k)) for r in rs):>12}"
                                                                         for k in KINDS))
     ok = sum(r["status"] == 0 for _, r in results)
     print(f"fuzz: {len(results)} cases ({ok} succeeded, {len(results) - ok} refused), {counts['traceback']} tracebacks, "
           f"{counts['partial']} partial files, {counts['silent_wrong']} silent wrong results, "
-          f"{counts['multi_line']} multi-line errors, {counts['orphans']} orphans, {counts['hang']} hangs")
+          f"{counts['multi_line']} multi-line errors, {counts['orphans']} orphans, {counts['hang']} hangs, "
+          f"{counts['valid_refused']} valid inputs refused, {counts['impossible']} impossible results")
     return 1 if any(counts.values()) else 0
 
 

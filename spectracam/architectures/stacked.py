@@ -9,19 +9,39 @@ reflectance ``R`` (M. A. Green, Sol. Energy Mater. Sol. Cells 92 (2008) 1305: :m
 
 the collection-depth model of :func:`spectracam.silicon.photodiode_qe` applied per window (sharp
 window edges; one pass of the light, no microlens or coating).  The layers sum to one photodiode
-collecting from ``z_0`` to the deepest boundary (a test).
+collecting from ``z_0`` to the deepest boundary (a test).  ``IR cut`` is the filter in front of the
+sensor that the camera carries (``filters.stacked_ir_cut_nm``, a logistic edge) times the optional
+``filters.ir_cut_nm`` every architecture shares (two filters in series).
 
-Defaults, ``[0.33, 1.34, 3.08, 6.0]`` µm: *effective* collection windows (carrier diffusion moves
-them away from the metallurgical junctions, which the model does not resolve), fitted with a 6 µm
-deepest boundary and a 655 nm IR cut (the measured camera's curves fall to half between 650 and
-660 nm) to two published sets of numbers for the Sigma SD1 Merrill: the shapes of its three curves
+**Defaults: the Sigma SD1 Merrill, with its IR-cut filter.**  Depths ``[0.245, 1.15, 2.61, 4.34]`` µm
+and an IR cut at 655 nm, 10 nm from 90 % to 10 %.  The depths are *effective* collection windows
+(carrier diffusion moves them away from the metallurgical junctions, which the model does not
+resolve), fitted to two published sets of numbers for the SD1 Merrill: the shapes of its three curves
 measured at NPL (Darrodi, Finlayson, Goodman, Mackiewicz, JOSA A 32 (2015) 381; colour-science's
-"Sigma SDMerill (NPL)"; peaks 630/590/480 nm) and the ratio of its layers' raw responses to a D65
-white implied by LibRaw's XYZ→camera matrix for the SD1/DP Merrill (``colordata.cpp``:
-bottom : middle : top = 0.267 : 0.578 : 1).  The fit gives peaks 630/590/490 nm, correlations
-0.984/0.982/0.990 and 0.30 : 0.60 : 1.  The junction depths often quoted for the Foveon X3 (about
-0.2, 0.6 and 2 µm; not found in a primary source here) give peaks 530/450/400 nm, correlating
-0.48/−0.02/−0.11 with the measured camera: they are not where the carriers are collected from.
+"Sigma SDMerill (NPL)"), and the ratio of its layers' raw responses to a D65 white implied by LibRaw's
+XYZ→camera matrix for the SD1/DP Merrill (``colordata.cpp``: bottom : middle : top = 0.267 : 0.578 : 1).
+The measured curves fall from 92 % to 18 % of their peaks between 650 and 660 nm: that is the camera's
+IR-cut (dust-protector) filter, which every SD1 Merrill carries in front of the sensor, not silicon —
+silicon's absorption changes slowly there — so the filter is part of the default; with no IR cut the
+best depths reach correlations of only 0.76/0.86/0.93 (the bottom layer cannot fall off in the red).
+
+Units: the model's QE is per photon; the NPL curves are per unit energy (as :mod:`spectracam.cameras`
+reads every relative camera curve: ``S/λ`` is per photon).  The fit compares them per photon (the
+curves converted with :func:`spectracam.cameras.to_electrons_per_photon`), on the NPL's 400–680 nm,
+and the white on the scenes' 400–700 nm bands under CIE D65.  Result (``tests/test_architectures.py``):
+correlations 0.981/0.978/0.992 (bottom/middle/top; 0.984/0.984/0.993 compared per unit energy instead),
+peaks 640/570/480 nm against the curves' 630/540/480 nm per photon (per energy 640/600/490 against
+630/590/480; the measured middle curve is flat within 5 % from 520 to 590 nm per photon, so its peak is
+poorly defined), white 0.269 : 0.583 : 1.  The junction depths often quoted for the Foveon X3 (about 0.2, 0.6
+and 2 µm; not found in a primary source here) give peaks 530/450/400 nm: they are not where the
+carriers are collected from.  (The defaults before issue 34, ``[0.33, 1.34, 3.08, 6.0]`` µm, were fitted
+per photon against per-energy curves with an IR cut no scene set: as shipped, with no IR cut, the
+bottom layer peaked at 680 nm and correlated 0.67/0.69/0.87.)
+
+**Layers that cannot form a colour image are refused** (:func:`check_layers`, at validation): fewer
+than three layers or more than four (a colour needs three channels; a DNG holds four colour planes at
+most); a layer whose response to a white is below :data:`MIN_WHITE_FRACTION` of the strongest layer's;
+or layers so alike that the colour conversion must amplify noise beyond :data:`MAX_CONDITION`.
 
 One exposure for all layers (they integrate together); every layer its own photodiode — the
 sensor's well, dark current and read noise, its own fixed pattern.  The layers' curves overlap
@@ -45,6 +65,81 @@ def layer_qe(wavelength_nm, depths_um) -> np.ndarray:
     alpha = absorption_coefficient_per_um(lam)
     reaching = np.stack([np.exp(-alpha * z) for z in depths_um])      # fraction of photons reaching depth z
     return ((1.0 - reflectance(lam)) * (reaching[:-1] - reaching[1:]))[::-1]
+
+
+#: A layer whose response to a white is below this fraction of the strongest layer's is refused: the exposure
+#: is metered so that the strongest layer fills its well, so such a layer records the white in under 1 % of full
+#: swing — on the paper's sensor (131 072 e⁻ well, 8-bit ADC: 512 e⁻ a code) at most 1 311 e⁻, 2.6 codes, which
+#: quantisation alone (σ = 148 e⁻) leaves at SNR < 9 for the white and < 2 for an 18 % grey: no colour.  A real
+#: Foveon's weakest layer (the SD1 Merrill's bottom one) gets 27 % of the top's.
+MIN_WHITE_FRACTION = 0.01
+#: The largest condition number of the layers' white-balanced responsivities per unit energy (each layer
+#: scaled to 1 on an equal-energy white, sampled at 1 nm over 400–700 nm, times the IR cuts; the measure
+#: :func:`spectracam.cameras.channel_condition` applies to a camera file).  It bounds how much the colour
+#: conversion can amplify the layers' relative noise in its worst direction against its best (for
+#: ``x = A⁺r``: ‖δx‖/‖x‖ ≤ κ‖δr‖/‖r‖).  The measured SD1 Merrill curves have κ = 11, the default depths
+#: 14, the paper's block filters 1.2; 100 spends 40 dB of a raw SNR whose ceiling on the paper's sensor is
+#: 51 dB (a full 131 072 e⁻ well), and the depth sets measured beyond it (e.g. [3, 3.5, 4, 4.5] µm, κ = 450)
+#: render the d65 chart below 0 dB luminance SNR — noise larger than the picture.
+MAX_CONDITION = 100.0
+#: Layer counts a stacked camera may have (``len(filters.stacked_depths_um) − 1``): three channels at least
+#: for a colour, four at most for a DNG's colour planes.
+LAYER_COUNTS = (3, 4)
+
+
+def stacked_cut(filters):
+    """Transmittance ``λ → T`` of the filters in front of the stacked sensor: its own IR cut
+    (``stacked_ir_cut_nm``, edge ``stacked_ir_cut_width_nm``) times the shared ``ir_cut_nm`` if set; None
+    when there is neither."""
+    from ..filters import ir_cut, logistic_scale_nm
+
+    shared = ir_cut(filters)
+    if filters.stacked_ir_cut_nm is None:
+        return shared
+    s, c = logistic_scale_nm(filters.stacked_ir_cut_width_nm), filters.stacked_ir_cut_nm
+
+    def cut(lam):
+        own = 1.0 / (1.0 + np.exp((np.asarray(lam, float) - c) / s))
+        return own if shared is None else own * shared(lam)
+
+    return cut
+
+
+def layer_diagnostics(filters) -> tuple[np.ndarray, float]:
+    """``(white fraction of each layer (bottom first; the strongest = 1), condition number)`` of the
+    layers × IR cuts on 400–700 nm at 1 nm under an equal-energy white (:data:`MAX_CONDITION`)."""
+    lam = np.arange(400.0, 701.0)
+    cut = stacked_cut(filters)
+    q = layer_qe(lam, filters.stacked_depths_um) * (1.0 if cut is None else cut(lam))
+    q = q * lam  # electrons per unit energy: an equal-energy white's photon flux ∝ λ
+    white = q.sum(axis=1)
+    if not np.all(white > 0):
+        return white / max(white.max(), 1e-300), float("inf")
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+        kappa = float(np.linalg.cond((q / white[:, None]).T))
+    return white / white.max(), kappa if np.isfinite(kappa) and kappa < 1e12 else float("inf")
+
+
+def check_layers(filters) -> None:
+    """Refuse ``filters.stacked_depths_um`` whose layers cannot form a colour image (module docstring),
+    in one line naming the field, the value and what is allowed."""
+    from ..errors import ConfigError
+
+    depths = list(filters.stacked_depths_um)
+    field = "filters.stacked_depths_um"
+    frac, kappa = layer_diagnostics(filters)
+    names = layer_names(len(frac))
+    if frac.min() < MIN_WHITE_FRACTION:
+        k = int(np.argmin(frac))
+        raise ConfigError(field, depths, f"layer {names[k]} (window {depths[len(depths) - 2 - k]:g}–"
+                          f"{depths[len(depths) - 1 - k]:g} µm) collects {frac[k]:.2g} of the strongest layer's charge "
+                          f"from a white; every layer needs ≥ {MIN_WHITE_FRACTION:g} of it to record a colour")
+    if kappa > MAX_CONDITION:
+        shown = "∞" if kappa == float("inf") else format(kappa, ".3g")
+        raise ConfigError(field, depths, f"the layers' responses are so alike (condition number {shown}) that the "
+                          f"colour conversion would amplify their noise beyond any picture; allowed ≤ {MAX_CONDITION:g} "
+                          "(the SD1 Merrill's measured curves: 11) — spread the windows over the depths where "
+                          "blue, green and red are absorbed (about 0.2–5 µm)")
 
 
 def layer_names(n: int) -> tuple[str, ...]:
@@ -73,10 +168,8 @@ class StackedPhotodiodes(Architecture):
         return type(self)(self.cfa_pattern, self.fixed_pattern, len(camera.filters.stacked_depths_um) - 1)
 
     def responsivities(self, filters, grid) -> np.ndarray:
-        """``(n, B)`` band-averaged layer QE × IR cut (400 points a band)."""
-        from ..filters import ir_cut
-
-        cut = ir_cut(filters)
+        """``(n, B)`` band-averaged layer QE × IR cuts (400 points a band)."""
+        cut = stacked_cut(filters)
         depths = filters.stacked_depths_um
 
         def layer(k):

@@ -106,6 +106,99 @@ def demosaic_factors(layout: MosaicLayout, method: str) -> np.ndarray:
     return F
 
 
+#: The viewing geometry S-CIELAB assumes when the processing names none: 0.5 m from a 120-dpi display, the
+#: reference code's (ISETCam's scParams) and ProcessingSpec's defaults (41.2 samples per degree).
+DEFAULT_VIEWING_DISTANCE_M = 0.5
+DEFAULT_DISPLAY_PIXEL_PITCH_MM = 25.4 / 120
+
+
+def viewing_samples_per_degree(processing) -> float:
+    """Image samples per degree of visual angle of ``processing``'s viewing geometry (``viewing_distance_m``,
+    ``display_pixel_pitch_mm``; one image pixel per display pixel): ``1 / (2·atan(p/2d))`` in degrees
+    (:func:`spectracam.spatial.scielab.samples_per_degree`), the chart score's own."""
+    from ..spatial.scielab import samples_per_degree
+
+    d = getattr(processing, "viewing_distance_m", DEFAULT_VIEWING_DISTANCE_M)
+    p = getattr(processing, "display_pixel_pitch_mm", DEFAULT_DISPLAY_PIXEL_PITCH_MM)
+    return samples_per_degree(d, p * 1e-3)
+
+
+def _scielab_kernels(samples_per_degree: float) -> np.ndarray:
+    """``(3, n, n)`` the S-CIELAB point spreads (luminance, red-green, blue-yellow; each sums to 1) of
+    :func:`spectracam.spatial.scielab.scielab_kernels`, the pipeline's own."""
+    from ..spatial.scielab import scielab_kernels
+
+    return np.stack(scielab_kernels(samples_per_degree))
+
+
+def scielab_white_factors(samples_per_degree: float) -> np.ndarray:
+    """``ρ[i, j] = Σ_x h_i(x)·h_j(x)``: the covariance of opponent channels i and j after the S-CIELAB kernels
+    ``h_i``, ``h_j`` per unit covariance of spatially white noise (full planes: one independent draw per pixel)."""
+    h = _scielab_kernels(samples_per_degree)
+    return np.einsum("iab,jab->ij", h, h)
+
+
+_SCIELAB_MOSAIC_CACHE: dict = {}
+
+
+def scielab_mosaic_factors(layout: MosaicLayout, method: str, samples_per_degree: float) -> np.ndarray:
+    """``S[u, c, i, j, k, l]``: at an output pixel of tile site ``u`` (row-major), the covariance of the demosaicked
+    channels k and l after the S-CIELAB kernels h_i and h_j, per unit variance of input channel c's pixels, all
+    pixels independent:
+
+        S[u, c, i, j, k, l] = Σ_{y ∈ c's pixels} g_ik(x_u; y)·g_jl(x_u; y),   g_ik(x; y) = Σ_x' h_i(x − x')·w_k(x', y)
+
+    with ``w_k(x', y)`` the demosaicker's weight of pixel y in channel k at x' (its impulse response).  By the
+    tile's periodicity the sum over c's pixels for one output pixel equals, for one impulse per site of c in the
+    tile, the sum over every output pixel of site u — how it is computed: one impulse per tile site through
+    :func:`spectracam.color.demosaic`, each output plane convolved with each kernel.  With one-pixel kernels
+    (``h = δ``) it is :func:`demosaic_factors` (``S[u, c, i, j, k, l] = F[u, c, k, l]``).  Cached per layout, method
+    and samples per degree (the factors depend on nothing else)."""
+    from scipy.signal import fftconvolve
+
+    from ..color import DEMOSAIC_MARGIN, demosaic
+
+    key = (layout, method, float(samples_per_degree))
+    if key in _SCIELAB_MOSAIC_CACHE:
+        return _SCIELAB_MOSAIC_CACHE[key]
+    _require_linear(layout, method)
+    h = _scielab_kernels(samples_per_degree)
+    half = (h.shape[-1] - 1) // 2
+    th, tw = layout.tile_shape
+    n = len(layout.channels)
+    reach = half + DEMOSAIC_MARGIN + max(th, tw)      # the impulse's response lies well inside the image
+    ry, rx = -(-(2 * reach + 1) // th), -(-(2 * reach + 1) // tw)
+    H, W = th * ry, tw * rx
+    cy, cx = (ry // 2) * th, (rx // 2) * tw
+    S = np.zeros((th * tw, n, 3, 3, n, n))
+    for dy, dx, c in layout.sites():
+        img = np.zeros((H, W))
+        img[cy + dy, cx + dx] = 1.0
+        out = demosaic(img, layout, method)                                   # (H, W, n): w_k(·, y)
+        g = np.stack([[fftconvolve(out[..., k], h[i], mode="same") for k in range(n)] for i in range(3)])
+        for uy in range(th):
+            for ux in range(tw):
+                sel = g[:, :, uy::th, ux::tw].reshape(3 * n, -1)
+                S[uy * tw + ux, c] += (sel @ sel.T).reshape(3, n, 3, n).transpose(0, 2, 1, 3)
+    S[np.abs(S) < 1e-15 * np.abs(S).max()] = 0.0    # the FFT's rounding where no channel mixes another
+    _SCIELAB_MOSAIC_CACHE[key] = S
+    return S
+
+
+def _require_linear(layout: MosaicLayout, method: str) -> None:
+    """Refuse a demosaicker that is not linear (the factors are read by impulses)."""
+    from ..color import demosaic
+
+    th, tw = layout.tile_shape
+    reps = max(8, -(-24 // min(th, tw)))
+    rng = np.random.default_rng(0)
+    a, b = rng.random((th * reps, tw * reps)), rng.random((th * reps, tw * reps))
+    if not np.allclose(demosaic(2 * a - 3 * b, layout, method), 2 * demosaic(a, layout, method)
+                       - 3 * demosaic(b, layout, method), atol=1e-9):
+        raise SpectracamError(f"design: processing.demosaic = {method!r} is not linear; the expected-error model "
+                              "needs a linear demosaicker (bilinear, patch or malvar2004)")
+
+
 def capture_rule(architecture) -> str:
     """``first`` (one exposure), ``max`` (sensors exposed together) or ``sum`` (frames in sequence)."""
     probe = np.array([1.0, 2.0, 4.0, 8.0][:len(architecture.channels)])
@@ -129,9 +222,17 @@ class CameraModel:
     display_matrix: np.ndarray  # display RGB → XYZ
     snr_combination: str
     points: np.ndarray = field(default_factory=normal_points)
+    #: S-CIELAB's viewing geometry, image samples per degree of visual angle (:func:`viewing_samples_per_degree`).
+    samples_per_degree: float | None = None
+    #: The filtered-noise factors: ``S[u, c, i, j, k, l]`` (:func:`scielab_mosaic_factors`) for a mosaic, ``ρ[i, j]``
+    #: (:func:`scielab_white_factors`) for full planes; ``None``: the expected S-CIELAB is not modelled.
+    scielab_factors: np.ndarray | None = None
 
     @classmethod
-    def of(cls, camera, processing, exposure: str | None = None) -> "CameraModel":
+    def of(cls, camera, processing, exposure: str | None = None,
+           samples_per_degree: float | None = None) -> "CameraModel":
+        """The model of ``camera`` developed by ``processing``; ``samples_per_degree`` (S-CIELAB's viewing geometry)
+        defaults to the processing's viewing distance and display pixel pitch."""
         from ..color import display_rgb_to_xyz
 
         if processing.delta_e != "cie1976":
@@ -142,14 +243,17 @@ class CameraModel:
                                   "conversion (the paper's); switch the clip off")
         arch = camera.architecture()
         layout = arch.layout
+        spd = viewing_samples_per_degree(processing) if samples_per_degree is None else float(samples_per_degree)
         if isinstance(layout, MosaicLayout):
             factors, shared = demosaic_factors(layout, processing.demosaic), False
+            scielab = scielab_mosaic_factors(layout, processing.demosaic, spd)
         else:
             factors = None
             shared = arch.fixed_pattern == "shared" or (arch.fixed_pattern == "physical" and arch.sensors == 1)
+            scielab = scielab_white_factors(spd)
         return cls(SensorModel.of(camera), tuple(arch.channels), exposure or camera.capture.exposure,
                    capture_rule(arch), factors, shared, display_rgb_to_xyz(processing.display),
-                   processing.snr_combination)
+                   processing.snr_combination, samples_per_degree=spd, scielab_factors=scielab)
 
     @property
     def sites(self) -> int:
@@ -340,6 +444,74 @@ def white_balance_penalty(R: list, rates: list, M: list, lab_true: np.ndarray, w
     return dr.mean(delta_e(lab_of(g)), axis=1) - dr.mean(delta_e(lab_of(None)), axis=1)
 
 
+def scielab_covariances(M: list, times: list, var: list, C_planes, cam: CameraModel) -> list:
+    """Per output site of the tile, the 3×3 display-RGB covariance (as lists of ``(S,)`` tensors) of the noise after
+    the demosaicker and S-CIELAB's filters (docs/metrics.md, "Expected S-CIELAB in the design model").
+
+    With ``P = O·M_disp`` (display RGB → opponent: :data:`~spectracam.spatial.scielab.XYZ_TO_OPPONENT` after the
+    display's RGB → XYZ) and ``A_ik = Σ_d P_id·M_kd / t_k`` (camera channel k's electrons → opponent i), opponent
+    channel i filtered by ``h_i``:
+
+    * mosaic: ``Cov_f[i, j] = Σ_c σ_c² Σ_kl A_ik·A_jl·S[u, c, i, j, k, l]`` (:func:`scielab_mosaic_factors`; for a
+      demosaicker that keeps channels apart, k = l = c: ``Σ_c A_ic·A_jc·σ_c²·ρ_c(i, j)``);
+    * full planes (spatially white): ``Cov_f[i, j] = ρ[i, j]·Σ_kl A_ik·A_jl·C[k, l]`` with ``ρ = Σ_x h_i·h_j``
+      (:func:`scielab_white_factors`) and ``C`` the planes' channel covariance (the shared fixed pattern included);
+
+    then back to display RGB: ``P⁻¹·Cov_f·P⁻ᵀ``.  ``var``: per channel the ``(S,)`` pixel variance (e⁻²);
+    ``C_planes``: :func:`channel_covariances` of full planes (ignored for a mosaic)."""
+    from ..spatial.scielab import XYZ_TO_OPPONENT
+
+    P = XYZ_TO_OPPONENT @ cam.display_matrix
+    Pi = np.linalg.inv(P)
+    n = len(M)
+    A = [[fresh(sum((float(P[i, d]) * M[k][d] for d in range(1, 3)), float(P[i, 0]) * M[k][0]) / times[k])
+          for k in range(n)] for i in range(3)]
+    pairs = [(i, j) for i in range(3) for j in range(i + 1)]
+
+    def to_rgb(Cf):
+        cov = [[0.0] * 3 for _ in range(3)]
+        for a in range(3):
+            for b in range(a + 1):
+                acc = 0.0
+                for i in range(3):
+                    for j in range(3):
+                        w = float(Pi[a, i] * Pi[b, j])
+                        if w != 0.0:
+                            acc = acc + w * Cf[max(i, j)][min(i, j)]
+                cov[a][b] = cov[b][a] = acc + (1e-14 if a == b else 0.0)
+        return cov
+
+    out = []
+    if cam.mosaic_factors is None:
+        rho = cam.scielab_factors
+        C = C_planes[0]
+        Cf = [[None] * 3 for _ in range(3)]
+        for i, j in pairs:
+            acc = 0.0
+            for k in range(n):
+                for l in range(n):
+                    if isinstance(C[k][l], float) and C[k][l] == 0.0:
+                        continue
+                    acc = acc + fresh(A[i][k] * A[j][l] * float(rho[i, j])) * C[k][l]
+            Cf[i][j] = acc
+        return [to_rgb(Cf)]
+    for S in cam.scielab_factors:      # (c, i, j, k, l) at one output site
+        Cf = [[None] * 3 for _ in range(3)]
+        for i, j in pairs:
+            acc = 0.0
+            for c in range(n):
+                coef = 0.0
+                for k in range(n):
+                    for l in range(n):
+                        if S[c, i, j, k, l] != 0.0:
+                            coef = coef + A[i][k] * A[j][l] * float(S[c, i, j, k, l])
+                if not isinstance(coef, float):
+                    acc = acc + fresh(coef) * var[c]
+            Cf[i][j] = acc
+        out.append(to_rgb(Cf))
+    return out
+
+
 @dataclass
 class LightResult:
     """The model's answer for one light: tensors (differentiable) per colour set."""
@@ -352,11 +524,23 @@ class LightResult:
     clipped: dict       # set → number of colours whose mean + 3σ passes the well
     #: set → (K,) the extra ΔE*ab of an estimated white per training Mondrian (:func:`white_balance_penalty`)
     white_penalty: dict = field(default_factory=dict)
+    #: set → (S,) expected S-CIELAB ΔE*ab on a flat patch of each colour (:func:`scielab_covariances`)
+    s_cielab: dict = field(default_factory=dict)
 
 
-def evaluate(R: list, light: LightModel, cam: CameraModel, split=None, sets=None, estimated=None) -> LightResult:
+#: The expectations :func:`evaluate` can compute: the per-pixel ΔE*ab and the S-CIELAB ΔE*ab.
+SCORES = ("delta_e", "s_cielab")
+
+
+def evaluate(R: list, light: LightModel, cam: CameraModel, split=None, sets=None, estimated=None,
+             scores=("delta_e",)) -> LightResult:
     """The expected-error model for responsivities ``R`` (N tensors of shape (B,), electrons per photon); with
-    ``estimated`` (set name → :class:`WhiteModel`), the estimated white's penalty for those sets too."""
+    ``estimated`` (set name → :class:`WhiteModel`), the estimated white's penalty for those sets too; ``scores``:
+    which of :data:`SCORES` to compute (each is a quadrature per tile site)."""
+    if not set(scores) <= set(SCORES) or not scores:
+        raise SpectracamError(f"design: scores = {scores!r}: a non-empty subset of {', '.join(SCORES)}")
+    if "s_cielab" in scores and cam.scielab_factors is None:
+        raise SpectracamError("design: this camera model has no S-CIELAB factors (CameraModel.of computes them)")
     dr, _ = backend()
     chart = _rates(light.chart_weights, R)
     M = conversion(chart, light.target_rgb)
@@ -369,8 +553,12 @@ def evaluate(R: list, light: LightModel, cam: CameraModel, split=None, sets=None
         rates = _rates(cs.weights, R)
         p, var, dark = pixel_moments(rates, times, cam)
         mean_rgb = [sum((rates[k] * fresh(M[k][c]) for k in range(1, n)), rates[0] * fresh(M[0][c])) for c in range(3)]
+        covs = channel_covariances(p, var, dark, cam)
+        if "s_cielab" in scores:
+            sc = [expected_delta_e(mean_rgb, cov, cs.lab, cam) for cov in scielab_covariances(M, times, var, covs, cam)]
+            res.s_cielab[name] = sum(sc[1:], sc[0]) / len(sc)
         des = []
-        for C in channel_covariances(p, var, dark, cam):
+        for C in (covs if "delta_e" in scores else ()):
             cov = [[0.0] * 3 for _ in range(3)]
             for c in range(3):
                 for d in range(c + 1):
@@ -382,7 +570,8 @@ def evaluate(R: list, light: LightModel, cam: CameraModel, split=None, sets=None
                             acc = acc + fresh(M[k][c] * M[j][d] / (times[k] * times[j])) * C[k][j]
                     cov[c][d] = cov[d][c] = acc + (1e-14 if c == d else 0.0)
             des.append(expected_delta_e(mean_rgb, cov, cs.lab, cam))
-        res.delta_e[name] = sum(des[1:], des[0]) / len(des)
+        if des:
+            res.delta_e[name] = sum(des[1:], des[0]) / len(des)
         if estimated and name in estimated:
             res.white_penalty[name] = white_balance_penalty(R, rates, M, cs.lab, estimated[name], cam)
         ln10 = float(np.log(10.0))

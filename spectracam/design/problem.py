@@ -75,8 +75,9 @@ def white_models(scene, camera, light: LightModel, sets, settings) -> dict:
 
 class DesignProblem:
     """One architecture's design: its parametrisation, the optional IR-cut edge and exposure split, the lights,
-    and the objective — the mean expected ΔE*ab over the training colours × lights, plus the realisability
-    penalty, minus ``snr_weight`` × the mean combined SNR (dB) when asked.
+    and the objective — the mean expected ΔE*ab (``settings.objective = "delta_e"``) or expected S-CIELAB
+    (``"s_cielab"``) over the training colours × lights, plus the realisability penalty, minus ``snr_weight`` × the
+    mean combined SNR (dB) when asked.
 
     ``x`` = [the parametrisation's variables | IR-cut edge, nm (if designed) | exposure shares (if designed)]."""
 
@@ -156,22 +157,30 @@ class DesignProblem:
             f = [v / total for v in f]
         return f
 
-    def evaluate(self, x, sets=None) -> list:
-        """The model's :class:`~spectracam.design.model.LightResult` for each light."""
+    @property
+    def score(self) -> str:
+        """The expectation the objective minimises: ``delta_e`` or ``s_cielab`` (:attr:`DesignSpec.objective`)."""
+        return getattr(self.settings, "objective", "delta_e")
+
+    def evaluate(self, x, sets=None, scores=("delta_e",)) -> list:
+        """The model's :class:`~spectracam.design.model.LightResult` for each light (``scores``: see
+        :func:`~spectracam.design.model.evaluate`)."""
         from .model import evaluate
 
         R = self.responsivities(x)
         split = self.shares(x)
         white = self.white or [None] * len(self.lights)
-        return [evaluate(R, light, self.model, split, sets, w) for light, w in zip(self.lights, white)]
+        return [evaluate(R, light, self.model, split, sets, w, scores) for light, w in zip(self.lights, white)]
 
     def objective(self, x):
-        """``(value, aux)``: the scalar the optimiser minimises (see the class), and the training ΔE."""
+        """``(value, aux)``: the scalar the optimiser minimises (see the class), and the training ΔE*ab (or
+        S-CIELAB, as the objective) it holds."""
         from .ad import backend
 
         dr, _ = backend()
-        results = self.evaluate(x, sets=(self.training,))
-        de = sum(dr.mean(r.delta_e[self.training]) for r in results) / len(results)
+        score = self.score
+        results = self.evaluate(x, sets=(self.training,), scores=(score,))
+        de = sum(dr.mean(getattr(r, score)[self.training]) for r in results) / len(results)
         if self.white:   # the camera finds its own white: the estimator's extra error on the training colours
             de = de + sum(dr.mean(r.white_penalty[self.training]) for r in results) / len(results)
         value = de + self.param.penalty(x)

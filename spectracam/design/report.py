@@ -31,6 +31,11 @@ def table_rows(results: dict) -> list[dict]:
             dev = v.get("monte_carlo_developed_delta_e")
             if dev is not None:   # the same camera developed by a camera that finds its own white (issue 33)
                 row.update(chart_monte_carlo_developed=dev["mean"], chart_mc_developed_std=dev["std"])
+            if "chart_s_cielab" in p:   # the expected S-CIELAB beside the expected ΔE*ab (docs/metrics.md)
+                row.update(training_s_cielab=p["training_s_cielab"], held_out_s_cielab=p["held_out_s_cielab"],
+                           chart_s_cielab_predicted=p["chart_s_cielab"])
+            if "s_cielab" in mc:
+                row.update(chart_s_cielab_monte_carlo=mc["s_cielab"], chart_s_cielab_mc_std=mc["s_cielab_std"])
             if "training_estimated_white" in p:
                 row.update(training_estimated_white=p["training_estimated_white"],
                            held_out_estimated_white=p["held_out_estimated_white"])
@@ -50,6 +55,23 @@ def report_markdown(results: dict, command: str) -> str:
         out.append(f"| {r['design']} | {r['filters']} | {r['training']:.2f} | {r['held_out']:.2f} | "
                    f"{r['chart_predicted']:.2f} | {r['chart_monte_carlo']:.2f} ± {r['chart_mc_std']:.2f} | "
                    f"{r['snr_db']:.1f} |")
+    sc = [r for r in table_rows(results) if "chart_s_cielab_predicted" in r]
+    if sc:
+        s = results["parameters"].get("s_cielab", {})
+        out += ["\nPer-pixel ΔE*ab against S-CIELAB (Zhang & Wandell's filters"
+                + (f" at {s['samples_per_degree']:.3g} samples per degree" if "samples_per_degree" in s else "")
+                + "): on a flat patch the eye's filters average the noise the demosaicker has already correlated, so "
+                "a demosaicker's averaging of neighbours no longer counts as less noise (docs/metrics.md, \"Expected "
+                "S-CIELAB in the design model\").  Expected: the model; Monte Carlo: the chart's measured mean "
+                "(± sd over seeds).\n",
+                "| design | filters | held-out ΔE*ab | held-out S-CIELAB | chart ΔE*ab expected | chart S-CIELAB expected "
+                "| chart ΔE*ab Monte Carlo | chart S-CIELAB Monte Carlo |", "|---|---|---|---|---|---|---|---|"]
+        for r in sc:
+            mc = (f"{r['chart_s_cielab_monte_carlo']:.2f} ± {r['chart_s_cielab_mc_std']:.2f}"
+                  if "chart_s_cielab_monte_carlo" in r else "—")
+            out.append(f"| {r['design']} | {r['filters']} | {r['held_out']:.2f} | {r['held_out_s_cielab']:.2f} | "
+                       f"{r['chart_predicted']:.2f} | {r['chart_s_cielab_predicted']:.2f} | "
+                       f"{r['chart_monte_carlo']:.2f} ± {r['chart_mc_std']:.2f} | {mc} |")
     dev = [r for r in table_rows(results) if "chart_monte_carlo_developed" in r]
     if dev:
         out += ["\nThe same cameras developed two ways, chart ΔE*ab by Monte Carlo (± sd over seeds): the oracle (told "
@@ -118,16 +140,17 @@ def figure_curves(results: dict, grid):
 
 
 def figure_convergence(results: dict):
-    """The training ΔE at every evaluation, per design."""
+    """The training ΔE*ab (or S-CIELAB, the objective's) at every evaluation, per design."""
     from ..io.plots import pyplot
 
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
     for i, (name, e) in enumerate(results["designs"].items()):
-        de = [h["training_delta_e"] for h in e["history"]]
+        de = [h.get("training_delta_e", h.get("training_s_cielab")) for h in e["history"]]
         ax.plot(np.arange(1, len(de) + 1), np.minimum.accumulate(de), color=f"C{i % 10}", label=name)
     ax.set_xlabel("model evaluations (objective + gradient)")
-    ax.set_ylabel("best training ΔE*ab (expected)")
+    sc = results["parameters"]["design_spec"].get("objective") == "s_cielab"
+    ax.set_ylabel("best training S-CIELAB ΔE*ab (expected)" if sc else "best training ΔE*ab (expected)")
     ax.set_xscale("log")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)

@@ -39,20 +39,29 @@ def light_label(light) -> str:
     return f"{light:g}K" if isinstance(light, (int, float)) else str(light)
 
 
+def experiment_path(value: str, base_dir: Path) -> Path:
+    """The file a design file's ``experiment`` names: a path relative to the design file, else a shipped
+    experiment by name exactly as ``--experiment`` takes it (``paper``, ``paper.toml``, ``scenes/paper``)."""
+    from ..cli_options import shipped_files, shipped_named
+
+    path = Path(value)
+    if not path.is_absolute():
+        path = base_dir / path
+    if path.exists():
+        return path
+    found = shipped_named(value, "experiment file")
+    if found is None:
+        names = ", ".join(shipped_files("experiment file")) or "none in this installation"
+        raise ConfigError("experiment", value, f"no such experiment file (relative to {base_dir}), and not the name of "
+                          f"a shipped experiment (shipped: {names})")
+    return found
+
+
 def setup(spec: DesignSpec, base_dir: Path) -> Setup:
     """Load the experiment the spec names and build one scene per light at its calibrated level."""
     from ..experiments.paper import calibrated_luminance, load_experiment
-    from ..scene import shipped_scene_file
 
-    path = Path(spec.experiment)
-    if not path.is_absolute():
-        path = base_dir / path
-    if not path.exists():
-        try:
-            path = shipped_scene_file(spec.experiment)
-        except SpectracamError:
-            raise ConfigError("experiment", spec.experiment, f"no such experiment file (relative to {base_dir}, or "
-                                                             "shipped with spectracam, e.g. paper.toml)") from None
+    path = experiment_path(spec.experiment, base_dir)
     exp = load_experiment(path)
     camera, processing = exp.base.camera, exp.base.processing
     level = calibrated_luminance(exp, camera)
@@ -66,12 +75,16 @@ def setup(spec: DesignSpec, base_dir: Path) -> Setup:
     return Setup(spec, camera, processing, level, tuple(scenes), tuple(light_label(v) for v in spec.lights))
 
 
-def predicted(problem: DesignProblem, x=None, camera=None) -> dict:
-    """The model's expected ΔE*ab (training, held out, chart) and chart SNR per light and averaged, for design
-    ``x`` or for a ``camera`` the pipeline defines (the paper's, the Luther camera, a grid pair)."""
+def predicted(problem: DesignProblem, x=None, camera=None, scores=None) -> dict:
+    """The model's expected ΔE*ab and expected S-CIELAB (``*_s_cielab``; docs/metrics.md, "Expected S-CIELAB in the
+    design model") on the training, held-out and chart colours, and the chart SNR, per light and averaged, for
+    design ``x`` or for a ``camera`` the pipeline defines (the paper's, the Luther camera, a grid pair); ``scores``
+    (default both): ``("delta_e",)`` leaves the S-CIELAB out (the grid's 81 pairs are ranked by ΔE*ab alone)."""
     from ..camera import camera_responsivities
     from .ad import numpy, tensor
-    from .model import CameraModel, evaluate
+    from .model import SCORES, CameraModel, evaluate
+
+    scores = SCORES if scores is None else tuple(scores)
 
     if camera is not None:
         R = [tensor(r) for r in camera_responsivities(camera, problem.grid)]
@@ -79,9 +92,9 @@ def predicted(problem: DesignProblem, x=None, camera=None) -> dict:
                 and camera.capture.exposure == problem.model.exposure)
         model = problem.model if same else CameraModel.of(camera, problem.processing)   # the demosaic's factors once
         white = getattr(problem, "white", None) or [None] * len(problem.lights)
-        results = [evaluate(R, light, model, None, None, w) for light, w in zip(problem.lights, white)]
+        results = [evaluate(R, light, model, None, None, w, scores) for light, w in zip(problem.lights, white)]
     else:
-        results = problem.evaluate(tensor(np.asarray(x, float)))
+        results = problem.evaluate(tensor(np.asarray(x, float)), scores=scores)
     out = {"by_light": {}}
     for light, r in zip(problem.lights, results):
         out["by_light"][light.label] = {
@@ -92,12 +105,20 @@ def predicted(problem: DesignProblem, x=None, camera=None) -> dict:
             "chart_snr_db": float(numpy(r.snr_db[CHART]).mean()),
             "exposure_ms": [1e3 * float(numpy(t).reshape(-1)[0]) for t in r.times_s],
             "clipped_training_colours": r.clipped[problem.training]}
+        if "s_cielab" in scores:
+            out["by_light"][light.label].update(
+                training_s_cielab=float(numpy(r.s_cielab[problem.training]).mean()),
+                held_out_s_cielab=float(numpy(r.s_cielab[problem.held_out]).mean()),
+                held_out_s_cielab_p95=float(np.percentile(numpy(r.s_cielab[problem.held_out]), 95)),
+                chart_s_cielab=float(numpy(r.s_cielab[CHART]).mean()))
         if problem.white:   # the estimated white's extra error, and the totals the objective saw
             for k, name in (("training", problem.training), ("held_out", problem.held_out)):
                 pen = float(numpy(r.white_penalty[name]).mean())
                 out["by_light"][light.label][f"{k}_white_penalty"] = pen
                 out["by_light"][light.label][f"{k}_estimated_white"] = out["by_light"][light.label][k] + pen
     keys = ["training", "held_out", "held_out_p95", "chart", "chart_snr_db"]
+    if "s_cielab" in scores:
+        keys += ["training_s_cielab", "held_out_s_cielab", "held_out_s_cielab_p95", "chart_s_cielab"]
     if problem.white:
         keys += ["training_white_penalty", "training_estimated_white", "held_out_white_penalty",
                  "held_out_estimated_white"]
@@ -108,41 +129,53 @@ def predicted(problem: DesignProblem, x=None, camera=None) -> dict:
 
 def monte_carlo(camera, cubes: dict, processing, seeds: int, base_seed: int = 0) -> dict:
     """Chart ΔE*ab and SNR of ``camera`` through the real capture → score pipeline, ``seeds`` captures per light
-    (seeds ``base_seed … base_seed + seeds − 1``): per light the mean and the spread over seeds, and their mean."""
+    (seeds ``base_seed … base_seed + seeds − 1``): per light the mean and the spread over seeds, and their mean;
+    the chart's measured S-CIELAB the same way (``s_cielab``, ``s_cielab_std``: the score's
+    ``ChartSummary.s_cielab_mean``, where the score has it)."""
     from ..experiments.paper import design_case
 
-    by_light, per_seed = {}, []
+    by_light, per_seed, sc_seed = {}, [], []
     for label, (scene, cube) in cubes.items():
-        des, snrs = [], []
+        des, snrs, scs = [], [], []
         for k in range(seeds):
             c = design_case(cube, scene, camera, processing, camera.design, base_seed + k)
             des.append(c["delta_e"])
             snrs.append(c["snr_db"])
+            scs.append(getattr(c["score"].summary, "s_cielab_mean", None))
         by_light[label] = {"delta_e": float(np.mean(des)), "delta_e_std": float(np.std(des, ddof=1)) if seeds > 1
                            else 0.0, "snr_db": float(np.mean(snrs)), "by_seed": [float(v) for v in des]}
+        if None not in scs:
+            by_light[label].update(s_cielab=float(np.mean(scs)), s_cielab_by_seed=[float(v) for v in scs])
         per_seed.append(des)
+        sc_seed.append(scs)
     per_seed = np.asarray(per_seed)            # (lights, seeds)
     chart_by_seed = per_seed.mean(axis=0)      # the chart mean over lights, per seed
-    return {"mean": float(chart_by_seed.mean()),
-            "std": float(chart_by_seed.std(ddof=1)) if seeds > 1 else 0.0,
-            "seeds": int(seeds), "snr_db": float(np.mean([v["snr_db"] for v in by_light.values()])),
-            "by_light": by_light}
+    out = {"mean": float(chart_by_seed.mean()),
+           "std": float(chart_by_seed.std(ddof=1)) if seeds > 1 else 0.0,
+           "seeds": int(seeds), "snr_db": float(np.mean([v["snr_db"] for v in by_light.values()])),
+           "by_light": by_light}
+    if not any(None in s for s in sc_seed):
+        sc = np.asarray(sc_seed, float).mean(axis=0)
+        out.update(s_cielab=float(sc.mean()), s_cielab_std=float(sc.std(ddof=1)) if seeds > 1 else 0.0)
+    return out
 
 
 def grid_best(problem: DesignProblem) -> dict:
-    """The grid sweep's block pairs scored by the model on the training objective: the best pair and its score."""
+    """The grid sweep's block pairs scored by the model on the training objective (expected ΔE*ab, or S-CIELAB
+    with ``objective = "s_cielab"``): the best pair and its score."""
+    key = "training_s_cielab" if getattr(problem, "score", "delta_e") == "s_cielab" else "training"
     best = None
     rows = []
     for c1 in GRID_CUTOFFS_NM[0]:
         for c2 in GRID_CUTOFFS_NM[1]:
             cam = problem.camera.replace(filters=problem.camera.filters.replace(kind="block",
                                                                                 cutoffs_nm=(float(c1), float(c2))))
-            p = predicted(problem, camera=cam)
-            rows.append((float(c1), float(c2), p["training"]))
-            if best is None or p["training"] < best[2]:
-                best = (float(c1), float(c2), p["training"], cam, p)
-    return {"cutoffs_nm": [best[0], best[1]], "camera": best[3], "predicted": best[4], "evaluations": len(rows),
-            "grid": rows}
+            p = predicted(problem, camera=cam, scores=("delta_e",) if key == "training" else None)
+            rows.append((float(c1), float(c2), p[key]))
+            if best is None or p[key] < best[2]:
+                best = (float(c1), float(c2), p[key], cam, p)
+    return {"cutoffs_nm": [best[0], best[1]], "camera": best[3], "predicted": predicted(problem, camera=best[3]),
+            "evaluations": len(rows), "grid": rows}
 
 
 def design_one(problem: DesignProblem, spec: DesignSpec, cubes: dict, log=lambda m: None,
@@ -159,7 +192,8 @@ def design_one(problem: DesignProblem, spec: DesignSpec, cubes: dict, log=lambda
     entry = {"design": problem.design, "parametrisation": problem.param.name,
              "variables": problem.describe(opt.x), "evaluations": opt.evaluations, "iterations": opt.iterations,
              "optimiser": opt.message, "optimise_s": t_opt, "objective": opt.objective,
-             "history": [{"objective": v, "training_delta_e": d} for v, d in opt.history],
+             "history": [{"objective": v, ("training_s_cielab" if problem.score == "s_cielab" else
+                                           "training_delta_e"): d} for v, d in opt.history],
              "camera": designed.to_dict()}
     p_opt = predicted(problem, opt.x)
     entry["predicted_delta_e"] = p_opt
@@ -173,7 +207,9 @@ def design_one(problem: DesignProblem, spec: DesignSpec, cubes: dict, log=lambda
         developed = camera_processing(problem.processing, "developed")
         entry["monte_carlo_developed_delta_e"] = monte_carlo(designed, cubes, developed, spec.seeds)
     log(f"{problem.design}: Monte Carlo {entry['monte_carlo_delta_e']['mean']:.3f} ΔE (chart, {spec.seeds} seeds) "
-        f"against the model's {p_opt['chart']:.3f}")
+        f"against the model's {p_opt['chart']:.3f}; expected S-CIELAB {p_opt['chart_s_cielab']:.3f}"
+        + (f", measured {entry['monte_carlo_delta_e']['s_cielab']:.3f}" if "s_cielab" in entry["monte_carlo_delta_e"]
+           else ""))
     paper_pred = predicted(problem, camera=paper)
     entry["paper_filters"] = {"design": paper.design, "predicted_delta_e": paper_pred,
                               "held_out_delta_e": paper_pred["held_out"],
@@ -214,6 +250,7 @@ def run_design(spec: DesignSpec, base_dir: Path, log=lambda m: None, st: Setup |
     """Every design of ``spec``: the results.json dict, with each design's cameras under ``_cameras`` (``st``:
     its :func:`setup`, if made already); ``progress``: bars over the designs and each one's iterations."""
     from ..progress import bar
+    from .model import DEFAULT_DISPLAY_PIXEL_PITCH_MM, DEFAULT_VIEWING_DISTANCE_M, viewing_samples_per_degree
 
     t0 = time.perf_counter()
     st = st or setup(spec, base_dir)
@@ -224,10 +261,15 @@ def run_design(spec: DesignSpec, base_dir: Path, log=lambda m: None, st: Setup |
         problem = DesignProblem(d, "depths" if arch == "stacked" else spec.filters, spec, st.camera, st.processing,
                                 list(st.scenes), spec.training, spec.held_out)
         designs[d] = design_one(problem, spec, cubes, log, progress=progress)
+    spd = viewing_samples_per_degree(st.processing)
     return {"parameters": {"design_spec": spec.to_dict(), "white_luminance_cd_m2": st.level_cd_m2,
                            "lights": list(st.labels), "camera": st.camera.to_dict(),
                            "processing": st.processing.to_dict(),
-                           "objective": "mean expected ΔE*ab (CIE 1976) over the training library × lights, the "
+                           "objective": ("mean expected ΔE*ab (CIE 1976)" if spec.objective == "delta_e" else
+                                         f"mean expected S-CIELAB ΔE*ab (Zhang & Wandell's filters at {spd:.4g} samples "
+                                         "per degree, after the demosaicker; docs/metrics.md, 'Expected S-CIELAB in "
+                                         "the design model')")
+                                        + " over the training library × lights, the "
                                         "conversion fitted on the chart under each light (paper 3.5)"
                                         + ("" if spec.white_balance == "oracle" else
                                            f", plus the extra noise-free ΔE*ab of balancing by the white "
@@ -237,5 +279,15 @@ def run_design(spec: DesignSpec, base_dir: Path, log=lambda m: None, st: Setup |
                                            if spec.snr_weight else ""),
                            "monte_carlo": f"chart ΔE*ab (paper Fig. 5b) through capture → score, {spec.seeds} seeds "
                                           f"per light at {spec.image_px[0]}×{spec.image_px[1]} px, "
-                                          f"{spec.renderer} renders; mean over lights, spread over seeds"},
+                                          f"{spec.renderer} renders; mean over lights, spread over seeds",
+                           "s_cielab": {"samples_per_degree": spd,
+                                        "viewing_distance_m": getattr(st.processing, "viewing_distance_m",
+                                                                      DEFAULT_VIEWING_DISTANCE_M),
+                                        "display_pixel_pitch_mm": getattr(st.processing, "display_pixel_pitch_mm",
+                                                                          DEFAULT_DISPLAY_PIXEL_PITCH_MM),
+                                        "expected": "*_s_cielab in predicted_delta_e: the expected S-CIELAB ΔE*ab of a "
+                                                    "flat patch of each colour, the noise after the demosaicker and "
+                                                    "the eye's filters (docs/metrics.md)",
+                                        "monte_carlo": "s_cielab in monte_carlo_*: the chart's measured mean "
+                                                       "S-CIELAB (ChartSummary.s_cielab_mean)"}},
             "designs": designs, "time_s": time.perf_counter() - t0, "_grid": st.scenes[0].grid}

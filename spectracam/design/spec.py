@@ -18,8 +18,14 @@ from .variables import PARAMETRISATIONS
 DESIGN_KEYS = ("experiment", "lights", "training", "held_out", "designs", "filters", "start_cutoffs_nm",
                "edge_width_nm", "start_centres_nm", "start_fwhm_nm", "knot_step_nm", "min_transmittance",
                "smoothness", "design_ir_cut", "start_ir_cut_nm", "snr_weight", "max_iterations", "tolerance",
-               "seeds", "renderer", "image_px", "grid", "luther", "white_balance", "white_balance_p", "developed")
+               "seeds", "renderer", "image_px", "grid", "luther", "white_balance", "white_balance_p", "developed",
+               "objective")
 
+
+#: What the design minimises (:attr:`DesignSpec.objective`): the expected per-pixel ΔE*ab (the paper's score) or the
+#: expected S-CIELAB ΔE*ab (the eye's spatial filters after the demosaicker; docs/metrics.md, "Expected S-CIELAB in
+#: the design model").
+DESIGN_OBJECTIVES = ("delta_e", "s_cielab")
 
 #: The whites the design's model can balance by (:attr:`DesignSpec.white_balance`).
 DESIGN_WHITE_BALANCES = ("oracle", "grey_world", "shades_of_grey")
@@ -57,6 +63,10 @@ class DesignSpec(Spec):
     start_ir_cut_nm: float = 680.0
     #: ΔE per dB of mean combined SNR traded in the objective (0: ΔE alone).
     snr_weight: float = 0.0
+    #: The expected error minimised: "delta_e" (per-pixel ΔE*ab on a flat patch, the paper's Figure 5b) or
+    #: "s_cielab" (the same after the eye's S-CIELAB filters at the experiment's viewing geometry, so a demosaicker's
+    #: averaging of neighbours counts only as far as the eye would not see the noise anyway).  Both are reported.
+    objective: str = "delta_e"
     #: The white the objective's camera balances by (issue 33): "oracle" (told the light: the paper's) or an
     #: estimator the model differentiates through — "grey_world" or "shades_of_grey" (Minkowski p =
     #: white_balance_p) over training Mondrians of the training colours under each light: the expected ΔE then
@@ -126,6 +136,7 @@ class DesignSpec(Spec):
         self.boolean("design_ir_cut", "grid", "luther")
         self.number("start_ir_cut_nm", 550, 800, unit="nm")
         self.number("snr_weight", 0, 10)
+        self.choice("objective", DESIGN_OBJECTIVES)
         self.choice("white_balance", DESIGN_WHITE_BALANCES)
         self.number("white_balance_p", 1, 16)
         self.boolean("developed")

@@ -299,7 +299,15 @@ class Depths(Parametrisation):
         for i in range(1, n):
             z.append(fresh(z[-1] + _t(x, i)))
         reach = [dr.exp(-alpha * fresh(zi)) for zi in z]
-        cut = 1.0 if ir_cut is None else ir_cut
+        # the filters in front of the layers: the stacked sensor's own IR cut (architectures.stacked.stacked_cut)
+        # times the shared one, fixed — or, when the design varies the shared IR cut, the designed one instead
+        from ..architectures.stacked import stacked_cut
+
+        f = self.camera.filters if ir_cut is None else self.camera.filters.replace(ir_cut_nm=None)
+        fixed = stacked_cut(f)
+        cut = tensor(np.asarray(fixed(samples.lam), float)) if fixed is not None else 1.0
+        if ir_cut is not None:
+            cut = cut * ir_cut
         return [front * (reach[k] - reach[k + 1]) * cut for k in reversed(range(n - 1))]
 
     def filters(self, x):

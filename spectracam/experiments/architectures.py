@@ -20,13 +20,22 @@ experiment's slanted edge and Siemens star (MTF50, false colour, S-CIELAB; mosai
 optical low-pass filter) and the motion experiment's moving edge (colour breakup and S-CIELAB against the
 design's own still capture), with the paper's pixel pitch and f-number.
 
-Per row: the per-pixel ΔE against the scene (mean and spread over seeds), the raw channels' combined
+Per row: the per-pixel ΔE against the scene and the chart's S-CIELAB on the same pixels (the eye's filters blur
+every design's noise alike, so a demosaicker's averaging counts for no more than the eye's; docs/metrics.md), each
+the mean and spread over seeds, the raw channels' combined
 SNR and the rendered luminance SNR (after the colour conversion, so its noise amplification
 counts; docs/metrics.md), the conversion's noise-free error on the 24 patches it is fitted on
 (training) and on held-out colours (``processing.held_out``), and the capture time; and the same case captured
 and developed by a camera that finds its own white (issue 33, :func:`developed_case`: ``developed_*`` fields —
 its own percentile metering, held to the same time limit when dimmed, the trained white balance and the
-dual-illuminant calibration), ranked beside the oracle's.
+dual-illuminant calibration), ranked beside the oracle's.  Every row says whether it is a usable image
+(:mod:`.usability`: the white patch's rendered SNR and the mean S-CIELAB against stated thresholds); an unusable case
+is never named a winner.
+
+On natural scenes (:func:`natural_case`): each design captures the shipped textured targets (``NATURAL_SCENES``:
+dead leaves of the CIE 2017 samples, a photograph made spectral) under D65 at the paper's level, scored per pixel
+against their known spectra (:mod:`spectracam.target_score`): per-pixel ΔE*ab and S-CIELAB on colours the
+conversion was not fitted on, at each target's viewing geometry.
 """
 from __future__ import annotations
 
@@ -43,11 +52,15 @@ from ..illuminant import IlluminantSpec
 from ..reference import ChartReference
 from ..score import score
 from .paper import PaperExperiment, calibrated_luminance, quick_scene, scaled
+from .usability import NO_USABLE_IMAGE, UsabilitySpec
 
 #: Light levels, as fractions of the paper's (its calibrated white luminance).
 LIGHT_FACTORS = (1.0, 0.1, 0.01)
 #: Noise seeds per case (the full run; ``--quick`` uses 2).
 SEEDS = 5
+#: The shipped textured scenes (scenes/*.toml) every design captures too: targets whose every pixel is scored
+#: against its known spectra, on colours the conversion was not fitted on.
+NATURAL_SCENES = ("dead_leaves", "photo")
 
 
 def designs() -> list[str]:
@@ -69,10 +82,23 @@ class ArchitecturesRun:
     quick: bool = False
     seeds: int = SEEDS
     light_factors: tuple = LIGHT_FACTORS
+    #: Below these a case is no usable image and is never named a winner (:mod:`.usability`).
+    usability: UsabilitySpec = UsabilitySpec()
+    #: The textured natural scenes every design also captures (:func:`natural_case`); () for none.
+    natural_scenes: tuple = None
 
     def __post_init__(self):
         if not isinstance(self.seeds, int) or isinstance(self.seeds, bool) or not 1 <= self.seeds <= 100:
             raise ConfigError("--seeds", self.seeds, "must be a whole number of seeds from 1 to 100")
+        if not isinstance(self.usability, UsabilitySpec):
+            raise ConfigError("usability", self.usability, "must be a UsabilitySpec (min_white_snr_db, "
+                              "max_s_cielab_mean)")
+        if self.natural_scenes is None:
+            object.__setattr__(self, "natural_scenes", NATURAL_SCENES)
+        bad = [n for n in self.natural_scenes if n not in NATURAL_SCENES]
+        if bad:
+            raise ConfigError("natural_scenes", list(self.natural_scenes), "must be drawn from "
+                              + ", ".join(NATURAL_SCENES))
 
     def scenes(self, level: float) -> dict:
         base = quick_scene(self.experiment.base, self.quick)
@@ -134,7 +160,10 @@ def case(scene, cube, design: str, seeds, limit_s: float | None = None) -> dict:
                      ("delta_e2000_mean", lambda s: s.summary.delta_e2000_mean),
                      ("delta_e_of_mean", lambda s: s.summary.delta_e_of_mean),
                      ("snr_db", lambda s: s.summary.snr_combined_db),
-                     ("snr_rendered_db", lambda s: s.summary.snr_rendered_db)):
+                     ("snr_rendered_db", lambda s: s.summary.snr_rendered_db),
+                     ("s_cielab_mean", lambda s: s.summary.s_cielab_mean),
+                     ("s_cielab_p95", lambda s: s.summary.s_cielab_p95),
+                     ("snr_white_rendered_db", lambda s: s.summary.snr_white_rendered_db)):
         row[key], row[f"{key}_sd"] = _stats([get(s) for s in scores])
     if s0.held_out is not None:
         row["held_out_delta_e"] = s0.held_out["delta_e_mean"]
@@ -163,7 +192,9 @@ def developed_case(scene, cube, design: str, seeds, limit_s: float | None = None
                      ("delta_e2000_mean", lambda s: s.summary.delta_e2000_mean),
                      ("delta_e_p95", lambda s: s.summary.delta_e_p95),
                      ("awb_recovery_deg", lambda s: s.summary.awb_recovery_deg),
-                     ("snr_rendered_db", lambda s: s.summary.snr_rendered_db)):
+                     ("snr_rendered_db", lambda s: s.summary.snr_rendered_db),
+                     ("s_cielab_mean", lambda s: s.summary.s_cielab_mean),
+                     ("snr_white_rendered_db", lambda s: s.summary.snr_white_rendered_db)):
         row[f"developed_{key}"], row[f"developed_{key}_sd"] = _stats([get(s) for s in scores])
     if scores[0].held_out is not None:
         row["developed_held_out_delta_e"] = _stats([s.held_out["delta_e_mean"] for s in scores])[0]
@@ -202,11 +233,16 @@ def run_architectures(run: ArchitecturesRun, renderer: str = "mitsuba", use_cach
                 for design in designs():
                     row = case(sc, cb, design, seeds, None if factor == 1.0 else limit)
                     rows.append({"illuminant": light, "light_factor": factor,
-                                 "white_luminance_cd_m2": level * factor, **row})
+                                 "white_luminance_cd_m2": level * factor, **row, **judge(row, run.usability)})
                     cases.update(1)
                 step(f"{light} at {factor:g}× the paper's light: {len(designs())} designs × {len(seeds)} seeds")
     t_chart = time.perf_counter() - t0
     extra = {}
+    if run.natural_scenes:
+        t1 = time.perf_counter()
+        extra["natural"] = run_natural(run, level, renderer, seeds, log, progress, use_cache)
+        step(f"natural scenes: {', '.join(run.natural_scenes)} × {len(designs())} designs "
+             f"({time.perf_counter() - t1:.1f} s)")
     if spacetime:
         base = exp.base.replace(illuminant=IlluminantSpec("blackbody", exp.calibration_temperature_K, None, level))
         extra["space"] = run_space(base, renderer, run.quick, log, progress=progress)
@@ -228,35 +264,118 @@ def run_architectures(run: ArchitecturesRun, renderer: str = "mitsuba", use_cach
                            "delta_e_mean": "chart mean of each patch's mean per-pixel ΔE against the scene "
                                            "(processing.delta_e), mean over seeds",
                            "delta_e_training": "the conversion's noise-free ΔE on the 24 patches it is fitted on",
-                           "held_out_delta_e": "the conversion's noise-free ΔE on processing.held_out's colours"},
+                           "held_out_delta_e": "the conversion's noise-free ΔE on processing.held_out's colours",
+                           "s_cielab_mean": "S-CIELAB (Zhang & Wandell 1997) on the same pixels as delta_e_mean: the "
+                                            "rendered image and the scene's truth through the eye's filters at "
+                                            f"{exp.base.processing.viewing_distance_m:g} m from a display of "
+                                            f"{exp.base.processing.display_pixel_pitch_mm:.4g}-mm pixels "
+                                            f"({exp.base.processing.samples_per_degree:.1f} samples per degree), "
+                                            "chart mean of each patch's mean, mean over seeds (docs/metrics.md)",
+                           "usable": "usable image: the white patch's rendered SNR ≥ "
+                                     f"{run.usability.min_white_snr_db:g} dB (ISO 12232's 'acceptable' SNR 10) and "
+                                     f"the mean S-CIELAB ≤ {run.usability.max_s_cielab_mean:g} (a flat grey image "
+                                     "scores ~41); an unusable case is never named a winner (docs/metrics.md)",
+                           "usability": run.usability.to_dict()},
             "rows": rows, "winners": winners(rows), **extra,
             "timings_s": {"chart": t_chart, "total": time.perf_counter() - t0}}
 
 
+def judge(row: dict, usability: UsabilitySpec) -> dict:
+    """``usable``/``unusable_reason`` of a case (the oracle camera's, mean over seeds) and ``developed_usable``/
+    ``developed_unusable_reason`` (the developed camera's) by the rule of :mod:`.usability`."""
+    out = {}
+    for prefix in ("", "developed_"):
+        if f"{prefix}delta_e_mean" in row:
+            ok, why = usability.judge(row.get(f"{prefix}s_cielab_mean"), row.get(f"{prefix}snr_white_rendered_db"))
+            out[f"{prefix}usable"], out[f"{prefix}unusable_reason"] = ok, why
+    return out
+
+
+def _usable(row: dict, metric: str) -> bool:
+    """Whether ``row`` may be named a winner on ``metric`` (the developed camera's flag for its metrics)."""
+    return row.get("developed_usable" if metric.startswith("developed_") else "usable", True) is not False
+
+
+#: What each light and level's winners are judged on: the metric and whether the least or the most wins.
+WINNER_METRICS = (("delta_e_mean", min), ("s_cielab_mean", min), ("snr_rendered_db", max),
+                  ("developed_delta_e_mean", min), ("developed_s_cielab_mean", min),
+                  ("developed_delta_e2000_mean", min))
+
+
 def winners(rows: list[dict]) -> list[dict]:
-    """For each light and level: the design with the lowest per-pixel ΔE, the highest rendered SNR;
-    and overall the lowest held-out conversion error and the shortest capture time at the paper's
-    level."""
+    """For each light and level: the design with the lowest per-pixel ΔE*ab, the lowest S-CIELAB, the highest
+    rendered SNR (and the developed camera's ΔE*ab, S-CIELAB, CIEDE2000) among the usable cases only — "no usable
+    image" where none is (``design`` ``None``, ``note``); and overall the lowest held-out conversion error and the
+    shortest capture time at the paper's level."""
     out = []
     for light in dict.fromkeys(r["illuminant"] for r in rows):
         for factor in dict.fromkeys(r["light_factor"] for r in rows):
             group = [r for r in rows if r["illuminant"] == light and r["light_factor"] == factor]
-            for metric, best in (("delta_e_mean", min), ("snr_rendered_db", max), ("developed_delta_e_mean", min),
-                                 ("developed_delta_e2000_mean", min)):
-                scored = [r for r in group if r.get(metric) is not None]
+            for metric, best in WINNER_METRICS:
+                present = [r for r in group if r.get(metric) is not None]
+                scored = [r for r in present if _usable(r, metric)]
                 if scored:
                     w = best(scored, key=lambda r: r[metric])
                     out.append({"illuminant": light, "light_factor": factor, "metric": metric,
                                 "design": w["design"], "value": w[metric], "sd": w.get(f"{metric}_sd")})
+                elif present:
+                    out.append({"illuminant": light, "light_factor": factor, "metric": metric, "design": None,
+                                "value": None, "sd": None, "note": NO_USABLE_IMAGE})
         group = [r for r in rows if r["illuminant"] == light and r["light_factor"] == 1.0]
         for metric in ("held_out_delta_e", "capture_time_ms"):
-            scored = [r for r in group if r.get(metric) is not None]
+            scored = [r for r in group if r.get(metric) is not None and _usable(r, metric)]
             if scored:   # noise-free numbers tie exactly where the filters are sums of the same three: name all
                 best = min(r[metric] for r in scored)
                 tied = [r["design"] for r in scored if r[metric] <= best * (1 + 1e-6)]
                 out.append({"illuminant": light, "light_factor": 1.0, "metric": metric, "design": ", ".join(tied),
                             "value": best, "sd": None})
     return out
+
+
+def natural_case(scene, cube, design: str, seeds) -> dict:
+    """One design capturing one textured scene (metered on its chart's white patch, as the chart cases are) over
+    ``seeds``: the per-pixel ΔE*ab and S-CIELAB of :mod:`spectracam.target_score` (held out: colours the conversion
+    was not fitted on), mean and spread over seeds."""
+    from ..reference import TargetReference
+    from ..target_score import score_target
+
+    from ..chart import WHITE_PATCH
+
+    camera = scene.camera.with_design(design)
+    chart, target = ChartReference.of(scene), TargetReference.of(scene)
+    white = chart.patch_radiance[WHITE_PATCH]   # the chart's white patch under the same light (as pipeline.capture)
+    scores = [score_target(capture(cube, camera, seed, white_radiance=white), chart, target, scene.target,
+                           scene.processing) for seed in seeds]
+    row = {"design": design}
+    for key in ("delta_e_mean", "delta_e_p95", "s_cielab_mean", "s_cielab_p95"):
+        row[key], row[f"{key}_sd"] = _stats([s.held_out[key] for s in scores])
+    row["pixels"] = scores[0].held_out["pixels"]
+    return row
+
+
+def run_natural(run: ArchitecturesRun, level: float, renderer: str, seeds, log=None, progress: bool = False,
+                use_cache: bool = True) -> dict:
+    """Every design on each of ``run.natural_scenes`` (:func:`natural_case`), with the paper's camera and processing
+    under the scene's own light at the paper's level."""
+    from ..cache import cached_render
+    from ..render import render
+    from ..scene import load_scene, shipped_scene_file
+
+    exp, rows, geometry = run.experiment, [], {}
+    for name in run.natural_scenes:
+        own = load_scene(shipped_scene_file(f"{name}.toml"))
+        scene = quick_scene(exp.base, run.quick).replace(
+            target=own.target, illuminant=own.illuminant.replace(white_luminance_cd_m2=level),
+            image=own.image if not run.quick else own.image.replace(width=own.image.width // 4,
+                                                                     height=own.image.height // 4))
+        # through the render cache, whose key holds a textured scene's [target] table (spectracam.cache.render_key)
+        cube = (cached_render(scene, renderer, progress=progress, log=log)[0] if use_cache
+                else render(scene, renderer=renderer, progress=progress, log=log))
+        geometry[name] = {"viewing_distance_m": scene.target.viewing_distance_m,
+                          "display_pixel_pitch_mm": scene.target.display_pixel_pitch_mm,
+                          "image_px": [scene.image.width, scene.image.height], "illuminant": scene.illuminant.label}
+        rows += [{"scene": name, **natural_case(scene, cube, d, seeds)} for d in designs()]
+    return {"rows": rows, "parameters": geometry}
 
 
 def write_architectures_outputs(out_dir: str | Path, results: dict, command: str, step=lambda msg: None) -> list:

@@ -25,13 +25,21 @@ def figure_comparison(results: dict):
               for i, d in enumerate(designs)}
     for row_axes, light in zip(axes, lights):
         for ax, metric, label in ((row_axes[0], "snr_rendered_db", "rendered luminance SNR (dB)"),
-                                  (row_axes[1], "delta_e_mean", "per-pixel ΔE*ab against the scene")):
+                                  (row_axes[1], "delta_e_mean", "per-pixel ΔE*ab (lines) and S-CIELAB (dotted)")):
             for d in designs:
-                pts = [(f * level, r[metric], r[f"{metric}_sd"]) for f in factors
-                       for r in _rows(results, light, f) if r["design"] == d and r[metric] is not None]
-                if pts:
-                    x, y, e = map(np.array, zip(*pts))
-                    ax.errorbar(x, y, yerr=e, capsize=3, label=d, **styles[d])
+                for m, extra in ((metric, {}), *((("s_cielab_mean", {"ls": ":", "label": None}),)
+                                                 if metric == "delta_e_mean" else ())):
+                    pts = [(f * level, r[m], r[f"{m}_sd"], r.get("usable", True) is not False) for f in factors
+                           for r in _rows(results, light, f) if r["design"] == d and r.get(m) is not None]
+                    if pts:
+                        x, y, e, ok = map(np.array, zip(*pts))
+                        ax.errorbar(x, y, yerr=e, capsize=3, **{"label": d, **styles[d], **extra})
+                        if (~ok).any():   # no usable image: greyed, hatched markers over the design's own
+                            ax.scatter(x[~ok], y[~ok], s=90, facecolor="0.85", edgecolor="0.4", hatch="////",
+                                       zorder=4, label=None)
+            if any(r.get("usable") is False for r in results["rows"] if r["illuminant"] == light):
+                ax.text(0.01, 0.01, "grey hatched: no usable image (docs/metrics.md); never ranked",
+                        transform=ax.transAxes, fontsize=8, color="0.3", va="bottom")
             ax.set_xscale("log")
             ax.set_xlabel("white luminance (cd/m²); the paper's light is the rightmost")
             ax.set_ylabel(label)
@@ -142,10 +150,12 @@ def figure_spacetime(results: dict):
     ax.title.set_fontsize(10)
     ax.grid(True, axis="x", alpha=0.3)
     designs = list(dict.fromkeys(r["design"] for r in time_["rows"]))
-    for ax, metric, label in ((axes[1, 0], "breakup_width_px", "(c) colour breakup width, px (motion alone)"),
+    for ax, metric, label in ((axes[1, 0], "breakup_width_px",
+                               "(c) colour breakup, px (spread of the channels' edges, motion alone)"),
                               (axes[1, 1], "scielab_delta_e", "(d) S-CIELAB ΔE*ab against the own still capture")):
         for i, d in enumerate(designs):
-            pts = sorted((r["speed_px_per_ms"], r[metric]) for r in time_["rows"] if r["design"] == d)
+            pts = sorted((r["speed_px_per_ms"], np.nan if r[metric] is None else r[metric])   # None: no edge found
+                         for r in time_["rows"] if r["design"] == d)
             x, v = zip(*pts)
             ax.plot(x, v, marker="osD^v<>p"[i % 8], color=colour[d.split("/")[0]], label=d)
         ax.set(xlabel="image speed on the sensor, px/ms", ylabel=label.split(") ")[1], title=label)
@@ -197,31 +207,108 @@ def report_markdown(results: dict, command: str) -> str:
              f"Renderer {p['renderer']}{' (quick: 160x120)' if p['quick'] else ''}; seeds {p['seeds']}; the "
              f"paper's light: a white of {p['paper_white_luminance_cd_m2']:.2f} cd/m² (×{', ×'.join(f'{f:g}' for f in p['light_factors'])}).",
              "", "Definitions:", ""]
-    for key in ("snr_db", "snr_rendered_db", "delta_e_mean", "delta_e_training", "held_out_delta_e"):
-        lines.append(f"- `{key}`: {p[key]}")
+    for key in ("snr_db", "snr_rendered_db", "delta_e_mean", "s_cielab_mean", "delta_e_training",
+                "held_out_delta_e", "usable"):
+        if key in p:
+            lines.append(f"- `{key}`: {p[key]}")
     lines.append("")
     for light in dict.fromkeys(r["illuminant"] for r in results["rows"]):
         for f in p["light_factors"]:
             rows = _rows(results, light, f)
+            sc_rank = _rank([r for r in rows if r.get("usable", True) is not False], "s_cielab_mean")
+            de_rank = _rank([r for r in rows if r.get("usable", True) is not False], "delta_e_mean")
             lines += [f"## {light}, {f:g}× the paper's light", "",
-                      "| design | channels | capture ms | ΔE mean ± sd | rendered SNR dB ± sd | raw SNR dB | "
-                      "training ΔE | held-out ΔE (p95) |", "|---|---|---:|---:|---:|---:|---:|---:|"]
-            for r in sorted(rows, key=lambda r: r["delta_e_mean"]):
+                      "| design | channels | capture ms | ΔE*ab mean ± sd (rank) | S-CIELAB mean ± sd (rank) | "
+                      "rendered SNR dB ± sd | white SNR dB | raw SNR dB | training ΔE | held-out ΔE (p95) | "
+                      "usable |",
+                      "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
+            for r in sorted(rows, key=lambda r: (r.get("usable", True) is False, r["delta_e_mean"])):
+                usable = "yes" if r.get("usable", True) is not False else f"**no**: {r['unusable_reason']}"
                 lines.append(f"| {r['design']} | {r['channels']} | {r['capture_time_ms']:.2f} | "
-                             f"{_fmt(r['delta_e_mean'], r['delta_e_mean_sd'])} | "
-                             f"{_fmt(r['snr_rendered_db'], r['snr_rendered_db_sd'])} | {_fmt(r['snr_db'])} | "
+                             f"{_fmt(r['delta_e_mean'], r['delta_e_mean_sd'])} ({de_rank.get(r['design'], '–')}) | "
+                             f"{_fmt(r.get('s_cielab_mean'), r.get('s_cielab_mean_sd'))} "
+                             f"({sc_rank.get(r['design'], '–')}) | "
+                             f"{_fmt(r['snr_rendered_db'], r['snr_rendered_db_sd'])} | "
+                             f"{_fmt(r.get('snr_white_rendered_db'), digits=1)} | {_fmt(r['snr_db'])} | "
                              f"{_fmt(r['delta_e_training'])} | {_fmt(r.get('held_out_delta_e'))} "
-                             f"({_fmt(r.get('held_out_delta_e_p95'))}) |")
-            lines.append("")
+                             f"({_fmt(r.get('held_out_delta_e_p95'))}) | {usable} |")
+            lines += ["", "Ranks count usable cases only (–: no usable image).", ""]
             if rows and "developed_delta_e_mean" in rows[0]:
                 lines += _both_ways_table(rows)
-    lines += ["## What wins where", "", "| light | level | metric | design | value |", "|---|---:|---|---|---:|"]
+    if "natural" in results:
+        lines += _natural_markdown(results)
+    lines += ["## What wins where", "",
+              "Each verdict names the score it rests on: `delta_e_mean` is the per-pixel ΔE*ab against the scene, "
+              "`s_cielab_mean` the same pixels through the eye's filters (S-CIELAB: a demosaicker's averaging "
+              "counts for no more than the eye's), `snr_rendered_db` the rendered luminance SNR; `developed_*` the "
+              "camera that finds its own white. Only usable cases are ranked; \"no usable image\" where none is.", "",
+              "| light | level | metric (the score it rests on) | design | value |", "|---|---:|---|---|---:|"]
     for w in results["winners"]:
-        lines.append(f"| {w['illuminant']} | {w['light_factor']:g}× | {w['metric']} | {w['design']} | "
+        lines.append(f"| {w['illuminant']} | {w['light_factor']:g}× | {w['metric']} | "
+                     f"{w['design'] if w['design'] is not None else w.get('note', 'no usable image')} | "
                      f"{_fmt(w['value'], w['sd'])} |")
+    lines += _verdict_lines(results)
     if "space" in results:
         lines += _spacetime_markdown(results)
     return "\n".join(lines)
+
+
+def _verdict_lines(results: dict) -> list[str]:
+    """Does S-CIELAB change the order of the paper's prism and the Bayer array (and Quad Bayer's place)?  Per light
+    and level where both are usable: the ΔE*ab and S-CIELAB differences with their seed spreads."""
+    out = []
+    pairs = (("prism/optimal", "cfa/single"), ("quad_bayer/single", "cfa/single"),
+             ("quad_bayer/single", "prism/optimal"))
+    for light in dict.fromkeys(r["illuminant"] for r in results["rows"]):
+        for f in results["parameters"]["light_factors"]:
+            rows = {r["design"]: r for r in _rows(results, light, f)}
+            for a, b in pairs:
+                ra, rb = rows.get(a), rows.get(b)
+                if ra is None or rb is None:
+                    continue
+                if ra.get("usable") is False or rb.get("usable") is False:
+                    out.append(f"- {light}, {f:g}×: {a} against {b}: no verdict (no usable image: "
+                               f"{ra.get('unusable_reason') or rb.get('unusable_reason')})")
+                    continue
+                if ra.get("s_cielab_mean") is None or rb.get("s_cielab_mean") is None:
+                    continue
+
+                def word(x, y):
+                    return "ahead of" if x < y else "behind"
+                de_a, de_b = ra["delta_e_mean"], rb["delta_e_mean"]
+                sc_a, sc_b = ra["s_cielab_mean"], rb["s_cielab_mean"]
+                same = (de_a < de_b) == (sc_a < sc_b)
+                out.append(f"- {light}, {f:g}×: {a} is {word(de_a, de_b)} {b} on per-pixel ΔE*ab ({de_a:.2f} ± "
+                           f"{ra['delta_e_mean_sd'] or 0:.2f} vs {de_b:.2f} ± {rb['delta_e_mean_sd'] or 0:.2f}) and "
+                           f"{word(sc_a, sc_b)} it on S-CIELAB ({sc_a:.2f} ± {ra['s_cielab_mean_sd'] or 0:.2f} vs "
+                           f"{sc_b:.2f} ± {rb['s_cielab_mean_sd'] or 0:.2f}): "
+                           + ("the same verdict" if same else "**S-CIELAB reverses the verdict**"))
+    return (["", "### Does S-CIELAB change the verdict?", "",
+             "Per-pixel ΔE*ab counts a demosaicker's averaging of neighbours as less noise; S-CIELAB blurs every "
+             "design's noise by the eye's filters. ± is the spread over seeds (sample std).", ""] + out + [""]
+            if out else [])
+
+
+def _natural_markdown(results: dict) -> list[str]:
+    nat = results["natural"]
+    lines = ["## Natural scenes", "",
+             "Every design on the shipped textured targets, the paper's camera and level, the targets' own light; "
+             "every pixel scored against its known spectra (colours the conversion was not fitted on): per-pixel "
+             "ΔE*ab and S-CIELAB at each target's viewing geometry (spectracam.target_score), mean ± sd over seeds.",
+             ""]
+    for name, g in nat["parameters"].items():
+        rows = [r for r in nat["rows"] if r["scene"] == name]
+        de, sc = _rank(rows, "delta_e_mean"), _rank(rows, "s_cielab_mean")
+        lines += [f"### {name} ({g['image_px'][0]}x{g['image_px'][1]}, {g['illuminant']}, "
+                  f"{g['viewing_distance_m']:g} m, {g['display_pixel_pitch_mm']:.3g}-mm display pixels)", "",
+                  "| design | ΔE*ab mean ± sd (rank) | ΔE*ab p95 | S-CIELAB mean ± sd (rank) | S-CIELAB p95 |",
+                  "|---|---:|---:|---:|---:|"]
+        for r in sorted(rows, key=lambda r: r["s_cielab_mean"]):
+            lines.append(f"| {r['design']} | {_fmt(r['delta_e_mean'], r['delta_e_mean_sd'])} ({de[r['design']]}) | "
+                         f"{_fmt(r['delta_e_p95'])} | {_fmt(r['s_cielab_mean'], r['s_cielab_mean_sd'])} "
+                         f"({sc[r['design']]}) | {_fmt(r['s_cielab_p95'])} |")
+        lines.append("")
+    return lines
 
 
 def _spacetime_markdown(results: dict) -> list[str]:
@@ -250,7 +337,7 @@ def _spacetime_markdown(results: dict) -> list[str]:
               "|---|---:|---:|---:|---:|---:|---:|"]
     for r in time_["rows"]:
         lines.append(f"| {r['design']} | {r['capture_time_ms']:.1f} | {r['speed_px_per_ms']:g} | "
-                     f"{r['breakup_width_px']:.1f} | {r['scielab_delta_e']:.2f} | "
+                     f"{_fmt(r['breakup_width_px'])} | {r['scielab_delta_e']:.2f} | "
                      f"{r['false_colour_still']:.2f} | {_fmt(r['mtf50_cy_per_px'], digits=3)} |")
     lines += ["", "## What wins in space and time", "", "| part | metric | design | value |", "|---|---|---|---:|"]
     for w in results["spacetime_winners"]:

@@ -78,7 +78,8 @@ def run_time(scene, renderer: str, quick: bool, log=None, progress: bool = False
     spec = spec.replace(speeds_px_per_ms=SPEEDS_PX_PER_MS[::2] if quick else SPEEDS_PX_PER_MS)
     res = run_motion(spec, _experiment_scene(scene, quick), renderer, log, keep_images=False, progress=progress)
     keys = ("breakup_width_px", "scielab_delta_e", "scielab_delta_e_sd", "cielab_delta_e", "false_colour_still",
-            "breakup_width_scene_px", "scielab_delta_e_scene", "mtf50_cy_per_px", "capture_time_ms", "snr_db")
+            "breakup_width_scene_px", "scielab_delta_e_scene", "mtf50_cy_per_px", "capture_time_ms", "snr_db",
+            "edge_blur_px", "breakup_threshold_width_px")
     rows = [{k: v for k, v in r.to_dict().items() if k in ("design", "speed_px_per_ms", *keys)} for r in res["rows"]]
     return {"rows": rows, "wall_s": res["wall_s"],
             "parameters": {"motion": spec.to_dict(), "renderer": renderer,
@@ -99,7 +100,10 @@ def spacetime_winners(space: dict, time_: dict) -> list[dict]:
     fast = max(r["speed_px_per_ms"] for r in time_["rows"])
     group = [r for r in time_["rows"] if r["speed_px_per_ms"] == fast]
     for metric in ("breakup_width_px", "scielab_delta_e"):
-        v = min(r[metric] for r in group)
-        tied = [r["design"] for r in group if abs(r[metric] - v) <= 1e-6 * max(1.0, abs(v))]
+        scored = [r for r in group if r.get(metric) is not None]   # None: the edge left the image
+        if not scored:
+            continue
+        v = min(r[metric] for r in scored)
+        tied = [r["design"] for r in scored if abs(r[metric] - v) <= 1e-6 * max(1.0, abs(v))]
         out.append({"part": "time", "metric": metric, "speed_px_per_ms": fast, "design": ", ".join(tied), "value": v})
     return out

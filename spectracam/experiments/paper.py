@@ -215,6 +215,7 @@ def design_case(cube, scene: Scene, camera: CameraSpec, processing: ProcessingSp
     return {"exposure_ms": c.capture_time_ms, "channel_ms": (1e3 * raw.exposure_times_s).tolist(),
             "white_response": white.tolist(), "snr_db": c.snr_combined_db, "delta_e": c.delta_e_mean,
             "delta_e_of_mean": c.delta_e_of_mean, "delta_e_conversion": c.delta_e_conversion,
+            "s_cielab": c.s_cielab_mean, "s_cielab_p95": c.s_cielab_p95,
             "held_out": result.held_out, "training": result.training, "raw": raw, "score": result}
 
 
@@ -243,7 +244,7 @@ def comparison(exp: PaperExperiment, cubes: dict, camera: CameraSpec, processing
     seed = exp.base.render.seed
     res = {"exposure_ms": {}, "channel_exposure_ms": {}, "fig4_white_response": {}, "fig5a_snr_db": {},
            "fig5b_delta_e": {}, "fig5b_delta_e_of_mean": {}, "delta_e_conversion": {}, "delta_e_conversion_p95": {},
-           "held_out_delta_e": {}, "held_out_delta_e_p95": {}}
+           "held_out_delta_e": {}, "held_out_delta_e_p95": {}, "fig5b_s_cielab": {}, "fig5b_s_cielab_p95": {}}
     cases = {}
     for T in exp.temperatures_K:
         key = f"{T:g}"
@@ -253,7 +254,8 @@ def comparison(exp: PaperExperiment, cubes: dict, camera: CameraSpec, processing
             for field_, value in (("exposure_ms", c["exposure_ms"]), ("channel_exposure_ms", c["channel_ms"]),
                                   ("fig4_white_response", c["white_response"]), ("fig5a_snr_db", c["snr_db"]),
                                   ("fig5b_delta_e", c["delta_e"]), ("fig5b_delta_e_of_mean", c["delta_e_of_mean"]),
-                                  ("delta_e_conversion", c["delta_e_conversion"])):
+                                  ("delta_e_conversion", c["delta_e_conversion"]),
+                                  ("fig5b_s_cielab", c["s_cielab"]), ("fig5b_s_cielab_p95", c["s_cielab_p95"])):
                 res[field_].setdefault(design, {})[key] = value
             if c["held_out"] is not None:   # the conversion on colours it was not fitted on (spectracam.heldout)
                 for field_, value in (("delta_e_conversion_p95", c["training"]["delta_e_p95"]),
@@ -266,7 +268,8 @@ def comparison(exp: PaperExperiment, cubes: dict, camera: CameraSpec, processing
             tick()
     scene, cube = scaled(*cubes[exp.budget_illuminant], light_scale)
     budget = error_budget(cube, scene, camera, processing, exp.budget_design, seed)
-    res["fig6_budget_delta_e"] = [{"step": step.id, "label": step.label, "delta_e": de} for step, de, _, _ in budget]
+    res["fig6_budget_delta_e"] = [{"step": step.id, "label": step.label, "delta_e": de,
+                                   "s_cielab": r.summary.s_cielab_mean} for step, de, _, r in budget]
     if keep_cases:
         cases[(exp.budget_illuminant, "budget")] = budget
     tick()
@@ -437,6 +440,13 @@ def run_paper(exp: PaperExperiment, renderer: str = "mitsuba", quick: bool = Fal
                            "the colour conversion error",
             "snr": "chart average of each patch's combined SNR (see processing.snr_combination)",
             "delta_e": "chart average of each patch's mean per-pixel ΔE (processing.delta_e)",
+            "s_cielab": "S-CIELAB (Zhang & Wandell 1997): the rendered image and the scene's truth image through the "
+                        "eye's filters, then the per-pixel ΔE (processing.delta_e) on the same patch pixels; chart "
+                        "average of each patch's mean (fig5b_s_cielab; fig5b_s_cielab_p95: the 95th percentile over "
+                        "every patch's pixels); always against the scene (the budget steps too); docs/metrics.md",
+            "s_cielab_viewing": {"viewing_distance_m": exp.base.processing.viewing_distance_m,
+                                 "display_pixel_pitch_mm": exp.base.processing.display_pixel_pitch_mm,
+                                 "samples_per_degree": exp.base.processing.samples_per_degree},
         },
         **main,
         "claims": claims,

@@ -65,11 +65,14 @@ def report_markdown(results: dict, command: str) -> str:
         "## Figure 5b: mean ΔE*ab over the 24 patches", "", _per_design(results, "fig5b_delta_e", "{:.2f}"), "",
         "ΔE*ab of each patch's mean colour (noise averaged out, mostly the conversion):", "",
         _per_design(results, "fig5b_delta_e_of_mean", "{:.2f}"), "",
+        *_s_cielab_lines(results),
         "![Figure 5](fig5.png)", "",
         *_held_out_lines(results),
         *both_ways_lines(results),
         f"## Figure 6: cumulative error budget, {p['budget_design']} under {p['budget_illuminant']}", "",
-        _table(["step", "mean ΔE*ab"], [[s["label"], f"{s['delta_e']:.2f}"] for s in results["fig6_budget_delta_e"]]), "",
+        _table(["step", "mean ΔE*ab", "S-CIELAB (against the scene)"],
+               [[s["label"], f"{s['delta_e']:.2f}", "–" if s.get("s_cielab") is None else f"{s['s_cielab']:.2f}"]
+                for s in results["fig6_budget_delta_e"]]), "",
         f"Method: {p['fig6_method']}.", "",
         "![Figure 6](fig6.png)", "",
         "## The paper's claims beside this run", "", PAPER_CLAIMS_NOTE, "",
@@ -94,6 +97,21 @@ def report_markdown(results: dict, command: str) -> str:
               "(rendered.exr) images of every case — and the spectral radiance (radiance.exr) of every light with "
               "`--save-cubes` — each carrying the parameters it came from.", ""]
     return "\n".join(lines)
+
+
+def _s_cielab_lines(results: dict) -> list:
+    """Figure 5b's per-pixel ΔE*ab beside S-CIELAB: the same pixels, the noise blurred by the eye's filters."""
+    if not results.get("fig5b_s_cielab"):
+        return []
+    v = results["parameters"].get("s_cielab_viewing", {})
+    temps = results["parameters"]["temperatures_K"]
+    rows = [[d] + [f"{results['fig5b_delta_e'][d][t]:.2f} / {results['fig5b_s_cielab'][d][t]:.2f}" for t in temps]
+            for d in results["fig5b_s_cielab"]]
+    return ["Per-pixel ΔE*ab / S-CIELAB on the same pixels (Zhang & Wandell's spatial extension: rendering and scene "
+            f"through the eye's filters, {v.get('viewing_distance_m', 0.5):g} m from a display of "
+            f"{v.get('display_pixel_pitch_mm', 25.4 / 120):.3g}-mm pixels, {v.get('samples_per_degree', 0):.1f} "
+            "samples per degree; the noise counts as much as the eye sees of it; docs/metrics.md):", "",
+            _table(["design"] + [f"{t} K" for t in temps], rows), ""]
 
 
 def _key_numbers(r: dict) -> list[str]:
@@ -127,6 +145,7 @@ def both_ways_lines(results: dict) -> list:
         return " / ".join("–" if v is None else fmt.format(v) for v in (a, b))
 
     rows = [[design] + [cell("delta_e_mean", design, t) for t in temps] for design in o["delta_e_mean"]]
+    rows_sc = [[design] + [cell("s_cielab_mean", design, t) for t in temps] for design in o.get("s_cielab_mean", {})]
     rows2000 = [[design] + [cell("delta_e2000_mean", design, t) for t in temps] for design in o["delta_e_mean"]]
     held = [[design] + [cell("held_out_delta_e", design, t) for t in temps] for design in o["delta_e_mean"]]
     awb = [[design] + [f"{d['awb_recovery_deg'][design][t]:.2f}° / {d['awb_reproduction_deg'][design][t]:.2f}°"
@@ -140,6 +159,8 @@ def both_ways_lines(results: dict) -> list:
             "DNG calibrations (CIE A, D65) by the colour temperature it finds (`dual_illuminant`); it shows its "
             "metered white at display Y = 1.  Same renders, same seed.  Definitions: docs/metrics.md.", "",
             "Mean per-pixel ΔE*ab over the 24 patches:", "", _table(["design"] + [f"{t} K" for t in temps], rows), "",
+            *(["Mean per-pixel S-CIELAB (the same pixels through the eye's filters):", "",
+               _table(["design"] + [f"{t} K" for t in temps], rows_sc), ""] if rows_sc else []),
             "Mean per-pixel CIEDE2000:", "", _table(["design"] + [f"{t} K" for t in temps], rows2000), "",
             "Held-out colours (noise-free, through the matrix each camera used), mean ΔE*ab:", "",
             _table(["design"] + [f"{t} K" for t in temps], held), "",

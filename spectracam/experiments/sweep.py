@@ -29,11 +29,14 @@ from ..io.files import atomic_write
 from ..overrides import DESIGN_PATH, PATH, apply_override, apply_overrides, parse_assignment
 from ..scene import Scene, load_scene, parse_scene, read_toml
 from ..score import SUMMARY_METRICS
+from .usability import UsabilitySpec
 
 #: Held-out metrics (spectracam.heldout): the conversion's noise-free error on processing.held_out's
 #: colours, which it was not fitted on, and the 95th percentile of its error on the chart it was.
 HELD_OUT_METRICS = ("held_out_delta_e_mean", "held_out_delta_e_p95", "held_out_delta_e_max", "delta_e_conversion_p95")
-#: What a sweep can record: every field of the chart summary, and the held-out scores.
+#: What a sweep can record: every field of the chart summary (S-CIELAB beside ΔE*ab: s_cielab_mean, s_cielab_p95),
+#: and the held-out scores.  Every row also carries ``usable`` and ``unusable_reason`` (.usability, its defaults):
+#: whatever the metrics, a trial that is no usable image says so, and no best cell is named from it.
 METRICS = SUMMARY_METRICS + HELD_OUT_METRICS
 DESIGN_AXIS = DESIGN_PATH  # "arch/scheme" in one value, so invalid pairs are never crossed
 #: How long to wait for an external Dask scheduler before giving up, s.
@@ -87,7 +90,8 @@ def _axis_values(t: dict | list, field: str, source: str, max_values: int = MAX_
     raise ConfigError(field, t, "must be a non-empty list of values or a table {start, stop, step}", source)
 
 
-def load_sweep(path: str | Path, overrides=(), max_cells: int = MAX_CELLS, log=lambda m: None) -> Sweep:
+def load_sweep(path: str | Path, overrides=(), max_cells: int = MAX_CELLS, log=lambda m: None,
+               progress: bool = True) -> Sweep:
     """Read and validate a sweep file; every cell's scene is validated here, before anything runs.
     ``overrides`` (``--set``): a path whose table is a sweep key changes the sweep, any other the
     base scene."""
@@ -150,8 +154,12 @@ def load_sweep(path: str | Path, overrides=(), max_cells: int = MAX_CELLS, log=l
                           src)
     from ..cache import RENDER_TABLES
 
+    from ..progress import Counter
+
     largest, renders = None, set()
-    for i, cell in enumerate(sweep.cells()):
+    # a bar, or lines when piped, and an estimate up front: validating 100 000 cells takes minutes
+    checking = Counter(n, desc="validating cells", unit="cell", log=log, progress=progress)
+    for i, cell in checking.iterate(enumerate(sweep.cells())):
         scene = cell_scene(sweep, cell, i)  # validate every combination now
         if scene.target.textured:
             raise ConfigError("target.kind", scene.target.kind, "a sweep scores the ColorChecker; a textured target is "
@@ -240,8 +248,10 @@ def run_cell(index: int, cell: dict, scene: Scene, cube, trials: int, sweep_seed
         if result.held_out is not None:
             values.update({f"held_out_{k}": result.held_out[k] for k in ("delta_e_mean", "delta_e_p95", "delta_e_max")},
                           delta_e_conversion_p95=result.training["delta_e_p95"])
+        usable, why = UsabilitySpec().judge(values["s_cielab_mean"], values["snr_white_rendered_db"])
         rows.append({"sweep": sweep_digest, "cell": index, "trial": trial, "seed": seed,
-                     **{f"axis:{k}": v for k, v in cell.items()}, **params, **{m: values[m] for m in metrics}})
+                     **{f"axis:{k}": v for k, v in cell.items()}, **params, **{m: values[m] for m in metrics},
+                     "usable": usable, "unusable_reason": why})
     return {"cell": index, "rows": rows, "compute_s": time.perf_counter() - t0}
 
 
@@ -411,7 +421,7 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
     """Run (or resume) a sweep; returns timing figures.  ``stop_after`` ends after that many new cells
     (for tests of interruption)."""
     from ..cache import cached_render, render_key
-    from ..progress import bar as progress_bar
+    from ..progress import Counter
 
     if scheduler is not None and not serial:
         probe_scheduler(scheduler)  # before anything is written: a wrong address leaves no half-made sweep
@@ -422,6 +432,10 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
     meta = {"source": sweep.source, "digest": sweep.digest, "axes": [[p, list(v)] for p, v in sweep.axes],
             "metrics": list(sweep.metrics), "trials": sweep.trials, "seed": sweep.seed, "renderer": sweep.renderer,
             "base_values": {p: base_value(sweep.base, p) for p, _ in sweep.axes}}
+    from ..io.files import regular_file
+
+    for p in (journal, meta_path):   # a FIFO in their place would block the journal's open for ever
+        regular_file(p, "output")
     if journal.exists() or meta_path.exists():
         if not resume:
             raise SpectracamError(f"output = {str(out)!r}: already holds a sweep; pass --resume to continue it, "
@@ -444,7 +458,8 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
     cells = sweep.cells()
     rows, done = finished_cells(rows, sweep, cells, log)  # a cell with missing or foreign rows is recomputed whole
     todo = [(i, c) for i, c in enumerate(cells) if i not in done]
-    scenes = {i: cell_scene(sweep, c, i) for i, c in todo}
+    preparing = Counter(len(todo), desc="preparing cells", unit="cell", log=log, progress=progress)
+    scenes = {i: cell_scene(sweep, c, i) for i, c in preparing.iterate(todo)}
 
     # one render per distinct radiance
     t0 = time.perf_counter()
@@ -461,7 +476,8 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
     with open(journal, "ab") as jf:
         import sys
 
-        bar = progress_bar(total=len(cells), initial=len(done), desc="sweep cells", unit="cell", progress=progress)
+        # cells done, rate and time left: a bar on a terminal, else a line every 30 s; the estimate up front
+        bar = Counter(len(cells), initial=len(done), desc="sweep cells", unit="cell", log=log, progress=progress)
         compute, t1, n_new, cluster_start = [], time.perf_counter(), 0, 0.0
         last_sync = [time.perf_counter()]
 

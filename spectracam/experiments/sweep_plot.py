@@ -54,17 +54,46 @@ def load_results(out_dir: str | Path) -> tuple[dict, list[dict]]:
     for name in ("results.parquet", "sweep.json"):
         if not (out / name).exists():
             raise SpectracamError(f"directory = {str(out)!r}: has no {name}; run spectracam sweep into it first")
+    from ..io.files import regular_file
+
     try:
-        meta = json.loads((out / "sweep.json").read_text())
+        meta = json.loads(regular_file(out / "sweep.json", "file").read_text())
         if not isinstance(meta, dict) or not {"axes", "metrics", "trials"} <= meta.keys():
             raise ValueError("keys missing")
+        axes, metrics, trials = meta["axes"], meta["metrics"], meta["trials"]
+        if not (isinstance(axes, list) and axes and all(isinstance(a, list) and len(a) == 2 and isinstance(a[0], str)
+                                                        and isinstance(a[1], list) for a in axes)):
+            raise ValueError("axes must be a non-empty list of [path, values] pairs")
+        if not (isinstance(metrics, list) and metrics and all(isinstance(m, str) for m in metrics)):
+            raise ValueError("metrics must be a non-empty list of names")
+        if isinstance(trials, bool) or not isinstance(trials, int) or trials < 1:
+            raise ValueError("trials must be an integer >= 1")
     except (ValueError, UnicodeDecodeError) as e:
         raise SpectracamError(f"file = {str(out / 'sweep.json')!r}: damaged ({e}); run the sweep again") from None
+    except OSError as e:
+        raise SpectracamError(f"file = {str(out / 'sweep.json')!r}: cannot be read ({e.strerror})") from None
     try:
-        rows = pq.read_table(out / "results.parquet").to_pylist()
+        table = pq.read_table(regular_file(out / "results.parquet", "file"))
+        rows = table.to_pylist()
     except (pa.ArrowException, OSError) as e:
         raise SpectracamError(f"file = {str(out / 'results.parquet')!r}: not a readable Parquet table "
                               f"({str(e).splitlines()[0]}); rerun with spectracam sweep --resume") from None
+    # the two files must describe the same sweep: every axis and metric sweep.json names is a column
+    columns = set(table.column_names)
+    table_axes = ", ".join(c[5:] for c in table.column_names if c.startswith("axis:")) or "none"
+    for name, _ in axes:
+        if f"axis:{name}" not in columns:
+            raise SpectracamError(f"file = {str(out / 'sweep.json')!r}: names the axis {name!r}, which "
+                                  f"{str(out / 'results.parquet')!r} lacks (its axes: {table_axes}); the two files "
+                                  "are not of one sweep: run the sweep again")
+    for m in metrics:
+        if m not in columns:
+            raise SpectracamError(f"file = {str(out / 'sweep.json')!r}: names the metric {m!r}, which "
+                                  f"{str(out / 'results.parquet')!r} lacks; the two files are not of one sweep: run "
+                                  "the sweep again")
+    if not rows:
+        raise SpectracamError(f"file = {str(out / 'results.parquet')!r}: holds no results; rerun with spectracam sweep "
+                              "--resume")
     return meta, rows
 
 
@@ -189,13 +218,14 @@ def sweep_figure(meta: dict, rows: list[dict], metric: str, x: str, line: str | 
             xs = sorted({r[f"axis:{x}"] for r in sel}, key=natural_key)
             vals = [[r[metric] for r in sel if r[f"axis:{x}"] == xv and r[metric] is not None] for xv in xs]
             series.append((lv, xs, np.array([np.mean(v) if v else np.nan for v in vals]),
-                           np.array([np.std(v) if v else np.nan for v in vals])))
-        best = None  # (line index, x value, mean)
-        for li, (lv, xs, mean, _) in enumerate(series):
-            for xv, mv in zip(xs, mean):
-                if np.isfinite(mv) and (best is None or (mv > best[2] if larger else mv < best[2])):
+                           np.array([np.std(v) if v else np.nan for v in vals]),
+                           [all(r.get("usable", True) is not False for r in sel if r[f"axis:{x}"] == xv) for xv in xs]))
+        best = None  # (line index, x value, mean): never a cell with a trial that is no usable image (.usability)
+        for li, (lv, xs, mean, _, usable) in enumerate(series):
+            for xv, mv, ok in zip(xs, mean, usable):
+                if ok and np.isfinite(mv) and (best is None or (mv > best[2] if larger else mv < best[2])):
                     best = (li, xv, mv)
-        for li, (lv, xs, mean, std) in enumerate(series):
+        for li, (lv, xs, mean, std, _) in enumerate(series):
             thick = best is not None and best[0] == li and len(lines) > 1
             style = dict(marker="o", ms=4 if thick else 3, lw=2.8 if thick else 1.2, color=colors[li],
                          zorder=3 if thick else 2, label=None if lv is None else str(lv))
@@ -212,8 +242,11 @@ def sweep_figure(meta: dict, rows: list[dict], metric: str, x: str, line: str | 
             li, bx, bv = best
             ax.plot([pos[bx]], [bv], marker="o", ms=12, mfc="none", mec="tab:red", mew=1.6, ls="none", zorder=5)
             text = f"best: {_fmt(bv)}\nat {with_value(x, bx)}" + (f"\non {with_value(line, lines[li])}" if line else "")
-            notes.append((ax, (pos[bx], bv), text, [(pos[v], m) for _, xs, mean, _ in series
+            notes.append((ax, (pos[bx], bv), text, [(pos[v], m) for _, xs, mean, _, _ in series
                                                      for v, m in zip(xs, mean)]))
+        elif any(np.isfinite(m).any() for _, _, m, _, _ in series):
+            ax.text(0.5, 0.97, "no usable image: no best cell (docs/metrics.md)", transform=ax.transAxes,
+                    ha="center", va="top", fontsize=8, color="0.3")
         if not numeric_x or len(xs_all) <= 9:
             ax.set_xticks([pos[v] for v in xs_all], [str(v) for v in xs_all])
         elif all(float(v).is_integer() for v in xs_all):

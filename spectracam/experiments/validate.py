@@ -35,19 +35,54 @@ from ..metrics import delta_e, xyz_to_lab
 SCENE_OVERRIDES = {"image": {"width": 192, "height": 144}}
 
 
-def validation_scene(camera_name: str):
+def validation_scene(camera_name: str, filters: dict | None = None, range_nm: tuple | None = None):
     """The shipped D65 chart scene with the camera's curves, noise-free, flat QE (the curves hold it), on
-    400–700 nm or the part of it the curves cover (the Sigma's stop at 680 nm)."""
+    400–700 nm or the part of it the curves cover (the Sigma's stop at 680 nm).  ``filters`` (with
+    ``range_nm``): a ``[filters]`` table of the user's own camera instead of a shipped one."""
     from ..scene import parse_scene, read_toml, shipped_scene_file
 
     data = read_toml(shipped_scene_file("d65.toml"), "scene file")
-    lo, hi = library_curves(camera_name).range_nm  # the scene's 400-700 nm, narrowed to the curves' range
-    wavelengths = {"start_nm": max(400.0, lo), "stop_nm": min(700.0, hi), "step_nm": 10.0}
+    lo, hi = range_nm or library_curves(camera_name).range_nm  # the scene's 400-700 nm, narrowed to the curves'
+    if min(700.0, hi) - max(400.0, lo) < 20.0:
+        raise ConfigError("--camera-file", camera_name, f"its curves cover {lo:g}–{hi:g} nm; validation needs at least "
+                                                        "20 nm of 400–700 nm")
+    lo10, hi10 = 10.0 * np.ceil(max(400.0, lo) / 10.0 - 1e-9), 10.0 * np.floor(min(700.0, hi) / 10.0 + 1e-9)
+    wavelengths = {"start_nm": lo10, "stop_nm": hi10, "step_nm": 10.0}
+    own = filters if filters is not None else {"camera": camera_name}
     data = {**data, **SCENE_OVERRIDES, "wavelengths": wavelengths,
-            "filters": {**data.get("filters", {}), "kind": "camera", "camera": camera_name, "qe": "flat"},
+            "filters": {**data.get("filters", {}), **own, "kind": "camera", "qe": "flat"},
             "sensor": {**data.get("sensor", {}), "shot_noise": False, "dark_current": False, "read_noise": False,
                        "fpn": False, "quantization": False}}
     return parse_scene(data, f"spectracam validate ({camera_name})")
+
+
+def user_camera(camera_file, matrix, unit: str = "relative", gains=None, gains_kept: bool = False):
+    """``(scene, PublishedMatrix, gains note, (wl, curves) as read or None)`` of a user's camera: the CSV of
+    ``filters.camera_file`` and its published XYZ(D65)→camera ``matrix`` (9 numbers), checked by the same
+    rules as a scene's (:mod:`spectracam.filters`); the matrix also restores the gains of per-channel-normalised
+    curves, as for the shipped cameras."""
+    from pathlib import Path
+
+    from ..cameras import PublishedMatrix, file_gains, load_camera_csv, peak_normalised
+
+    wl, rows = load_camera_csv(Path(camera_file), "--camera-file")
+    filters = {"camera": "file", "camera_curve_nm": wl, "camera_curve": rows, "camera_unit": unit,
+               "camera_xyz_to_camera": tuple(matrix), "camera_gains": tuple(gains or ()),
+               "camera_gains_kept": bool(gains_kept)}
+    scene = validation_scene(str(camera_file), filters, (wl[0], wl[-1]))
+    spec = scene.camera.filters
+    w, v = np.asarray(spec.camera_curve_nm), np.asarray(spec.camera_curve)
+    g = file_gains(spec, w, v)
+    if spec.camera_gains:
+        note = f"given (camera_gains R {g[0]:.4g}, G {g[1]:.4g}, B {g[2]:.4g})"
+    elif np.any(g != 1.0):
+        note = (f"restored: the D65 neutral of the given matrix (gains R {g[0] / g[1]:.3f}, G 1, B {g[2] / g[1]:.3f} "
+                "on the per-channel-normalised curves)")
+    else:
+        note = "as in the file" + (" (camera_gains_kept)" if spec.camera_gains_kept else "")
+    m = PublishedMatrix(Path(camera_file).name, spec.camera_xyz_to_camera, "given (--matrix)")
+    equal = (w, v) if unit == "relative" and peak_normalised(v) else None
+    return scene, m, note, equal
 
 
 def raw_patch_rates(scene, renderer: str) -> np.ndarray:
@@ -64,12 +99,18 @@ def raw_patch_rates(scene, renderer: str) -> np.ndarray:
 
 
 def validate_camera(name: str, renderer: str = "analytic") -> dict:
-    """One camera's row: simulated and published neutral, ΔE*ab with the published matrix and the fit."""
+    """One shipped camera's row: simulated and published neutral, ΔE*ab with the published matrix and the fit."""
+    curves = library_curves(name)
+    equal = (curves.wavelengths_nm, curves.values) if curves.per_channel else None
+    return camera_row(name, validation_scene(name), PUBLISHED_MATRICES[curves.matrix],
+                      curves.gains_note if curves.per_channel else "as published", equal, renderer)
+
+
+def camera_row(name: str, scene, matrix, gains_note: str, equal_gains, renderer: str = "analytic") -> dict:
+    """A camera's row (module docstring); ``equal_gains``: ``(wl, curves)`` normalised per channel, whose white
+    at equal gains is shown beside (what ignoring the lost gains would give), or None."""
     from ..reference import ChartReference
 
-    curves = library_curves(name)
-    matrix = PUBLISHED_MATRICES[curves.matrix]
-    scene = validation_scene(name)
     ref = ChartReference.of(scene)
     rates = raw_patch_rates(scene, renderer)
     sim = rates[WHITE_PATCH] / rates[WHITE_PATCH][1]
@@ -81,7 +122,7 @@ def validate_camera(name: str, renderer: str = "analytic") -> dict:
     fit, *_ = np.linalg.lstsq(rates, ref.patch_xyz, rcond=None)
     de_fit = delta_e(xyz_to_lab(rates @ fit, ref.white_xyz), lab_scene, "cie1976")
     row = {"camera": name, "model": matrix.model, "matrix_xyz_to_camera": list(matrix.xyz_to_camera),
-           "matrix_source": matrix.source, "gains": curves.gains_note if curves.per_channel else "as published",
+           "matrix_source": matrix.source, "gains": gains_note,
            "white_RG_simulated": float(sim[0]), "white_BG_simulated": float(sim[2]),
            "white_RG_published": float(pub[0]), "white_BG_published": float(pub[2]),
            "white_RG_error_percent": float(100 * (sim[0] / pub[0] - 1)),
@@ -90,21 +131,27 @@ def validate_camera(name: str, renderer: str = "analytic") -> dict:
            "delta_e_fit_mean": float(de_fit.mean()), "delta_e_fit_max": float(de_fit.max()),
            "delta_e_published_per_patch": de_pub.round(4).tolist(), "delta_e_fit_per_patch": de_fit.round(4).tolist(),
            "patch_names": list(ref.names)}
-    if curves.per_channel:  # what the defect gave: the channels at equal gains, on the white patch
+    if equal_gains is not None:  # what the defect gave: the channels at equal gains, on the white patch
         from ..chart import patch_reflectances
 
-        r = d65_response(curves.wavelengths_nm, curves.values, patch_reflectances(scene.chart)[WHITE_PATCH][1])
+        r = d65_response(*equal_gains, patch_reflectances(scene.chart)[WHITE_PATCH][1])
         row["white_RG_equal_gains"], row["white_BG_equal_gains"] = float(r[0]), float(r[2])
     return row
 
 
-def run_validate(renderer: str = "analytic") -> dict:
-    """Every shipped camera with a published matrix, and the library as ``spectracam cameras`` lists it."""
+def run_validate(renderer: str = "analytic", user: dict | None = None) -> dict:
+    """Every shipped camera with a published matrix, and the library as ``spectracam cameras`` lists it; with
+    ``user`` (the keyword arguments of :func:`user_camera`), that camera alone, checked the same way."""
     from .validate_wb import run_validate_wb
 
-    names = [n for n in CAMERAS if library_curves(n).matrix in PUBLISHED_MATRICES and _usable(n)]
-    rows = [validate_camera(n, renderer) for n in names]
-    return {"renderer": renderer, "illuminant": "CIE D65", "chart": validation_scene(CAMERAS[0]).chart.dataset,
+    if user is not None:
+        scene, matrix, note, equal = user_camera(**user)
+        rows = [camera_row(str(user["camera_file"]), scene, matrix, note, equal, renderer)]
+        names = []
+    else:
+        names = [n for n in CAMERAS if library_curves(n).matrix in PUBLISHED_MATRICES and _usable(n)]
+        rows = [validate_camera(n, renderer) for n in names]
+    out = {"renderer": renderer, "illuminant": "CIE D65", "chart": validation_scene(CAMERAS[0]).chart.dataset,
             "definitions": {
                 "neutral": "raw R/G and B/G of the ColorChecker's white patch (noise-free capture) against "
                            "M·XYZ(white patch) of the published XYZ(D65)→camera matrix M",
@@ -112,9 +159,40 @@ def run_validate(renderer: str = "analytic") -> dict:
                                      "scene's XYZ, CIELAB relative to D65; M was not fitted on these patches",
                 "delta_e_fit": "CIE 1976 ΔE*ab of a 3×3 least-squares fit raw→XYZ on the same 24 patches (a training "
                                "score)"},
-            "cameras": rows, "library": library_table(),
-            # the cameras' own measurements from Debian packages (darktable, rawtherapee-data), or why skipped
-            "real_camera_data": run_validate_wb(names)}
+            "cameras": rows, "library": library_table()}
+    if user is None:  # the cameras' own measurements from Debian packages (darktable, rawtherapee-data), or why skipped
+        out["real_camera_data"] = run_validate_wb(names)
+    return out
+
+
+def parse_matrix(text: str) -> tuple:
+    """9 numbers (an XYZ(D65)→camera matrix, row-major) from ``--matrix``: the numbers themselves, separated by
+    commas, spaces or brackets, or the path of a text file that holds them."""
+    import os
+    import re
+    import stat
+    from pathlib import Path
+
+    source = text
+    if os.path.exists(text):
+        p = Path(text)
+        if not stat.S_ISREG(p.stat().st_mode):
+            raise ConfigError("--matrix", text, "must be 9 numbers or a regular text file holding them")
+        try:
+            source = p.read_bytes()[:100_000].decode("utf-8")
+        except (OSError, UnicodeDecodeError) as e:
+            raise ConfigError("--matrix", text, f"cannot be read as a text file ({e})") from None
+        source = "\n".join(r for r in source.splitlines() if not r.lstrip().startswith("#"))
+    parts = [x for x in re.split(r"[\s,;\[\]()]+", source) if x]
+    try:
+        nums = [float(x) for x in parts]
+    except ValueError:
+        nums = []
+    if len(nums) != 9 or not np.all(np.isfinite(nums)):
+        raise ConfigError("--matrix", text[:200], "must be 9 finite numbers — the camera's XYZ(D65)→camera matrix, "
+                                                  "row-major (rows R, G, B), e.g. Adobe's ColorMatrix2 ×10⁴ as dcraw "
+                                                  "tabulates it — or a text file holding them")
+    return tuple(nums)
 
 
 def _usable(name: str) -> bool:

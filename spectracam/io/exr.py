@@ -60,6 +60,26 @@ def attribute_number(value) -> float:
     return float(np.asarray(value, dtype=np.float64).reshape(-1)[0])
 
 
+def json_object_attribute(attrs: dict, name: str, src: str) -> dict | None:
+    """A header attribute that holds a JSON object (``spectracamScene``, ``spectracamRender``,
+    ``spectracamCamera``, ``spectracamMetering``) as a dict, None when absent; text that is not JSON, or
+    JSON that is not an object (``'[1, 2, 3]'``, a number, a string), is a damaged file: one line naming
+    the attribute, never a TypeError where the scene is rebuilt from it."""
+    if name not in attrs:
+        return None
+    value = attrs[name]
+    try:
+        parsed = json.loads(value) if isinstance(value, (str, bytes)) else value
+    except ValueError as e:
+        raise SpectracamError(f"file = {src!r}: attribute {name} is damaged (not JSON: {e})") from None
+    if not isinstance(parsed, dict):
+        shown = value if len(str(value)) <= 60 else str(value)[:57] + "..."
+        kind = {list: "an array", str: "a string", bool: "a boolean", type(None): "null"}.get(type(parsed), "a number")
+        raise SpectracamError(f"file = {src!r}: attribute {name} = {shown!r} is damaged (a JSON object of tables "
+                              f"is expected, this is {kind})")
+    return parsed
+
+
 def write_exr(path: str | Path, channels: dict[str, np.ndarray], attributes: dict, half: bool = False) -> Path:
     """Write float32 (or, with ``half``, float16) channels and attributes; the file appears complete or
     not at all (temp + rename).
@@ -80,6 +100,9 @@ def read_exr(path: str | Path) -> tuple[dict[str, np.ndarray], dict]:
     """All channels (name → (H, W) array) and header attributes of a single-part EXR file."""
     import OpenEXR
 
+    from .files import regular_file
+
+    regular_file(path, "file")  # a FIFO would block OpenEXR's open for ever
     try:
         with _library_output_held() as held:
             f = OpenEXR.File(str(path), separate_channels=True)
@@ -97,6 +120,9 @@ def read_exr_header(path: str | Path) -> dict:
     """The header attributes of a single-part EXR file, without its pixels (``dataWindow``: ((x0, y0), (x1, y1)))."""
     import OpenEXR
 
+    from .files import regular_file
+
+    regular_file(path, "file")
     try:
         with _library_output_held():
             return dict(OpenEXR.File(str(path), header_only=True).header())
@@ -198,12 +224,10 @@ def read_radiance_exr(path: str | Path, units: str | None = None) -> tuple[Radia
     cube = np.stack([channels[n] for _, n in bands], axis=-1).astype(np.float32, copy=False)  # half floats too
     if scale != 1.0:
         cube = (cube * np.float32(scale)).astype(np.float32)
-    try:
-        meta = json.loads(attrs["spectracamRender"]) if "spectracamRender" in attrs else {}
-        if "spectracamScene" in attrs:
-            meta["scene"] = json.loads(attrs["spectracamScene"])
-    except (ValueError, TypeError) as e:
-        raise SpectracamError(f"file = {str(path)!r}: a recorded attribute is damaged ({e})") from None
+    meta = json_object_attribute(attrs, "spectracamRender", str(path)) or {}
+    scene = json_object_attribute(attrs, "spectracamScene", str(path))
+    if scene is not None:
+        meta["scene"] = scene
     return RadianceCube(cube, np.array([w for w, _ in bands]), meta).check(str(path)), attrs
 
 
@@ -422,6 +446,8 @@ def read_raw_exr(path: str | Path) -> RawCapture:
     if attrs.get("spectracamKind") != "raw":
         raise SpectracamError(f"file = {src!r}: not a spectracam raw capture (spectracamKind = "
                               f"{attrs.get('spectracamKind')!r})")
+    for name in ("spectracamCamera", "spectracamScene", "spectracamMetering"):
+        json_object_attribute(attrs, name, src)   # a JSON object each, or one line here
     try:
         cam = json.loads(attrs["spectracamCamera"])
         layout = layout_from_dict(json.loads(attrs["spectracamLayout"]), src)

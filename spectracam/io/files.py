@@ -13,6 +13,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import os
+import stat
 import tempfile
 from pathlib import Path
 from typing import Callable
@@ -37,6 +38,31 @@ def _make_parent(path: Path) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     if _STAGES:
         _STAGES[-1]["dirs"].extend(reversed(missing))
+
+
+#: What a path that is not a regular file is, by its ``stat`` type, for the one line that refuses it.
+_NOT_REGULAR = ((stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISSOCK, "a socket"),
+                (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"), (stat.S_ISDIR, "a directory"))
+
+
+def regular_file(path: str | Path, what: str) -> Path:
+    """``path`` if it is a regular file (or a link to one), checked with ``stat.S_ISREG`` before anything
+    opens it: every loader of a user's file (scene, sweep, design and config TOML, curve and camera CSVs,
+    reflectances, EXRs, photographs, a directory's report.json for ``view``) calls this first.  A FIFO
+    opened for reading blocks until a writer comes — a hang, not an error — and a device may never end:
+    both are refused in one line (:class:`~spectracam.errors.ConfigError` naming ``what``, exit 2).  A path
+    that does not exist is returned as is: the caller's own open says "no such file" in its words."""
+    from ..errors import ConfigError
+
+    p = Path(path)
+    try:
+        mode = os.stat(p).st_mode
+    except (OSError, ValueError):
+        return p
+    if stat.S_ISREG(mode):
+        return p
+    kind = next((name for test, name in _NOT_REGULAR if test(mode)), "not a regular file")
+    raise ConfigError(what, str(p), f"is {kind}, not a regular file; give a file")
 
 
 class WriteError(OSError):
@@ -184,6 +210,8 @@ def _discard(stage: dict, renamed: list) -> None:
 
 def json_default(o):
     """``json.dumps(default=)`` for NumPy scalars and arrays."""
+    import numpy as np
+
     if isinstance(o, np.generic):
         return o.item()
     if isinstance(o, np.ndarray):

@@ -31,9 +31,10 @@ def motion_cmd(out_dir: Path, quick: bool, renderer: str, sets, quiet: bool):
     spec, scene = load_motion(sets, quick=quick)   # validated before any work
     if renderer not in ("mitsuba", "analytic"):
         raise ConfigError("--renderer", renderer, "moving targets are rendered by 'mitsuba' or 'analytic'")
-    check_motion_memory(spec, scene)
+    estimate = check_motion_memory(spec, scene)
     check_writable(out_dir)
     log = progress_log(quiet)
+    log(estimate.line())
     t0 = time.perf_counter()
     result = run_motion(spec, scene, renderer=renderer, log=log, progress=not quiet)
     command = "spectracam motion -o " + str(out_dir) + (" --quick" if quick else "") \

@@ -11,18 +11,25 @@ architecture's own ``record`` **with the paper's sensor noise**, demosaicked, co
 and scored against the same design's noise-free still capture (the edge at rest at the capture's
 middle instant, t = 0) and against the static scene there:
 
-* ``breakup_width_px`` — :func:`.metrics.breakup_width_px`: the width over which the chroma added to the
-  design's own noise-free *still* capture (the edge at rest; the same exposures, demosaicking and
-  conversion) by its noise-free moving capture exceeds ``breakup_threshold``: colour breakup from the
-  motion alone, 0 at rest whatever the design's demosaicking false colour;
+* ``breakup_width_px`` — :func:`.metrics.edge_channels`: how far apart the motion moves the colour
+  channels' edges, to a fraction of a pixel: each camera channel's edge in the noise-free moving capture
+  (its 50 % crossing, profiles binned along the slanted edge) against the same channel's in the design's
+  own noise-free *still* capture (the edge at rest; the same exposures, demosaicking and conversion), the
+  spread of those shifts (``channel_edge_shift_px``, per channel): colour breakup from the motion alone,
+  0 at rest whatever the design's demosaicking false colour, ``v·(t_last − t_first)`` for frames in
+  sequence (t: each window's middle), 0 for one shared window; ``edge_blur_px``: the channels' mean
+  10–90 % rise (the blur, kept apart); ``breakup_threshold_width_px``: the width over which the chroma
+  the motion adds exceeds ``breakup_threshold`` (the headline before issue 34: it counts blur and cannot
+  read below two 0.5 px bins);
 * ``false_colour_still`` — that still capture's chroma against the camera's conversion of the ideal image
   within 2 px of the edge, √(Δa*² + Δb*²): demosaicking false colour, its own metric;
 * ``scielab_delta_e`` / ``cielab_delta_e`` — mean S-CIELAB / CIELAB ΔE*ab within ``zone_half_width_px``
   of the edge of the noisy capture against that still capture: what motion and noise add to the
   camera's own still photograph (at rest: the noise alone); mean over ``seeds`` noise seeds, ``_sd``
   their spread, ``scielab_delta_e_by_seed`` each;
-* ``scielab_delta_e_scene`` / ``cielab_delta_e_scene`` / ``breakup_width_scene_px`` — the same against the
-  ideal image of the scene (they also hold the conversion's constant error and the demosaicking false
+* ``scielab_delta_e_scene`` / ``cielab_delta_e_scene`` / ``breakup_width_scene_px`` /
+  ``breakup_threshold_width_scene_px`` — the same against the ideal image of the scene (the channels' edges
+  against the scene's edge) (they also hold the conversion's constant error and the demosaicking false
   colour: what an observer comparing with the scene sees);
 * ``mtf50_cy_per_px`` — e-SFR of the displayed luminance across the edge, as ISO 12233:2017 states it
   (``esfr_correct_binning``: with the binning correction the standard lacks);
@@ -221,17 +228,65 @@ def design_snr_db(scene, camera, design: str, seed: int) -> float | None:
 MEMORY_PER_SUBPIXEL_BYTES = (400.0, 48.0)
 
 
-def check_motion_memory(spec: MotionSpec, scene) -> None:
-    """Refuse, before any work, a motion run larger than the memory this process may use."""
-    from ..pipeline import check_bytes
+#: A field-sequential capture lasts about this many times the CFA's exposure (three exposures of about
+#: 1.5× the CFA's with readout gaps: fsc/optimal 130 ms against cfa/single's 28 ms at 5000 K): the
+#: longest capture, for the estimate of the slices before the exposures are metered.
+CAPTURE_OVER_CFA_EXPOSURE = 5.0
+
+
+@dataclass(frozen=True)
+class MotionEstimate:
+    """What a motion run will cost, known before any work (:func:`motion_estimate`)."""
+
+    bytes: float                     # peak memory, bytes
+    slice_renders: int               # slice renders, at most (shared positions make fewer)
+    cases: int
+
+    def line(self) -> str:
+        return (f"motion: {self.cases} cases, at most about {self.slice_renders} slice renders, "
+                f"about {self.bytes / 2**30:.1f} GiB at the peak")
+
+
+def motion_estimate(spec: MotionSpec, scene) -> MotionEstimate:
+    """The peak memory and the slice renders of a run, before any work.  Memory: the measured bytes per
+    sub-pixel (:data:`MEMORY_PER_SUBPIXEL_BYTES`, the default run's cache of rendered poses included) plus, with a
+    set number of ``slices``, the cache those poses fill (each pose ``K × sub-pixels`` float32, up to
+    :data:`~.render.BASIS_CACHE_BYTES`).  Renders: per case ``slices``, or (0) the slices of the step
+    ``max_step_px`` over the longest capture (:data:`CAPTURE_OVER_CFA_EXPOSURE` × the CFA's exposure), at least
+    :data:`~.render.MIN_SLICES_PER_WINDOW` per window of three."""
+    from .render import BASIS_CACHE_BYTES, MIN_SLICES_PER_WINDOW
 
     m = sopt.margin_px(spec.pixel_pitch_um, spec.f_number, scene.grid.edges_nm[-1])
     w, h = spec.edge_size_px
     subpixels = (w + 2 * m) * (h + 2 * m) * spec.supersampling ** 2
     fixed, per_band = MEMORY_PER_SUBPIXEL_BYTES
-    check_bytes(subpixels * (fixed + per_band * len(scene.grid)),
-                f"edge_size_px = [{w}, {h}] (+{m} px margin) at supersampling = {spec.supersampling} with "
-                f"{len(scene.grid)} bands", "use a smaller edge, less supersampling or fewer bands")
+    need = subpixels * (fixed + per_band * len(scene.grid))
+    speeds = case_speeds(spec)
+    cases = len(spec.designs) * len(spec.rolling_shutter) * len(speeds)
+    capture_ms = CAPTURE_OVER_CFA_EXPOSURE * (spec.cfa_exposure_ms or 28.0)
+    if spec.slices:
+        per_case = [spec.slices if v > 0 else 1 for v in speeds]
+        K = 2 if spec.render_mode == "materials" else len(scene.grid)
+        need += min(BASIS_CACHE_BYTES, sum(per_case) * len(spec.designs) * len(spec.rolling_shutter)
+                    * K * subpixels * 4)
+    else:
+        per_case = [max(3 * MIN_SLICES_PER_WINDOW, math.ceil(v * capture_ms / spec.max_step_px)) if v > 0 else 1
+                    for v in speeds]
+    return MotionEstimate(float(need), int(sum(per_case) * len(spec.designs) * len(spec.rolling_shutter)), cases)
+
+
+def check_motion_memory(spec: MotionSpec, scene) -> MotionEstimate:
+    """Refuse, before any work, a motion run larger than the memory this process may use; its estimate."""
+    from ..pipeline import check_bytes
+
+    est = motion_estimate(spec, scene)
+    m = sopt.margin_px(spec.pixel_pitch_um, spec.f_number, scene.grid.edges_nm[-1])
+    w, h = spec.edge_size_px
+    slices = f", slices = {spec.slices} (their cached poses)" if spec.slices else ""
+    check_bytes(est.bytes, f"edge_size_px = [{w}, {h}] (+{m} px margin) at supersampling = {spec.supersampling} with "
+                f"{len(scene.grid)} bands{slices}",
+                "use a smaller edge, less supersampling, fewer bands" + (" or fewer slices" if slices else ""))
+    return est
 
 
 # -- the result rows ------------------------------------------------------------------------------
@@ -251,12 +306,21 @@ class MotionRow:
     speed_px_per_ms: float
     speed_mm_per_s: float
     rolling_shutter: bool
-    #: Colour breakup (noise-free captures, the motion alone): width over the threshold, the largest added
-    #: chroma (ΔE*ab), the width against the scene; the still capture's demosaicking false colour (ΔE*ab).
-    breakup_width_px: float
+    #: Colour breakup (noise-free captures): the spread of the channels' edge positions moved by the motion
+    #: alone (px, sub-pixel; None where an edge was not found), the largest added chroma (ΔE*ab), the spread
+    #: against the scene's edge; the still capture's demosaicking false colour (ΔE*ab).
+    breakup_width_px: float | None
     max_added_chroma: float
-    breakup_width_scene_px: float
+    breakup_width_scene_px: float | None
     false_colour_still: float
+    #: Each channel's edge moved by the motion (px along +x, the architecture's channel order), the channels'
+    #: mean 10–90 % rise (px: the blur, apart from the breakup), and the width over which the added chroma
+    #: exceeds ``breakup_threshold`` (px, in 0.5 px bins; before issue 34 the breakup width), against the still
+    #: capture and against the scene.
+    channel_edge_shift_px: tuple
+    edge_blur_px: float | None
+    breakup_threshold_width_px: float
+    breakup_threshold_width_scene_px: float
     #: Means over the noise seeds (ΔE*ab; cycles/pixel); None where a seed gave no value (no usable edge).
     scielab_delta_e: float | None
     cielab_delta_e: float | None
@@ -333,6 +397,7 @@ class Capture:
 
     noisy: tuple                     # ((camera rates (H, W, N), display XYZ (H, W, 3)), ...) per seed
     quiet_xyz: np.ndarray
+    quiet_rates: np.ndarray          # the noise-free twin's camera rates (H, W, N)
 
 
 @dataclass(frozen=True)
@@ -341,6 +406,8 @@ class StillReference:
 
     xyz: np.ndarray
     false_colour: float
+    #: Its channels' edge profiles (:func:`.metrics.channel_profiles`): ``(d (n,), profiles (n, N))``.
+    profiles: tuple
 
 
 @contextlib.contextmanager
@@ -431,18 +498,21 @@ def capture(setup: MotionSetup, dm: DesignModel, rates: np.ndarray, timings: dic
     with timed(timings, "capture"):
         noisy = tuple(capture_at_seed(setup, dm, rates, sd) for sd in setup.seeds)
     with timed(timings, "processing"):
-        quiet = noisy[0][1] if not setup.spec.noise else \
-            capture_at_seed(setup, dm, rates, setup.spec.seed, dm.quiet_camera)[1]
-    return Capture(noisy, quiet)
+        quiet = noisy[0] if not setup.spec.noise else \
+            capture_at_seed(setup, dm, rates, setup.spec.seed, dm.quiet_camera)
+    return Capture(noisy, quiet[1], quiet[0])
 
 
-def still_reference(setup: MotionSetup, dm: DesignModel, still_xyz: np.ndarray) -> StillReference:
-    """The noise-free still capture and its false colour within 2 px of the edge, against the camera's
-    conversion of the ideal image (√(Δa*² + Δb*²))."""
+def still_reference(setup: MotionSetup, dm: DesignModel, still_xyz: np.ndarray, still_rates: np.ndarray
+                    ) -> StillReference:
+    """The noise-free still capture, its false colour within 2 px of the edge, against the camera's
+    conversion of the ideal image (√(Δa*² + Δb*²)), and its channels' edge profiles."""
     h, w = setup.valid.shape
-    zone = mm.edge_zone(mm.edge_distance((h, w), setup.edge_columns), 2.0) & setup.valid
+    dist = mm.edge_distance((h, w), setup.edge_columns)
+    zone = mm.edge_zone(dist, 2.0) & setup.valid
     lab_s, lab_o = (xyz_to_lab(a, dm.conversion.display_white) for a in (still_xyz, dm.own_xyz))
-    return StillReference(still_xyz, float(np.hypot(*(lab_s - lab_o)[..., 1:].transpose(2, 0, 1))[zone].mean()))
+    return StillReference(still_xyz, float(np.hypot(*(lab_s - lab_o)[..., 1:].transpose(2, 0, 1))[zone].mean()),
+                          mm.channel_profiles(still_rates, dist, setup.valid))
 
 
 def score_capture(setup: MotionSetup, dm: DesignModel, still: StillReference, xyz: np.ndarray, zone: np.ndarray):
@@ -480,16 +550,28 @@ def score_case(setup: MotionSetup, dm: DesignModel, timing, still: StillReferenc
     d, chroma = mm.chroma_profile(cap.quiet_xyz, still.xyz, white, dist, 0.5, spec.zone_half_width_px, setup.valid)
     cam_rates, xyz = cap.noisy[0]
     d_s, chroma_s = mm.chroma_profile(xyz, dm.own_xyz, white, dist, 0.5, spec.zone_half_width_px, setup.valid)
+    # the channels' edges, to a fraction of a pixel: moved by the motion (against the still capture's) and
+    # against the scene's edge (d = 0), both located with the still capture's plateaus
+    d_e, still_prof = still.profiles
+    d_m, moving_prof = mm.channel_profiles(cap.quiet_rates, dist, setup.valid)
+    if d_m.shape != d_e.shape or not np.allclose(d_m, d_e):   # a rolling shutter moves the bins: re-bin the still
+        moving_prof = _rebin(d_m, moving_prof, d_e)
+    edge = mm.edge_channels(d_e, moving_prof, still_prof)
+    edge_scene = mm.edge_channels(d_e, moving_prof, still_prof, relative=False)
     scored = [score_capture(setup, dm, still, x, zone) for _, x in cap.noisy]
     per_seed = {k: [s[k] for s, _, _ in scored] for k in SEED_METRICS}
     _, scielab_map, (f, sfr) = scored[0]          # the first seed's map and curve are the ones drawn
     row = MotionRow(
         design=dm.design, speed_px_per_ms=v_px_per_ms, speed_mm_per_s=speed_mm_per_s(spec, v_px_per_ms),
         rolling_shutter=bool(rolling),
-        breakup_width_px=mm.breakup_width_px(d, chroma, spec.breakup_threshold),
+        breakup_width_px=finite_or_none(edge.separation_px),
         max_added_chroma=float(np.nanmax(np.append(chroma, 0.0))),
-        breakup_width_scene_px=mm.breakup_width_px(d_s, chroma_s, spec.breakup_threshold),
+        breakup_width_scene_px=finite_or_none(edge_scene.separation_px),
         false_colour_still=still.false_colour,
+        channel_edge_shift_px=tuple(finite_or_none(x) for x in edge.shift_px),
+        edge_blur_px=finite_or_none(edge.blur_px),
+        breakup_threshold_width_px=mm.breakup_threshold_width_px(d, chroma, spec.breakup_threshold),
+        breakup_threshold_width_scene_px=mm.breakup_threshold_width_px(d_s, chroma_s, spec.breakup_threshold),
         **{k: mean_or_none(v) for k, v in per_seed.items()},
         **{f"{k}_sd": sd_or_none(v) for k, v in per_seed.items()},
         scielab_delta_e_by_seed=tuple(per_seed["scielab_delta_e"]), seeds=setup.seeds, snr_db=dm.snr_db,
@@ -509,7 +591,7 @@ def sweep_speeds(setup: MotionSetup, dm: DesignModel, timing, rolling: bool, tim
         rates, slicing = render_at_speed(setup, dm, timing, v, timings)
         cap = capture(setup, dm, rates, timings)
         if still is None:   # the first speed is 0: the still reference
-            still = still_reference(setup, dm, cap.quiet_xyz)
+            still = still_reference(setup, dm, cap.quiet_xyz, cap.quiet_rates)
         if v not in setup.spec.speeds_px_per_ms:
             continue        # the still reference only
         with timed(timings, "metrics"):
@@ -555,6 +637,19 @@ def run_motion(spec: MotionSpec, scene, renderer: str = "mitsuba", log=None, kee
                            "white_luminance_cd_m2": setup.scene.illuminant.white_luminance_cd_m2,
                            "samples_per_degree": setup.samples_per_degree},
             "wall_s": time.perf_counter() - t_start}
+
+
+def finite_or_none(x) -> float | None:
+    return float(x) if x is not None and np.isfinite(x) else None
+
+
+def _rebin(d_from: np.ndarray, profiles: np.ndarray, d_to: np.ndarray) -> np.ndarray:
+    """Profiles on bins ``d_from`` read at ``d_to`` (linear; NaN outside)."""
+    out = np.full((d_to.size, profiles.shape[1]), np.nan)
+    for k in range(profiles.shape[1]):
+        ok = np.isfinite(profiles[:, k])
+        out[:, k] = np.interp(d_to, d_from[ok], profiles[ok, k], left=np.nan, right=np.nan)
+    return out
 
 
 def mean_or_none(values):

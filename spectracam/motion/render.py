@@ -16,8 +16,9 @@ band radiance:
 
 :func:`integrate` places slices in time (``t = 0`` the middle of the capture): slice j at
 ``t_j = j·Δt`` with ``Δt = max_step_px / (fastest image speed)`` so the image moves at most
-``max_step_px`` between slices (or a set number over the capture); for a uniform translation every
-speed then samples the same positions and shares their renders. Slices share the sample budget:
+``max_step_px`` between slices (or a set number over the capture), halved as often as needed for the
+shortest window to hold :data:`MIN_SLICES_PER_WINDOW` slices; for a uniform translation every
+speed then samples the same positions (a lattice of ``max_step_px / 2^k``) and shares their renders. Slices share the sample budget:
 ``samples_per_subpixel // slices`` each (at least 1). Each channel's window — per row with a rolling
 shutter — weights the slices by the time of their cell ``[t_j − Δt/2, t_j + Δt/2]`` inside it (the
 midpoint rule of ``∫ rate dt``), and the weighted sum divided by the window's length is the channel's
@@ -50,6 +51,13 @@ from .motion import Motion, pose_key, pose_matrix
 from .timing import CaptureTiming
 
 RENDER_MODES = ("materials", "bands")
+#: Fewest slices in the shortest exposure window (issue 34).  A window's cells at its two ends are partly
+#: inside it, and each is rendered at its cell's middle, so the window's mean pose is off by up to
+#: Δt²/(4·window) of time: with a few slices per window that is below 1/64 of the window, and a channel's
+#: edge (breakup measured to 0.01 px) is where the window's middle puts it.  Before, at 0.0025 px/ms a
+#: 40 ms window could hold one 100 ms cell: its edge was 10 ms (25 % of the breakup) off.  The step is
+#: halved, not set, so the positions stay on the shared lattice of ``max_step_px``.
+MIN_SLICES_PER_WINDOW = 4
 #: Rendered poses kept for reuse by the next capture at the same speed (the designs share their slice
 #: positions), least recently used dropped first: enough for every pose of the default run (161 of
 #: 2.6 MB), and a bound so that a run of 100 000 slices does not grow without end.
@@ -276,6 +284,9 @@ def slice_times(motion: Motion, timing: CaptureTiming, geometry: CameraGeometry,
     if speed <= 0 or hi - lo <= 0:
         return np.array([0.0]), max(hi - lo, 1e-12)
     dt = max_step_px / speed
+    shortest = float(np.min(timing.duration_s))
+    if shortest > 0 and dt > shortest / MIN_SLICES_PER_WINDOW:   # halve the step: its positions stay shared
+        dt /= 2.0 ** math.ceil(math.log2(dt * MIN_SLICES_PER_WINDOW / shortest))
     j = np.arange(int(math.floor(lo / dt + 0.5)), int(math.floor(hi / dt + 0.5)) + 1)
     return j * dt, dt
 

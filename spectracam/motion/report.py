@@ -154,8 +154,8 @@ def figure_curves(result, out: Path) -> list[Path]:
     speeds = sorted({r.speed_px_per_ms for r in rows})
     seeds = len(rows[0].seeds)
     mean = f" (mean over {seeds} noise seeds)" if spec["noise"] and seeds > 1 else ""
-    panels = [("breakup_width_px", f"(a) colour-breakup width, px\n(chroma added by the motion > "
-               f"{spec['breakup_threshold']:g} ΔE*ab; noise-free captures)"),
+    panels = [("breakup_width_px", "(a) colour breakup, px: spread of the channels' edges\n(moved by the motion, "
+               "sub-pixel; noise-free captures)"),
               ("scielab_delta_e", f"(b) S-CIELAB ΔE*ab at the edge{mean}\n(against the camera's own still capture)"),
               ("cielab_delta_e", f"(c) CIELAB ΔE*ab at the edge{mean}\n(against the camera's own still capture)")]
     fig, axes = plt.subplots(2, 2, figsize=(13, 10), constrained_layout=True)
@@ -355,8 +355,8 @@ def _tables(result) -> list[str]:
     rows = result["rows"]
     speeds = sorted({r.speed_px_per_ms for r in rows})
     out = []
-    for key in ("scielab_delta_e", "cielab_delta_e", "breakup_width_px", "false_colour_still", "mtf50_cy_per_px",
-                "scielab_delta_e_scene"):
+    for key in ("scielab_delta_e", "cielab_delta_e", "breakup_width_px", "edge_blur_px", "breakup_threshold_width_px",
+                "false_colour_still", "mtf50_cy_per_px", "scielab_delta_e_scene"):
         for rolling in sorted({r.rolling_shutter for r in rows}):
             out += [f"**{key}** ({'rolling' if rolling else 'global'} shutter)", "",
                     "| design | SNR dB | " + " | ".join(f"{v:g}" for v in speeds) + " px/ms |",
@@ -416,8 +416,13 @@ def _setup(result) -> list[str]:
             + f"; {spec['samples_per_subpixel']} samples per sub-pixel per capture shared by its slices (at least 1 "
             f"each), {spec['supersampling']}×{spec['supersampling']} sub-pixels per pixel; render mode "
             f"`{spec['render_mode']}`.",
-            f"* Breakup width: the chroma the camera adds (against its own rendering of the still scene), averaged "
-            f"along the edge in 0.5 px bins, above {spec['breakup_threshold']:g} ΔE*ab. S-CIELAB and CIELAB: mean "
+            "* Breakup (`breakup_width_px`): each camera channel's edge profile (averaged along the slanted edge in "
+            "0.25 px bins, normalised by the still capture's plateaus) is located where it crosses 50 %; the "
+            "breakup is the spread (max − min) of the channels' shifts from their still positions — sub-pixel, "
+            "v·(t_last − t_first) for frames in sequence (t: each window's middle), 0 for one shared window. Blur "
+            "(`edge_blur_px`): the channels' mean 10–90 % rise. `breakup_threshold_width_px`: the distance over "
+            f"which the chroma the motion adds (0.5 px bins) exceeds {spec['breakup_threshold']:g} ΔE*ab (blur and "
+            "demosaicking count in it; it cannot read below 2 bins). S-CIELAB and CIELAB: mean "
             f"within {spec['zone_half_width_px']:g} px of the edge, against the design's own still capture (the "
             f"`*_scene` columns: against the scene); S-CIELAB at {result['parameters']['samples_per_degree']:.1f} "
             "samples/degree.",

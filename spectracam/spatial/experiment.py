@@ -163,9 +163,19 @@ class SpatialSpec(Spec):
     display_pixel_pitch_mm: float = 25.4 / 120
     seed: int = 0
 
+    def _number_list(self, name: str, lo: float, allowed: str, **kw) -> None:
+        """A non-empty list of numbers ≥ ``lo``; a single number (``--set olpf_separations_px=1``) or any other
+        non-list is refused by name before its length is asked for (issue 34: it was a TypeError)."""
+        v = getattr(self, name)
+        if not isinstance(v, tuple) or not v:
+            example = [float(x) for x in type(self).__dataclass_fields__[name].default]   # the default
+            raise self.error(name, f"must be a non-empty list of {allowed}, e.g. {example}", list(v)
+                             if isinstance(v, tuple) else v)
+        self.numbers(name, len(v), lo, **kw)
+
     def validate(self) -> None:
-        self.numbers("pixel_pitches_um", len(self.pixel_pitches_um), 0.1, lo_open=True, unit="µm")
-        self.numbers("f_numbers", len(self.f_numbers), 0.5, unit="")
+        self._number_list("pixel_pitches_um", 0.1, "pixel pitches > 0.1 µm", lo_open=True, unit="µm")
+        self._number_list("f_numbers", 0.5, "f-numbers ≥ 0.5", unit="")
         for name, allowed in (("targets", SPATIAL_TARGETS.names), ("demosaics", DEMOSAIC_METHODS.names)):
             v = getattr(self, name)
             if not isinstance(v, tuple) or not v or any(x not in allowed for x in v):
@@ -181,11 +191,12 @@ class SpatialSpec(Spec):
                              list(self.designs) if isinstance(self.designs, tuple) else self.designs)
         for d in self.designs:
             split_design(d, "designs")
-        self.numbers("olpf_separations_px", len(self.olpf_separations_px), 0.0, unit="px")
-        if not self.olpf_separations_px or any(x > sopt.MARGIN_PX / 2 for x in self.olpf_separations_px):
+        self._number_list("olpf_separations_px", 0.0, f"separations from 0 to {sopt.MARGIN_PX / 2:g} px (0: no filter)",
+                          unit="px")
+        if any(x > sopt.MARGIN_PX / 2 for x in self.olpf_separations_px):
             raise self.error("olpf_separations_px", f"must be a non-empty list of separations from 0 to "
                              f"{sopt.MARGIN_PX / 2:g} px (0: no filter)", list(self.olpf_separations_px))
-        self.numbers("misregistrations_px", len(self.misregistrations_px), 0.0, unit="px")
+        self._number_list("misregistrations_px", 0.0, f"misregistrations from 0 to {sopt.MARGIN_PX / 2:g} px", unit="px")
         if any(m > sopt.MARGIN_PX / 2 for m in self.misregistrations_px):
             raise self.error("misregistrations_px", f"must be at most {sopt.MARGIN_PX / 2:g} px",
                              list(self.misregistrations_px))

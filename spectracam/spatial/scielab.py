@@ -31,8 +31,10 @@ maximum, which makes its Gaussians about 2.1× wider than the paper's; we do not
 """
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
-from scipy import ndimage
+from scipy import fft, ndimage
 
 from ..metrics import delta_e as _delta_e
 from ..metrics import xyz_to_lab as _xyz_to_lab
@@ -201,6 +203,47 @@ def scielab_filter(xyz, samples_per_degree: float, *, support_deg: float = 1.0, 
             acc += wi * ndimage.correlate1d(tmp, gi, axis=1, mode=boundary)
         out[..., c] = acc
     return np.linalg.solve(m, out.reshape(-1, 3).T).T.reshape(out.shape)
+
+
+@lru_cache(maxsize=8)
+def _kernel_spectra(spd: float, shape: tuple[int, int], dtype: str) -> np.ndarray:
+    """``(shape[0], shape[1]//2 + 1, 3)``: the real FFTs of the three kernels of :func:`scielab_kernels` zero-padded
+    to ``shape`` (memoised: every capture of one scene is filtered at one size)."""
+    k = scielab_kernels(spd)
+    out = np.stack([fft.rfft2(kk.astype(dtype), s=shape) for kk in k], axis=-1)
+    out.flags.writeable = False
+    return out
+
+
+def scielab_filter_fft(xyz, samples_per_degree: float, dtype=np.float64) -> np.ndarray:
+    """:func:`scielab_filter` (reflecting boundary, 1° support, the reference opponent matrix) computed as one FFT
+    convolution per opponent channel with the full 2-D kernels of :func:`scielab_kernels`, in ``dtype``.
+
+    The image is extended by the kernels' reach with ``numpy.pad(mode="symmetric")`` — scipy.ndimage's "reflect",
+    so the result equals :func:`scielab_filter`'s to the rounding of ``dtype`` (float64: 1e-15 of the largest
+    value; float32: about 1e-6, which moves a ΔE of 10 by up to 1e-4; ``tests/test_scielab_scores.py``).  On a
+    640×480 image, with the kernels' spectra memoised, about 2× faster in float64 (3× in float32) than the 14
+    row and column passes, which is why the chart scores use it (in float64).
+
+    Examples
+    --------
+    >>> x = np.random.default_rng(0).random((30, 40, 3))
+    >>> bool(np.allclose(scielab_filter_fft(x, 20.0, np.float64), scielab_filter(x, 20.0), rtol=0, atol=1e-12))
+    True
+    """
+    img = np.asarray(xyz, dtype=float)
+    if img.ndim != 3 or img.shape[-1] != 3:
+        raise ValueError(f"S-CIELAB: expected an XYZ image of shape (rows, cols, 3), got {img.shape}")
+    spd = _check_spd(samples_per_degree)
+    r = _support(spd, 1.0).size // 2
+    dt = np.dtype(dtype)
+    opp = np.pad((img @ XYZ_TO_OPPONENT.T).astype(dt), ((r, r), (r, r), (0, 0)), mode="symmetric")
+    h, w = opp.shape[:2]
+    shape = (fft.next_fast_len(h, real=True), fft.next_fast_len(w, real=True))
+    spectrum = fft.rfft2(opp, s=shape, axes=(0, 1))
+    spectrum *= _kernel_spectra(spd, shape, dt.name)
+    out = fft.irfft2(spectrum, s=shape, axes=(0, 1))[2 * r:h, 2 * r:w]
+    return np.linalg.solve(XYZ_TO_OPPONENT, out.reshape(-1, 3).T.astype(float)).T.reshape(out.shape)
 
 
 def scielab(xyz1, xyz2, white_xyz, samples_per_degree: float, delta_e: str = "cie1976", *,

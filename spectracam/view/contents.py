@@ -102,6 +102,11 @@ def find_contents(directory: Path) -> Contents:
                 results = json.loads(p.read_text())
             except (OSError, ValueError) as e:
                 raise SpectracamError(f"file = {str(p)!r}: is not JSON ({e})") from None
+            if p.name == "report.json" and not isinstance(results, dict):   # the page reads its tables by name
+                kind = {list: "an array", str: "a string", bool: "a boolean", type(None): "null"}.get(type(results),
+                                                                                                    "a number")
+                raise SpectracamError(f"file = {str(p)!r}: is not a spectracam report (a JSON object of tables is "
+                                      f"expected; this file holds {kind})")
             if isinstance(results, dict):
                 c.parameters = results.get("parameters") or c.parameters
     c.kind = _kind_of(d, results if isinstance(results, dict) else None)

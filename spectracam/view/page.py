@@ -275,9 +275,11 @@ def build_page(c: Contents, cases: list[Case]) -> str:
         if p.name == "report.json":
             try:
                 report = json.loads(p.read_text())
+                if not isinstance(report, dict):   # a case's report.json that is not one: its text is still shown
+                    raise TypeError("not a JSON object")
                 both = both_ways_table(report)
                 table = patch_table(report)
-            except (ValueError, KeyError, TypeError, IndexError):
+            except (ValueError, KeyError, TypeError, IndexError, AttributeError):
                 both = table = ""
             if both:
                 body += [f"<h2>two cameras ({html.escape(str(p.relative_to(c.directory)))})</h2>", both]
