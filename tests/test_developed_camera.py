@@ -281,6 +281,7 @@ def test_simulate_reports_both_cameras(tmp_path):
 
     table = both_ways_table(report)
     assert "oracle (told the light)" in table and f"{bw['developed']['delta_e_mean']:.2f}" in table
+    assert "S-CIELAB" in table and f"{bw['developed']['s_cielab_mean']:.2f}" in table
 
 
 def test_a_sweep_over_the_white_balance(tmp_path):

@@ -152,20 +152,22 @@ def test_two_different_tuning_zero_entries_are_refused(tmp_path):
 
 
 # ---------------------------------------------------------------- the simulated neutral
-def test_constant_curves_give_the_ratio_of_their_gains(tmp_path):
-    """A camera whose quantum efficiencies are constant (0.3, 0.5, 0.2) counts the same photons in every channel:
-    its neutral is (0.6, 1, 0.4) under any light."""
+def test_constant_curves_are_refused_as_no_colour_camera(tmp_path):
+    """A camera whose quantum efficiencies are constant (0.3, 0.5, 0.2) counts the same photons in every channel: its
+    neutral would be (0.6, 1, 0.4) under any light, but its channels are proportional, so no conversion can make a
+    colour of them (issue 34: refused in one line, condition number ∞, instead of a LinAlgError later). The neutral
+    arithmetic itself is held to colour-science's integral by the next test."""
     from pathlib import Path
 
+    from spectracam.errors import ConfigError
     from spectracam.scene import parse_scene, resolve_curve_files
 
     p = tmp_path / "flat.csv"
     p.write_text("wl,R,G,B\n" + "\n".join(f"{w:g},0.3,0.5,0.2" for w in np.arange(380, 781, 5.0)) + "\n")
-    scene = parse_scene(resolve_curve_files({"filters": {"camera_file": str(p), "camera_unit": "electrons_per_photon",
-                                                         "qe": "flat"}}, Path(tmp_path)))
-    for ill in (vw.daylight_spec(5200.0), IlluminantSpec(kind="blackbody", temperature_K=3000.0),
-                IlluminantSpec(kind="cie", temperature_K=None, name="FL2")):
-        np.testing.assert_allclose(simulated_neutral(scene, ill), [0.6, 1.0, 0.4], rtol=1e-6)
+    with pytest.raises(ConfigError, match="condition number ∞") as e:
+        parse_scene(resolve_curve_files({"filters": {"camera_file": str(p), "camera_unit": "electrons_per_photon",
+                                                     "qe": "flat"}}, Path(tmp_path)))
+    assert "\n" not in str(e.value)
 
 
 @pytest.mark.parametrize("camera", ["Canon EOS 5D Mark II (rawtoaces)", "Nikon 5100 (NPL)"])

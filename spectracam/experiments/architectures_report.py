@@ -329,8 +329,10 @@ def _spacetime_markdown(results: dict) -> list[str]:
     lines += ["", "## Time", "",
               f"The motion experiment's edge moving across the sensor, global shutter, the paper's noise, light set so "
               f"that cfa/single needs 28 ms (white {tp['white_luminance_cd_m2']:.1f} cd/m²), renderer {tp['renderer']} "
-              f"({time_['wall_s']:.1f} s). Breakup: width over which the chroma added to the design's own noise-free "
-              "still capture exceeds 2 ΔE*ab (noise-free captures: motion alone). S-CIELAB (motion): the noisy capture "
+              f"({time_['wall_s']:.1f} s). Breakup: the spread of the colour channels' edge positions (each where its "
+              "profile across the edge crosses 50 %, sub-pixel) beyond their spread in the design's own noise-free "
+              "still capture (noise-free captures: motion alone; blur does not move a 50 % point, docs/metrics.md). "
+              "S-CIELAB (motion): the noisy capture "
               "against that still capture. False colour (still): the still capture against the camera's rendering of "
               "the ideal image, within 2 px of the edge (demosaicking).", "",
               "| design | capture ms | speed px/ms | breakup px | S-CIELAB (motion) | false colour (still) | MTF50 |",

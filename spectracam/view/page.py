@@ -177,6 +177,7 @@ def patch_table(report: dict) -> str:
 
 #: The rows of the oracle / developed table (report.json's ``both_ways``; docs/metrics.md).
 BOTH_WAYS_ROWS = (("delta_e_mean", "mean ΔE*ab per pixel", 2), ("delta_e_p95", "95th percentile ΔE*ab", 2),
+                  ("s_cielab_mean", "mean S-CIELAB (the eye's filters)", 2),
                   ("delta_e2000_mean", "mean CIEDE2000", 2), ("held_out_delta_e", "held-out ΔE*ab (noise-free)", 2),
                   ("awb_recovery_deg", "white's recovery error (°)", 2),
                   ("awb_reproduction_deg", "white's reproduction error (°)", 2),
