@@ -3,7 +3,7 @@
 Implements and extends Catrysse, Wandell & El Gamal, "Comparative analysis of color
 architectures for image sensors", Proc. SPIE 3650 (1999).
 """
-__version__ = "0.1.0"
+from ._version import __version__  # noqa: E402
 
 from .camera import CameraSpec  # noqa: E402
 from .capture import RawCapture  # noqa: E402

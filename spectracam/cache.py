@@ -13,7 +13,7 @@ import json
 import os
 from pathlib import Path
 
-from . import __version__
+from ._version import __version__
 from .io.exr import read_radiance_exr, write_radiance_exr
 from .render import render
 

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import click
 
-from . import __version__
+from ._version import __version__
 from .cli_options import (VIEW_REQUEST, ShippedFile, as_given, camera_options, check_writable, flag_overrides,
                           output_option, processing_options, progress_log, quiet_option, renderer_option, set_option,
                           view_option)

@@ -104,3 +104,26 @@ def test_right_types_still_work(small):
                               design="cfa/single")
     assert spectracam.score(raw2, scene, scene.processing).summary.delta_e_mean > 0
     assert spectracam.load_scene(README.parent / "scenes" / "d65.toml", ["image.width=64"]).image.width == 64
+
+
+def test_the_version_lives_below_the_stages_and_matches_the_package_metadata():
+    """Stages import the version from ``spectracam._version`` (no import back up to the package ``__init__``, issue
+    35), and it equals pyproject.toml's, which the wheel's metadata carries."""
+    import ast
+    import tomllib
+    from pathlib import Path
+
+    import spectracam
+    from spectracam._version import __version__
+
+    root = Path(spectracam.__file__).parent
+    assert spectracam.__version__ == __version__
+    with open(root.parent / "pyproject.toml", "rb") as f:
+        assert tomllib.load(f)["project"]["version"] == __version__
+    upward = []
+    for path in root.rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.level > 0 and node.module is None \
+                    and any(a.name == "__version__" for a in node.names):
+                upward.append(str(path.relative_to(root)))
+    assert not upward, f"import __version__ from spectracam._version instead: {upward}"

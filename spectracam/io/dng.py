@@ -100,7 +100,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import __version__
+from .._version import __version__
 from ..architecture import MosaicLayout, PlanesLayout
 from ..capture import RawCapture
 from ..errors import SpectracamError

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import __version__
+from .._version import __version__
 from ..architecture import MosaicLayout, PlanesLayout
 from ..camera import CameraSpec
 from ..capture import RawCapture

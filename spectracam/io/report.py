@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import __version__
+from .._version import __version__
 from ..color import adaptation_matrix, display_rgb_to_xyz
 from ..score import ChartScore
 from .exr import write_exr

@@ -292,7 +292,7 @@ def write_case_images(result, out: Path, command: str) -> list[Path]:
     from ..color import display_rgb_to_xyz
     from ..io.exr import write_exr
     from ..io.report import display_chromaticities, write_png
-    from .. import __version__
+    from .._version import __version__
 
     spec = result["parameters"]["spatial"]
     display = result["parameters"]["scene"]["processing"]["display"]

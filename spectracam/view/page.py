@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import __version__
+from .._version import __version__
 from ..errors import SpectracamError
 from ..io.report import DELTA_E_VMAX  # the ΔE*ab colour scale of the scores' delta_e.png
 from .cases import CHANNEL_COLOURS, Case, load_case
