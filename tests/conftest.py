@@ -50,3 +50,15 @@ def mitsuba_5000(scene_5000):
 def patch_means(cube, masks):
     """(24, n_bands) mean radiance of each patch's masked pixels."""
     return np.stack([cube.radiance[m].mean(axis=0, dtype=np.float64) for m in masks])
+
+
+def assert_gradient_is_central_differences(problem, x, g, indices, rel: float = 1e-4, step=None) -> None:
+    """``g`` (the design problem's gradient at ``x``) equals central differences of its objective at each index,
+    within ``rel`` of the difference (floor 1e-3); the step is ``step`` or 1e-4 of the variable (at least 1e-4)."""
+    for i in indices:
+        h = step if step is not None else 1e-4 * max(1.0, abs(x[i]))
+        xp, xm = x.copy(), x.copy()
+        xp[i] += h
+        xm[i] -= h
+        fd = (problem.value_and_gradient(xp)[0] - problem.value_and_gradient(xm)[0]) / (2 * h)
+        assert abs(g[i] - fd) <= rel * max(abs(fd), 1e-3), (i, g[i], fd)

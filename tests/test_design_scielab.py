@@ -7,6 +7,7 @@ import json
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from conftest import assert_gradient_is_central_differences
 
 from spectracam.architecture import MosaicLayout, make_architecture
 from spectracam.camera import camera_responsivities
@@ -204,13 +205,7 @@ def test_s_cielab_objective_is_the_expected_scielab_its_gradient_exact_and_it_lo
     want_de = np.mean([tnumpy(k.delta_e["tcs14"]).mean() for k in r])
     assert aux == pytest.approx(want_sc, rel=1e-12) and v == pytest.approx(want_sc, rel=1e-12)   # Gaussians: no penalty
     assert de.value_and_gradient(x)[2] == pytest.approx(want_de, rel=1e-12) and want_sc < want_de
-    for i in (0, 2, x.size - 1):
-        h = 1e-4 * max(1.0, abs(x[i]))
-        xp, xm = x.copy(), x.copy()
-        xp[i] += h
-        xm[i] -= h
-        fd = (sc.value_and_gradient(xp)[0] - sc.value_and_gradient(xm)[0]) / (2 * h)
-        assert abs(g[i] - fd) <= 1e-4 * max(abs(fd), 1e-3), (i, g[i], fd)
+    assert_gradient_is_central_differences(sc, x, g, (0, 2, x.size - 1))
     opt = optimise(sc, max_iterations=4)
     assert opt.objective < v - 0.1 and opt.training_delta_e == pytest.approx(opt.objective)
 
