@@ -1,3 +1,3 @@
-from .cli import main
+from spectracam.cli import main
 
 main()

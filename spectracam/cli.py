@@ -9,11 +9,11 @@ from pathlib import Path
 
 import click
 
-from ._version import __version__
-from .cli_options import (VIEW_REQUEST, ShippedFile, as_given, camera_options, check_writable, flag_overrides,
+from spectracam._version import __version__
+from spectracam.experiments.options import (VIEW_REQUEST, ShippedFile, as_given, camera_options, check_writable, flag_overrides,
                           output_option, processing_options, progress_log, quiet_option, renderer_option, set_option,
                           view_option)
-from .errors import ConfigError, SpectracamError
+from spectracam.core.errors import ConfigError, SpectracamError
 
 
 def _interrupted(signum, frame):
@@ -23,15 +23,15 @@ def _interrupted(signum, frame):
     import os
     import signal
 
-    from .io.files import remove_unfinished
-    from .processes import is_main, terminate_children
+    from spectracam.core.files import remove_unfinished
+    from spectracam.core.processes import is_main, terminate_children
 
     if not is_main():  # a forked worker: its parent cleans up and reports
         os._exit(128 + signum)
     signal.signal(signum, signal.SIG_IGN)  # a second signal must not interrupt the cleanup
     terminate_children()
     remove_unfinished()
-    from .progress import on_terminal
+    from spectracam.core.progress import on_terminal
 
     if on_terminal():  # a progress bar may be drawn on this line: clear it
         sys.stderr.write("\r\x1b[K")
@@ -41,7 +41,7 @@ def _interrupted(signum, frame):
 
 
 class _Group(click.Group):
-    """Every command's outputs appear together or not at all (:func:`spectracam.io.files.staged`).
+    """Every command's outputs appear together or not at all (:func:`spectracam.core.files.staged`).
     Bad input is one line and exit status 2; a fault of the environment (a disk full, a directory
     not writable) one line and exit status 1; SIGINT, SIGTERM and SIGHUP remove every temporary
     file and exit with 128 + the signal's number."""
@@ -51,7 +51,7 @@ class _Group(click.Group):
         The signal handlers are installed first, so a signal during the imports is handled too."""
         import signal
 
-        from .processes import mark_main
+        from spectracam.core.processes import mark_main
 
         mark_main()
         for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
@@ -71,12 +71,12 @@ class _Group(click.Group):
 
     #: Commands that live with their stage, imported only when asked for (scipy, Mitsuba scenes):
     #: the spatial comparison (issue 13) and motion (issue 14).
-    LAZY = {"spatial": ("spectracam.spatial.command", "spatial_cmd"),
-            "motion": ("spectracam.motion.command", "motion_cmd")}
+    LAZY = {"spatial": ("spectracam.experiments.spatial.command", "spatial_cmd"),
+            "motion": ("spectracam.experiments.motion.command", "motion_cmd")}
 
     def format_epilog(self, ctx, formatter):
         """The shipped files a file argument may name, listed as this installation has them."""
-        from .cli_options import shipped_summary
+        from spectracam.experiments.options import shipped_summary
 
         with formatter.section("Shipped files"):
             formatter.write_text(shipped_summary())
@@ -95,7 +95,7 @@ class _Group(click.Group):
     def invoke(self, ctx):
         import signal
 
-        from .io.files import stage_outputs, staged
+        from spectracam.core.files import stage_outputs, staged
 
         for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
             signal.signal(sig, _interrupted)
@@ -104,7 +104,7 @@ class _Group(click.Group):
                 try:
                     rv = super().invoke(ctx)
                 except BaseException:
-                    from .progress import close_bars
+                    from spectracam.core.progress import close_bars
 
                     close_bars()  # the error's one line starts a line of its own
                     raise
@@ -137,9 +137,9 @@ class _Group(click.Group):
 def _write_page(out_dir: Path, quiet: bool, outputs: tuple[list, list]) -> None:
     """``--view``: write DIR/index.html once the command's outputs are in place under their names; should
     it fail (a full disk, a signal), the outputs the command just wrote are removed too
-    (:func:`spectracam.io.files.staged_after`)."""
-    from .io.files import staged_after
-    from .view import write_view
+    (:func:`spectracam.core.files.staged_after`)."""
+    from spectracam.core.files import staged_after
+    from spectracam.view import write_view
 
     with staged_after(outputs):
         write_view(out_dir, log=progress_log(quiet))  # its log says what it wrote
@@ -159,9 +159,9 @@ def _given(flag: str, name: str, value) -> str:
 
 def _scene(data: dict, source: str, config_file=None, flags=(), sets=()):
     """A Scene from a scene dict with the config file's camera tables, the flags and ``--set``."""
-    from .camera import CAMERA_TABLES
-    from .overrides import apply_overrides
-    from .scene import Scene, parse_scene, read_toml, resolve_curve_files
+    from spectracam.camera import CAMERA_TABLES
+    from spectracam.pipeline.overrides import apply_overrides
+    from spectracam.pipeline.scene_file import Scene, parse_scene, read_toml, resolve_curve_files
 
     here = Path(source).parent if Path(source).is_file() else Path.cwd()  # where file paths are relative to
     data = resolve_curve_files(data, here)
@@ -195,11 +195,11 @@ def render_cmd(scene_file: Path, out_dir: Path, renderer: str, sets, quiet: bool
 
     SCENE_FILE is a path, or the name of a scene shipped with spectracam (d65, blackbody_3000K …
     blackbody_7000K, cfi99, mondrian, dead_leaves, photo), with or without .toml."""
-    from .io.exr import write_radiance_exr
-    from .render import render
-    from .scene import read_toml
+    from spectracam.io.exr import write_radiance_exr
+    from spectracam.render import render
+    from spectracam.pipeline.scene_file import read_toml
 
-    from .pipeline import check_memory
+    from spectracam.pipeline import check_memory
 
     scene = _scene(read_toml(scene_file, "scene file"), str(scene_file), sets=sets)  # validated before any work
     check_memory(scene)
@@ -213,13 +213,13 @@ def render_cmd(scene_file: Path, out_dir: Path, renderer: str, sets, quiet: bool
 
 
 def _write_capture(out_dir: Path, raw, scene) -> list[Path]:
-    from .io.dng import write_dng
-    from .io.exr import write_raw_exr
-    from .reference import ChartReference
+    from spectracam.io.dng import write_dng
+    from spectracam.io.exr import write_raw_exr
+    from spectracam.scene.reference import ChartReference
 
     # every layout has a DNG: a CFA mosaic, or LinearRaw for three planes (prism, field-sequential); an ADC of
     # more bits than a DNG reader takes is in raw.exr only, and the command says so
-    from .io.dng import DNG_MAX_BITS
+    from spectracam.io.dng import DNG_MAX_BITS
 
     paths = [write_raw_exr(out_dir / "raw.exr", raw)]
     if raw.camera.sensor.adc_bits > DNG_MAX_BITS:
@@ -228,12 +228,12 @@ def _write_capture(out_dir: Path, raw, scene) -> list[Path]:
         return paths
     reference, neutral = ChartReference.of(scene), None
     if not scene.processing.told_the_light and raw.scene is not None:   # AsShotNeutral: the camera's own white
-        from .processing import develop
-        from .score import camera_rates
+        from spectracam.processing import develop
+        from spectracam.evaluation.score import camera_rates
 
         target = None
         if scene.target.textured:
-            from .reference import TargetReference
+            from spectracam.scene.reference import TargetReference
 
             target = TargetReference.of(scene)
         neutral = develop(camera_rates(raw, scene.processing), raw, reference, scene.processing, target).neutral
@@ -256,9 +256,9 @@ def _write_capture(out_dir: Path, raw, scene) -> list[Path]:
 def capture_cmd(radiance_file: Path, out_dir: Path, arch, exposure, config_file, seed, white, units, sets, quiet):
     """Capture a spectral RADIANCE_FILE (spectracam's, or a Fichet-layout EXR from any tool) with a simulated
     sensor; write DIR/raw.exr and DIR/raw.dng."""
-    from .io.exr import read_radiance_exr
-    from .metering import parse_white
-    from .pipeline import capture, capture_spectral_image, check_cube_matches, stand_in_scene
+    from spectracam.io.exr import read_radiance_exr
+    from spectracam.sensor.metering import parse_white
+    from spectracam.pipeline import capture, capture_spectral_image, check_cube_matches, stand_in_scene
 
     white_spec = parse_white(white) if white is not None else None  # checked before the file is read
     cube, _ = read_radiance_exr(radiance_file, units)  # checked as it is read
@@ -269,7 +269,7 @@ def capture_cmd(radiance_file: Path, out_dir: Path, arch, exposure, config_file,
         scene = _scene(cube.metadata["scene"], str(radiance_file), config_file, flags, sets)
         check_cube_matches(cube, scene, str(radiance_file))
     else:  # a spectral image from another tool: the stand-in scene holds the camera and the conversion's chart
-        from .pipeline import STAND_IN_SCENE
+        from spectracam.pipeline import STAND_IN_SCENE
 
         data = _scene(dict(STAND_IN_SCENE), str(radiance_file), config_file, flags, sets).to_dict()
         data.pop("wavelengths")  # the image's own bands
@@ -294,9 +294,9 @@ def capture_cmd(radiance_file: Path, out_dir: Path, arch, exposure, config_file,
 
 def _write_display(out_dir: Path, raw, scene) -> list[Path]:
     """rendered.exr and rendered.png of a capture without a chart truth (no score)."""
-    from .io.report import srgb_preview, write_display_exr, write_png
-    from .reference import ChartReference
-    from .score import display_rgb
+    from spectracam.io.report import srgb_preview, write_display_exr, write_png
+    from spectracam.scene.reference import ChartReference
+    from spectracam.evaluation.score import display_rgb
 
     rgb, M = display_rgb(raw, ChartReference.of(scene), scene.processing)
     params = {"scene": None, "conversion_fitted_on": scene.to_dict(), "camera": raw.camera.to_dict(),
@@ -308,13 +308,13 @@ def _write_display(out_dir: Path, raw, scene) -> list[Path]:
 
 
 def _score_and_write(raw, scene, out_dir: Path, log, cube=None):
-    from .io.report import write_score_outputs
-    from .pipeline import both_ways, score
+    from spectracam.io.report import write_score_outputs
+    from spectracam.pipeline import both_ways, score
 
     result = score(raw, scene)
     result = dataclasses.replace(result, both_ways=both_ways(raw, scene, cube, result))   # report.json's two blocks
     if scene.target.textured:
-        from .io.report import write_target_outputs
+        from spectracam.io.report import write_target_outputs
 
         paths = write_target_outputs(out_dir, result)
         h, t = result.held_out, result.training
@@ -364,8 +364,8 @@ def _log_both_ways(bw: dict, log) -> None:
 @view_option
 def score_cmd(raw_file, scene_file, out_dir, demosaic, display, adaptation, delta_e, gamut_clip, sets, quiet):
     """Render RAW_FILE on a display and score it: rendered.exr/.png, delta_e.png, report.json/.csv."""
-    from .io.exr import read_raw_exr
-    from .scene import read_toml
+    from spectracam.io.exr import read_raw_exr
+    from spectracam.pipeline.scene_file import read_toml
 
     raw = read_raw_exr(raw_file)
     if scene_file is not None:
@@ -396,14 +396,14 @@ def simulate_cmd(scene_file, out_dir, renderer, arch, exposure, config_file, see
 
     SCENE_FILE is a path, or the name of a scene shipped with spectracam (d65, blackbody_3000K …
     blackbody_7000K, cfi99, mondrian, dead_leaves, photo), with or without .toml."""
-    from .io.exr import write_radiance_exr
-    from .pipeline import capture
-    from .render import render
-    from .scene import read_toml
+    from spectracam.io.exr import write_radiance_exr
+    from spectracam.pipeline import capture
+    from spectracam.render import render
+    from spectracam.pipeline.scene_file import read_toml
 
     flags = flag_overrides(arch=arch, exposure=exposure, demosaic=demosaic, display=display, adaptation=adaptation,
                             delta_e=delta_e, gamut_clip=gamut_clip)
-    from .pipeline import check_memory
+    from spectracam.pipeline import check_memory
 
     scene = _scene(read_toml(scene_file, "scene file"), str(scene_file), config_file, flags, sets)
     check_memory(scene)
@@ -431,10 +431,10 @@ def simulate_cmd(scene_file, out_dir, renderer, arch, exposure, config_file, see
 @view_option
 def paper_cmd(out_dir, experiment_file, renderer, quick, no_cache, save_cubes, sets, quiet):
     """Reproduce the paper's Figures 4, 5a, 5b and 6: figures, results.json, report.md, case files."""
-    from .experiments.paper import load_experiment, quick_scene, run_paper
-    from .experiments.report import write_paper_outputs
+    from spectracam.experiments.paper.experiment import load_experiment, quick_scene, run_paper
+    from spectracam.experiments.paper.report import write_paper_outputs
 
-    from .pipeline import check_memory
+    from spectracam.pipeline import check_memory
 
     path = experiment_file or default_experiment()
     exp = load_experiment(path, sets)
@@ -481,13 +481,13 @@ def architectures_cmd(out_dir, experiment_file, renderer, quick, seeds, no_cache
     and 1/100 of its light: SNR, ΔE (training and held-out), capture time; then each architecture on the
     slanted edge and star (MTF50, false colour, S-CIELAB; with and without an optical low-pass filter) and
     on a moving edge (colour breakup); results.json, report.md, figures."""
-    from .experiments.architectures import SEEDS, ArchitecturesRun, designs, run_architectures, \
+    from spectracam.experiments.architectures.experiment import SEEDS, ArchitecturesRun, designs, run_architectures, \
         write_architectures_outputs
-    from .experiments.paper import load_experiment, quick_scene
-    from .pipeline import check_memory
+    from spectracam.experiments.paper.experiment import load_experiment, quick_scene
+    from spectracam.pipeline import check_memory
 
     exp = load_experiment(experiment_file or default_experiment(), sets)
-    from .experiments.usability import UsabilitySpec
+    from spectracam.evaluation.usability import UsabilitySpec
 
     limits = {k: v for k, v in (("min_white_snr_db", min_white_snr_db), ("max_s_cielab_mean", max_s_cielab))
               if v is not None}
@@ -531,8 +531,8 @@ def architectures_cmd(out_dir, experiment_file, renderer, quick, seeds, no_cache
 @view_option
 def emva_cmd(out_dir, scene_file, config_file, channel, wavelength_nm, seed, sets, quiet):
     """Characterise the simulated camera by EMVA 1288 (Release 4.0, linear): datasheet and plots."""
-    from .experiments.emva import EmvaSetup, run_emva, write_emva_outputs
-    from .scene import read_toml
+    from spectracam.experiments.emva.experiment import EmvaSetup, run_emva, write_emva_outputs
+    from spectracam.pipeline.scene_file import read_toml
 
     data, source = (read_toml(scene_file, "scene file"), str(scene_file)) if scene_file else ({}, "command line")
     scene = _scene(data, source, config_file, (), sets)
@@ -556,7 +556,7 @@ def cameras_cmd(as_json: bool):
     gains were obtained (filters.camera_file takes any other camera's curves)."""
     import json
 
-    from .cameras import library_table
+    from spectracam.architecture.cameras import library_table
 
     rows = library_table()
     if as_json:
@@ -594,7 +594,7 @@ def validate_cmd(out_dir, renderer, camera_file, matrix, camera_unit, camera_gai
     """Check every shipped camera with a published XYZ(D65)→camera matrix: the simulated white's R/G and B/G against
     the matrix's neutral, and ΔE*ab of the published matrix on the simulated raw (beside a least-squares fit's).
     With --camera-file and --matrix, check your own camera the same way."""
-    from .experiments.validate import parse_matrix, run_validate, write_validate_outputs
+    from spectracam.experiments.validate.experiment import parse_matrix, run_validate, write_validate_outputs
 
     user, command = None, f"spectracam validate -o {out_dir} --renderer {renderer}"
     if (camera_file is None) != (matrix is None) or (camera_file is None and (camera_gains or gains_kept)):
@@ -638,8 +638,8 @@ def validate_cmd(out_dir, renderer, camera_file, matrix, camera_unit, camera_gai
 def _analytic_renderer_option(f):
     """``--renderer`` as :data:`renderer_option`, the closed form by default (a render does not depend on the
     sensor, and the white-balance statistics need many)."""
-    from .cli_options import RegistryChoice
-    from .render import RENDERERS
+    from spectracam.experiments.options import RegistryChoice
+    from spectracam.render import RENDERERS
 
     return click.option("--renderer", type=RegistryChoice(RENDERERS, "--renderer"), default="analytic",
                         show_default=True, help="The closed form or Mitsuba (Monte Carlo).")(f)
@@ -660,8 +660,8 @@ def white_balance_cmd(out_dir, quick, seeds, renderer, sets, quiet):
     (blackbodies 2700–7500 K, CIE D50/D65/D75, FL2/FL7/FL11, LED-B1/B3/BH1/V1): recovery and reproduction angular
     errors, their mean, median and 95th percentile per sensor; results.json, report.md, white_balance.png/.svg.
     --set PATH=VALUE changes every case's scene (e.g. sensor.read_noise_e=5, processing.white_balance_p=4)."""
-    from .experiments.white_balance import plan, run_white_balance, summary_line, write_white_balance_outputs
-    from .pipeline import check_memory
+    from spectracam.experiments.white_balance.experiment import plan, run_white_balance, summary_line, write_white_balance_outputs
+    from spectracam.pipeline import check_memory
 
     run = plan(quick=quick, seeds=seeds, renderer=renderer, sets=sets)   # every scene validated before any work
     check_memory(run.scenes[run.sensors[0].key]["photo"], copies=4, what=", a render and its captures per worker")
@@ -693,11 +693,11 @@ def white_balance_cmd(out_dir, quick, seeds, renderer, sets, quiet):
 @view_option
 def consistency_cmd(out_dir, experiment_file, renderer, full, sets, quiet):
     """Which readings of the paper's open choices reproduce which of its claims: a map and a table."""
-    from .experiments.consistency import run_consistency, write_consistency_outputs
-    from .experiments.paper import load_experiment
+    from spectracam.experiments.consistency.experiment import run_consistency, write_consistency_outputs
+    from spectracam.experiments.paper.experiment import load_experiment
 
     exp = load_experiment(experiment_file or default_experiment(), sets)
-    from .pipeline import check_memory
+    from spectracam.pipeline import check_memory
 
     if full:  # the quick map is 160x120: nothing to estimate
         check_memory(exp.base, copies=len(exp.temperatures_K) + 1, what=f", {len(exp.temperatures_K) + 1} lights")
@@ -730,12 +730,12 @@ def sweep_cmd(sweep_file, out_dir, scheduler, workers, serial, resume, max_cells
 
     SWEEP_FILE is a path, or the name of a sweep shipped with spectracam (cfa_cutoffs,
     cfa_cutoffs_held_out), with or without .toml."""
-    from .experiments.sweep import load_sweep, run_sweep
+    from spectracam.experiments.sweep.experiment import load_sweep, run_sweep
 
     if serial and scheduler:
         raise SpectracamError("--serial and --scheduler: choose one")
     sweep = load_sweep(sweep_file, sets, max_cells=max_cells, log=progress_log(quiet), progress=not quiet)
-    from .pipeline import check_memory
+    from spectracam.pipeline import check_memory
 
     check_memory(sweep.largest_scene, copies=sweep.distinct_renders,
                  what=f", {sweep.distinct_renders} distinct render(s) held at once")
@@ -755,7 +755,7 @@ def sweep_cmd(sweep_file, out_dir, scheduler, workers, serial, resume, max_cells
 @view_option
 def plot_sweep_cmd(out_dir, x_axis, line_axis, panel_axis, metrics):
     """Plot a finished sweep: DIR/plots/<metric>.png and .svg."""
-    from .experiments.sweep_plot import plot_sweep
+    from spectracam.experiments.sweep.plot import plot_sweep
 
     paths = plot_sweep(out_dir, x_axis, line_axis, panel_axis, list(metrics) or None)
     click.echo("wrote " + ", ".join(str(p) for p in paths if p.suffix == ".png"))
@@ -763,7 +763,7 @@ def plot_sweep_cmd(out_dir, x_axis, line_axis, panel_axis, metrics):
 
 def default_experiment() -> Path:
     """The paper's experiment file shipped with spectracam (scenes/paper.toml)."""
-    from .scene import shipped_scene_file
+    from spectracam.pipeline.scene_file import shipped_scene_file
 
     try:
         return shipped_scene_file("paper.toml")
@@ -787,9 +787,9 @@ def design_cmd(spec_file, out_dir, quick, sets, quiet):
     on held-out colours; verify by Monte Carlo through capture → score; compare with the paper's filters, the
     grid's best block pair and the Luther camera.  SPEC.toml: a design file, or the name of a shipped one
     (design, with or without .toml)."""
-    from .design.report import write_design_outputs
-    from .design.run import run_design, setup
-    from .design.spec import load_design
+    from spectracam.experiments.design.report import write_design_outputs
+    from spectracam.experiments.design.run import run_design, setup
+    from spectracam.experiments.design.spec import load_design
 
     spec, base_dir = load_design(spec_file, sets, quick=quick)
     st = setup(spec, base_dir)
@@ -812,7 +812,7 @@ def design_cmd(spec_file, out_dir, quick, sets, quiet):
 @click.argument("file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
 def inspect_cmd(file: Path):
     """Print channels, size, recorded parameters and per-channel min/mean/max of an EXR file."""
-    from .io.exr import describe
+    from spectracam.io.exr import describe
 
     click.echo(describe(file))
 
@@ -824,7 +824,7 @@ def view_cmd(out_dir: Path, quiet: bool):
     """Write DIR/index.html: one self-contained interactive page of what a spectracam command wrote into DIR
     (any command's output directory); print the page's path.  Every command that writes a directory does
     the same with --view."""
-    from .view import write_view
+    from spectracam.view import write_view
 
     page = write_view(out_dir, log=progress_log(quiet))
     click.echo(str(page))

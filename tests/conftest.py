@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from spectracam.scene import parse_scene
+from spectracam.pipeline.scene_file import parse_scene
 
 SMALL = {"image": {"width": 160, "height": 120}}
 

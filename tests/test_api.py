@@ -85,7 +85,7 @@ def _wrong_type_cases(scene, cube, raw):
 
 
 def test_wrong_argument_types_name_the_argument_the_type_and_what_is_allowed(small):
-    from spectracam.errors import ArgumentTypeError, SpectracamError
+    from spectracam.core.errors import ArgumentTypeError, SpectracamError
 
     for call, where, given, allowed in _wrong_type_cases(*small):
         with pytest.raises(TypeError) as e:

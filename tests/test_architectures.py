@@ -8,14 +8,14 @@ import pytest
 from click.testing import CliRunner
 
 from spectracam import ChartReference, capture, score
-from spectracam.architecture import ARCHITECTURES, MosaicLayout
+from spectracam.architecture.base import ARCHITECTURES, MosaicLayout
 from spectracam.camera import CameraSpec, band_weights, camera_responsivities
-from spectracam.chart import WHITE_PATCH
+from spectracam.scene.chart import WHITE_PATCH
 from spectracam.cli import main
-from spectracam.color import ProcessingSpec, periodic_bilinear
-from spectracam.errors import ConfigError
-from spectracam.filters import FilterSpec
-from spectracam.spectra import WavelengthGrid
+from spectracam.processing.color import ProcessingSpec, periodic_bilinear
+from spectracam.core.errors import ConfigError
+from spectracam.architecture.filters import FilterSpec
+from spectracam.core.spectra import WavelengthGrid
 
 NEW = ("stacked", "rgbw", "ryyb", "cmy", "quad_bayer")
 GRID = WavelengthGrid(np.arange(400.0, 701.0, 10.0))
@@ -44,8 +44,8 @@ def test_complementary_filters_are_exact_sums_of_the_block_filters():
 
 # ---------------------------------------------------------------- stacked photodiodes
 def test_stacked_layers_are_beer_lambert_windows_and_sum_to_one_photodiode():
-    from spectracam.architectures.stacked import layer_qe
-    from spectracam.silicon import absorption_coefficient_per_um, photodiode_qe, reflectance
+    from spectracam.architecture.stacked import layer_qe
+    from spectracam.architecture.silicon import absorption_coefficient_per_um, photodiode_qe, reflectance
 
     lam = np.arange(400.0, 701.0, 5.0)
     z = (0.33, 1.34, 3.08, 6.0)
@@ -65,11 +65,11 @@ def test_stacked_layers_are_beer_lambert_windows_and_sum_to_one_photodiode():
 
 def _stacked_and_merrill(**filters):
     """The stacked default's layers on NPL's grid (400–680 nm, 10 nm) and the measured SD1 Merrill curves read as
-    the project reads every relative camera curve — per unit energy, so ``S/λ`` per photon (spectracam.cameras) —
+    the project reads every relative camera curve — per unit energy, so ``S/λ`` per photon (spectracam.architecture.cameras) —
     in the model's unit, electrons per photon."""
     import colour
 
-    from spectracam.cameras import to_electrons_per_photon
+    from spectracam.architecture.cameras import to_electrons_per_photon
 
     merrill = colour.MSDS_CAMERA_SENSITIVITIES["Sigma SDMerill (NPL)"]
     lam = np.asarray(merrill.wavelengths, float)
@@ -129,7 +129,7 @@ def test_stacked_white_response_ratio_against_the_merrill():
 
 
 def test_the_stacked_ir_cut_is_a_logistic_edge_in_series_with_the_shared_one():
-    from spectracam.architectures.stacked import layer_qe, stacked_cut
+    from spectracam.architecture.stacked import layer_qe, stacked_cut
 
     grid = WavelengthGrid(np.arange(400.0, 701.0, 10.0))
     lam = np.array([600.0, 655.0, 660.0])
@@ -150,11 +150,11 @@ def test_the_stacked_ir_cut_is_a_logistic_edge_in_series_with_the_shared_one():
 
 
 def test_layer_usability_measures_are_the_cameras_own():
-    """The stacked check's condition number is the one a camera file is held to (spectracam.cameras.channel_condition,
+    """The stacked check's condition number is the one a camera file is held to (spectracam.architecture.cameras.channel_condition,
     per unit energy, white-balanced): the default layers 13.5, the measured SD1 Merrill 11.4 — the bound, 100,
     sits an order of magnitude above a real Foveon."""
-    from spectracam.architectures.stacked import MAX_CONDITION, layer_diagnostics, layer_qe, stacked_cut
-    from spectracam.cameras import channel_condition, library_curves
+    from spectracam.architecture.stacked import MAX_CONDITION, layer_diagnostics, layer_qe, stacked_cut
+    from spectracam.architecture.cameras import channel_condition, library_curves
 
     f = FilterSpec()
     frac, kappa = layer_diagnostics(f)
@@ -400,8 +400,8 @@ def test_architectures_quick_command(tmp_path):
 def test_stacked_layers_beyond_three_in_raw_files(tmp_path, scene_5000, analytic_5000):
     """n layers: n planes in raw.exr; a DNG holds four colour planes at most (LinearRaw), so five are refused when the
     depths are validated (before issue 34: after the capture, with nothing written)."""
-    from spectracam.capture import capture as capture_stage
-    from spectracam.errors import SpectracamError
+    from spectracam.camera.capture import capture as capture_stage
+    from spectracam.core.errors import SpectracamError
     from spectracam.io.dng import write_dng
     from spectracam.io.exr import read_raw_exr, write_raw_exr
 

@@ -7,11 +7,11 @@ import sys
 import numpy as np
 import pytest
 
-from spectracam.cameras import (CAMERAS, PUBLISHED_MATRICES, d65_white_xyz, energy_sensitivities, library_curves,
+from spectracam.architecture.cameras import (CAMERAS, PUBLISHED_MATRICES, d65_white_xyz, energy_sensitivities, library_curves,
                                 restored_gains, to_electrons_per_photon)
-from spectracam.errors import ConfigError
-from spectracam.filters import FilterSpec, responsivities
-from spectracam.spectra import WavelengthGrid
+from spectracam.core.errors import ConfigError
+from spectracam.architecture.filters import FilterSpec, responsivities
+from spectracam.core.spectra import WavelengthGrid
 
 CLI = [sys.executable, "-m", "spectracam"]
 SMALL = ["--set", "image.width=160", "--set", "image.height=120"]
@@ -78,7 +78,7 @@ def test_sigma_layers_sit_where_a_real_merrill_puts_them():
 
 
 def test_a_camera_without_gains_or_reference_is_refused(monkeypatch):
-    from spectracam import cameras
+    from spectracam.architecture import cameras
 
     entry = cameras._LIBRARY["Sigma SDMerill (NPL)"]
     monkeypatch.setitem(cameras._LIBRARY, "Sigma SDMerill (NPL)", (*entry[:3], None, True))
@@ -122,7 +122,7 @@ def canon_csv(path, unit_scale=1.0):
 
 
 def test_a_csv_of_a_shipped_camera_gives_the_same_responsivities(tmp_path):
-    from spectracam.scene import resolve_curve_files
+    from spectracam.pipeline.scene_file import resolve_curve_files
 
     data = resolve_curve_files({"filters": {"camera_file": str(canon_csv(tmp_path / "c.csv"))}}, tmp_path)
     assert data["filters"]["camera"] == "file" and data["filters"]["kind"] == "camera"
@@ -178,7 +178,7 @@ def test_the_three_units_describe_the_same_camera_when_they_should(tmp_path):
     """The same camera written in each unit gives identical captures: relative energy curves S, the
     electrons per photon they mean (S/λ scaled to qe_peak), and the A/W of those (QE·qλ/hc)."""
     from spectracam.pipeline import simulate
-    from spectracam.scene import parse_scene, resolve_curve_files
+    from spectracam.pipeline.scene_file import parse_scene, resolve_curve_files
 
     wl, S = energy_sensitivities("Canon EOS 5D Mark II (rawtoaces)")
     qe = S / wl[:, None]
@@ -339,9 +339,9 @@ def test_metering_on_a_region_a_level_and_the_patch(chart_exr):
     with the highest rate ends the exposure)."""
     from spectracam.camera import band_weights
     from spectracam.io.exr import read_radiance_exr
-    from spectracam.metering import white_radiance_of
+    from spectracam.sensor.metering import white_radiance_of
     from spectracam.pipeline import capture, scene_of
-    from spectracam.reference import ChartReference
+    from spectracam.scene.reference import ChartReference
 
     cube, _ = read_radiance_exr(chart_exr)
     scene = scene_of(cube)
@@ -395,8 +395,8 @@ def test_a_matrix_or_gains_restore_a_user_camera_to_the_shipped_one(tmp_path):
     """The Nikon's NPL curves with Adobe's matrix (or with the gains it implies) are the shipped Nikon exactly;
     kept at equal gains on request, the D65 white reads R/G 0.582 where the matrix implies 0.443 (the defect,
     made explicit)."""
-    from spectracam.cameras import d65_response
-    from spectracam.scene import resolve_curve_files
+    from spectracam.architecture.cameras import d65_response
+    from spectracam.pipeline.scene_file import resolve_curve_files
 
     csv = nikon_npl_csv(tmp_path / "n.csv")
     shipped = responsivities(FilterSpec(kind="camera", camera="Nikon 5100 (NPL)"), GRID)
@@ -424,7 +424,7 @@ def test_a_matrix_or_gains_restore_a_user_camera_to_the_shipped_one(tmp_path):
     ({"camera_gains_kept": "yes"}, "filters.camera_gains_kept = 'yes': must be true or false"),
 ])
 def test_bad_gain_options_are_one_line(tmp_path, extra, message):
-    from spectracam.scene import resolve_curve_files
+    from spectracam.pipeline.scene_file import resolve_curve_files
 
     data = resolve_curve_files({"filters": {"camera_file": str(nikon_npl_csv(tmp_path / "n.csv")), **extra}}, tmp_path)
     with pytest.raises(ConfigError, match=message.replace("[", "\\[").replace("]", "\\]")):
@@ -453,7 +453,7 @@ def test_identical_channels_are_refused_in_one_line(tmp_path):
 
 
 def test_channel_condition_of_the_shipped_cameras():
-    from spectracam.cameras import channel_condition
+    from spectracam.architecture.cameras import channel_condition
 
     k = {n: channel_condition(library_curves(n).wavelengths_nm, library_curves(n).values) for n in CAMERAS}
     assert k["Nikon 5100 (NPL)"] == pytest.approx(1.93, abs=0.01)

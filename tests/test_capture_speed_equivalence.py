@@ -1,14 +1,14 @@
-"""The fused capture (spectracam.kernels, issue 10 "Speed") against the NumPy reference path
+"""The fused capture (spectracam.sensor.kernels, issue 10 "Speed") against the NumPy reference path
 (spectracam.sensor.expose): exact where nothing is random, the same distributions where something is,
 the closed forms of the sensor model, one seed → one output whatever the number of threads, and a
 silent, correct fallback."""
 import numpy as np
 import pytest
 
-from spectracam import kernels
-from spectracam.architecture import ARCHITECTURES, Architecture, MosaicLayout, make_architecture
+from spectracam.sensor import kernels
+from spectracam.architecture.base import ARCHITECTURES, Architecture, MosaicLayout, make_architecture
 from spectracam.camera import CameraSpec, CaptureSpec, band_weights
-from spectracam.capture import capture as capture_stage
+from spectracam.camera.capture import capture as capture_stage
 from spectracam.render import RadianceCube
 from spectracam.sensor import PatternRef, SensorSpec, adc_inverse, expose, fixed_pattern, noise_stream
 
@@ -134,7 +134,7 @@ def test_noise_free_capture_matches_the_numpy_path(fused, on_numpy, quad_registe
 
 @pytest.mark.parametrize("arch", ["cfa", "prism", "fsc"])
 def test_rates_given_as_an_array_record_exactly(fused, on_numpy, arch):
-    # an architecture handed computed rates (as spectracam.spatial does) gets the NumPy path's numbers
+    # an architecture handed computed rates (as spectracam.experiments.spatial does) gets the NumPy path's numbers
     rates = np.stack([rates_with_extremes(seed=k) for k in range(3)], axis=-1)
     a = make_architecture(arch)
     times = np.array([0.01, 0.008, 0.012])

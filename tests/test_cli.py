@@ -58,9 +58,9 @@ def test_missing_scene_file_is_clear(tmp_path):
 # -- shipped files by name, from any directory (issue 23) ---------------------------------------------------------
 
 def test_shipped_files_are_found_by_name(tmp_path, monkeypatch):
-    from spectracam.cli_options import resolve_shipped
-    from spectracam.scene import shipped_dir
-    from spectracam.errors import ConfigError
+    from spectracam.experiments.options import resolve_shipped
+    from spectracam.pipeline.scene_file import shipped_dir
+    from spectracam.core.errors import ConfigError
 
     monkeypatch.chdir(tmp_path)   # outside the checkout: scenes/d65.toml is no path here
     root = shipped_dir()

@@ -3,8 +3,8 @@ import json
 
 import pytest
 
-import spectracam.experiments.consistency as cons
-from spectracam.experiments.paper import load_experiment
+import spectracam.experiments.consistency.experiment as cons
+from spectracam.experiments.paper.experiment import load_experiment
 
 
 @pytest.fixture
@@ -25,7 +25,7 @@ def test_readings_cover_the_factorial_and_the_one_at_a_time_choices():
 
 
 def test_consistency_map(small_map, tmp_path):
-    exp = load_experiment(cons.__file__.replace("spectracam/experiments/consistency.py", "scenes/paper.toml"))
+    exp = load_experiment(cons.__file__.replace("spectracam/experiments/consistency/experiment.py", "scenes/paper.toml"))
     r = cons.run_consistency(exp)
     assert len(r["rows"]) == 3
     shallow, flat, dim = r["rows"]
@@ -45,7 +45,7 @@ def test_consistency_map(small_map, tmp_path):
 def test_a_reading_with_another_spectral_range_is_rendered_on_that_range(monkeypatch):
     """Issue 18's planted slip: the cubes keyed on something other than the grid let the 380–730 nm
     reading run silently on 400–700 nm cubes.  Every capture must see the reading's own bands."""
-    import spectracam.experiments.paper as paper
+    import spectracam.experiments.paper.experiment as paper
 
     monkeypatch.setattr(cons, "FACTORS", {k: v[:1] for k, v in cons.FACTORS.items()})
     monkeypatch.setattr(cons, "ONE_AT_A_TIME", [r for r in cons.ONE_AT_A_TIME if r[0] == "spectral range"])
@@ -57,7 +57,7 @@ def test_a_reading_with_another_spectral_range_is_rendered_on_that_range(monkeyp
         return real(cube, scene, *args, **kwargs)
 
     monkeypatch.setattr(paper, "design_case", spy)
-    exp = load_experiment(cons.__file__.replace("spectracam/experiments/consistency.py", "scenes/paper.toml"))
+    exp = load_experiment(cons.__file__.replace("spectracam/experiments/consistency/experiment.py", "scenes/paper.toml"))
     cons.run_consistency(exp)
     ranges = {(a, b) for a, b, c, d in seen}
     assert ranges == {(400.0, 700.0), (380.0, 730.0)}, ranges

@@ -1,6 +1,6 @@
 """Design by gradient: the expected-error model against the capture → score pipeline, Dr.Jit's gradients against
 finite differences, the parametrisations against the pipeline's filters, the optimiser against the grid, and the
-command (spectracam.design)."""
+command (spectracam.experiments.design)."""
 import json
 
 import numpy as np
@@ -10,14 +10,14 @@ from conftest import assert_gradient_is_central_differences
 
 from spectracam.camera import camera_responsivities
 from spectracam.cli import main
-from spectracam.design.ad import numpy as tnumpy
-from spectracam.design.ad import tensor
-from spectracam.design.model import CameraModel, demosaic_factors, evaluate, normal_points
-from spectracam.design.problem import DesignProblem, light_model
-from spectracam.design.spec import DesignSpec
-from spectracam.experiments.paper import calibrated_luminance, design_case, load_experiment, scenes_for
-from spectracam.illuminant import IlluminantSpec
-from spectracam.scene import shipped_scene_file
+from spectracam.experiments.design.ad import numpy as tnumpy
+from spectracam.experiments.design.ad import tensor
+from spectracam.experiments.design.model import CameraModel, demosaic_factors, evaluate, normal_points
+from spectracam.experiments.design.problem import DesignProblem, light_model
+from spectracam.experiments.design.spec import DesignSpec
+from spectracam.experiments.paper.experiment import calibrated_luminance, design_case, load_experiment, scenes_for
+from spectracam.scene.illuminant import IlluminantSpec
+from spectracam.pipeline.scene_file import shipped_scene_file
 
 
 @pytest.fixture(scope="module")
@@ -96,8 +96,8 @@ def test_the_quadrature_has_converged(paper):
 def test_demosaic_factors_are_the_bilinear_weights():
     """Bilinear on RGGB: red has variance 1 at its own site, 1/2 between two reds, 1/4 between four; green 1 and
     1/4; no channel mixes another; a non-linear demosaicker is refused."""
-    from spectracam.architecture import MosaicLayout
-    from spectracam.errors import SpectracamError
+    from spectracam.architecture.base import MosaicLayout
+    from spectracam.core.errors import SpectracamError
 
     F = demosaic_factors(MosaicLayout.bayer("RGGB"), "bilinear")   # sites (0,0) R, (0,1) G, (1,0) G, (1,1) B
     red = [F[u, 0, 0, 0] for u in range(4)]
@@ -145,9 +145,9 @@ def test_gradients_match_finite_differences(paper, kind, design, settings):
 def test_designs_are_the_cameras_the_pipeline_runs(paper, kind, design, settings):
     """The model's responsivities of a design are those of the camera it hands the pipeline (the ideal block's
     one-sample ramp within 1e-3 of the peak, smooth filters to rounding), and the exposure split is the pipeline's."""
-    from spectracam.exposure import exposure_times_s
-    from spectracam.chart import WHITE_PATCH
-    from spectracam.reference import ChartReference
+    from spectracam.sensor.exposure import exposure_times_s
+    from spectracam.scene.chart import WHITE_PATCH
+    from spectracam.scene.reference import ChartReference
 
     p = _problem(paper, kind, design, settings)
     x = p.initial()
@@ -167,8 +167,8 @@ def test_designs_are_the_cameras_the_pipeline_runs(paper, kind, design, settings
 def test_block_design_reaches_the_grid_best_with_fewer_evaluations(paper):
     """From the paper's 490/610 nm the block design lands within 10 nm and 0.1 ΔE of the best of the grid's 81
     pairs (scored by the same model), in fewer evaluations than the grid has pairs."""
-    from spectracam.design.optimise import optimise
-    from spectracam.design.run import grid_best
+    from spectracam.experiments.design.optimise import optimise
+    from spectracam.experiments.design.run import grid_best
 
     exp, _ = paper
     p = DesignProblem("cfa/single", "block", DesignSpec(filters="block"), exp.base.camera, exp.base.processing,
@@ -181,11 +181,11 @@ def test_block_design_reaches_the_grid_best_with_fewer_evaluations(paper):
 
 
 def test_exposure_split_scheme_and_transmittance_filters_validate():
-    from spectracam.architecture import make_architecture
+    from spectracam.architecture.base import make_architecture
     from spectracam.camera import CaptureSpec
-    from spectracam.errors import ConfigError
-    from spectracam.exposure import exposure_times_s
-    from spectracam.filters import FilterSpec
+    from spectracam.core.errors import ConfigError
+    from spectracam.sensor.exposure import exposure_times_s
+    from spectracam.architecture.filters import FilterSpec
     from spectracam.sensor import SensorSpec
 
     s = SensorSpec(q_max_e=100.0, dark_current=False)

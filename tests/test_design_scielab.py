@@ -1,7 +1,7 @@
 """The design model's expected S-CIELAB (docs/metrics.md, "Expected S-CIELAB in the design model"): the filtered-noise
 factors against their closed forms and against simulated noise fields, the model against the Monte Carlo capture →
 score pipeline (ChartSummary.s_cielab_mean) for a CFA, a prism and field-sequential full planes, and the ``s_cielab``
-objective (spectracam.design)."""
+objective (spectracam.experiments.design)."""
 import json
 
 import numpy as np
@@ -9,21 +9,21 @@ import pytest
 from click.testing import CliRunner
 from conftest import assert_gradient_is_central_differences
 
-from spectracam.architecture import MosaicLayout, make_architecture
+from spectracam.architecture.base import MosaicLayout, make_architecture
 from spectracam.camera import camera_responsivities
 from spectracam.cli import main
-from spectracam.color import demosaic, display_rgb_to_xyz
-from spectracam.design.ad import numpy as tnumpy
-from spectracam.design.ad import tensor
-from spectracam.design.model import (CameraModel, demosaic_factors, evaluate, scielab_mosaic_factors,
+from spectracam.processing.color import demosaic, display_rgb_to_xyz
+from spectracam.experiments.design.ad import numpy as tnumpy
+from spectracam.experiments.design.ad import tensor
+from spectracam.experiments.design.model import (CameraModel, demosaic_factors, evaluate, scielab_mosaic_factors,
                                      scielab_white_factors, viewing_samples_per_degree)
-from spectracam.design.problem import DesignProblem, light_model
-from spectracam.design.spec import DesignSpec
-from spectracam.experiments.paper import calibrated_luminance, design_case, load_experiment
-from spectracam.illuminant import IlluminantSpec
-from spectracam.metrics import delta_e, xyz_to_lab
-from spectracam.scene import shipped_scene_file
-from spectracam.spatial.scielab import SCIELAB_FILTERS, XYZ_TO_OPPONENT, _components, scielab_filter, scielab_kernels
+from spectracam.experiments.design.problem import DesignProblem, light_model
+from spectracam.experiments.design.spec import DesignSpec
+from spectracam.experiments.paper.experiment import calibrated_luminance, design_case, load_experiment
+from spectracam.scene.illuminant import IlluminantSpec
+from spectracam.core.cielab import delta_e, xyz_to_lab
+from spectracam.pipeline.scene_file import shipped_scene_file
+from spectracam.evaluation.scielab import SCIELAB_FILTERS, XYZ_TO_OPPONENT, _components, scielab_filter, scielab_kernels
 
 #: The default viewing geometry: 0.5 m from a 120-dpi display.
 SPD = 41.22825066282352
@@ -157,7 +157,7 @@ def test_expected_scielab_agrees_with_the_pipeline(paper, design, off, tol, belo
     dominates (the Luther camera: no conversion error; a tenth of the light): within ``tol``, while S-CIELAB is
     below ``below`` × the per-pixel ΔE*ab (measured 0.58, 0.47, 0.68; 0.87), so a model that kept the per-pixel
     covariance would fail by more than the tolerance."""
-    from spectracam.reference import ChartReference
+    from spectracam.scene.reference import ChartReference
     from spectracam.render import render
 
     exp, _ = paper
@@ -192,7 +192,7 @@ def test_s_cielab_objective_is_the_expected_scielab_its_gradient_exact_and_it_lo
     """``objective = "s_cielab"``: the value is the mean expected S-CIELAB over the training colours × lights (the
     per-pixel objective's ΔE*ab untouched), its Dr.Jit gradient equals central differences (relative 1e-4), and a few
     L-BFGS-B iterations lower it (history keyed ``training_s_cielab``)."""
-    from spectracam.design.optimise import optimise
+    from spectracam.experiments.design.optimise import optimise
 
     exp, _ = paper
     rest = (exp.base.camera, exp.base.processing, _scenes(paper, (3000, 6500)), "tcs14", "vs15")

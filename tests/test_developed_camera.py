@@ -10,15 +10,15 @@ from conftest import assert_gradient_is_central_differences
 
 import spectracam as sc
 from spectracam import pipeline
-from spectracam.color import ProcessingSpec
-from spectracam.errors import ConfigError, SpectracamError
+from spectracam.processing.color import ProcessingSpec
+from spectracam.core.errors import ConfigError, SpectracamError
 from spectracam.processing import CAMERAS, metered_camera
 from spectracam.processing.calibration import D50_XYZ, dual_illuminant_matrices, xy_to_cct
 from spectracam.processing.white_balance import (WHITE_BALANCE_METHODS, Estimation, estimate_neutral,
                                                  minkowski_mean, recovery_error_deg, reproduction_error_deg)
-from spectracam.reference import ChartReference
+from spectracam.scene.reference import ChartReference
 from spectracam.render import RadianceCube
-from spectracam.scene import shipped_dir
+from spectracam.pipeline.scene_file import shipped_dir
 
 NEUTRAL = np.array([0.31, 0.55, 0.77])
 
@@ -133,7 +133,7 @@ def test_oracle_is_the_papers_chain_and_developed_differs():
     raw = pipeline.capture(cube, scene=scene)
     assert raw.metering is None      # the oracle meters the white patch as before
     oracle = pipeline.score(raw, scene)
-    from spectracam.score import conversion_matrix
+    from spectracam.evaluation.score import conversion_matrix
 
     M = conversion_matrix(ChartReference.of(scene), raw.camera, scene.processing)
     assert np.array_equal(np.asarray(oracle.parameters["conversion_matrix"]), M)
@@ -180,7 +180,7 @@ def test_scene_light_calibration_with_the_true_white_reproduces_the_oracle_colou
 
 
 def _uniform_cube(scene, reflectance_of_pixels):
-    from spectracam.illuminant import white_diffuser_radiance
+    from spectracam.scene.illuminant import white_diffuser_radiance
 
     white = white_diffuser_radiance(scene.illuminant, scene.grid)
     rad = (np.asarray(reflectance_of_pixels, float)[..., None] * white).astype(np.float32)
@@ -190,7 +190,7 @@ def _uniform_cube(scene, reflectance_of_pixels):
 @pytest.mark.parametrize("method", ["average", "percentile"])
 def test_metering_finds_the_implied_white(method):
     from spectracam.camera import band_weights
-    from spectracam.metering import metered_white_rates
+    from spectracam.sensor.metering import metered_white_rates
 
     scene = _scene()
     cap = scene.camera.capture.replace(metering=method)
@@ -221,7 +221,7 @@ def test_metering_auto_follows_the_camera_and_an_explicit_one_wins():
                                          ("capture.metering_target", 0), ("processing.white_balance_sigma_px", -1),
                                          ("processing.white_balance_training", "nosuch")])
 def test_bad_values_name_the_field(field, value):
-    from spectracam.scene import Scene
+    from spectracam.pipeline.scene_file import Scene
 
     table, key = field.split(".")
     with pytest.raises(ConfigError, match=field.replace(".", r"\.")):
@@ -233,7 +233,7 @@ def test_a_trained_estimator_with_nothing_left_to_train_on_is_refused(tmp_path):
     with pytest.raises(ConfigError, match="white_balance_training.*scored scene's own library"):
         _scene(camera="developed", white_balance_training="colorchecker24")
     # by content: a file of the chart's own spectra (a copy under another name) leaves nothing once they are removed
-    from spectracam.chart import patch_reflectances
+    from spectracam.scene.chart import patch_reflectances
 
     scene = _scene(camera="developed")
     lam = np.arange(380.0, 781.0, 5.0)
@@ -290,7 +290,7 @@ def test_a_sweep_over_the_white_balance(tmp_path):
 
     import pyarrow.parquet as pq
 
-    from spectracam.experiments.sweep import load_sweep, run_sweep
+    from spectracam.experiments.sweep.experiment import load_sweep, run_sweep
 
     base = (Path(__file__).parent.parent / "scenes" / "blackbody_5000K.toml").resolve()
     p = tmp_path / "sweep.toml"
@@ -355,10 +355,10 @@ def test_dng_carries_forward_matrices_and_the_cameras_own_neutral(tmp_path, came
 # ---- the design with an estimated white ------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def paper_design():
-    from spectracam.design.spec import DesignSpec
-    from spectracam.experiments.paper import calibrated_luminance, load_experiment
-    from spectracam.illuminant import IlluminantSpec
-    from spectracam.scene import shipped_scene_file
+    from spectracam.experiments.design.spec import DesignSpec
+    from spectracam.experiments.paper.experiment import calibrated_luminance, load_experiment
+    from spectracam.scene.illuminant import IlluminantSpec
+    from spectracam.pipeline.scene_file import shipped_scene_file
 
     exp = load_experiment(shipped_scene_file("paper.toml"))
     level = calibrated_luminance(exp, exp.base.camera)
@@ -368,7 +368,7 @@ def paper_design():
 
 
 def _design_problem(paper_design, **settings):
-    from spectracam.design.problem import DesignProblem
+    from spectracam.experiments.design.problem import DesignProblem
 
     exp, scenes, DesignSpec = paper_design
     return DesignProblem("cfa/single", "gaussian", DesignSpec(filters="gaussian", **settings), exp.base.camera,
@@ -376,9 +376,9 @@ def _design_problem(paper_design, **settings):
 
 
 def test_design_white_penalty_is_the_numpy_computation(paper_design):
-    from spectracam.design.ad import numpy as tnumpy
-    from spectracam.design.ad import tensor
-    from spectracam.metrics import xyz_to_lab
+    from spectracam.experiments.design.ad import numpy as tnumpy
+    from spectracam.experiments.design.ad import tensor
+    from spectracam.core.cielab import xyz_to_lab
 
     p = _design_problem(paper_design, white_balance="shades_of_grey", white_balance_p=6.0)
     x = p.initial()
@@ -406,8 +406,8 @@ def test_design_white_penalty_is_the_numpy_computation(paper_design):
 
 
 def test_design_objective_adds_the_white_penalty_and_its_gradient_is_exact(paper_design):
-    from spectracam.design.ad import numpy as tnumpy
-    from spectracam.design.ad import tensor
+    from spectracam.experiments.design.ad import numpy as tnumpy
+    from spectracam.experiments.design.ad import tensor
 
     oracle = _design_problem(paper_design)
     est = _design_problem(paper_design, white_balance="grey_world")
@@ -420,7 +420,7 @@ def test_design_objective_adds_the_white_penalty_and_its_gradient_is_exact(paper
 
 
 def test_design_white_balance_values_are_checked():
-    from spectracam.design.spec import DesignSpec
+    from spectracam.experiments.design.spec import DesignSpec
 
     with pytest.raises(ConfigError, match="white_balance"):
         DesignSpec(white_balance="corrected_moments")
@@ -455,7 +455,7 @@ def test_tone_curve_changes_the_picture_never_the_score(tmp_path):
 
 @pytest.mark.parametrize("adaptation", ["xyz_scaling", "bradford", "cat16"])
 def test_every_adaptation_carries_white_to_white_and_the_developed_camera_runs_with_it(adaptation):
-    from spectracam.color import adaptation_matrix
+    from spectracam.processing.color import adaptation_matrix
 
     a, b = np.array([1.0985, 1.0, 0.3558]), np.array([0.9505, 1.0, 1.0888])   # CIE A, D65
     A = adaptation_matrix(a, b, adaptation)
@@ -469,9 +469,9 @@ def test_every_adaptation_carries_white_to_white_and_the_developed_camera_runs_w
 
 
 def test_the_shipped_two_cameras_sweep_loads_every_estimator():
-    from spectracam.experiments.sweep import load_sweep
+    from spectracam.experiments.sweep.experiment import load_sweep
     from spectracam.processing.white_balance import WHITE_BALANCE_METHODS
-    from spectracam.scene import shipped_scene_file
+    from spectracam.pipeline.scene_file import shipped_scene_file
 
     sw = load_sweep(shipped_scene_file("sweeps/two_cameras.toml"))
     axes = dict(sw.axes)

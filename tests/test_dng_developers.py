@@ -12,7 +12,7 @@ from conftest import small_scene
 
 from spectracam import ChartReference, capture
 from spectracam.io.dng import write_dng
-from spectracam.metrics import xyz_to_lab
+from spectracam.core.cielab import xyz_to_lab
 
 GREYS = slice(19, 24)  # greys 20-24 (1-based; 0-based 19-23): 8, 6.5, 5, 3.5 and the black
 

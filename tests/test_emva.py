@@ -9,7 +9,7 @@ from click.testing import CliRunner
 
 from spectracam.camera import CameraSpec
 from spectracam.cli import main
-from spectracam.experiments.emva import KEYS, EmvaSetup, run_emva
+from spectracam.experiments.emva.experiment import KEYS, EmvaSetup, run_emva
 from spectracam.sensor import SensorSpec
 
 
@@ -88,7 +88,7 @@ def test_configured_top_code_threshold_is_the_sensors_own_quantiser(bits, black)
     the half code moves it by 0.5/K)."""
     import numpy as np
 
-    from spectracam.experiments.emva import EmvaSetup, configured
+    from spectracam.experiments.emva.experiment import EmvaSetup, configured
     from spectracam.sensor import adc
 
     s = SensorSpec(adc_bits=bits, black_level_DN=black, q_max_e=10 * 2**bits)
@@ -105,8 +105,8 @@ def test_plots_mark_the_steps_the_analysis_left_out_of_its_fits():
     range and the steps beyond saturation as three kinds of marker, the two excluded kinds with a legend
     entry that cites the clause.  The markers' data, read back from the matplotlib figures, must be
     exactly the steps of the analysis's own masks (12-bit camera, 64 × 64 px: both kinds present)."""
-    from spectracam.emva1288 import analyse
-    from spectracam.experiments.emva import figures, simulate_series
+    from spectracam.evaluation.emva1288 import analyse
+    from spectracam.experiments.emva.experiment import figures, simulate_series
 
     camera = CameraSpec(sensor=SensorSpec(adc_bits=12, prnu_fraction=0.01, dsnu_fraction=0.2))
     setup = EmvaSetup(width=64, height=64)
@@ -156,7 +156,7 @@ def test_a_noise_free_sensor_writes_its_datasheet(tmp_path):
     """Without read noise and fixed pattern the dark steps have no temporal noise, hence no SNR (NaN):
     emva.json writes it as null instead of refusing to write (it did: 'Out of range float values are
     not JSON compliant')."""
-    from spectracam.experiments.emva import write_emva_outputs
+    from spectracam.experiments.emva.experiment import write_emva_outputs
 
     sensor = SensorSpec(read_noise=False, fpn=False)
     result = run_emva(CameraSpec(sensor=sensor), EmvaSetup(width=64, height=64))

@@ -1,4 +1,4 @@
-"""EMVA 1288 Release 4.0 Linear analysis (spectracam.emva1288) against a camera whose parameters we set.
+"""EMVA 1288 Release 4.0 Linear analysis (spectracam.evaluation.emva1288) against a camera whose parameters we set.
 
 A small, self-contained linear camera (Poisson photo- and dark electrons, a full well, a Gaussian
 DSNU and PRNU pattern from a fixed seed, Gaussian read noise, an ADC with gain K, a black level and a
@@ -33,8 +33,8 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from spectracam import emva1288 as emva
-from spectracam.errors import ConfigError
+from spectracam.evaluation import emva1288 as emva
+from spectracam.core.errors import ConfigError
 
 
 @dataclass(frozen=True)
@@ -326,7 +326,7 @@ def test_column_and_row_parts_keep_their_axes_on_a_non_square_frame():
     """Issue 18's planted slip: M (rows) and N (columns) swapped.  On a 40 × 200 frame with a strong
     pixel pattern (σ 10 DN) and a weak column pattern (σ 1 DN), swapping 1/M and 1/N moves the column
     part by 100·(1/40 − 1/200) = 2 DN² (200 %), and swapping the axes puts it in the rows."""
-    from spectracam.emva1288 import spatial_statistics
+    from spectracam.evaluation.emva1288 import spatial_statistics
 
     rng = np.random.default_rng(5)
     M, N, L = 40, 200, 8

@@ -1,7 +1,7 @@
 """`spectracam emva` against the EMVA 1288 reference implementation (issue 23).
 
 The frames of the 12-bit camera of ``tests/test_emva.py`` (1 % PRNU, 20 % DSNU), made by
-``spectracam.experiments.emva.simulate_series`` — the frames, exposure times and photon counts
+``spectracam.experiments.emva.experiment.simulate_series`` — the frames, exposure times and photon counts
 ``spectracam emva`` analyses — are written as image files with an EMVA 1288 descriptor file
 (``b exposure_ns photons`` / ``d exposure_ns`` / ``i file``) and run through the reference
 implementation's own pipeline, ``emva1288.process``: ``ParseEmvaDescriptorFile`` → ``LoadImageData``
@@ -52,8 +52,8 @@ import numpy as np
 import pytest
 
 from spectracam.camera import CameraSpec
-from spectracam.emva1288 import analyse
-from spectracam.experiments.emva import KEYS, EmvaSetup, run_emva, simulate_series
+from spectracam.evaluation.emva1288 import analyse
+from spectracam.experiments.emva.experiment import KEYS, EmvaSetup, run_emva, simulate_series
 from spectracam.sensor import SensorSpec
 
 try:

@@ -173,8 +173,8 @@ def test_own_camera(tmp_path, monkeypatch):
     n, _ = run_notebook("own_camera.ipynb", tmp_path, monkeypatch)
     import spectracam
     from spectracam.camera import CameraSpec
-    from spectracam.design.run import setup
-    from spectracam.design.spec import load_design
+    from spectracam.experiments.design.run import setup
+    from spectracam.experiments.design.spec import load_design
 
     for name, c in n["cameras"].items():
         _, _, r = _score(SCENES / "d65.toml", n["size"] + c["overrides"], n["seed"])

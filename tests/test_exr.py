@@ -3,7 +3,7 @@ import json
 import numpy as np
 import pytest
 
-from spectracam.errors import SpectracamError
+from spectracam.core.errors import SpectracamError
 from spectracam.io.exr import (describe, parse_spectral_channel, read_exr, read_radiance_exr,
                                spectral_channel_name, write_exr, write_radiance_exr)
 
@@ -55,7 +55,7 @@ def test_colour_science_fichet_reader_agrees(written, mitsuba_5000):
 
 
 def test_preview_white_patch_is_near_its_luminous_reflectance(written, scene_5000):
-    from spectracam.chart import patch_masks
+    from spectracam.scene.chart import patch_masks
 
     channels, _ = read_exr(written)
     masks = patch_masks(scene_5000.chart, 160, 120)

@@ -50,7 +50,7 @@ def test_a_full_disk_is_one_line_and_leaves_nothing(tmp_path):
 
 def test_a_full_render_cache_never_stops_a_run(tmp_path):
     from conftest import small_scene
-    from spectracam.cache import cached_render, render_key
+    from spectracam.io.cache import cached_render, render_key
 
     # an entry blocked by a directory: rendered, said, and the run goes on
     scene = small_scene()
@@ -219,11 +219,11 @@ def test_emva_refuses_a_dark_channel_in_one_line(tmp_path):
 def test_set_reaches_every_documented_key_and_wins(tmp_path):
     """--set comes last: over a sweep file's own [scene] table, over an experiment's light, and a
     quick look keeps what --set chose; upper-case keys and top-level list elements are reachable."""
-    from spectracam.experiments.paper import load_experiment
-    from spectracam.experiments.sweep import cell_scene, load_sweep
-    from spectracam.motion.experiment import load_motion
-    from spectracam.scene import shipped_scene_file
-    from spectracam.spatial.experiment import SpatialSpec, load_spec_and_scene
+    from spectracam.experiments.paper.experiment import load_experiment
+    from spectracam.experiments.sweep.experiment import cell_scene, load_sweep
+    from spectracam.experiments.motion.experiment import load_motion
+    from spectracam.pipeline.scene_file import shipped_scene_file
+    from spectracam.experiments.spatial.experiment import SpatialSpec, load_spec_and_scene
 
     sweep = load_sweep("scenes/sweeps/cfa_cutoffs.toml", ["image.width=160", "image.height=120"])
     first = cell_scene(sweep, sweep.cells()[0], 0)
@@ -264,10 +264,10 @@ def test_philox_matches_random123s_known_answers(counter, key, want):
     a wrong multiplier, Weyl constant, round count or word order fails here."""
     import numpy as np
 
-    from spectracam.kernels import philox_np
+    from spectracam.sensor.kernels import philox_np
 
     pytest.importorskip("numba")
-    from spectracam._numba_kernels import philox
+    from spectracam.sensor._numba_kernels import philox
 
     got = philox(*(np.uint64(c) for c in counter), *(np.uint64(k) for k in key))
     assert [int(x) for x in got] == list(want)
@@ -298,14 +298,14 @@ def test_motion_memory_does_not_grow_with_its_slices(monkeypatch):
     for reuse are bounded (issue 18: a (rows × slices) table per channel group — 1.4 GB at slices =
     100000 — and every pose's render kept died with MemoryError)."""
     import tracemalloc
-    from spectracam.motion import render
-    from spectracam.motion.motion import Motion
-    from spectracam.motion.render import MovingScene, integrate
-    from spectracam.motion.timing import TimingSpec, capture_timing
-    from spectracam.architecture import make_architecture
-    from spectracam.scene import load_scene
-    from spectracam.spatial.geometry import CameraGeometry
-    from spectracam.spatial.targets import SlantedEdge
+    from spectracam.experiments.motion import render
+    from spectracam.experiments.motion.motion import Motion
+    from spectracam.experiments.motion.render import MovingScene, integrate
+    from spectracam.experiments.motion.timing import TimingSpec, capture_timing
+    from spectracam.architecture.base import make_architecture
+    from spectracam.pipeline.scene_file import load_scene
+    from spectracam.experiments.spatial.geometry import CameraGeometry
+    from spectracam.experiments.spatial.targets import SlantedEdge
 
     scene = load_scene("scenes/d65.toml")
     g = CameraGeometry.framing(16.0, 12.0, 1.4, 10.0, 16, 16)
@@ -335,7 +335,7 @@ def test_the_fused_backend_never_hides_a_fault(monkeypatch, capsys):
     exception in a kernel — a bug, bad data — reaches the caller (issue 18: it was swallowed and the
     backend silently switched itself off)."""
     numba = pytest.importorskip("numba")
-    from spectracam import kernels
+    from spectracam.sensor import kernels
 
     mod = kernels._numba()
     if mod is None:
@@ -363,7 +363,7 @@ def test_a_forked_child_captures_with_its_own_thread_pool():
     the parent's pool has no threads in the child, and a capture there hung)."""
     import numpy as np
     from spectracam import pipeline
-    from spectracam.scene import load_scene
+    from spectracam.pipeline.scene_file import load_scene
 
     scene = load_scene("scenes/blackbody_5000K.toml", ["image.width=96", "image.height=64"])
     cube = pipeline.render(scene, "analytic")
@@ -392,8 +392,8 @@ def test_a_forked_child_captures_with_its_own_thread_pool():
 def test_layouts_are_what_they_say():
     """A mistyped plane kind is refused (it was timed as simultaneous), and a layout with no raw form
     is not written as "planes"."""
-    from spectracam.architecture import PlanesLayout
-    from spectracam.errors import SpectracamError
+    from spectracam.architecture.base import PlanesLayout
+    from spectracam.core.errors import SpectracamError
     from spectracam.io.exr import layout_to_dict
 
     with pytest.raises(SpectracamError, match="layout kind = 'frame'"):
@@ -401,7 +401,7 @@ def test_layouts_are_what_they_say():
     with pytest.raises(SpectracamError, match="no raw EXR form"):
         layout_to_dict(object())
     with pytest.raises(Exception, match="targets = 'nosuch': must be one of 'edge', 'edge_red_cyan'"):
-        from spectracam.spatial.experiment import SPATIAL_TARGETS
+        from spectracam.experiments.spatial.experiment import SPATIAL_TARGETS
 
         SPATIAL_TARGETS.get("nosuch")
 

@@ -6,13 +6,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from spectracam import heldout, reflectances
+from spectracam.evaluation import heldout
+from spectracam.scene import reflectances
 from spectracam.camera import FilterSpec
-from spectracam.errors import SpectracamError
-from spectracam.reference import ChartReference
-from spectracam.scene import load_scene, resolve_curve_files
-from spectracam.score import conversion_matrix
-from spectracam.spectra import cie_1931_cmfs
+from spectracam.core.errors import SpectracamError
+from spectracam.scene.reference import ChartReference
+from spectracam.pipeline.scene_file import load_scene, resolve_curve_files
+from spectracam.evaluation.score import conversion_matrix
+from spectracam.core.spectra import cie_1931_cmfs
 
 SCENE = load_scene("scenes/d65.toml", ["image.width=160", "image.height=120"])
 

@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from spectracam.errors import SpectracamError
-from spectracam.motion import metrics as mm
-from spectracam.motion.experiment import check_motion_memory, load_motion, motion_estimate, run_motion
+from spectracam.core.errors import SpectracamError
+from spectracam.experiments.motion import metrics as mm
+from spectracam.experiments.motion.experiment import check_motion_memory, load_motion, motion_estimate, run_motion
 
 H, W = 64, 96
 
@@ -103,11 +103,11 @@ def test_one_exposure_does_not_break_up(noise_free_run, rolling):
 def test_slow_speeds_put_several_slices_in_every_window():
     """At 0.0025 px/ms the 0.25 px step is 100 ms, longer than a frame: the step is halved until the shortest
     window holds 4 slices, on the shared lattice of positions (max_step / 2^k)."""
-    from spectracam.architecture import make_architecture
-    from spectracam.motion.motion import Motion
-    from spectracam.motion.render import MIN_SLICES_PER_WINDOW, slice_times
-    from spectracam.motion.timing import TimingSpec, capture_timing
-    from spectracam.spatial.geometry import CameraGeometry
+    from spectracam.architecture.base import make_architecture
+    from spectracam.experiments.motion.motion import Motion
+    from spectracam.experiments.motion.render import MIN_SLICES_PER_WINDOW, slice_times
+    from spectracam.experiments.motion.timing import TimingSpec, capture_timing
+    from spectracam.experiments.spatial.geometry import CameraGeometry
 
     g = CameraGeometry.framing(32.0, 12.0, 1.4, 10.0, 64, 16)
     timing = capture_timing(make_architecture("fsc"), [0.039, 0.038, 0.051], TimingSpec(), 16)

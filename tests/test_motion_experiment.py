@@ -5,8 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from spectracam.errors import ConfigError
-from spectracam.motion.experiment import MotionRow, load_motion, run_motion
+from spectracam.core.errors import ConfigError
+from spectracam.experiments.motion.experiment import MotionRow, load_motion, run_motion
 
 TINY = ("edge_size_px=[48, 32]", "speeds_px_per_ms=[0.0, 0.05, 0.2]", "samples_per_subpixel=4",
         "zone_half_width_px=12.0", "wavelengths={start_nm = 400, stop_nm = 700, step_nm = 30}")
@@ -122,7 +122,7 @@ def test_command_writes_its_files(tmp_path):
     from click.testing import CliRunner
     from PIL import Image
 
-    from spectracam.motion.command import motion_cmd
+    from spectracam.experiments.motion.command import motion_cmd
 
     out = tmp_path / "m"
     args = ["-o", str(out), "--renderer", "analytic", "--quiet", "--set", "designs=[\"cfa/single\", \"fsc/optimal\"]",

@@ -2,15 +2,15 @@
 import numpy as np
 import pytest
 
-from spectracam.architecture import make_architecture
-from spectracam.motion.motion import Motion
-from spectracam.motion.render import MovingScene, channel_rates, integrate, posed_edge, slice_times
-from spectracam.motion.timing import TimingSpec, capture_timing
-from spectracam.scene import Scene
-from spectracam.spatial import optics as sopt
-from spectracam.spatial.geometry import CameraGeometry
-from spectracam.spatial.render import render_analytic
-from spectracam.spatial.targets import SlantedEdge
+from spectracam.architecture.base import make_architecture
+from spectracam.experiments.motion.motion import Motion
+from spectracam.experiments.motion.render import MovingScene, channel_rates, integrate, posed_edge, slice_times
+from spectracam.experiments.motion.timing import TimingSpec, capture_timing
+from spectracam.pipeline.scene_file import Scene
+from spectracam.experiments.spatial import optics as sopt
+from spectracam.experiments.spatial.geometry import CameraGeometry
+from spectracam.experiments.spatial.render import render_analytic
+from spectracam.experiments.spatial.targets import SlantedEdge
 
 SCENE = Scene.from_dict({"wavelengths": {"start_nm": 400, "stop_nm": 700, "step_nm": 20}})
 MARGIN = 8

@@ -2,10 +2,10 @@
 import numpy as np
 import pytest
 
-from spectracam.architecture import make_architecture
-from spectracam.errors import ConfigError
-from spectracam.exposure import exposure_times_s
-from spectracam.motion.timing import TimingSpec, capture_timing
+from spectracam.architecture.base import make_architecture
+from spectracam.core.errors import ConfigError
+from spectracam.sensor.exposure import exposure_times_s
+from spectracam.experiments.motion.timing import TimingSpec, capture_timing
 from spectracam.sensor import SensorSpec
 
 T = np.array([0.02, 0.01, 0.04])

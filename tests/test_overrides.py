@@ -12,10 +12,10 @@ import pytest
 from click.testing import CliRunner
 
 from spectracam.cli import main
-from spectracam.errors import ConfigError
+from spectracam.core.errors import ConfigError
 from spectracam.io.exr import read_raw_exr, read_radiance_exr
-from spectracam.io.files import atomic_write
-from spectracam.overrides import apply_overrides, parse_assignment, parse_value
+from spectracam.core.files import atomic_write
+from spectracam.pipeline.overrides import apply_overrides, parse_assignment, parse_value
 
 SCENE = "[image]\nwidth = 96\nheight = 72\n"
 
@@ -92,8 +92,8 @@ def test_bad_set_is_one_line_and_writes_nothing(files, tmp_path, setting, messag
 def test_set_on_paper_and_sweep(tmp_path):
     from pathlib import Path
 
-    from spectracam.experiments.paper import load_experiment
-    from spectracam.experiments.sweep import load_sweep
+    from spectracam.experiments.paper.experiment import load_experiment
+    from spectracam.experiments.sweep.experiment import load_sweep
 
     scenes = Path(__file__).resolve().parent.parent / "scenes"
     exp = load_experiment(scenes / "paper.toml", ["wavelengths.step_nm=20", "designs=['cfa/single']",

@@ -6,9 +6,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from spectracam.experiments.claims import evaluate
-from spectracam.experiments.paper import load_experiment, run_paper
-from spectracam.experiments.report import write_paper_outputs
+from spectracam.experiments.paper.claims import evaluate
+from spectracam.experiments.paper.experiment import load_experiment, run_paper
+from spectracam.experiments.paper.report import write_paper_outputs
 
 PAPER = Path(__file__).parent.parent / "scenes" / "paper.toml"
 
@@ -107,7 +107,7 @@ def test_sampled_band_spectra_carry_the_render_noise_that_light_weighting_remove
     """The cause of the old render noise, isolated: the same scene, spectra sampled inside each band
     (the previous method) against light-weighted band averages; both agree on average."""
     from conftest import small_scene
-    from spectracam.reference import ChartReference
+    from spectracam.scene.reference import ChartReference
     from spectracam.render import render
     from spectracam.render.mitsuba import render_mitsuba
 
@@ -142,7 +142,7 @@ def test_cache_rejects_an_entry_for_another_scene(tmp_path):
     from conftest import small_scene
     from spectracam.io.exr import write_radiance_exr
     from spectracam.render import render
-    from spectracam.cache import cached_render, render_key
+    from spectracam.io.cache import cached_render, render_key
 
     a = small_scene(image={"width": 64, "height": 48})
     b = small_scene(image={"width": 64, "height": 48}, illuminant={"temperature_K": 3000})
@@ -175,7 +175,7 @@ def test_claims_follow_the_numbers():
 
 
 def test_light_scale_alternative_scales_scene_and_cube_together(experiment):
-    from spectracam.experiments.paper import Alternative
+    from spectracam.experiments.paper.experiment import Alternative
 
     exp = dataclasses.replace(experiment, temperatures_K=(5000.0,), alternatives=(Alternative("dim", "", {}, 0.1),))
     r, _, _ = run_paper(exp, renderer="analytic", quick=True, use_cache=False)

@@ -13,7 +13,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from spectracam.scene import parse_scene
+from spectracam.pipeline.scene_file import parse_scene
 
 SMALL = {"image": {"width": 160, "height": 120}}
 
@@ -23,7 +23,7 @@ SMALL = {"image": {"width": 160, "height": 120}}
 def test_held_out_p95_is_the_95th_percentile_of_the_errors():
     """0, 1, …, 100 ΔE: the 95th percentile is 95 (any definition: it is a sample value), the mean 50, the max 100.
     A percentile asked as ``np.percentile(e, 0.95)`` (the 0.95th) reads 0.95."""
-    from spectracam import heldout
+    from spectracam.evaluation import heldout
 
     rng = np.random.default_rng(35)
     e = rng.permutation(np.arange(101.0))         # order must not matter
@@ -33,7 +33,7 @@ def test_held_out_p95_is_the_95th_percentile_of_the_errors():
     assert s["delta_e_p95"] == pytest.approx(95.0), s
     assert s["delta_e_max"] == 100.0
     # and on a textured target's per-pixel statistics, the same 95th percentile
-    from spectracam.target_score import _stats
+    from spectracam.evaluation.target_score import _stats
 
     assert _stats(e) == pytest.approx((50.0, 95.0, 100.0))
 
@@ -43,7 +43,7 @@ def test_held_out_p95_is_the_95th_percentile_of_the_errors():
 def _design_sensor(off=(), **kw):
     """``(SensorSpec, the design model's SensorModel of it)``: the paper's sensor with PRNU, DSNU and column FPN on."""
     from spectracam.camera import CameraSpec
-    from spectracam.design.model import SensorModel
+    from spectracam.experiments.design.model import SensorModel
 
     cam = CameraSpec()
     sensor = cam.sensor.replace(**{"prnu_fraction": 0.02, "dsnu_fraction": 0.1, "fpn_fraction": 0.005,
@@ -66,7 +66,7 @@ def _closed_form_variance(sensor, p, t):
 
 
 def test_design_pixel_variance_is_the_closed_form():
-    from spectracam.design.model import pixel_moments
+    from spectracam.experiments.design.model import pixel_moments
 
     sensor, sm = _design_sensor()
     assert sm.dark_rate_e_per_s > 0 and sm.prnu > 0
@@ -82,7 +82,7 @@ def test_design_pixel_variance_is_the_closed_form():
 
 def test_design_shot_noise_includes_the_dark_charge():
     """Only shot noise and dark current on: the variance is Poisson's, the mean charge p + d."""
-    from spectracam.design.model import pixel_moments
+    from spectracam.experiments.design.model import pixel_moments
 
     sensor, sm = _design_sensor(off=("read_noise", "fpn", "quantization"))
     r, t = np.array([0.0, 1.0e3, 1.0e4]), 2.0
@@ -95,7 +95,7 @@ def test_design_shot_noise_includes_the_dark_charge():
 def test_design_prnu_is_a_gain_squared():
     """PRNU alone: σ = PRNU × signal, so the variance grows with the square of the signal (×4 at twice the signal),
     and in a one-sensor camera (field-sequential) the gain is the same in every frame: covariance PRNU²·p_k·p_j."""
-    from spectracam.design.model import channel_covariances, pixel_moments
+    from spectracam.experiments.design.model import channel_covariances, pixel_moments
 
     _, sm = _design_sensor(off=("shot_noise", "dark_current", "read_noise", "quantization"), prnu_fraction=0.03,
                            dsnu_fraction=0.0, fpn_fraction=0.0, column_fpn_fraction=0.0)
@@ -129,7 +129,7 @@ def test_quad_bayer_is_bayer_of_two_by_two_same_colour_blocks():
 def test_rgbw_tile_is_kodak_cfa_2_0():
     """Kodak's CFA 2.0 (Compton & Hamilton, US 2007/0024931), as the module's docstring draws it:
     W on a checkerboard, B top-left, R bottom-right."""
-    import spectracam.architectures.rgbw as rgbw
+    import spectracam.architecture.rgbw as rgbw
 
     want = "WBWG" "BWGW" "WGWR" "GWRW"
     assert _pattern("rgbw") == want
@@ -144,7 +144,7 @@ def test_samples_layout_squares_are_centred_in_their_cells():
     """The library chart's squares, (1 − gap) of their cell, centred in it, rasterised by texel centre (i + ½):
     a cell of 10 texels with gap 0.25 (inset 1.25) keeps texels 1…8, one texel off each side — symmetric.  Centres
     off by half a texel keep 2…8."""
-    from spectracam.target import TargetSpec, texel_labels
+    from spectracam.scene.target import TargetSpec, texel_labels
 
     spec = TargetSpec(kind="samples", supersampling=2, gap=0.25, columns=4, samples=tuple(range(8)))
     labels = np.asarray(texel_labels(spec, 20, 10, 99))           # 40 × 20 texels: cells of 10 texels, 4 × 2
@@ -162,7 +162,7 @@ def test_painted_shapes_cover_texels_by_their_centres():
     """A disc of radius 2 about texel coordinates (5, 5) (a texel's corner) covers the texels whose centre
     (x + ½, y + ½) lies within it: the 12 of a 4 × 4 block less its corners, symmetric about (5, 5); a rectangle of half
     sides 2 × 1 about (5, 5) covers columns 3…6 and rows 4…5."""
-    from spectracam._paint import paint_shapes
+    from spectracam.scene._paint import paint_shapes
 
     def paint(disc, hw, hh):
         labels = np.full((10, 10), -1, np.int32)
@@ -188,7 +188,7 @@ def test_painted_shapes_cover_texels_by_their_centres():
 def test_interior_excludes_pixels_within_the_margin_of_another_label(margin):
     """Two labels meeting at column 10 of a 20 × 30 image, and one mixed pixel (−1) at (row 5, column 4): a pixel
     is interior when no other label, mixed pixel or image border lies within ``margin`` pixels (Chebyshev)."""
-    from spectracam.target_score import _interior
+    from spectracam.evaluation.target_score import _interior
 
     labels = np.zeros((20, 30), np.int32)
     labels[:, 10:] = 1
@@ -213,7 +213,7 @@ MOTION_TINY = ("edge_size_px=[48, 32]", "speeds_px_per_ms=[0.0]", "samples_per_s
 def test_motion_still_reference_is_the_noise_free_capture():
     """The still reference is the design's capture without noise: its false colour is the noise-free run's and
     does not change with the noise seed; at rest every noisy seed differs from it (by its noise: none is 0)."""
-    from spectracam.motion.experiment import load_motion, run_motion
+    from spectracam.experiments.motion.experiment import load_motion, run_motion
 
     def row(*sets):
         spec, scene = load_motion(MOTION_TINY + sets)
@@ -232,7 +232,7 @@ def test_motion_still_reference_is_the_noise_free_capture():
 
 def test_crossing_speed_is_the_linear_interpolation_of_the_difference():
     """a − b = −2, −1, +3 at 0, 0.1, 0.3 px/ms: zero between 0.1 and 0.3 at 0.1 + 0.2·1/4 = 0.15 px/ms."""
-    from spectracam.motion.experiment import crossing
+    from spectracam.experiments.motion.experiment import crossing
 
     speeds = np.array([0.0, 0.1, 0.3])
     b = np.array([5.0, 5.0, 5.0])
@@ -248,13 +248,13 @@ def test_crossing_speed_is_the_linear_interpolation_of_the_difference():
 def test_rolling_shutter_shifts_a_rightward_edge_right_in_lower_rows():
     """Rows are read top to bottom, row r a line time t_row later than row r − 1: a vertical edge moving right at v
     lies v·t_row·r further right in row r (a shear with the closed-form slope v·t_row)."""
-    from spectracam.architecture import make_architecture
-    from spectracam.motion.motion import Motion
-    from spectracam.motion.render import MovingScene, integrate
-    from spectracam.motion.timing import TimingSpec, capture_timing
-    from spectracam.scene import Scene
-    from spectracam.spatial.geometry import CameraGeometry
-    from spectracam.spatial.targets import SlantedEdge
+    from spectracam.architecture.base import make_architecture
+    from spectracam.experiments.motion.motion import Motion
+    from spectracam.experiments.motion.render import MovingScene, integrate
+    from spectracam.experiments.motion.timing import TimingSpec, capture_timing
+    from spectracam.pipeline.scene_file import Scene
+    from spectracam.experiments.spatial.geometry import CameraGeometry
+    from spectracam.experiments.spatial.targets import SlantedEdge
 
     scene = Scene.from_dict({"wavelengths": {"start_nm": 400, "stop_nm": 700, "step_nm": 50}})
     width, height, margin, line_us, v = 32, 12, 4, 500.0, 0.4     # v in px/ms
@@ -289,9 +289,9 @@ def _srgb8(x):
 def test_view_scene_preview_is_srgb_of_the_scene():
     """Under CIE D65 (sRGB's white) a grey of reflectance 0.2 previews as linear sRGB (0.2, 0.2, 0.2) and the white
     diffuser as (1, 1, 1); an orange (a 600-nm band) as the published XYZ→sRGB matrix (IEC 61966-2-1) says."""
-    from spectracam.illuminant import white_diffuser_radiance
+    from spectracam.scene.illuminant import white_diffuser_radiance
     from spectracam.render import RadianceCube
-    from spectracam.spectra import K_M_LM_PER_W, cmf_band_weights
+    from spectracam.core.spectra import K_M_LM_PER_W, cmf_band_weights
     from spectracam.view.cases import Case, _radiance
 
     scene = parse_scene({**SMALL, "illuminant": {"type": "cie", "name": "D65"}})
@@ -316,9 +316,9 @@ def test_view_scene_preview_is_srgb_of_the_scene():
 def test_view_raw_preview_maps_the_top_code_to_full_scale(tmp_path):
     """Each raw pixel in its channel's colour at brightness DN / top code (2ⁿ − 1): a G pixel at the top code is the
     G colour at full scale, at half the top code at half of it."""
-    from spectracam.architecture import MosaicLayout
+    from spectracam.architecture.base import MosaicLayout
     from spectracam.camera import CameraSpec
-    from spectracam.capture import RawCapture
+    from spectracam.camera.capture import RawCapture
     from spectracam.io.exr import write_raw_exr
     from spectracam.view.cases import CHANNEL_COLOURS, load_case
 
@@ -343,9 +343,9 @@ def test_posed_edge_moves_with_the_object():
     """The slanted edge runs ``angle`` from the vertical, its column growing down the image (documented).  Moving
     the object up by 3 pixels (y up) moves the image up 3 rows: the posed edge's coverage at row r is the resting
     edge's at row r + 3; moved right by 2 pixels, it is the resting edge's 2 columns to the left."""
-    from spectracam.motion.render import posed_edge
-    from spectracam.spatial.geometry import CameraGeometry
-    from spectracam.spatial.targets import SlantedEdge
+    from spectracam.experiments.motion.render import posed_edge
+    from spectracam.experiments.spatial.geometry import CameraGeometry
+    from spectracam.experiments.spatial.targets import SlantedEdge
 
     ss, W, H = 2, 40, 40
     g = CameraGeometry.framing(W * 0.5, 12.0, 1.4, 10.0, W, H)
@@ -369,8 +369,8 @@ def test_misregistration_along_x_shifts_columns():
     right (x) sees the next column, 1 px down (y) the next row, of the same image."""
     from scipy import fft as sfft
 
-    from spectracam.spatial.capture import misregistration_shifts
-    from spectracam.spatial.optics import sample_channels
+    from spectracam.experiments.spatial.capture import misregistration_shifts
+    from spectracam.experiments.spatial.optics import sample_channels
 
     assert misregistration_shifts(0.5) == ((0.5, 0.0), (0.0, 0.0), (0.0, 0.5))
     ss, H, W = 2, 8, 12
@@ -391,13 +391,13 @@ def test_misregistration_along_x_shifts_columns():
 def test_set_list_index_sets_that_element():
     """``a.b[1]=v`` sets the second element (indices from 0), in a table, at the top level and in a list the file
     leaves at its default."""
-    from spectracam.overrides import apply_overrides
+    from spectracam.pipeline.overrides import apply_overrides
 
     assert apply_overrides({"a": {"b": [1, 2, 3]}}, ["a.b[1]=9"]) == {"a": {"b": [1, 9, 3]}}
     assert apply_overrides({"a": {"b": [1, 2, 3]}}, ["a.b[0]=9"]) == {"a": {"b": [9, 2, 3]}}
     assert apply_overrides({"k": [1, 2, 3]}, ["k[2]=9"]) == {"k": [1, 2, 9]}
     assert apply_overrides({}, ["a.b[1]=9"], defaults=lambda: {"a": {"b": [1, 2, 3]}}) == {"a": {"b": [1, 9, 3]}}
-    from spectracam.motion.experiment import load_motion
+    from spectracam.experiments.motion.experiment import load_motion
 
     spec, _ = load_motion(("designs[1]='rgbw/single'",))      # an experiment's list left at its default
     default, _ = load_motion(())
@@ -410,7 +410,7 @@ def test_a_false_flag_reaches_the_spec_as_false():
     from click.testing import CliRunner
 
     from spectracam.cli import _scene
-    from spectracam.cli_options import flag_overrides, processing_options
+    from spectracam.experiments.options import flag_overrides, processing_options
 
     data = {**SMALL, "processing": {"gamut_clip": True}}
     seen = {}
@@ -446,12 +446,12 @@ RECORDED_UNIFORMS = (0.8014543652534485, 0.20666712522506714, 0.4726284742355346
 
 
 def test_philox_matches_the_published_known_answer():
-    from spectracam import kernels
+    from spectracam.sensor import kernels
 
     got = kernels.philox_np(np.array([0], np.uint64), (0, 0), 0)
     assert tuple(int(w[0]) for w in got) == PHILOX_ZERO
     if kernels.available():          # the compiled kernel: the same first word, as a uniform (top 24 bits · 2⁻²⁴)
-        from spectracam import _numba_kernels as nk
+        from spectracam.sensor import _numba_kernels as nk
 
         out = np.empty(4, np.float32)
         nk.fill_kernel(out, np.int64(0), np.uint64(0), np.uint64(0), False)
@@ -461,7 +461,7 @@ def test_philox_matches_the_published_known_answer():
 @pytest.mark.parametrize("fused", ["1", "0"])
 def test_noise_stream_known_answer(fused, monkeypatch):
     """The project's generator from seed 0 (recorded at b2d6aa4), on the compiled kernels and on the NumPy path."""
-    from spectracam import kernels
+    from spectracam.sensor import kernels
     from spectracam.sensor import TEMPORAL_STREAM, noise_stream
 
     monkeypatch.setenv("SPECTRACAM_FUSED", fused)

@@ -6,9 +6,9 @@ import pytest
 from click.testing import CliRunner
 
 from spectracam import ChartReference, capture, score
-from spectracam.architecture import ARCHITECTURES, Architecture, MosaicLayout
+from spectracam.architecture.base import ARCHITECTURES, Architecture, MosaicLayout
 from spectracam.cli import main
-from spectracam.color import ProcessingSpec
+from spectracam.processing.color import ProcessingSpec
 from spectracam.io.dng import write_dng
 from spectracam.io.exr import read_raw_exr, write_radiance_exr, write_raw_exr
 

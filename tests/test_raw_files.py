@@ -11,12 +11,12 @@ from conftest import small_scene
 
 from spectracam import ChartReference, capture
 from spectracam.camera import CameraSpec
-from spectracam.capture import RawCapture
-from spectracam.errors import ConfigError
+from spectracam.camera.capture import RawCapture
+from spectracam.core.errors import ConfigError
 from spectracam.io.dng import as_shot_neutral, color_matrices, saturation_iso, write_dng
 from spectracam.io.exr import attribute_number, read_exr, read_raw_exr, write_radiance_exr, write_raw_exr
-from spectracam.metrics import xyz_to_lab
-from spectracam.scene import parse_scene
+from spectracam.core.cielab import xyz_to_lab
+from spectracam.pipeline.scene_file import parse_scene
 
 parse_camera = CameraSpec.from_dict
 
@@ -331,7 +331,7 @@ def test_dng_of_a_luther_camera_develops_to_the_scene(tmp_path, scene_640, analy
     # A camera whose channels are the CIE 1931 CMFs, noise-free, 16 bits: through the DNG and LibRaw
     # every patch inside sRGB's gamut reproduces the scene (measured max 0.15 ΔE*ab; the chart's cyan,
     # blue and yellow lie outside sRGB and are clipped), the greys to 0.05 of their a*, b*.
-    from spectracam.filters import FilterSpec
+    from spectracam.architecture.filters import FilterSpec
     from spectracam.sensor import SensorSpec
 
     colour = pytest.importorskip("colour")

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from spectracam.color import adaptation_matrix
-from spectracam.metrics import delta_e
+from spectracam.processing.color import adaptation_matrix
+from spectracam.core.cielab import delta_e
 
 SHARMA_2005 = Path(__file__).parent / "data" / "ciede2000_sharma2005.csv"
 

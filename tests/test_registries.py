@@ -5,21 +5,21 @@ import pytest
 
 from conftest import small_scene
 from spectracam import capture, score
-from spectracam.architecture import ARCHITECTURES, MosaicLayout
+from spectracam.architecture.base import ARCHITECTURES, MosaicLayout
 from spectracam.camera import CameraSpec, CaptureSpec
-from spectracam.capture import RawCapture
-from spectracam.color import ADAPTATIONS, DEMOSAIC_METHODS, DISPLAYS, ProcessingSpec, adaptation_matrix, \
+from spectracam.camera.capture import RawCapture
+from spectracam.processing.color import ADAPTATIONS, DEMOSAIC_METHODS, DISPLAYS, ProcessingSpec, adaptation_matrix, \
     display_rgb_to_xyz
-from spectracam.errors import ConfigError
-from spectracam.exposure import EXPOSURE_SCHEMES
-from spectracam.filters import FILTER_KINDS, QE_MODELS, FilterSpec, quantum_efficiency, responsivities
-from spectracam.illuminant import ILLUMINANTS, IlluminantSpec
-from spectracam.metrics import DELTA_E_METHODS, SNR_COMBINATIONS, combine_snr_db, delta_e
+from spectracam.core.errors import ConfigError
+from spectracam.sensor.exposure import EXPOSURE_SCHEMES
+from spectracam.architecture.filters import FILTER_KINDS, QE_MODELS, FilterSpec, quantum_efficiency, responsivities
+from spectracam.scene.illuminant import ILLUMINANTS, IlluminantSpec
+from spectracam.core.cielab import DELTA_E_METHODS, SNR_COMBINATIONS, combine_snr_db, delta_e
 from spectracam.optics import IRRADIANCE_FORMS, OpticsSpec
 from spectracam.render import RENDERERS, render
-from spectracam.score import channel_stats
+from spectracam.evaluation.score import channel_stats
 from spectracam.sensor import FPN_READINGS, SHOT_NOISE_MODELS, SensorSpec, fixed_pattern
-from spectracam.spectra import WavelengthGrid
+from spectracam.core.spectra import WavelengthGrid
 
 W = np.array([0.95, 1.0, 1.09])
 
@@ -82,7 +82,7 @@ def test_gaussian_filters_have_the_stated_centre_and_fwhm():
 def test_camera_filters_peak_at_qe_peak_and_follow_the_measured_data():
     """A camera's relative curves are per unit energy: per photon they are S(λ)·λ⁻¹ up to one constant
     for all channels (the gains restored), scaled so the largest responsivity is qe_peak."""
-    from spectracam.cameras import energy_sensitivities
+    from spectracam.architecture.cameras import energy_sensitivities
 
     spec = FilterSpec(kind="camera", qe_peak=0.5)
     R = responsivities(spec, FINE)
@@ -99,7 +99,7 @@ def test_camera_filters_peak_at_qe_peak_and_follow_the_measured_data():
 
 
 def test_xyz_filters_are_quantal_colour_matching_functions():
-    from spectracam.spectra import cie_1931_cmfs
+    from spectracam.core.spectra import cie_1931_cmfs
 
     R = responsivities(FilterSpec(kind="xyz"), FINE)
     wl, xyz = cie_1931_cmfs()

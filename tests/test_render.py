@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 
 from conftest import patch_means, small_scene
-from spectracam.chart import patch_masks, patch_names_and_data
+from spectracam.scene.chart import patch_masks, patch_names_and_data
 from spectracam.render import render
 from spectracam.render.mitsuba import find_libllvm19, run_probe, select_variant
-from spectracam.spectra import cie_1931_cmfs, luminance_cd_m2, planck_radiance
+from spectracam.core.spectra import cie_1931_cmfs, luminance_cd_m2, planck_radiance
 
 #: Issue 2's accuracy requirement: every patch and band within 0.5 % at the default sample count.
 PATCH_BAND_RTOL = 0.005
@@ -54,7 +54,7 @@ def test_white_patch_luminance_is_declared_level_times_reflectance(renderer, T):
 
 def test_radiance_is_illuminant_times_reflectance_over_pi(scene_5000, analytic_5000):
     # the closed form at a band centre, far from edges, vs the band average (smooth spectra: < 0.1 %)
-    from spectracam.illuminant import spectral_irradiance
+    from spectracam.scene.illuminant import spectral_irradiance
 
     masks = patch_masks(scene_5000.chart, scene_5000.image.width, scene_5000.image.height)
     lam = 555.0

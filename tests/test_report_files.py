@@ -5,11 +5,11 @@ import pytest
 
 from spectracam import ChartReference, capture, score
 from spectracam.camera import CameraSpec, CaptureSpec
-from spectracam.color import ProcessingSpec, display_rgb_to_xyz
-from spectracam.filters import FilterSpec
+from spectracam.processing.color import ProcessingSpec, display_rgb_to_xyz
+from spectracam.architecture.filters import FilterSpec
 from spectracam.io.report import (REC709_CHROMATICITIES, delta_e_figure, display_chromaticities, srgb_preview,
                                   write_score_outputs)
-from spectracam.metrics import xyz_to_lab
+from spectracam.core.cielab import xyz_to_lab
 from spectracam.sensor import SensorSpec
 
 colour = pytest.importorskip("colour")

@@ -152,7 +152,7 @@ def test_disk_full_while_writing_leaves_nothing(good, tmp_path, monkeypatch):
     # the third file of simulate fails as a full disk would: one line, exit 1, none of its outputs
     from click.testing import CliRunner
 
-    import spectracam.io.files as files
+    import spectracam.core.files as files
     from spectracam.cli import main
 
     real, n = files.atomic_write, {"calls": 0}
@@ -190,7 +190,7 @@ def test_signals_leave_nothing(good, tmp_path, sig):
 
 def test_render_cache_verifies_its_pixels(tmp_path):
     from conftest import small_scene
-    from spectracam.cache import cached_render, render_key
+    from spectracam.io.cache import cached_render, render_key
 
     s = small_scene(image={"width": 64, "height": 48})
     cube, hit = cached_render(s, "analytic", directory=tmp_path)
@@ -206,7 +206,7 @@ def test_render_cache_verifies_its_pixels(tmp_path):
 def test_sweep_journal_survives_damage_and_foreign_rows(tmp_path):
     from pathlib import Path
 
-    from spectracam.experiments.sweep import load_sweep, run_sweep
+    from spectracam.experiments.sweep.experiment import load_sweep, run_sweep
 
     root = Path(__file__).resolve().parent.parent / "scenes"
     (tmp_path / "sw.toml").write_text(f'base_scene = "{root}/blackbody_5000K.toml"\nrenderer = "analytic"\n'
@@ -225,7 +225,7 @@ def test_sweep_journal_survives_damage_and_foreign_rows(tmp_path):
     rows = [json.loads(x) for x in j.read_text().splitlines() if x.startswith("{\"sweep\": \"" + sweep.digest)]
     assert sorted((r["cell"], r["trial"]) for r in rows) == [(0, 0), (1, 0), (2, 0)]
     (tmp_path / "o" / "sweep.json").write_text("{damaged")
-    from spectracam.errors import SpectracamError
+    from spectracam.core.errors import SpectracamError
 
     with pytest.raises(SpectracamError, match="sweep.json is damaged"):
         run_sweep(sweep, tmp_path / "o", serial=True, resume=True, progress=False)

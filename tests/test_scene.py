@@ -3,11 +3,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from spectracam.chart import ChartSpec, View, patch_coverage, patch_masks, patch_rectangles_mm
-from spectracam.errors import ConfigError
-from spectracam.illuminant import IlluminantSpec, irradiance_scale, spectral_irradiance
-from spectracam.scene import load_scene, parse_scene
-from spectracam.spectra import K_M_LM_PER_W, cie_1931_cmfs
+from spectracam.scene.chart import ChartSpec, View, patch_coverage, patch_masks, patch_rectangles_mm
+from spectracam.core.errors import ConfigError
+from spectracam.scene.illuminant import IlluminantSpec, irradiance_scale, spectral_irradiance
+from spectracam.pipeline.scene_file import load_scene, parse_scene
+from spectracam.core.spectra import K_M_LM_PER_W, cie_1931_cmfs
 
 SCENES = sorted(p for p in (Path(__file__).parent.parent / "scenes").glob("*.toml") if p.stem not in ("paper", "design"))  # experiment and design files
 

@@ -6,13 +6,13 @@ import pytest
 
 from conftest import small_scene
 from spectracam.camera import CameraSpec, CaptureSpec
-from spectracam.capture import capture
-from spectracam.color import ProcessingSpec, adaptation_matrix, display_rgb_to_xyz
-from spectracam.errors import ConfigError
-from spectracam.reference import ChartReference
-from spectracam.score import chart_scielab_map, chart_truth_xyz, developed_rgb, score
+from spectracam.camera.capture import capture
+from spectracam.processing.color import ProcessingSpec, adaptation_matrix, display_rgb_to_xyz
+from spectracam.core.errors import ConfigError
+from spectracam.scene.reference import ChartReference
+from spectracam.evaluation.score import chart_scielab_map, chart_truth_xyz, developed_rgb, score
 from spectracam.sensor import SensorSpec
-from spectracam.spatial.scielab import samples_per_degree, scielab
+from spectracam.evaluation.scielab import samples_per_degree, scielab
 
 NOISELESS = SensorSpec().off("shot_noise", "dark_current", "read_noise", "fpn", "quantization")
 
@@ -61,10 +61,10 @@ def test_s_cielab_is_below_per_pixel_delta_e_for_a_noisy_capture(noisy):
 
 def test_chart_map_equals_scielab_of_the_whole_image_band_by_band(noisy, scene_5000, monkeypatch):
     # the crop to the scored boxes plus the filters' reach, and the bands of rows, change nothing: the map equals
-    # spectracam.spatial.scielab on the whole rendered image against the whole truth image
+    # spectracam.evaluation.scielab on the whole rendered image against the whole truth image
     import importlib
 
-    score_module = importlib.import_module("spectracam.score")
+    score_module = importlib.import_module("spectracam.evaluation.score")
 
     raw, ref, res = noisy
     processing = scene_5000.processing
@@ -132,7 +132,7 @@ def test_validation_uses_the_scielab_samples_per_degree():
 # -- no winner from an unusable image ------------------------------------------------------------------------------
 
 def test_usability_thresholds_and_reasons():
-    from spectracam.experiments.usability import UsabilitySpec
+    from spectracam.evaluation.usability import UsabilitySpec
 
     u = UsabilitySpec()
     assert (u.min_white_snr_db, u.max_s_cielab_mean) == (20.0, 40.0)
@@ -149,7 +149,7 @@ def test_usability_thresholds_and_reasons():
 
 
 def test_winners_skip_unusable_cases_and_say_when_none_is_usable():
-    from spectracam.experiments.architectures import winners
+    from spectracam.experiments.architectures.experiment import winners
 
     def row(design, de, usable, factor=1.0):
         return {"illuminant": "D65", "light_factor": factor, "design": design, "delta_e_mean": de,
@@ -167,8 +167,8 @@ def test_winners_skip_unusable_cases_and_say_when_none_is_usable():
 def dim_and_normal():
     """architectures at the paper's light and at 1/100 of it (quick, analytic, one seed, chart only)."""
     from spectracam.cli import default_experiment
-    from spectracam.experiments.architectures import ArchitecturesRun, run_architectures
-    from spectracam.experiments.paper import load_experiment
+    from spectracam.experiments.architectures.experiment import ArchitecturesRun, run_architectures
+    from spectracam.experiments.paper.experiment import load_experiment
 
     run = ArchitecturesRun(load_experiment(default_experiment(), ()), quick=True, seeds=1, light_factors=(1.0, 0.01),
                            natural_scenes=())
@@ -176,7 +176,7 @@ def dim_and_normal():
 
 
 def test_architectures_at_a_hundredth_of_the_light_names_no_winner(dim_and_normal, tmp_path):
-    from spectracam.experiments.architectures import write_architectures_outputs
+    from spectracam.experiments.architectures.experiment import write_architectures_outputs
 
     res = dim_and_normal
     dim = [r for r in res["rows"] if r["light_factor"] == 0.01]
@@ -205,7 +205,7 @@ def test_architectures_at_a_hundredth_of_the_light_names_no_winner(dim_and_norma
 
 
 def test_sweep_rows_carry_s_cielab_and_usability(scene_5000, analytic_5000):
-    from spectracam.experiments.sweep import METRICS, run_cell
+    from spectracam.experiments.sweep.experiment import METRICS, run_cell
 
     assert {"s_cielab_mean", "s_cielab_p95", "snr_white_rendered_db"} <= set(METRICS)
     out = run_cell(0, {"illuminant.temperature_K": 5000}, scene_5000, analytic_5000, 1, 7,
@@ -229,7 +229,7 @@ def test_architectures_usability_options_reach_the_run_and_are_validated(monkeyp
     from click.testing import CliRunner
 
     from spectracam import cli
-    from spectracam.experiments import architectures as arch
+    from spectracam.experiments.architectures import experiment as arch
 
     seen = {}
 
@@ -253,7 +253,7 @@ def test_architectures_usability_options_reach_the_run_and_are_validated(monkeyp
 def test_fft_filter_equals_the_row_and_column_passes(shape):
     """The chart scores' FFT filter (numpy 'symmetric' padding = scipy 'reflect') is scielab_filter to rounding:
     float64 (the default) to 1e-12, float32 to 2e-6 of the values' scale — including images smaller than the kernels' reach."""
-    from spectracam.spatial.scielab import scielab_filter, scielab_filter_fft
+    from spectracam.evaluation.scielab import scielab_filter, scielab_filter_fft
 
     x = np.random.default_rng(3).random((*shape, 3))
     ref = scielab_filter(x, 41.23)

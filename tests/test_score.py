@@ -8,11 +8,11 @@ import pytest
 
 from conftest import small_scene
 from spectracam import capture, score
-from spectracam.architecture import MosaicLayout
+from spectracam.architecture.base import MosaicLayout
 from spectracam.camera import CameraSpec, CaptureSpec
-from spectracam.color import ProcessingSpec, display_rgb_to_xyz, tile_replicate
-from spectracam.filters import FilterSpec
-from spectracam.metrics import combine_snr_db, delta_e, xyz_to_lab
+from spectracam.processing.color import ProcessingSpec, display_rgb_to_xyz, tile_replicate
+from spectracam.architecture.filters import FilterSpec
+from spectracam.core.cielab import combine_snr_db, delta_e, xyz_to_lab
 from spectracam.render import render
 from spectracam.sensor import SensorSpec
 
@@ -88,7 +88,7 @@ def test_scores_do_not_depend_on_light_level(arch, scheme):
 @pytest.mark.parametrize("arch, scheme", [("prism", "optimal"), ("cfa", "single")])
 def test_snr_against_closed_form(arch, scheme):
     # shot + read only: SNR of a channel = 20·log10(μ/√(μ + σ_r²)) for μ photo-electrons
-    from spectracam.chart import patch_boxes
+    from spectracam.scene.chart import patch_boxes
 
     scene = small_scene(image={"width": 480, "height": 360})
     sensor = SensorSpec(fpn=False, quantization=False, dark_current=False)
@@ -121,8 +121,8 @@ def test_cfa_scores_all_demosaicking_methods(scene_5000, analytic_5000):
 def test_recorded_electrons_undo_quantisation_and_dark_charge():
     # a ramp of signals through the 8-bit ADC with dark current on: mid-step dequantisation minus the
     # expected dark charge recovers the mean photo-electrons to within a small part of a step (512 e⁻)
-    from spectracam.capture import RawCapture
-    from spectracam.score import recorded_electrons
+    from spectracam.camera.capture import RawCapture
+    from spectracam.evaluation.score import recorded_electrons
     from spectracam.sensor import expose, noise_stream
 
     sensor = SensorSpec(shot_noise=False, read_noise=False, fpn=False)
@@ -172,7 +172,7 @@ def test_score_and_simulate_commands(tmp_path):
 @pytest.mark.parametrize("method", ["bilinear", "malvar2004", "menon2007", "patch"])
 def test_demosaicking_in_bands_equals_one_pass(method, monkeypatch):
     # bands of rows with context margins (memory) give exactly the one-pass image
-    import spectracam.color as color
+    import spectracam.processing.color as color
 
     mosaic = np.random.default_rng(0).random((300, 90)) * 100
     layout = MosaicLayout.bayer("GBRG")

@@ -5,18 +5,18 @@ import numpy as np
 import pytest
 
 from spectracam import capture
-from spectracam.architecture import MosaicLayout, make_architecture
+from spectracam.architecture.base import MosaicLayout, make_architecture
 from spectracam.camera import CameraSpec, CaptureSpec
 from spectracam.camera import photo_electron_rates as _rates
-from spectracam.capture import capture as capture_stage
-from spectracam.errors import ConfigError
-from spectracam.reference import ChartReference
-from spectracam.exposure import exposure_times_s
-from spectracam.filters import FilterSpec, responsivities
+from spectracam.camera.capture import capture as capture_stage
+from spectracam.core.errors import ConfigError
+from spectracam.scene.reference import ChartReference
+from spectracam.sensor.exposure import exposure_times_s
+from spectracam.architecture.filters import FilterSpec, responsivities
 from spectracam.optics import OpticsSpec, irradiance_factor
 from spectracam.render import RadianceCube
 from spectracam.sensor import SensorSpec, adc_inverse, expose, fixed_pattern, noise_stream
-from spectracam.spectra import PLANCK_H_J_S, SPEED_OF_LIGHT_M_S, WavelengthGrid
+from spectracam.core.spectra import PLANCK_H_J_S, SPEED_OF_LIGHT_M_S, WavelengthGrid
 
 GRID = np.arange(400.0, 701.0, 10.0)
 QUIET = SensorSpec().off("shot_noise", "dark_current", "read_noise", "fpn", "quantization", "clipping")
@@ -169,8 +169,8 @@ def test_exposure_rules():
 def test_white_metered_near_saturation_does_not_clip(scene_5000, analytic_5000, fill, clipped_lo, clipped_hi):
     """With the paper's noise (FPN as a bound) the white metered at full well clips most of its
     pixels (80 % at this seed: the flooring ADC reads a full well as the top code); metered at 95 % (the default) none."""
-    from spectracam.experiments.paper import load_experiment
-    from spectracam.scene import shipped_scene_file
+    from spectracam.experiments.paper.experiment import load_experiment
+    from spectracam.pipeline.scene_file import shipped_scene_file
 
     paper_camera = load_experiment(shipped_scene_file("paper.toml")).base.camera
     cam = paper_camera.replace(capture=paper_camera.capture.replace(white_fill=fill)).with_design("prism/optimal")
@@ -185,7 +185,7 @@ def test_optimal_prism_and_fsc_have_identical_expected_electrons(scene_5000, ana
     p = capture(analytic_5000, design="prism/optimal", scene=scene_5000)
     f = capture(analytic_5000, design="fsc/optimal", scene=scene_5000)
     np.testing.assert_array_equal(p.expected_e, f.expected_e)
-    from spectracam.chart import patch_masks
+    from spectracam.scene.chart import patch_masks
 
     white = patch_masks(scene_5000.chart, 160, 120)[18]
     # each channel's white-patch mean reaches the metered fill of the well, 95 % (photo + dark)

@@ -6,14 +6,14 @@ import pytest
 from conftest import small_scene
 from spectracam import capture
 from spectracam.camera import CameraSpec, CaptureSpec
-from spectracam.capture import capture as capture_stage
-from spectracam.errors import ConfigError
-from spectracam.filters import FilterSpec, quantum_efficiency, responsivities
+from spectracam.camera.capture import capture as capture_stage
+from spectracam.core.errors import ConfigError
+from spectracam.architecture.filters import FilterSpec, quantum_efficiency, responsivities
 from spectracam.optics import OpticsSpec, radiance_to_photon_irradiance
 from spectracam.render import RadianceCube, render
-from spectracam.scene import load_scene
+from spectracam.pipeline.scene_file import load_scene
 from spectracam.sensor import SensorSpec, adc_inverse, expose, fixed_pattern, noise_stream
-from spectracam.spectra import WavelengthGrid
+from spectracam.core.spectra import WavelengthGrid
 
 GRID = WavelengthGrid(np.arange(405.0, 700.0, 10.0))
 

@@ -5,8 +5,8 @@ from importlib.resources import files
 import numpy as np
 import pytest
 
-import spectracam.silicon as si
-from spectracam.silicon import absorption_coefficient_per_um, photodiode_qe, reflectance
+import spectracam.architecture.silicon as si
+from spectracam.architecture.silicon import absorption_coefficient_per_um, photodiode_qe, reflectance
 
 #: Green (2008)'s tabulated α, 1/cm, as transcribed independently to three figures in
 #: github.com/NedJWestern/Loss-Analysis, constants/Si_alpha_Green_2008.dat (commit e315383).

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from spectracam.errors import ConfigError
-from spectracam.spatial.command import spatial_cmd
-from spectracam.spatial.experiment import load_spatial
+from spectracam.core.errors import ConfigError
+from spectracam.experiments.spatial.command import spatial_cmd
+from spectracam.experiments.spatial.experiment import load_spatial
 
 SMALL = ["edge_size_px=[64, 64]", "star_size_px=[64, 64]", "chart_size_px=[96, 64]", "zone_plate_size_px=[64, 64]",
          "pixel_pitches_um=[10.0, 2.0]", "f_numbers=[1.4]", "wavelengths.step_nm=30", "supersampling=2"]
@@ -85,7 +85,7 @@ def test_aliasing_counts_against_the_nyquist_reference(run):
 
 
 def test_footprint_reference_hides_aliasing_the_nyquist_reference_shows():
-    from spectracam.spatial.experiment import load_spatial, run_spatial
+    from spectracam.experiments.spatial.experiment import load_spatial, run_spatial
 
     base = SMALL + ["pixel_pitches_um=[10.0]", "targets=['zone_plate']", "designs=['fsc/optimal']"]
     out = {}
@@ -97,7 +97,7 @@ def test_footprint_reference_hides_aliasing_the_nyquist_reference_shows():
 
 
 def test_standard_esfr_reads_lower_than_the_binning_corrected_one():
-    from spectracam.spatial.experiment import load_spatial, run_spatial
+    from spectracam.experiments.spatial.experiment import load_spatial, run_spatial
 
     base = SMALL + ["pixel_pitches_um=[10.0]", "targets=['edge']", "designs=['fsc/optimal']"]
     m = {}
@@ -108,8 +108,8 @@ def test_standard_esfr_reads_lower_than_the_binning_corrected_one():
 
 
 def test_noise_seeds_give_a_mean_with_its_interval():
-    from spectracam.spatial.experiment import load_spatial, run_spatial
-    from spectracam.spatial.score import SpatialRow
+    from spectracam.experiments.spatial.experiment import load_spatial, run_spatial
+    from spectracam.experiments.spatial.score import SpatialRow
 
     spec, scene = load_spatial(SMALL + ["pixel_pitches_um=[10.0]", "targets=['edge']", "noise=true", "seeds=3",
                                         "designs=['fsc/optimal']"])

@@ -9,13 +9,13 @@ from scipy import ndimage
 from scipy.optimize import brentq
 from scipy.special import ndtr
 
-from spectracam.metrics import delta_e, xyz_to_lab
-from spectracam.spatial import (SCIELAB_FILTERS, XYZ_TO_OPPONENT, XYZ_TO_OPPONENT_AS_PRINTED, esfr,
+from spectracam.core.cielab import delta_e, xyz_to_lab
+from spectracam.experiments.spatial import (SCIELAB_FILTERS, XYZ_TO_OPPONENT, XYZ_TO_OPPONENT_AS_PRINTED, esfr,
                                 samples_per_degree, scielab, scielab_filter, scielab_kernels)
 
 # the package re-exports the functions under the submodules' names, so fetch the modules themselves
-esfr_module = importlib.import_module("spectracam.spatial.esfr")
-scielab_module = importlib.import_module("spectracam.spatial.scielab")
+esfr_module = importlib.import_module("spectracam.evaluation.esfr")
+scielab_module = importlib.import_module("spectracam.evaluation.scielab")
 
 # ----------------------------------------------------------------------------------------------- e-SFR
 

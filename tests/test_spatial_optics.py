@@ -7,16 +7,16 @@ import numpy as np
 import pytest
 
 from spectracam.camera import CameraSpec, band_weights
-from spectracam.illuminant import IlluminantSpec
+from spectracam.scene.illuminant import IlluminantSpec
 from spectracam.optics import OpticsSpec
 from spectracam.sensor import SensorSpec
-from spectracam.spectra import WavelengthGrid
-from spectracam.spatial.esfr import esfr
-from spectracam.spatial.geometry import CameraGeometry
-from spectracam.spatial.optics import (MARGIN_PX, OpticsSettings, channel_mtf_closed_form, diffraction_otf,
+from spectracam.core.spectra import WavelengthGrid
+from spectracam.evaluation.esfr import esfr
+from spectracam.experiments.spatial.geometry import CameraGeometry
+from spectracam.experiments.spatial.optics import (MARGIN_PX, OpticsSettings, channel_mtf_closed_form, diffraction_otf,
                                        margin_px, pixel_rates)
-from spectracam.spatial.render import material_radiance, render_analytic
-from spectracam.spatial.targets import SiemensStar, SlantedEdge, TiltedChart
+from spectracam.experiments.spatial.render import material_radiance, render_analytic
+from spectracam.experiments.spatial.targets import SiemensStar, SlantedEdge, TiltedChart
 
 GRID = WavelengthGrid(np.arange(405.0, 700.0, 10.0))
 LIGHT = IlluminantSpec()
@@ -73,7 +73,7 @@ def test_edge_mtf_matches_diffraction_times_aperture(pitch, N, w, fill, olpf):
 def test_olpf_is_four_spots():
     """The filter's OTF sampled on a grid is the Fourier transform of four equal spots at (±d/2, ±d/2):
     a point through it, in space, is those four spots (d = 2 px on a 32-px periodic grid)."""
-    from spectracam.spatial.optics import olpf_otf
+    from spectracam.experiments.spatial.optics import olpf_otf
 
     n, d = 32, 2.0
     f = np.fft.fftfreq(n)
@@ -157,7 +157,7 @@ def test_tilted_chart_masks_and_materials():
 
 def test_doctests():
     for name in ("geometry", "optics"):
-        mod = importlib.import_module(f"spectracam.spatial.{name}")
+        mod = importlib.import_module(f"spectracam.experiments.spatial.{name}")
         assert doctest.testmod(mod).failed == 0
 
 

@@ -5,14 +5,14 @@ import numpy as np
 import pytest
 
 from spectracam.camera import CameraSpec
-from spectracam.illuminant import IlluminantSpec
+from spectracam.scene.illuminant import IlluminantSpec
 from spectracam.optics import OpticsSpec
-from spectracam.spectra import WavelengthGrid
-from spectracam.spatial.esfr import esfr
-from spectracam.spatial.geometry import CameraGeometry
-from spectracam.spatial.optics import MARGIN_PX, OpticsSettings, pixel_rates
-from spectracam.spatial.render import render_analytic, render_mitsuba
-from spectracam.spatial.targets import SiemensStar, SlantedEdge, TiltedChart
+from spectracam.core.spectra import WavelengthGrid
+from spectracam.evaluation.esfr import esfr
+from spectracam.experiments.spatial.geometry import CameraGeometry
+from spectracam.experiments.spatial.optics import MARGIN_PX, OpticsSettings, pixel_rates
+from spectracam.experiments.spatial.render import render_analytic, render_mitsuba
+from spectracam.experiments.spatial.targets import SiemensStar, SlantedEdge, TiltedChart
 
 GRID = WavelengthGrid(np.arange(410.0, 700.0, 20.0))   # 20-nm bands keep the renders short
 LIGHT = IlluminantSpec()
@@ -70,7 +70,7 @@ def test_thinlens_defocus_matches_blur_disc():
 def test_band_limited_reference_keeps_below_nyquist_and_removes_above(f_cy_per_px, axis):
     """A cosine box-averaged over 4×4 sub-pixels: the ideal low-pass returns the cosine itself at the pixel
     centres below 0.5 cy/px (the sub-pixel box divided out, the half-pixel phase right) and its mean above."""
-    from spectracam.spatial.render import SubpixelCube
+    from spectracam.experiments.spatial.render import SubpixelCube
 
     ss, n = 4, 32
     edges = np.arange(n * ss + 1) / ss
@@ -93,7 +93,7 @@ def test_zone_plate_mitsuba_blend_matches_closed_form(patches):
     """Mitsuba's blendbsdf weighted by the zone plate's bitmap against the closed-form coverage: the same
     mean, and per-pixel differences at the Monte Carlo noise of 16 samples per sub-pixel (0.54 % rms at 16,
     1.08 % at 4: it halves as the samples quadruple, so it is noise, not a bias)."""
-    from spectracam.spatial.targets import ZonePlate
+    from spectracam.experiments.spatial.targets import ZonePlate
 
     t = ZonePlate(patches=patches, radius_px=24)
     g = CameraGeometry.framing(24.0, 12.0, 4.0, 10.0, 48, 48)

@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from spectracam.spectra import (WavelengthGrid, band_average, cmf_band_weights, energy_to_photons,
+from spectracam.core.spectra import (WavelengthGrid, band_average, cmf_band_weights, energy_to_photons,
                                 planck_radiance)
 
 SIGMA_SB = 5.670374419e-8  # W m^-2 K^-4, CODATA 2018

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from spectracam.errors import ConfigError, SpectracamError
-from spectracam.experiments.sweep import load_sweep, run_sweep
+from spectracam.core.errors import ConfigError, SpectracamError
+from spectracam.experiments.sweep.experiment import load_sweep, run_sweep
 
 BASE = (Path(__file__).parent.parent / "scenes" / "blackbody_5000K.toml").resolve()
 
@@ -149,7 +149,7 @@ def test_plot_sweep(tmp_path):
 def test_resume_drops_journal_rows_that_cannot_belong(tmp_path, damage):
     """Issue 18: each damaged row is dropped with a warning and its cell computed again; the tables then
     hold exactly one row per cell and trial, equal to a clean run's."""
-    from spectracam.experiments.sweep import load_sweep, run_sweep
+    from spectracam.experiments.sweep.experiment import load_sweep, run_sweep
 
     sw_path = sweep_file(tmp_path)  # 2 temperatures × 3 cutoffs, 2 trials
     sweep = load_sweep(sw_path)
@@ -186,7 +186,7 @@ def test_resume_drops_journal_rows_that_cannot_belong(tmp_path, damage):
 
 
 def test_a_damaged_sweep_json_is_not_called_another_sweep(tmp_path):
-    from spectracam.experiments.sweep import load_sweep, run_sweep
+    from spectracam.experiments.sweep.experiment import load_sweep, run_sweep
 
     sweep = load_sweep(sweep_file(tmp_path))
     (tmp_path / "run").mkdir()
@@ -201,7 +201,7 @@ def test_a_damaged_sweep_json_is_not_called_another_sweep(tmp_path):
     ("{ start = 450, stop = 460, step = 1e-300 }", r"gives 1e\+301 values, more than --max-cells"),
 ])
 def test_axis_ranges_are_checked_before_any_value_is_made(tmp_path, axis, message):
-    from spectracam.experiments.sweep import load_sweep
+    from spectracam.experiments.sweep.experiment import load_sweep
 
     p = sweep_file(tmp_path)
     p.write_text(p.read_text().replace("{ start = 480, stop = 500, step = 10 }", axis))
@@ -215,7 +215,7 @@ def test_two_runs_in_one_directory_at_once_are_refused(tmp_path):
     """Issue 18: two --resume runs at once both computed the same cells; the journal is locked."""
     import subprocess
 
-    from spectracam.experiments.sweep import _lock_journal, load_sweep, run_sweep
+    from spectracam.experiments.sweep.experiment import _lock_journal, load_sweep, run_sweep
 
     sw_path = sweep_file(tmp_path)
     sweep = load_sweep(sw_path)
@@ -251,7 +251,7 @@ def test_sweep_figure_legend_order_colours_and_best_line():
     import matplotlib.pyplot as plt
     from matplotlib.text import Text
 
-    from spectracam.experiments.sweep_plot import natural_key, sweep_figure
+    from spectracam.experiments.sweep.plot import natural_key, sweep_figure
 
     noise = [10, 2, 0.5, 100, 3, 1.5, 20, 5, 1, 50, 15, 7, 0.2, 30]  # 14 lines, scrambled, "10" < "2" as text
     meta, rows = _synthetic_sweep(noise)

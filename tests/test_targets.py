@@ -7,15 +7,15 @@ import sys
 import numpy as np
 import pytest
 
-from spectracam._paint import paint_shapes
-from spectracam.errors import ConfigError, SpectracamError
-from spectracam.illuminant import IlluminantSpec, spectral_irradiance
+from spectracam.scene._paint import paint_shapes
+from spectracam.core.errors import ConfigError, SpectracamError
+from spectracam.scene.illuminant import IlluminantSpec, spectral_irradiance
 from spectracam.pipeline import capture, score
-from spectracam.reference import ChartReference, TargetReference, library_colours
+from spectracam.scene.reference import ChartReference, TargetReference, library_colours
 from spectracam.render import render
-from spectracam.scene import Scene, load_scene
-from spectracam.spectra import cie_1931_cmfs
-from spectracam.target import TargetSpec, power_law, texel_labels
+from spectracam.pipeline.scene_file import Scene, load_scene
+from spectracam.core.spectra import cie_1931_cmfs
+from spectracam.scene.target import TargetSpec, power_law, texel_labels
 
 NOISE_OFF = {"shot_noise": False, "dark_current": False, "read_noise": False, "fpn": False, "quantization": False}
 
@@ -98,7 +98,7 @@ def test_a_photograph_of_library_colours_gets_their_spectra_back(tmp_path):
 
 
 def test_a_damaged_missing_or_changed_photograph_is_one_line(tmp_path):
-    from spectracam.target import resolve_target_files
+    from spectracam.scene.target import resolve_target_files
 
     (tmp_path / "bad.png").write_bytes(b"\x89PNG\r\n\x1a\n not really")
     scene = Scene.from_dict({"target": {"kind": "photo", "photo": f"file:{tmp_path / 'bad.png'}"},
@@ -141,7 +141,7 @@ def test_mitsuba_renders_every_target_as_its_closed_form_within_the_render_noise
 
 def test_a_target_renders_at_the_stated_light_level():
     """The surround of a library chart is a flat reflectance: its radiance is ρ·E/π of the light."""
-    from spectracam.illuminant import white_diffuser_radiance
+    from spectracam.scene.illuminant import white_diffuser_radiance
 
     scene = Scene.from_dict({"target": {"kind": "samples"}, "image": {"width": 64, "height": 48}})
     cube = render(scene, "analytic")

@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 
 from spectracam.pipeline import capture, score
-from spectracam.reference import TargetReference
+from spectracam.scene.reference import TargetReference
 from spectracam.render import render
 from spectracam.render.target import render_target_mitsuba
-from spectracam.scene import Scene, load_scene, shipped_scene_file
+from spectracam.pipeline.scene_file import Scene, load_scene, shipped_scene_file
 
 NOISE_OFF = {"shot_noise": False, "dark_current": False, "read_noise": False, "fpn": False, "quantization": False}
 #: The shipped scenes, shrunk: 96 × 72 px (a fifth to a third of them edge pixels), shapes scaled down to match.
@@ -93,7 +93,7 @@ def test_noise_free_per_pixel_delta_e_is_the_same_with_either_renderer(name):
 
 
 def test_an_unknown_sampler_is_one_line():
-    from spectracam.errors import SpectracamError
+    from spectracam.core.errors import SpectracamError
 
     with pytest.raises(SpectracamError, match=r"sampler = 'halton': must be one of 'texels', 'independent'"):
         render_target_mitsuba(_small("samples"), sampler="halton")
@@ -102,7 +102,7 @@ def test_an_unknown_sampler_is_one_line():
 def test_the_render_cache_keys_a_textured_target_and_its_method():
     """A textured scene's key holds its [target] table and the issue-34 method, so a per-band-seed entry (method
     2) or another target's entry is never served; a chart scene's key is unchanged."""
-    from spectracam.cache import RENDER_METHOD, TEXTURED_RENDER_METHOD, render_key
+    from spectracam.io.cache import RENDER_METHOD, TEXTURED_RENDER_METHOD, render_key
 
     a, b = _small("dead_leaves"), _small("mondrian")
     (ka, ia), (kb, _) = render_key(a, "mitsuba"), render_key(b, "mitsuba")

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from spectracam.errors import ConfigError, SpectracamError
+from spectracam.core.errors import ConfigError, SpectracamError
 
 ROOT = Path(__file__).resolve().parent.parent
 CLI = [sys.executable, "-m", "spectracam"]
@@ -36,7 +36,7 @@ def one_line(r, code, *parts):
 # -- 1. --set illuminant.file switches the illuminant -------------------------------------------------------
 
 def test_set_illuminant_file_drops_the_other_types_keys_the_user_did_not_set():
-    from spectracam.overrides import apply_overrides
+    from spectracam.pipeline.overrides import apply_overrides
 
     cie = {"illuminant": {"type": "cie", "name": "D65", "white_luminance_cd_m2": 50.0}}
     assert apply_overrides(cie, ["illuminant.file=spd.csv"]) == \
@@ -54,7 +54,7 @@ def test_set_illuminant_file_drops_the_other_types_keys_the_user_did_not_set():
 
 @pytest.mark.parametrize("scene", ["d65.toml", "blackbody_5000K.toml"])
 def test_set_illuminant_file_works_on_a_cie_or_blackbody_scene(tmp_path, scene):
-    from spectracam.scene import load_scene
+    from spectracam.pipeline.scene_file import load_scene
 
     (tmp_path / "spd.csv").write_text(SPD)
     s = load_scene(ROOT / "scenes" / scene, [f"illuminant.file={tmp_path / 'spd.csv'}"])
@@ -98,7 +98,7 @@ def _photo_scene(d: Path, photo: str) -> Path:
 
 @pytest.mark.parametrize("size", [(20000, 20000), (10000, 9000)])
 def test_a_photo_too_large_is_refused_in_one_line_naming_the_limit(tmp_path, size):
-    from spectracam.target import MAX_PHOTO_PIXELS, _read_photo
+    from spectracam.scene.target import MAX_PHOTO_PIXELS, _read_photo
 
     _png_header_only(tmp_path / "huge.png", *size)
     with pytest.raises(SpectracamError, match=f"larger than the {MAX_PHOTO_PIXELS} px"):
@@ -113,7 +113,7 @@ def test_a_float_tiff_is_read_as_linear_light(tmp_path):
     import tifffile
     from PIL import Image
 
-    from spectracam.target import _read_photo
+    from spectracam.scene.target import _read_photo
 
     linear = np.zeros((40, 60, 3), np.float32)
     linear[..., 0], linear[..., 1], linear[..., 2] = 0.8, 0.4, 0.1
@@ -135,7 +135,7 @@ def test_a_float_tiff_is_read_as_linear_light(tmp_path):
 def test_a_float_tiff_out_of_range_is_refused(tmp_path):
     import tifffile
 
-    from spectracam.target import _read_photo
+    from spectracam.scene.target import _read_photo
 
     tifffile.imwrite(tmp_path / "hdr.tif", np.full((8, 8, 3), 3.0, np.float32), photometric="rgb")
     with pytest.raises(SpectracamError, match="linear light 0–1.*spans 3–3"):
@@ -157,8 +157,8 @@ def test_a_float_tiff_photo_renders_its_colours_not_black(tmp_path):
     ch, _ = read_exr(tmp_path / "out" / "radiance.exr")
     cube = np.stack([v for k, v in sorted(ch.items()) if k.startswith("S0.")], -1)
     # a 50 % grey under 100 cd/m² D65: about half the white diffuser's radiance, nowhere near black
-    from spectracam.illuminant import IlluminantSpec, white_diffuser_radiance
-    from spectracam.scene import _default_grid
+    from spectracam.scene.illuminant import IlluminantSpec, white_diffuser_radiance
+    from spectracam.pipeline.scene_file import _default_grid
 
     white = white_diffuser_radiance(IlluminantSpec("cie", None, "D65", 100.0), _default_grid())
     ratio = float(cube.mean() / white.mean())
@@ -170,7 +170,7 @@ def test_a_float_tiff_photo_renders_its_colours_not_black(tmp_path):
 def test_spatial_olpf_separations_given_a_number_is_one_line(tmp_path):
     r = run("spatial", "-o", tmp_path / "o", "--quick", "--renderer", "analytic", "--set", "olpf_separations_px=1")
     one_line(r, 2, "olpf_separations_px = 1", "must be a non-empty list", "e.g. [0.0, 1.0]")
-    from spectracam.spatial.experiment import load_spatial
+    from spectracam.experiments.spatial.experiment import load_spatial
 
     for field in ("pixel_pitches_um", "f_numbers", "misregistrations_px"):
         with pytest.raises(ConfigError, match=f"{field} = 2: must be a non-empty list"):
@@ -222,7 +222,7 @@ def test_plot_sweep_with_an_axis_the_table_lacks_is_one_line(tmp_path):
     meta["axes"] = [["sensor.read_noise_e", [10, 20, 30]]]
     meta["metrics"] = ["snr_combined_db"]
     (d / "sweep.json").write_text(json.dumps(meta))
-    from spectracam.experiments.sweep_plot import load_results
+    from spectracam.experiments.sweep.plot import load_results
 
     with pytest.raises(SpectracamError, match="names the metric 'snr_combined_db'"):
         load_results(d)
@@ -244,7 +244,7 @@ class _Clock:
 
 
 def test_a_counter_says_cells_done_rate_and_time_left_when_no_bar_is_drawn():
-    from spectracam.progress import Counter
+    from spectracam.core.progress import Counter
 
     said = []
     c = Counter(99_999, desc="sweep cells", unit="cell", log=said.append)
@@ -274,8 +274,8 @@ def test_a_counter_says_cells_done_rate_and_time_left_when_no_bar_is_drawn():
 
 
 def test_a_sweep_logs_its_estimate_and_progress(tmp_path, monkeypatch):
-    import spectracam.progress as progress
-    from spectracam.experiments.sweep import load_sweep, run_sweep
+    import spectracam.core.progress as progress
+    from spectracam.experiments.sweep.experiment import load_sweep, run_sweep
 
     class Eager(progress.Counter):   # the thresholds of a long sweep, reached by a short one
         def __init__(self, *a, **kw):
@@ -321,7 +321,7 @@ def test_a_fifo_as_an_input_file_is_refused_not_waited_on(tmp_path, case):
 
 
 def test_regular_file_refuses_every_kind_of_non_file(tmp_path):
-    from spectracam.io.files import regular_file
+    from spectracam.core.files import regular_file
 
     os.mkfifo(tmp_path / "p")
     with pytest.raises(ConfigError, match="is a FIFO"):
@@ -360,7 +360,7 @@ def test_a_fifo_in_place_of_a_sweeps_journal_is_refused(tmp_path):
 # -- 9. a local scene file with a shipped scene's name ------------------------------------------------------
 
 def test_a_bare_name_matching_a_local_and_a_shipped_scene_is_ambiguous(tmp_path, monkeypatch):
-    from spectracam.cli_options import resolve_shipped, shipped_files
+    from spectracam.experiments.options import resolve_shipped, shipped_files
 
     monkeypatch.chdir(tmp_path)
     shipped = shipped_files("scene file")["d65"]
@@ -386,8 +386,8 @@ def test_the_ambiguous_scene_name_on_the_command_line(tmp_path):
 # -- 10. experiment = "paper" in a design file ----------------------------------------------------------------
 
 def test_a_design_files_experiment_takes_names_as_the_flag_does(tmp_path):
-    from spectracam.cli_options import resolve_shipped
-    from spectracam.design.run import experiment_path
+    from spectracam.experiments.options import resolve_shipped
+    from spectracam.experiments.design.run import experiment_path
 
     flag = resolve_shipped("paper", "experiment file")
     for value in ("paper", "paper.toml", "scenes/paper", "scenes/paper.toml"):
@@ -402,8 +402,8 @@ def test_a_design_files_experiment_takes_names_as_the_flag_does(tmp_path):
 
 
 def test_a_design_file_with_experiment_paper_sets_up(tmp_path):
-    from spectracam.design.run import setup
-    from spectracam.design.spec import load_design
+    from spectracam.experiments.design.run import setup
+    from spectracam.experiments.design.spec import load_design
 
     (tmp_path / "d.toml").write_text('experiment = "paper"\nlights = [5000]\ndesigns = ["cfa/single"]\n')
     spec, base_dir = load_design(tmp_path / "d.toml", quick=True)

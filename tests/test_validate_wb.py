@@ -6,11 +6,11 @@ import struct
 import numpy as np
 import pytest
 
-from spectracam.experiments import validate_wb as vw
-from spectracam.experiments.validate_wb import (DataFileError, DcpProfile, PresetLight, effective_cct, light_spec,
+from spectracam.experiments.validate import white_balance as vw
+from spectracam.experiments.validate.white_balance import (DataFileError, DcpProfile, PresetLight, effective_cct, light_spec,
                                                 load_wb_presets, preset_neutral, presets_at_zero_tuning, read_dcp,
                                                 simulated_neutral)
-from spectracam.illuminant import IlluminantSpec
+from spectracam.scene.illuminant import IlluminantSpec
 
 SHIPPED = ["Nikon 5100 (NPL)", "Sigma SDMerill (NPL)", "Canon EOS 5D Mark II (rawtoaces)"]
 
@@ -159,8 +159,8 @@ def test_constant_curves_are_refused_as_no_colour_camera(tmp_path):
     arithmetic itself is held to colour-science's integral by the next test."""
     from pathlib import Path
 
-    from spectracam.errors import ConfigError
-    from spectracam.scene import parse_scene, resolve_curve_files
+    from spectracam.core.errors import ConfigError
+    from spectracam.pipeline.scene_file import parse_scene, resolve_curve_files
 
     p = tmp_path / "flat.csv"
     p.write_text("wl,R,G,B\n" + "\n".join(f"{w:g},0.3,0.5,0.2" for w in np.arange(380, 781, 5.0)) + "\n")
@@ -176,8 +176,8 @@ def test_neutral_equals_colour_sciences_integral(camera):
     scene's 400–700 nm agree with the simulated camera's 10-nm bands within 0.1 %."""
     import colour
 
-    from spectracam.cameras import energy_sensitivities
-    from spectracam.experiments.validate import validation_scene
+    from spectracam.architecture.cameras import energy_sensitivities
+    from spectracam.experiments.validate.experiment import validation_scene
 
     scene = validation_scene(camera)
     wl, S = energy_sensitivities(camera)
@@ -190,7 +190,7 @@ def test_neutral_equals_colour_sciences_integral(camera):
 
 
 def test_effective_temperature_recovers_a_known_light():
-    from spectracam.experiments.validate import validation_scene
+    from spectracam.experiments.validate.experiment import validation_scene
 
     scene = validation_scene("Nikon 5100 (NPL)")
     for light, T in ((PresetLight("daylight", "daylight", 5500.0), 6300.0),
@@ -202,7 +202,7 @@ def test_effective_temperature_recovers_a_known_light():
 
 # ---------------------------------------------------------------- skipped without the files, in validate's report
 def test_missing_files_skip_with_the_reason_and_validate_still_reports(tmp_path, monkeypatch):
-    from spectracam.experiments.validate import validate_markdown
+    from spectracam.experiments.validate.experiment import validate_markdown
 
     monkeypatch.setattr(vw, "data_prefixes", lambda: [tmp_path / "nowhere"])
     part = vw.run_validate_wb(SHIPPED)

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from spectracam.errors import SpectracamError
+from spectracam.core.errors import SpectracamError
 from spectracam.view import write_view
 from spectracam.view.cases import PAGE_VALUES, load_case
 from spectracam.view.contents import find_contents
@@ -31,8 +31,8 @@ def _invoke(cmd, args):
 def outputs(tmp_path_factory):
     """simulate, paper (quick), spatial and motion outputs, small, closed-form renders."""
     from spectracam.cli import main
-    from spectracam.motion.command import motion_cmd
-    from spectracam.spatial.command import spatial_cmd
+    from spectracam.experiments.motion.command import motion_cmd
+    from spectracam.experiments.spatial.command import spatial_cmd
 
     root = tmp_path_factory.mktemp("view")
     scene = str(Path(__file__).parents[1] / "scenes" / "d65.toml")
@@ -181,8 +181,8 @@ def test_simulate_page_probes_the_spectrum_the_exr_holds(outputs, browser):
     assert page.count("<tr><td>") >= 24
     data = browser.execute_script("return window.spectracam.data(0)")
     from spectracam.camera import camera_responsivities
-    from spectracam.filters import clear_responsivity
-    from spectracam.spectra import WavelengthGrid
+    from spectracam.architecture.filters import clear_responsivity
+    from spectracam.core.spectra import WavelengthGrid
 
     grid = WavelengthGrid(data["wavelengths_nm"])
     R = camera_responsivities(capture.camera, grid)
@@ -196,8 +196,8 @@ def test_simulate_page_lab_matches_the_score(outputs):
     (report.json: the mean over its pixels against the reference's colour), and the page's scene
     L*a*b* (from the radiance cube's 10-nm bands) is the reference's (CIE colorimetry on a 1-nm grid)
     to 0.5: measured here up to 0.41 in a* on the blue patch, the bands' own colorimetric error."""
-    from spectracam.reference import ChartReference
-    from spectracam.scene import parse_scene
+    from spectracam.scene.reference import ChartReference
+    from spectracam.pipeline.scene_file import parse_scene
 
     d = outputs / "simulate"
     case = load_case(".", d / "radiance.exr", d / "raw.exr", d / "rendered.exr")
@@ -247,9 +247,9 @@ def test_spatial_and_motion_pages(outputs, browser, name, figures):
     case = contents.cases[0][1]["rendered"]
     pixels, names = read_oiio(case)
     rgb = pixels[last["y"], last["x"], [names.index(c) for c in "RGB"]]
-    from spectracam.color import display_rgb_to_xyz
+    from spectracam.processing.color import display_rgb_to_xyz
     from spectracam.io.exr import read_exr_header
-    from spectracam.metrics import xyz_to_lab
+    from spectracam.core.cielab import xyz_to_lab
 
     display = json.loads(read_exr_header(case)["spectracamParameters"]).get("processing", {}).get("display", "crt")
     M = display_rgb_to_xyz(display)

@@ -9,7 +9,7 @@ import pytest
 from click.testing import CliRunner
 
 from spectracam.cli import main
-from spectracam.experiments.white_balance import FAMILIES, LUTHER, error_statistics, estimators
+from spectracam.experiments.white_balance.experiment import FAMILIES, LUTHER, error_statistics, estimators
 from spectracam.processing.white_balance import TRAINING_LIGHTS, WHITE_BALANCE_METHODS
 
 #: The quick run, at 80×60 pixels so that the test stays short (the command's --quick is 160×120).
@@ -125,7 +125,7 @@ def test_statistics_of_a_hand_made_list():
     one = error_statistics([2.0, 4.0, 9.0], [0, 0, 0])
     assert one["median"] == 4.0 and one["mean"] == 5.0 and one["mean_spread_over_seeds"] is None
     assert one["p95"] == pytest.approx(4.0 + 0.9 * 5.0)
-    from spectracam.errors import SpectracamError
+    from spectracam.core.errors import SpectracamError
 
     with pytest.raises(SpectracamError):
         error_statistics([1.0, float("nan")])

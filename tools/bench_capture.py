@@ -3,7 +3,7 @@
     python3 tools/bench_capture.py [--width 4000 --height 3000] [--repeats 5] [--all-fpn] [--no-memory]
 
 Times, in the same run and interleaved (best of ``--repeats``):
-  (a) spectracam's capture (``spectracam.capture``: metering, fixed pattern, the fused sensor pass);
+  (a) spectracam's capture (``spectracam.camera.capture``: metering, fixed pattern, the fused sensor pass);
   (b) a naive NumPy capture written plainly below: ``radiance @ weights``, the Bayer selection, then
       each noise step as its own NumPy expression (float32 throughout, NumPy's fast generator);
   (c) one plain read of the cube, ``cube.sum()`` — the memory-read floor.
@@ -128,7 +128,8 @@ def main() -> None:
         print(json.dumps(memory_run(args.width, args.height, args.all_fpn)))
         return
 
-    from spectracam import capture, kernels, render
+    from spectracam import capture, render
+    from spectracam.sensor import kernels
     from spectracam.camera import band_weights
 
     scene = _scene(args.width, args.height, args.all_fpn)

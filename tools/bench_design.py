@@ -26,14 +26,14 @@ def main() -> None:
     ap.add_argument("--skip-freeform", action="store_true")
     a = ap.parse_args()
 
-    from spectracam.cache import cached_render
-    from spectracam.design.optimise import optimise
-    from spectracam.design.problem import DesignProblem
-    from spectracam.design.run import monte_carlo
-    from spectracam.design.spec import DesignSpec, load_design
-    from spectracam.experiments.paper import design_case
-    from spectracam.experiments.sweep import trial_seed
-    from spectracam.scene import load_scene, shipped_scene_file
+    from spectracam.io.cache import cached_render
+    from spectracam.experiments.design.optimise import optimise
+    from spectracam.experiments.design.problem import DesignProblem
+    from spectracam.experiments.design.run import monte_carlo
+    from spectracam.experiments.design.spec import DesignSpec, load_design
+    from spectracam.experiments.paper.experiment import design_case
+    from spectracam.experiments.sweep.experiment import trial_seed
+    from spectracam.pipeline.scene_file import load_scene, shipped_scene_file
 
     base = load_scene(shipped_scene_file("blackbody_5000K.toml"), ["image.width=320", "image.height=240"])
     scenes = {T: base.replace(illuminant=base.illuminant.replace(temperature_K=float(T))) for T in (3000, 6500)}
@@ -78,7 +78,7 @@ def main() -> None:
 
     if not a.skip_freeform:
         fspec, _ = load_design(shipped_scene_file("design.toml"), ["designs=['cfa/single']"])
-        from spectracam.design.run import setup
+        from spectracam.experiments.design.run import setup
 
         st = setup(fspec, shipped_scene_file("design.toml").parent)
         t0 = time.perf_counter()

@@ -12,15 +12,15 @@ from __future__ import annotations
 import argparse
 import time
 
-from spectracam.architecture import make_architecture
-from spectracam.motion.motion import Motion
-from spectracam.motion.render import MovingScene, channel_rates, integrate
-from spectracam.motion.timing import TimingSpec, capture_timing
-from spectracam.scene import Scene
-from spectracam.spatial import optics as sopt
-from spectracam.spatial.geometry import CameraGeometry
-from spectracam.spatial.render import render_mitsuba
-from spectracam.spatial.targets import SlantedEdge
+from spectracam.architecture.base import make_architecture
+from spectracam.experiments.motion.motion import Motion
+from spectracam.experiments.motion.render import MovingScene, channel_rates, integrate
+from spectracam.experiments.motion.timing import TimingSpec, capture_timing
+from spectracam.pipeline.scene_file import Scene
+from spectracam.experiments.spatial import optics as sopt
+from spectracam.experiments.spatial.geometry import CameraGeometry
+from spectracam.experiments.spatial.render import render_mitsuba
+from spectracam.experiments.spatial.targets import SlantedEdge
 
 
 def best(f, repeat):

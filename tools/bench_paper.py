@@ -20,8 +20,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--renderer", default="mitsuba", choices=("mitsuba", "analytic"))
     args = ap.parse_args()
-    from spectracam.experiments.paper import load_experiment, run_paper
-    from spectracam.experiments.report import write_paper_outputs
+    from spectracam.experiments.paper.experiment import load_experiment, run_paper
+    from spectracam.experiments.paper.report import write_paper_outputs
 
     exp = load_experiment(ROOT / "scenes" / "paper.toml")
     with tempfile.TemporaryDirectory() as tmp:

@@ -39,7 +39,7 @@ def main() -> None:
     import numpy as np
 
     from spectracam import load_scene, render
-    from spectracam.chart import patch_masks
+    from spectracam.scene.chart import patch_masks
 
     scene = load_scene(args.scene)
     colds = []

@@ -21,7 +21,7 @@ def main() -> None:
     ap.add_argument("--set", dest="sets", action="append", default=[])
     a = ap.parse_args()
 
-    from spectracam.spatial.experiment import STAGES, load_spatial, run_spatial
+    from spectracam.experiments.spatial.experiment import STAGES, load_spatial, run_spatial
 
     spec, scene = load_spatial(a.sets, quick=a.quick)
     for i in range(2 if a.warm else 1):
@@ -42,7 +42,7 @@ def reference_cost(spec, scene, repeats: int = 5) -> None:
     """Seconds of ``band_limited()`` and ``pixel_average()`` on a cube of the edge's size with margin."""
     import numpy as np
 
-    from spectracam.spatial.render import SubpixelCube
+    from spectracam.experiments.spatial.render import SubpixelCube
 
     ss = spec.supersampling
     w, h = (x + 2 * 16 for x in spec.edge_size_px)

@@ -32,7 +32,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sweep", default=str(ROOT / "scenes" / "sweeps" / "cfa_cutoffs.toml"))
     args = ap.parse_args()
-    from spectracam.experiments.sweep import load_sweep, run_sweep
+    from spectracam.experiments.sweep.experiment import load_sweep, run_sweep
 
     alone = _spin()
     with ProcessPoolExecutor(2) as ex:

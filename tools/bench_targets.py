@@ -24,9 +24,9 @@ def main() -> None:
     ap.add_argument("--kinds", default="dead_leaves")
     args = ap.parse_args()
 
-    from spectracam.reference import TargetReference
+    from spectracam.scene.reference import TargetReference
     from spectracam.render import render
-    from spectracam.scene import Scene
+    from spectracam.pipeline.scene_file import Scene
 
     def scene(kind: str, size: int) -> Scene:
         target = {} if kind == "chart" else {"target": {"kind": kind}}

@@ -24,13 +24,13 @@ import sys
 
 def main(argv=None) -> int:
     from spectracam import pipeline
-    from spectracam.capture import capture
-    from spectracam.experiments.paper import calibrated_luminance, load_experiment, scenes_for
+    from spectracam.camera.capture import capture
+    from spectracam.experiments.paper.experiment import calibrated_luminance, load_experiment, scenes_for
     from spectracam.pipeline import camera_processing
     from spectracam.processing import metered_camera
-    from spectracam.reference import ChartReference
-    from spectracam.scene import shipped_scene_file
-    from spectracam.score import score
+    from spectracam.scene.reference import ChartReference
+    from spectracam.pipeline.scene_file import shipped_scene_file
+    from spectracam.evaluation.score import score
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--temperatures", default="3000,5000,7000")

@@ -154,8 +154,8 @@ class Chart:
         from spectracam import ChartReference
         from spectracam.io.dng import camera_patches, camera_to_xyz_matrix
         from spectracam.io.exr import read_raw_exr
-        from spectracam.metrics import xyz_to_lab
-        from spectracam.scene import parse_scene
+        from spectracam.core.cielab import xyz_to_lab
+        from spectracam.pipeline.scene_file import parse_scene
 
         self.raw = read_raw_exr(dng.with_name("raw.exr"))
         self.ref = ref = ChartReference.of(parse_scene(self.raw.scene))
@@ -172,7 +172,7 @@ class Chart:
     def lab(self, xyz: np.ndarray) -> np.ndarray:
         """CIELAB against D65 of ``(24, 3)`` XYZ scaled so that greys 20–23 have the scene's Y (a developer
         cannot know that the white patch was metered to full scale)."""
-        from spectracam.metrics import xyz_to_lab
+        from spectracam.core.cielab import xyz_to_lab
 
         xyz = xyz * (self.ref.patch_xyz[19:23, 1].sum() / xyz[19:23, 1].sum())
         return xyz_to_lab(xyz, self.d65)
@@ -194,7 +194,7 @@ class Chart:
         file's clip at 0 adds to that mean, per channel in DN; and the camera's rendering of the patch (its
         conversion, as :attr:`camera`) from the unclipped and from the clipped mean codes, as ΔL*, Δa*, Δb*
         against its rendering of the noise-free signal.  None for a CFA DNG."""
-        from spectracam.architecture import PlanesLayout
+        from spectracam.architecture.base import PlanesLayout
         from spectracam.io.dng import camera_patches, linear_raw_pedestal
 
         raw = self.raw

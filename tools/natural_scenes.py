@@ -29,12 +29,12 @@ def main() -> None:
     args = ap.parse_args()
     seeds = [int(s) for s in args.seeds.split(",")]
 
-    from spectracam.color import adaptation_matrix, display_rgb_to_xyz
+    from spectracam.processing.color import adaptation_matrix, display_rgb_to_xyz
     from spectracam.io.report import srgb_preview
     from spectracam.pipeline import capture, score
-    from spectracam.reference import TargetReference
+    from spectracam.scene.reference import TargetReference
     from spectracam.render import render
-    from spectracam.scene import load_scene
+    from spectracam.pipeline.scene_file import load_scene
 
     keys = ("delta_e_mean", "delta_e_p95", "s_cielab_mean", "sample_delta_e_of_mean_mean",
             "sample_delta_e_conversion_mean")

@@ -34,7 +34,7 @@ def flatten(r: dict) -> dict[str, float]:
 
 
 def run(step_nm: float, renderer: str, quick: bool, overrides=()) -> dict[str, float]:
-    from spectracam.experiments.paper import load_experiment, run_paper
+    from spectracam.experiments.paper.experiment import load_experiment, run_paper
 
     exp = load_experiment(ROOT / "scenes" / "paper.toml", [f"wavelengths.step_nm={step_nm}", *overrides])
     r, _, _ = run_paper(dataclasses.replace(exp, alternatives=()), renderer=renderer, quick=quick, use_cache=False)

@@ -100,12 +100,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .._version import __version__
-from ..architecture import MosaicLayout, PlanesLayout
-from ..capture import RawCapture
-from ..errors import SpectracamError
-from ..processing.calibration import D50_XYZ, constrained_lstsq, white_neutral  # D50: the DNG SDK's normalisation
-from .files import atomic_write
+from spectracam._version import __version__
+from spectracam.architecture.base import MosaicLayout, PlanesLayout
+from spectracam.camera.capture import RawCapture
+from spectracam.core.errors import SpectracamError
+from spectracam.processing.calibration import D50_XYZ, constrained_lstsq, white_neutral  # D50: the DNG SDK's normalisation
+from spectracam.core.files import atomic_write
 
 #: DNG CFAPattern colour codes.
 _CFA_CODE = {"R": 0, "G": 1, "B": 2, "C": 3, "M": 4, "Y": 5, "W": 6}
@@ -125,7 +125,7 @@ def camera_model(raw: RawCapture) -> str:
 
 def white_radiance(reference) -> np.ndarray:
     """Band-averaged radiance ``(B,)`` of a perfect white diffuser under the scene illuminant, E/π."""
-    from ..illuminant import white_diffuser_radiance
+    from spectracam.scene.illuminant import white_diffuser_radiance
 
     return white_diffuser_radiance(reference.illuminant, reference.grid)
 
@@ -158,7 +158,7 @@ def forward_matrices(raw: RawCapture, reference) -> list[np.ndarray]:
     D65: :func:`spectracam.processing.calibration.dual_illuminant_matrices` with Bradford adaptation to D50 (the
     DNG SDK's), each mapping the balanced neutral (1, …, 1) onto D50's white exactly.  The balanced camera space
     (camera / neutral) is the same for rates and for the file's exposures, so the rates' fit is the file's."""
-    from ..processing.calibration import dual_illuminant_matrices
+    from spectracam.processing.calibration import dual_illuminant_matrices
 
     dual = dual_illuminant_matrices(reference, raw.camera, "bradford")
     return [np.ascontiguousarray(fm.T) for fm in dual.forward_matrices]
@@ -167,7 +167,7 @@ def forward_matrices(raw: RawCapture, reference) -> list[np.ndarray]:
 def calibration_reference(reference, name: str):
     """The chart reference of the same chart, wavelength grid, image and level under the CIE illuminant ``name``
     (a key of colour-science's ``SDS_ILLUMINANTS``: "A", "D65"); memoised, as :meth:`ChartReference.of` is."""
-    from ..illuminant import IlluminantSpec
+    from spectracam.scene.illuminant import IlluminantSpec
 
     return reference.lit_by(IlluminantSpec(kind="cie", temperature_K=None, name=name,
                                            white_luminance_cd_m2=reference.illuminant.white_luminance_cd_m2))
@@ -223,8 +223,8 @@ def saturation_exposure_lux_s(raw: RawCapture, reference) -> float:
     illuminance of a luminance L is ``E_v = k_v·L`` with ``k_v`` the lens's image-irradiance factor
     (``π/(4N²)`` paraxial, ``π/(1 + 4N²)`` exact) times its transmittance, averaged over the white's
     spectrum weighted by ȳ(λ)."""
-    from ..optics import radiance_to_photon_irradiance
-    from ..spectra import cmf_band_weights, energy_to_photons
+    from spectracam.optics import radiance_to_photon_irradiance
+    from spectracam.core.spectra import cmf_band_weights, energy_to_photons
 
     cam, s, grid = raw.camera, raw.camera.sensor, reference.grid
     times = np.asarray(raw.exposure_times_s, float)
@@ -338,13 +338,13 @@ def dng_image(raw: RawCapture) -> tuple[np.ndarray, MosaicLayout | PlanesLayout,
     """``(digital numbers, layout, note)`` as the DNG holds them.  A mosaic whose tile LibRaw can
     decode (its ``filters`` word holds tiles two columns wide: every 2×2 tile) is written as
     recorded; a three-channel mosaic of a wider tile (Quad Bayer) remosaicked to RGGB Bayer, as phones
-    write theirs (:func:`spectracam.color.remosaic_to_bayer`); a four-channel mosaic of a wider tile
-    (RGBW) as LinearRaw of its channels interpolated by :func:`spectracam.color.periodic_bilinear`.
+    write theirs (:func:`spectracam.processing.color.remosaic_to_bayer`); a four-channel mosaic of a wider tile
+    (RGBW) as LinearRaw of its channels interpolated by :func:`spectracam.processing.color.periodic_bilinear`.
     ``note`` says which, for the file's description; raw.exr always holds the mosaic as recorded."""
     layout = raw.layout
     if isinstance(layout, PlanesLayout) or layout.tile_shape == (2, 2):
         return np.asarray(raw.digital), layout, None
-    from ..color import periodic_bilinear, remosaic_to_bayer
+    from spectracam.processing.color import periodic_bilinear, remosaic_to_bayer
 
     if len(layout.channels) == 3:
         mosaic, pattern = remosaic_to_bayer(raw.digital, layout)

@@ -20,14 +20,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .._version import __version__
-from ..architecture import MosaicLayout, PlanesLayout
-from ..camera import CameraSpec
-from ..capture import RawCapture
-from ..errors import ConfigError, SpectracamError
-from ..render import RadianceCube
-from ..spectra import K_M_LM_PER_W, WavelengthGrid, cmf_band_weights
-from .files import atomic_write
+from spectracam._version import __version__
+from spectracam.architecture.base import MosaicLayout, PlanesLayout
+from spectracam.camera import CameraSpec
+from spectracam.camera.capture import RawCapture
+from spectracam.core.errors import ConfigError, SpectracamError
+from spectracam.render import RadianceCube
+from spectracam.core.spectra import K_M_LM_PER_W, WavelengthGrid, cmf_band_weights
+from spectracam.core.files import atomic_write
 
 SPECTRAL_CHANNEL = re.compile(r"^S0\.(\d+(?:,\d+)?)nm$")
 SPECTRAL_LAYOUT_VERSION = "1.0"
@@ -100,7 +100,7 @@ def read_exr(path: str | Path) -> tuple[dict[str, np.ndarray], dict]:
     """All channels (name → (H, W) array) and header attributes of a single-part EXR file."""
     import OpenEXR
 
-    from .files import regular_file
+    from spectracam.core.files import regular_file
 
     regular_file(path, "file")  # a FIFO would block OpenEXR's open for ever
     try:
@@ -120,7 +120,7 @@ def read_exr_header(path: str | Path) -> dict:
     """The header attributes of a single-part EXR file, without its pixels (``dataWindow``: ((x0, y0), (x1, y1)))."""
     import OpenEXR
 
-    from .files import regular_file
+    from spectracam.core.files import regular_file
 
     regular_file(path, "file")
     try:
@@ -440,7 +440,7 @@ def check_raw_attributes(attrs: dict, camera: CameraSpec, layout, times: np.ndar
 
 
 def read_raw_exr(path: str | Path) -> RawCapture:
-    """Read a raw EXR back into a :class:`~spectracam.capture.RawCapture` (without expected electrons)."""
+    """Read a raw EXR back into a :class:`~spectracam.camera.capture.RawCapture` (without expected electrons)."""
     src = str(path)
     channels, attrs = read_exr(path)
     if attrs.get("spectracamKind") != "raw":

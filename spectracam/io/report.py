@@ -9,12 +9,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .._version import __version__
-from ..color import adaptation_matrix, display_rgb_to_xyz
-from ..score import ChartScore
-from .exr import write_exr
-from .files import atomic_write
-from .plots import save_figure
+from spectracam._version import __version__
+from spectracam.processing.color import adaptation_matrix, display_rgb_to_xyz
+from spectracam.evaluation.score import ChartScore
+from spectracam.io.exr import write_exr
+from spectracam.core.files import atomic_write
+from spectracam.io.plots import save_figure
 
 
 #: ITU-R BT.709 / sRGB primaries and D65 white, CIE 1931 xy (IEC 61966-2-1).
@@ -41,7 +41,7 @@ def srgb_preview(rendered_rgb: np.ndarray, display: str, adapt_white: bool = Tru
     0.313, about 8300 K, stays bluish)."""
     import colour
 
-    from ..processing.tone import tone_map
+    from spectracam.processing.tone import tone_map
 
     M = display_rgb_to_xyz(display)
     srgb = colour.RGB_COLOURSPACES["sRGB"]
@@ -55,7 +55,7 @@ def srgb_preview(rendered_rgb: np.ndarray, display: str, adapt_white: bool = Tru
 
 def write_png(path: Path, rgb8: np.ndarray) -> Path:
     """An 8-bit image as PNG."""
-    from .plots import pyplot
+    from spectracam.io.plots import pyplot
 
     plt = pyplot()
     buf = io.BytesIO()
@@ -74,7 +74,7 @@ def delta_e_figure(delta_e_map: np.ndarray, title: str, vmax: float | None = DEL
     own 99th percentile (at least 10)."""
     from mpl_toolkits.axes_grid1 import make_axes_locatable
 
-    from .plots import pyplot
+    from spectracam.io.plots import pyplot
 
     plt = pyplot()
     h, w = delta_e_map.shape
@@ -183,7 +183,7 @@ def target_csv(result) -> bytes:
 
 
 def write_target_outputs(out_dir: str | Path, result, adapt_white: bool = True) -> list[Path]:
-    """A textured target's score (:class:`~spectracam.target_score.TargetScore`): rendered.exr/.png,
+    """A textured target's score (:class:`~spectracam.evaluation.target_score.TargetScore`): rendered.exr/.png,
     delta_e.png and s_cielab.png (per pixel, fixed 0–20 scale), report.json and report.csv."""
     out = Path(out_dir)
     params = result.parameters

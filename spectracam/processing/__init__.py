@@ -19,8 +19,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from .calibration import CALIBRATIONS, Calibration, white_neutral
-from .white_balance import (WHITE_BALANCE_METHODS, Estimation, estimate_neutral, recovery_error_deg,
+from spectracam.processing.calibration import CALIBRATIONS, Calibration, white_neutral
+from spectracam.processing.white_balance import (WHITE_BALANCE_METHODS, Estimation, estimate_neutral, recovery_error_deg,
                             reproduction_error_deg, usable_pixels)
 
 #: Each camera's steps: ``capture.metering``, ``processing.white_balance``, ``processing.calibration``.
@@ -64,10 +64,10 @@ def scored_reflectances(reference, target_reference=None) -> tuple:
 
 @lru_cache(maxsize=16)
 def _scored(chart, grid, library) -> tuple:
-    from ..chart import patch_reflectances
-    from ..reflectances import load
-    from ..spectra import band_average
-    from .white_balance import band_reflectance
+    from spectracam.scene.chart import patch_reflectances
+    from spectracam.scene.reflectances import load
+    from spectracam.core.spectra import band_average
+    from spectracam.processing.white_balance import band_reflectance
 
     out = [np.stack([band_average(rho, grid) for _, rho in patch_reflectances(chart)])]
     if library is not None:
@@ -87,7 +87,7 @@ def develop(image: np.ndarray, raw, reference, processing, target_reference=None
     """The developed camera's rendering matrix for the camera image ``(H, W, N)`` (e⁻/s; demosaicked,
     exposure-normalised) of ``raw``: estimate the neutral (``processing.white_balance``), calibrate by it
     (``processing.calibration``), and show the metered white at display Y = 1."""
-    from ..color import display_rgb_to_xyz
+    from spectracam.processing.color import display_rgb_to_xyz
 
     camera = raw.camera
     true = white_neutral(reference.illuminant, reference.grid, camera)
@@ -98,7 +98,7 @@ def develop(image: np.ndarray, raw, reference, processing, target_reference=None
     metered = raw.metered_rate_e_per_s if raw.metered_rate_e_per_s is not None else true
     Y = float(np.asarray(metered, float) @ M @ display_rgb_to_xyz(processing.display)[1])
     if not np.isfinite(Y) or Y <= 0:
-        from ..errors import SpectracamError
+        from spectracam.core.errors import SpectracamError
 
         raise SpectracamError(f"processing: the metered white renders at luminance {Y:g}; the estimated neutral "
                               f"{np.round(estimate, 6).tolist()} leaves the camera no white to show")
@@ -109,7 +109,7 @@ def develop(image: np.ndarray, raw, reference, processing, target_reference=None
              "reproduction_deg": float(reproduction_error_deg(estimate, true)),
              "pixels_used": int(ctx.valid.sum()), **info}
     if processing.white_balance_method == "corrected_moments":
-        from .white_balance import exclusion_key, trained_correction
+        from spectracam.processing.white_balance import exclusion_key, trained_correction
 
         block["training"] = trained_correction(training_camera(camera), reference.grid,
                                                processing.white_balance_training,

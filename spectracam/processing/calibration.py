@@ -34,8 +34,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..errors import SpectracamError
-from ..registry import Registry
+from spectracam.core.errors import SpectracamError
+from spectracam.core.registry import Registry
 
 #: Calibrations: name → function ``(ctx: Calibration, neutral (N,)) → (N×3 camera→XYZ-at-display-white, info)``.
 CALIBRATIONS: Registry = Registry("processing.calibration", "colour calibration")
@@ -63,8 +63,8 @@ class Calibration:
 
 def white_neutral(illuminant, grid, camera) -> np.ndarray:
     """``(N,)`` the camera's noise-free rates (e⁻/s) for a perfect white diffuser under ``illuminant``."""
-    from ..camera import photo_electron_rates
-    from ..illuminant import white_diffuser_radiance
+    from spectracam.camera import photo_electron_rates
+    from spectracam.scene.illuminant import white_diffuser_radiance
 
     white = white_diffuser_radiance(illuminant, grid)
     return photo_electron_rates(white[None].astype(np.float32), grid, camera)[0].astype(np.float64)
@@ -73,7 +73,7 @@ def white_neutral(illuminant, grid, camera) -> np.ndarray:
 def constrained_lstsq(A: np.ndarray, B: np.ndarray, c: np.ndarray, d: np.ndarray) -> np.ndarray:
     """``X`` minimising ‖A·X − B‖² subject to ``c·X = d`` (one row constraint on every column), by eliminating the
     constraint: ``X = X₀ + N·Z`` with ``X₀ = cᵀd/|c|²`` and ``N`` an orthonormal basis of ``c``'s null space.  With
-    more than three channels the reduced problem is solved as :func:`spectracam.color.fit_conversion` solves the
+    more than three channels the reduced problem is solved as :func:`spectracam.processing.color.fit_conversion` solves the
     conversion (columns at unit norm, singular values below ``CONVERSION_RCOND`` dropped: a W channel that is the
     sum of R, G and B leaves the plain solution undetermined).
 
@@ -81,7 +81,7 @@ def constrained_lstsq(A: np.ndarray, B: np.ndarray, c: np.ndarray, d: np.ndarray
     >>> np.allclose(np.ones(3) @ X, 1.0)
     True
     """
-    from ..color import CONVERSION_RCOND
+    from spectracam.processing.color import CONVERSION_RCOND
 
     c = np.asarray(c, float)
     X0 = np.outer(c, np.asarray(d, float)) / (c @ c)
@@ -172,8 +172,8 @@ def _illuminant_cct(name: str) -> float:
 def dual_illuminant_matrices(reference, camera, adaptation: str) -> DualIlluminant:
     """The ColorMatrix and ForwardMatrix of ``camera`` under each of :data:`CALIBRATION_LIGHTS`, fitted on the chart
     of ``reference`` (memoised)."""
-    from ..color import adaptation_matrix
-    from ..illuminant import IlluminantSpec
+    from spectracam.processing.color import adaptation_matrix
+    from spectracam.scene.illuminant import IlluminantSpec
 
     cms, fms, ns, ccts = [], [], [], []
     for name in CALIBRATION_LIGHTS:
@@ -194,7 +194,7 @@ def dual_illuminant_matrices(reference, camera, adaptation: str) -> DualIllumina
 
 def xyz_to_display_rgb(processing) -> tuple[np.ndarray, np.ndarray]:
     """``(3×3 inverse display matrix, display white XYZ)``."""
-    from ..color import display_rgb_to_xyz
+    from spectracam.processing.color import display_rgb_to_xyz
 
     M_disp = display_rgb_to_xyz(processing.display)
     return np.linalg.inv(M_disp), M_disp.sum(axis=1)
@@ -203,7 +203,7 @@ def xyz_to_display_rgb(processing) -> tuple[np.ndarray, np.ndarray]:
 def conversion_target_rgb(reference, processing) -> np.ndarray:
     """``(24, 3)`` what the conversion aims at (paper 3.5): the display RGB that shows each patch's XYZ carried
     from the light's white to the display's."""
-    from ..color import adaptation_matrix, display_rgb_to_xyz
+    from spectracam.processing.color import adaptation_matrix, display_rgb_to_xyz
 
     M_disp = display_rgb_to_xyz(processing.display)
     to_display_xyz = adaptation_matrix(reference.white_xyz, M_disp.sum(axis=1), processing.adaptation)
@@ -213,7 +213,7 @@ def conversion_target_rgb(reference, processing) -> np.ndarray:
 def conversion_matrix(reference, camera, processing) -> np.ndarray:
     """The N×3 colour conversion (paper 3.5; 3×3 for three channels): least squares from the chart's noise-free
     camera rates to :func:`conversion_target_rgb` — the paper's camera's, fitted under the scene's own light."""
-    from ..color import fit_conversion
+    from spectracam.processing.color import fit_conversion
 
     return fit_conversion(reference.patch_rates(camera), conversion_target_rgb(reference, processing))
 
@@ -229,7 +229,7 @@ def _scene_light(ctx: Calibration, neutral: np.ndarray):
 @CALIBRATIONS.register("dual_illuminant")
 def _dual_illuminant(ctx: Calibration, neutral: np.ndarray):
     """The DNG's two calibrations interpolated at the CCT the camera finds from ê (module docstring)."""
-    from ..color import adaptation_matrix
+    from spectracam.processing.color import adaptation_matrix
 
     dual = dual_illuminant_matrices(ctx.reference, ctx.camera, ctx.processing.adaptation)
     xy, cct, iterations = dual.neutral_to_xy(neutral)

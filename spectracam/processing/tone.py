@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..registry import Registry
+from spectracam.core.registry import Registry
 
 #: Tone curves: name → function ``(linear RGB, ≥ 0 where shown) → values in [0, 1] before the sRGB encoding``.
 TONE_CURVES: Registry = Registry("processing.tone_curve", "tone curve")

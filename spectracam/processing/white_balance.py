@@ -1,7 +1,7 @@
 """White balance as a camera finds it: the light's neutral estimated from the image (``processing.white_balance``).
 
 An estimator sees the demosaicked, exposure-normalised camera image ``ρ(x) (H, W, N)`` (photo-electrons per second
-per channel; :func:`spectracam.score.camera_rates`) and the mask of pixels it may use (finite and not clipped), and
+per channel; :func:`spectracam.evaluation.score.camera_rates`) and the mask of pixels it may use (finite and not clipped), and
 returns the **neutral** ``ê (N,)``: its estimate of the camera's response to a perfect white diffuser under the
 scene's light, up to scale.  The truth ``e`` is that response computed from the light (the ``oracle``).
 
@@ -38,8 +38,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..errors import SpectracamError
-from ..registry import Registry
+from spectracam.core.errors import SpectracamError
+from spectracam.core.registry import Registry
 
 #: Estimators: name → function ``(ctx: Estimation) → neutral (N,)``.
 WHITE_BALANCE_METHODS: Registry = Registry("processing.white_balance", "white-balance estimator")
@@ -180,7 +180,7 @@ def edge_magnitudes(ctx: Estimation) -> np.ndarray:
 @WHITE_BALANCE_METHODS.register("corrected_moments")
 def _corrected_moments(ctx: Estimation) -> np.ndarray:
     """The moments of the usable pixels through the correction trained for this camera (module docstring)."""
-    from . import training_camera
+    from spectracam.processing import training_camera
 
     model = trained_correction(training_camera(ctx.camera), ctx.grid, ctx.processing.white_balance_training,
                                exclusion_key(ctx.scored_reflectances))
@@ -209,7 +209,7 @@ def exclusion_key(arrays) -> tuple:
 
 
 def training_lights():
-    from ..illuminant import IlluminantSpec
+    from spectracam.scene.illuminant import IlluminantSpec
 
     return [IlluminantSpec("blackbody", v, None, 100.0) if k == "blackbody" else IlluminantSpec("cie", None, v, 100.0)
             for k, v in TRAINING_LIGHTS]
@@ -219,7 +219,7 @@ def training_lights():
 def trained_correction(camera, grid, library: str, exclusion: tuple = ()) -> TrainedCorrection:
     """The corrected-moments correction for ``camera`` on ``grid``, trained on ``library`` under
     :data:`TRAINING_LIGHTS` minus the scored colours ``exclusion`` (memoised)."""
-    from ..reflectances import load
+    from spectracam.scene.reflectances import load
 
     rset = load(library, "processing.white_balance_training")
     lo, hi = float(grid.edges_nm[0]), float(grid.edges_nm[-1])
@@ -243,9 +243,9 @@ def trained_correction(camera, grid, library: str, exclusion: tuple = ()) -> Tra
 @lru_cache(maxsize=32)
 def _trained(camera, grid, library: str, kept: bytes) -> TrainedCorrection:
     """The training itself, memoised on the samples kept (scored sets that remove the same samples share it)."""
-    from ..camera import photo_electron_rates
-    from ..illuminant import white_diffuser_radiance
-    from ..reflectances import load
+    from spectracam.camera import photo_electron_rates
+    from spectracam.scene.illuminant import white_diffuser_radiance
+    from spectracam.scene.reflectances import load
 
     refl_all = band_reflectance(load(library, "processing.white_balance_training"), grid)
     keep = np.frombuffer(kept, bool)
@@ -296,7 +296,7 @@ def _trained(camera, grid, library: str, kept: bytes) -> TrainedCorrection:
 
 def band_reflectance(rset, grid) -> np.ndarray:
     """``(n, B)`` band-averaged reflectances of a set, vectorised over samples (20 points per band)."""
-    from ..spectra import band_sample_points
+    from spectracam.core.spectra import band_sample_points
 
     lam = band_sample_points(grid, 20)                                  # (B, P + 1)
     y = rset.at(lam.ravel()).reshape(-1, *lam.shape)                     # (n, B, P + 1)

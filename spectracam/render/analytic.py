@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..chart import View, patch_coverage
-from ..reference import ChartReference
-from . import RadianceCube
+from spectracam.scene.chart import View, patch_coverage
+from spectracam.scene.reference import ChartReference
+from spectracam.render.cube import RadianceCube
 
 
 def render_analytic(scene) -> RadianceCube:

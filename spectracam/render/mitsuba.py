@@ -32,11 +32,11 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..chart import View, patch_rectangles_mm, patch_reflectances
-from ..errors import SpectracamError
-from ..illuminant import spectral_irradiance
-from ..spectra import band_average, band_sample_points
-from . import RadianceCube
+from spectracam.scene.chart import View, patch_rectangles_mm, patch_reflectances
+from spectracam.core.errors import SpectracamError
+from spectracam.scene.illuminant import spectral_irradiance
+from spectracam.core.spectra import band_average, band_sample_points
+from spectracam.render.cube import RadianceCube
 
 #: Start of the reference wavelength window every band is mapped into (any visible value works).
 REFERENCE_WINDOW_NM = 500.0
@@ -239,7 +239,7 @@ def render_mitsuba(scene, progress: bool = False, log=None, within_band: str = "
     Float = type(params["board.bsdf.reflectance.values"])  # mi.Float, or a buffer type in scalar variants
     params["board.bsdf.reflectance.values"] = Float(np.full(POINTS_PER_BAND + 1, scene.chart.surround_reflectance))
 
-    from ..progress import bar
+    from spectracam.core.progress import bar
 
     # a bar on a terminal only; a log (stderr redirected) gets the one line the caller writes per stage
     for b in bar(range(B), desc="render bands", unit="band", progress=progress):

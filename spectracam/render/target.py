@@ -1,8 +1,8 @@
-"""Rendering a textured target (:mod:`spectracam.target`): the closed form and Mitsuba.
+"""Rendering a textured target (:mod:`spectracam.scene.target`): the closed form and Mitsuba.
 
 The target is a Lambertian plane facing the light, filling the view; texel (i, j) has the reflectance
 of the sample its label names.  Closed form: each pixel's band radiance is the mean of ``E·S/π`` over
-its s × s texels (:meth:`~spectracam.reference.TargetReference.pixel_mean`).  Mitsuba: one rectangle
+its s × s texels (:meth:`~spectracam.scene.reference.TargetReference.pixel_mean`).  Mitsuba: one rectangle
 with a nearest-neighbour ``bitmap`` texture of the texel grid; per band the light is the band average
 ``Ē`` and each texel's value the light-weighted band average ``⟨E·S⟩/⟨E⟩`` of its sample (as the
 chart's patches, :mod:`spectracam.render.mitsuba`), so a pixel inside one sample is exact.  Values
@@ -31,11 +31,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import SpectracamError
-from ..illuminant import spectral_irradiance
-from ..reference import TargetReference
-from ..spectra import band_average
-from . import RadianceCube
+from spectracam.core.errors import SpectracamError
+from spectracam.scene.illuminant import spectral_irradiance
+from spectracam.scene.reference import TargetReference
+from spectracam.core.spectra import band_average
+from spectracam.render.cube import RadianceCube
 
 
 #: Where a textured Mitsuba render places each pixel's samples, the same in every band (module docstring):
@@ -59,7 +59,7 @@ def render_target_analytic(scene) -> RadianceCube:
 
 
 def render_target_mitsuba(scene, progress: bool = False, log=None, sampler: str = "texels") -> RadianceCube:
-    from .mitsuba import POINTS_PER_BAND, activate_variant, band_scene, even_band_width_nm, select_variant
+    from spectracam.render.mitsuba import POINTS_PER_BAND, activate_variant, band_scene, even_band_width_nm, select_variant
 
     if sampler not in SAMPLERS:
         raise SpectracamError(f"sampler = {sampler!r}: must be one of " + ", ".join(map(repr, SAMPLERS)))
@@ -90,7 +90,7 @@ def render_target_mitsuba(scene, progress: bool = False, log=None, sampler: str 
     Float = type(params["light.irradiance.values"])
     seed = texture_seed(scene.render.seed)          # one seed for every band: the positions repeat (docstring)
     cube = np.empty((H, W, B), dtype=np.float32)
-    from ..progress import bar
+    from spectracam.core.progress import bar
 
     for b in bar(range(B), desc="render bands", unit="band", progress=progress):
         params["light.irradiance.values"] = Float(np.full(POINTS_PER_BAND + 1, light_band[b], np.float32))

@@ -6,6 +6,6 @@ from pathlib import Path
 
 def write_view(directory: str | Path, log=None) -> Path:
     """Write ``DIR/index.html`` for an output directory of any command (:mod:`.page`); returns its path."""
-    from .page import write_page
+    from spectracam.view.page import write_page
 
     return write_page(Path(directory), log=log)

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import SpectracamError
+from spectracam.core.errors import SpectracamError
 
 #: 4-byte values (spectra, digital numbers, CIELAB, image pixels) a page's cases carry at most: 6 M
 #: (24 MB; 32 MB as base64), shared equally among them.
@@ -78,7 +78,7 @@ def rgba(rgb8: np.ndarray) -> np.ndarray:
 
 
 def _scene_of(params: dict | None):
-    from ..scene import parse_scene
+    from spectracam.pipeline.scene_file import parse_scene
 
     if not params:
         return None
@@ -90,9 +90,9 @@ def _scene_of(params: dict | None):
 
 def _radiance(case: Case, cube):
     """Spectra, preview and scene CIELAB of the radiance cube."""
-    from ..illuminant import white_diffuser_radiance
-    from ..metrics import xyz_to_lab
-    from ..spectra import K_M_LM_PER_W, cmf_band_weights
+    from spectracam.scene.illuminant import white_diffuser_radiance
+    from spectracam.core.cielab import xyz_to_lab
+    from spectracam.core.spectra import K_M_LM_PER_W, cmf_band_weights
 
     s = case.stride
     rad = np.asarray(cube.radiance[::s, ::s], np.float32)
@@ -118,10 +118,10 @@ def _radiance(case: Case, cube):
 def _raw(case: Case, path: Path, grid):
     """Digital numbers (one channel per pixel of a mosaic, N of planes) and a picture of them: each
     pixel in its channel's colour, brightness DN / top code."""
-    from ..architecture import MosaicLayout
-    from ..camera import camera_responsivities
-    from ..filters import clear_responsivity
-    from ..io.exr import read_raw_exr
+    from spectracam.architecture.base import MosaicLayout
+    from spectracam.camera import camera_responsivities
+    from spectracam.architecture.filters import clear_responsivity
+    from spectracam.io.exr import read_raw_exr
 
     raw = read_raw_exr(path)
     s = case.stride
@@ -155,10 +155,10 @@ def _raw(case: Case, path: Path, grid):
 
 def _rendered(case: Case, path: Path):
     """Rendered CIELAB (display white) and the sRGB picture of the display's colours."""
-    from ..color import display_rgb_to_xyz
-    from ..io.exr import read_exr
-    from ..io.report import srgb_preview
-    from ..metrics import xyz_to_lab
+    from spectracam.processing.color import display_rgb_to_xyz
+    from spectracam.io.exr import read_exr
+    from spectracam.io.report import srgb_preview
+    from spectracam.core.cielab import xyz_to_lab
 
     channels, attrs = read_exr(path)
     if attrs.get("spectracamKind") != "rendered" or not {"R", "G", "B"} <= set(channels):
@@ -178,8 +178,8 @@ def _rendered(case: Case, path: Path):
 
 def _chart_lab(case: Case, scene) -> np.ndarray | None:
     """Scene CIELAB from the chart reference inside each patch (NaN elsewhere): the score's truth."""
-    from ..metrics import xyz_to_lab
-    from ..reference import ChartReference
+    from spectracam.core.cielab import xyz_to_lab
+    from spectracam.scene.reference import ChartReference
 
     if scene is None or getattr(scene, "target", None) is not None and scene.target.textured:
         return None
@@ -194,7 +194,7 @@ def _chart_lab(case: Case, scene) -> np.ndarray | None:
 def load_case(name: str, radiance: Path | None, raw: Path | None, rendered: Path | None, share: float = 1.0) -> Case:
     """A case from its files (any of them may be missing); ``share``: its part of the page's budget
     (:func:`_stride`)."""
-    from ..io.exr import read_exr_header, read_radiance_exr
+    from spectracam.io.exr import read_exr_header, read_radiance_exr
 
     cube = read_radiance_exr(radiance)[0] if radiance is not None else None
     if cube is not None:

@@ -8,7 +8,7 @@ import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..errors import SpectracamError
+from spectracam.core.errors import SpectracamError
 
 #: The files of one shot, by role.
 SHOT_FILES = {"radiance": "radiance.exr", "raw": "raw.exr", "rendered": "rendered.exr"}
@@ -52,7 +52,7 @@ def _kind_of(d: Path, results: dict | None) -> str:
 
 def _is_rendering(path: Path) -> bool:
     """Is ``path`` an EXR spectracam wrote (its header says, the pixels are not read)?"""
-    from ..io.exr import read_exr_header
+    from spectracam.io.exr import read_exr_header
 
     try:
         return read_exr_header(path).get("spectracamKind") in ("rendered", "raw", "radiance")

@@ -17,11 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
-from .._version import __version__
-from ..errors import SpectracamError
-from ..io.report import DELTA_E_VMAX  # the ΔE*ab colour scale of the scores' delta_e.png
-from .cases import CHANNEL_COLOURS, Case, load_case
-from .contents import Contents, find_contents
+from spectracam._version import __version__
+from spectracam.core.errors import SpectracamError
+from spectracam.io.report import DELTA_E_VMAX  # the ΔE*ab colour scale of the scores' delta_e.png
+from spectracam.view.cases import CHANNEL_COLOURS, Case, load_case
+from spectracam.view.contents import Contents, find_contents
 
 #: Figure bytes a page embeds at most; later figures are linked (relative, so they open beside it).
 EMBED_BYTES = 40_000_000
@@ -312,7 +312,7 @@ def build_page(c: Contents, cases: list[Case]) -> str:
 
 def write_page(directory: Path, log=None) -> Path:
     """Find what ``directory`` holds, build the page and write ``directory/index.html`` (atomically)."""
-    from ..io.files import atomic_write
+    from spectracam.core.files import atomic_write
 
     c = find_contents(directory)
     cases = []

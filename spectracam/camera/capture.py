@@ -1,0 +1,82 @@
+"""The sensor back end in one call: radiance cube → optics → responsivities → exposure → sensor.
+
+``ρ_k = A·T_k·∫E_q(λ)·R_k(λ)dλ`` (paper, 3.3) is the radiance times one ``(bands, 3)`` weight matrix
+(:func:`~spectracam.camera.band_weights`); exposure is metered on the white patch (paper 4.5) from
+the patch's mean spectrum; the architecture then samples and records it.  The rates are handed on
+uncomputed (:class:`~spectracam.sensor.kernels.SpectralRates`): the fused sensor pass
+(:mod:`spectracam.sensor.kernels`) reads the cube once and weights each pixel with the channel its site
+records, noise and ADC in the same loop; without it they are computed as
+:func:`~spectracam.camera.photo_electron_rates` does and recorded by the NumPy steps.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from spectracam.architecture.base import MosaicLayout, PlanesLayout
+from spectracam.camera import CameraSpec, band_weights
+from spectracam.sensor.exposure import exposure_times_s
+from spectracam.sensor.kernels import SpectralRates
+
+
+@dataclass
+class RawCapture:
+    """What the sensor recorded.
+
+    ``digital``: digital numbers in the layout's shape — ``(H, W)`` for a :class:`MosaicLayout`,
+    ``(3, H, W)`` for a :class:`PlanesLayout`; ``expected_e``: the same layout, noise-free electrons
+    (photo + dark), ``None`` when read from a file; ``exposure_times_s``: per channel R, G, B;
+    ``capture_time_s``: total; ``metered_rate_e_per_s``: the white patch's mean photo-electron rates
+    that set the exposure; ``scene``: the scene it was taken of, as recorded (a dict), if known.
+    """
+
+    digital: np.ndarray
+    expected_e: np.ndarray | None
+    exposure_times_s: np.ndarray
+    capture_time_s: float
+    layout: MosaicLayout | PlanesLayout
+    camera: CameraSpec
+    seed: int
+    metered_rate_e_per_s: np.ndarray | None = None
+    scene: dict | None = None
+    #: How the white was metered when not on a chart scene's white patch (spectracam.sensor.metering).
+    metering: dict | None = None
+
+    @property
+    def design(self) -> str:
+        return self.camera.design
+
+
+def capture(cube, camera: CameraSpec, seed: int, metering_box: tuple[slice, slice] | None = None, *,
+            white_radiance: np.ndarray | None = None, metering: dict | None = None,
+            time_limit_s: float | None = None) -> RawCapture:
+    """Capture a :class:`~spectracam.render.RadianceCube` with ``camera``; exposure is metered on
+    the mean rates of the pixels in ``metering_box`` (the white patch, paper 4.5) or, for any other
+    white (:mod:`spectracam.sensor.metering`), on the rates of its radiance ``white_radiance`` ``(B,)``,
+    recorded as ``metering``; a camera that meters itself (``capture.metering`` average or percentile,
+    :mod:`spectracam.sensor.metering`) ignores both and meters a preview of the cube, and with ``time_limit_s`` (a hand-held
+    limit) shortens its metered exposures in proportion so the capture lasts at most that long; ``seed`` fixes every
+    random draw (fixed pattern and temporal noise)."""
+    arch = camera.architecture()
+    weights = band_weights(camera, cube.grid)
+    rates = SpectralRates(cube.radiance, weights)  # computed in the sensor's pass
+    if camera.capture.metering not in ("auto", "white_patch"):   # the camera meters its own preview (issue 33)
+        from spectracam.sensor.metering import metered_white_rates, metering_record
+
+        white_rate = metered_white_rates(cube.radiance, weights.astype(np.float64), camera.capture)
+        metering = metering_record(camera.capture)
+    elif white_radiance is not None:
+        white_rate = np.asarray(white_radiance, np.float64) @ weights.astype(np.float64)
+    else:
+        white_rate = rates.mean(*metering_box)
+    times = exposure_times_s(camera.capture.exposure, white_rate, camera.sensor, arch, camera.capture.white_fill,
+                             camera.capture.exposure_split)
+    if time_limit_s is not None and metering is not None and metering.get("kind") == "camera":
+        scale = min(1.0, time_limit_s / arch.capture_time_s(times))
+        times = times * scale
+        metering = {**metering, "time_limit_ms": 1e3 * time_limit_s, "shortened_by": scale}
+    digital, expected = arch.record(rates, times, camera.sensor, seed)
+    return RawCapture(digital=digital, expected_e=expected, exposure_times_s=times,
+                      capture_time_s=arch.capture_time_s(times), layout=arch.layout, camera=camera, seed=seed,
+                      metered_rate_e_per_s=white_rate, scene=cube.metadata.get("scene"), metering=metering)

@@ -1,0 +1,53 @@
+"""Scores that do not flatter: the colour conversion judged on colours it was not fitted on.
+
+The conversion (paper 3.5) is fitted on the 24 chart patches under the scene's light — a *training*
+set, as a camera maker calibrates — so the chart's own conversion error is a training error.  Here
+the same conversion is applied to a *held-out* library of measured reflectances
+(:mod:`spectracam.scene.reflectances`, default the CIE 2017 99 samples) under the same light:
+
+    ΔE_i = ΔE( Lab_display(ρ_i · M · M_disp),  Lab_scene(XYZ_i) )
+
+with ρ_i the sample's noise-free photo-electron rates (band-averaged ``E·S_i/π`` through the
+camera), M the fitted conversion, ``M_disp`` the display's RGB→XYZ, Lab of the display's output
+against the display white and the sample's true Lab against the light's white (exactly how the
+chart's ``delta_e_conversion`` is defined).  Noise-free: it isolates what the conversion cannot
+reach; the noise's own error is in the chart scores.  Reported: mean, 95th percentile, max, count.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from spectracam.camera import CameraSpec, photo_electron_rates
+from spectracam.processing.color import ProcessingSpec, display_rgb_to_xyz
+from spectracam.scene.illuminant import IlluminantSpec
+from spectracam.core.cielab import delta_e, xyz_to_lab
+from spectracam.scene.reference import LibraryColours, library_colours
+from spectracam.core.spectra import WavelengthGrid
+
+#: The library's colours under a light: moved to :mod:`spectracam.scene.reference` (the truth of a scene),
+#: where a textured target (:mod:`spectracam.scene.target`) finds them too.
+HeldOutColours, held_out_colours = LibraryColours, library_colours
+
+
+def conversion_errors(colours: LibraryColours, camera: CameraSpec, grid: WavelengthGrid, conversion: np.ndarray,
+                      processing: ProcessingSpec) -> np.ndarray:
+    """``(n,)`` ΔE of each sample through the fitted 3×3 ``conversion`` (see the module)."""
+    rates = photo_electron_rates(colours.radiance.astype(np.float32), grid, camera).astype(np.float64)
+    M_disp = display_rgb_to_xyz(processing.display)
+    shown = xyz_to_lab(rates @ conversion @ M_disp.T, M_disp.sum(axis=1))
+    truth = xyz_to_lab(colours.xyz, colours.white_xyz)
+    return np.asarray(delta_e(shown, truth, processing.delta_e), float)
+
+
+def summary(errors: np.ndarray, library: str) -> dict:
+    """The report's block: mean, 95th percentile and max ΔE, and the sample count."""
+    e = np.asarray(errors, float)
+    return {"library": library, "samples": int(e.size), "delta_e_mean": float(e.mean()),
+            "delta_e_p95": float(np.percentile(e, 95)), "delta_e_max": float(e.max())}
+
+
+def held_out_block(library: str, illuminant: IlluminantSpec, grid: WavelengthGrid, camera: CameraSpec,
+                   conversion: np.ndarray, processing: ProcessingSpec) -> dict:
+    """:func:`summary` of ``library`` under the light, through a conversion fitted elsewhere."""
+    colours = held_out_colours(library, illuminant, grid)
+    return summary(conversion_errors(colours, camera, grid, conversion, processing), library)

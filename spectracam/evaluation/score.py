@@ -1,0 +1,505 @@
+"""From a raw capture to a displayed image and its score (paper, sections 3.5, 3.6 and 5).
+
+Digital numbers become electrons (:func:`~spectracam.sensor.adc_inverse`), the expected dark charge
+is subtracted (a dark-frame calibration; the fixed pattern stays), a mosaic is demosaicked, each
+channel is divided by its exposure time, and the 3×3 matrix fitted on the chart reference maps the
+result to linear display RGB.  Everything here dispatches on the capture's layout.
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from spectracam.architecture.base import MosaicLayout
+from spectracam.camera.capture import RawCapture
+from spectracam.scene.chart import WHITE_PATCH
+from spectracam.processing.color import ProcessingSpec, demosaic, display_rgb_to_xyz
+from spectracam.core.errors import SpectracamError
+from spectracam.core.cielab import SNR_COMBINATIONS, combine_snr_db, delta_e, snr_db, xyz_to_lab
+from spectracam.processing import develop, oracle_block
+from spectracam.processing.calibration import conversion_matrix, conversion_target_rgb  # noqa: F401  (the paper's 3.5)
+from spectracam.scene.reference import ChartReference
+from spectracam.sensor import adc_full_scale_dn, adc_inverse
+
+#: What a per-pixel ΔE is measured against: the scene (the default), or the noise-free rendering of
+#: the same camera (the conversion error removed; how the paper's Figure 6 isolates the noise steps).
+DELTA_E_REFERENCES = ("scene", "camera")
+
+
+def _finite(x) -> float | None:
+    return float(x) if np.isfinite(x) else None
+
+
+def _mean_or_none(values) -> float | None:
+    return None if any(v is None for v in values) else float(np.mean(values))
+
+
+@dataclass(frozen=True)
+class PatchScore:
+    """One patch: scene and rendered CIELAB, ΔE (per-pixel mean, of the mean colour, of the
+    conversion alone) and SNR per channel and combined.  An SNR is ``None`` when it has no finite
+    value: noise-free (σ = 0: infinite), or undefined — the channel's mean dark-subtracted signal is
+    ≤ 0 under noise, so 20·log10(μ/σ) has no value; ``snr_undefined`` names those channels, so the
+    two cases never read alike."""
+
+    patch: int
+    name: str
+    scene_lab: tuple
+    rendered_lab: tuple
+    delta_e_mean: float
+    delta_e_of_mean: float
+    delta_e_conversion: float
+    snr_R_db: float | None
+    snr_G_db: float | None
+    snr_B_db: float | None
+    snr_combined_db: float | None
+    pixels: int
+    snr_undefined: tuple = ()
+    #: Every recorded channel's SNR by name (R, G, B; R, Y, B; C, Y, M; R, G, B, W; …): the R/G/B
+    #: fields above are ``None`` for a channel the architecture does not record.
+    snr_by_channel_db: dict = dataclasses.field(default_factory=dict)
+    #: 20·log10(Y/σ_Y) of the rendered luminance: the channels' measured means and noise carried
+    #: through the exposure normalisation and the colour conversion to display luminance, the channels
+    #: independent (so the conversion's noise amplification counts and no demosaicker's smoothing
+    #: does; docs/metrics.md).
+    snr_rendered_db: float | None = None
+    #: The mean per-pixel S-CIELAB ΔE over the patch's scored pixels (:func:`chart_scielab_map`).
+    s_cielab_mean: float | None = None
+
+
+@dataclass(frozen=True)
+class ChartSummary:
+    """Chart averages and the capture's timing: exactly what sweeps record and the paper reads."""
+
+    delta_e_mean: float
+    delta_e_of_mean: float
+    delta_e_conversion: float
+    snr_combined_db: float | None
+    snr_R_db: float | None
+    snr_G_db: float | None
+    snr_B_db: float | None
+    capture_time_ms: float
+    #: The channel's exposure time (``None`` when the architecture records no such channel).
+    exposure_R_ms: float | None
+    exposure_G_ms: float | None
+    exposure_B_ms: float | None
+    #: How many patch-channel SNRs are undefined (mean signal ≤ 0 under noise); a channel's chart SNR
+    #: above is ``None`` then, and ``None`` with a count of 0 means noise-free.
+    snr_undefined_patches: int = 0
+    #: The patches' mean rendered-luminance SNR (:attr:`PatchScore.snr_rendered_db`).
+    snr_rendered_db: float | None = None
+    #: 95th percentile of the per-pixel ΔE (processing.delta_e) over every patch's pixels.
+    delta_e_p95: float | None = None
+    #: The chart average of each patch's mean per-pixel CIEDE2000 (beside ΔE*ab whatever processing.delta_e is).
+    delta_e2000_mean: float | None = None
+    #: The white balance's recovery and reproduction angular errors, degrees (0 for the oracle;
+    #: spectracam.processing.white_balance).
+    awb_recovery_deg: float | None = None
+    awb_reproduction_deg: float | None = None
+    #: S-CIELAB (Zhang & Wandell; :func:`chart_scielab_map`): the rendered image and the scene's truth image through
+    #: the eye's filters at processing.viewing_distance_m and display_pixel_pitch_mm, then ΔE (processing.delta_e) per
+    #: pixel on the same pixels as delta_e_mean: the chart average of each patch's mean, and the 95th percentile over
+    #: every patch's pixels.  Always against the scene.
+    s_cielab_mean: float | None = None
+    s_cielab_p95: float | None = None
+    #: The white patch's rendered luminance SNR (:attr:`PatchScore.snr_rendered_db` of chart.WHITE_PATCH): what the
+    #: usability rule reads (spectracam.evaluation.usability); ``None``: noise-free or undefined.
+    snr_white_rendered_db: float | None = None
+
+
+#: The metrics a sweep can record: every field of :class:`ChartSummary`.
+SUMMARY_METRICS = tuple(f.name for f in dataclasses.fields(ChartSummary))
+
+
+@dataclass(frozen=True, eq=False)
+class ChartScore:
+    """A capture scored against its scene: typed results, the displayed image and the ΔE map."""
+
+    summary: ChartSummary
+    patches: tuple[PatchScore, ...]
+    parameters: dict  # scene, camera, processing, seed, definitions, conversion matrix
+    rendered_rgb: np.ndarray  # (H, W, 3) linear display RGB
+    delta_e_map: np.ndarray  # (H, W), NaN outside the patches' masks
+    #: The conversion's noise-free error on the 24 patches it was fitted on (spectracam.evaluation.heldout.summary).
+    training: dict | None = None
+    #: The same on colours it was not fitted on (processing.held_out), or None.
+    held_out: dict | None = None
+    #: The neutral the camera used, the true one and the angular errors (spectracam.processing.develop).
+    white_balance: dict | None = None
+    #: The oracle camera's and the developed camera's scores side by side (spectracam.pipeline.both_ways).
+    both_ways: dict | None = None
+
+    def to_dict(self) -> dict:
+        """The strict-JSON report (report.json)."""
+        out = {"parameters": self.parameters, "patches": [dataclasses.asdict(p) for p in self.patches],
+               "chart": dataclasses.asdict(self.summary)}
+        if self.white_balance is not None:
+            out["white_balance"] = self.white_balance
+        if self.both_ways is not None:
+            out["both_ways"] = self.both_ways
+        if self.training is not None:
+            out["training"] = self.training
+        if self.held_out is not None:
+            out["held_out"] = self.held_out
+        return out
+
+
+def recorded_electrons(raw: RawCapture) -> tuple[np.ndarray, np.ndarray]:
+    """Dark-subtracted electrons in the capture's layout, and the dark charge subtracted per channel."""
+    s = raw.camera.sensor
+    e = adc_inverse(raw.digital, s)
+    dark = s.dark_rate_e_per_s * np.asarray(raw.exposure_times_s)
+    if isinstance(raw.layout, MosaicLayout):
+        return e - dark[0], dark
+    return e - dark[:, None, None], dark
+
+
+def camera_rates(raw: RawCapture, processing: ProcessingSpec) -> np.ndarray:
+    """``(H, W, N)`` photo-electrons per second per channel: demosaicked and exposure-normalised."""
+    e, _ = recorded_electrons(raw)
+    if isinstance(raw.layout, MosaicLayout):
+        rgb = demosaic(e, raw.layout, processing.demosaic)
+        del e
+    else:
+        rgb = np.moveaxis(e, 0, -1)
+    rgb /= np.asarray(raw.exposure_times_s)[None, None, :]  # in place: a 12-Mpx image holds 290 MB
+    return rgb
+
+
+def channel_stats(raw: RawCapture, boxes) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and std ``(24, N)`` of the recorded (dark-subtracted) electrons of each channel's own
+    pixels in each box (for a mosaic: every site of the channel in the tile, both greens of a Bayer)."""
+    e, _ = recorded_electrons(raw)
+    n = len(raw.layout.channels)
+    means, stds = np.zeros((len(boxes), n)), np.zeros((len(boxes), n))
+    mosaic = isinstance(raw.layout, MosaicLayout)
+    if mosaic:
+        th, tw = raw.layout.tile_shape
+        sites = raw.layout.sites()
+    for p, (r, c) in enumerate(boxes):
+        if mosaic:
+            for k in range(n):
+                pix = np.concatenate([e[r, c][(dy - r.start) % th::th, (dx - c.start) % tw::tw].ravel()
+                                      for dy, dx, kk in sites if kk == k])
+                means[p, k], stds[p, k] = pix.mean(), pix.std()
+                if pix.max() == pix.min():   # one code everywhere (a coarse ADC): no noise, not rounding's 1e-13
+                    stds[p, k] = 0.0
+        else:
+            block = e[:, r, c].reshape(n, -1)
+            means[p], stds[p] = block.mean(axis=1), block.std(axis=1)
+            stds[p][block.max(axis=1) == block.min(axis=1)] = 0.0
+    return means, stds
+
+
+def check_raw(raw: RawCapture) -> None:
+    """Refuse a capture that no sensor could have recorded: digital numbers that are not finite or lie
+    outside the ADC's codes, a layout that does not match the array, exposure times that are not > 0."""
+    s = raw.camera.sensor
+    d = raw.digital
+    want, n = (2 if isinstance(raw.layout, MosaicLayout) else 3), len(raw.layout.channels)
+    if d.ndim != want or (want == 3 and d.shape[0] != n):
+        raise SpectracamError(f"capture: a {type(raw.layout).__name__} holds "
+                              f"{'(H, W)' if want == 2 else f'({n}, H, W)'} digital numbers; got {d.shape}")
+    top = adc_full_scale_dn(s)
+    bad = ~np.isfinite(d) | (d < 0) | (d > top)
+    if bad.any():
+        raise SpectracamError(f"capture: {int(bad.sum())} digital numbers are not finite or outside the "
+                              f"{s.adc_bits}-bit ADC's 0…{top:g} (e.g. {d[bad].flat[0]!r})")
+    t = np.asarray(raw.exposure_times_s, float)
+    if t.shape != (n,) or not np.all(np.isfinite(t)) or np.any(t <= 0):
+        raise SpectracamError(f"capture: exposure times must be {n} finite times > 0 s, one per channel "
+                              f"{', '.join(raw.layout.channels)}; got {t.tolist()}")
+
+
+def display_rgb(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec) -> tuple[np.ndarray, np.ndarray]:
+    """``(rendered (H, W, 3) linear display RGB, conversion matrix)`` (:func:`developed_rgb` without its white-balance
+    block)."""
+    rgb, M, _ = developed_rgb(raw, reference, processing)
+    return rgb, M
+
+
+def developed_rgb(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec,
+                  target_reference=None) -> tuple[np.ndarray, np.ndarray, dict]:
+    """``(rendered (H, W, 3) linear display RGB, conversion matrix, white-balance block)``: demosaicked,
+    exposure-normalised rates through the conversion — for the paper's camera (``processing.told_the_light``) the one
+    fitted on ``reference`` under its own light (which need not be the captured scene: a spectral image from another
+    tool is shown through the chart's conversion); for a camera that finds its own white, the matrix it develops from
+    this image (:func:`spectracam.processing.develop`)."""
+    rgb = camera_rates(raw, processing)
+    if processing.told_the_light:
+        M = conversion_matrix(reference, raw.camera, processing)
+        block = oracle_block(reference, raw.camera, processing)
+    else:
+        dev = develop(rgb, raw, reference, processing, target_reference)
+        M, block = dev.matrix, dev.white_balance
+    if rgb.shape[-1] == 3:   # in place, a band of rows at a time: no second full-size image
+        for i in range(0, rgb.shape[0], 256):
+            rgb[i:i + 256] = rgb[i:i + 256] @ M
+    else:                    # N ≠ 3 channels: into a new (H, W, 3) image, band by band
+        rgb = np.concatenate([rgb[i:i + 256] @ M for i in range(0, rgb.shape[0], 256)])
+    if processing.gamut_clip:
+        np.clip(rgb, 0.0, 1.0, out=rgb)
+    return rgb, M, block
+
+
+#: How far a chart capture's exposure times may lie from those its scene's white patch meters (the
+#: render's patch means match the reference to 1e-6 since issue 17; older Mitsuba renders to 0.1 %).
+EXPOSURE_MATCH_TOLERANCE = 0.01
+
+
+def check_exposure_matches(raw: RawCapture, reference: ChartReference) -> None:
+    """A capture metered on its chart's white patch must have the exposure times that patch gives for
+    its camera: a recorded scene edited to another light or level, or a capture of other pixels, is
+    refused instead of being scored against the wrong truth."""
+    from spectracam.scene.chart import WHITE_PATCH
+    from spectracam.sensor.exposure import exposure_times_s
+
+    if raw.scene is None or raw.metering is not None:
+        return
+    cam = raw.camera
+    try:
+        want = exposure_times_s(cam.capture.exposure, reference.patch_rates(cam)[WHITE_PATCH], cam.sensor,
+                                cam.architecture(), cam.capture.white_fill, cam.capture.exposure_split)
+    except SpectracamError:
+        return  # the scene's light cannot be metered at all: other checks speak
+    got = np.asarray(raw.exposure_times_s, float)
+    worst = float(np.max(np.abs(got / want - 1)))
+    if worst > EXPOSURE_MATCH_TOLERANCE:
+        raise SpectracamError(f"capture: its exposure times ({', '.join(f'{1e3 * t:.4g}' for t in got)} ms) are not "
+                              f"those its recorded scene's white patch meters ({', '.join(f'{1e3 * t:.4g}' for t in want)}"
+                              f" ms under {reference.illuminant.label}, {reference.illuminant.white_luminance_cd_m2:g} "
+                              "cd/m²); the scene or the capture was edited, or another scene was captured")
+
+
+#: Pixels whose CIELAB is computed in one call: few calls (each has a fixed cost) without a
+#: full-image Lab (a 12-Mpx chart's masks in one call held 0.25 cubes more than the image).
+LAB_CHUNK_PIXELS = 1 << 20
+
+
+def _box_labs(rgb: np.ndarray, boxes, M_disp: np.ndarray, display_white: np.ndarray):
+    """CIELAB ``(h, w, 3)`` of each box's pixels in turn, computed for runs of boxes of at most
+    :data:`LAB_CHUNK_PIXELS` pixels (or one box) at a time."""
+    i = 0
+    while i < len(boxes):
+        j, n = i, 0
+        while j < len(boxes) and (j == i or n + _pixels(boxes[j]) <= LAB_CHUNK_PIXELS):
+            n += _pixels(boxes[j])
+            j += 1
+        lab = xyz_to_lab(np.concatenate([rgb[r, c].reshape(-1, 3) for r, c in boxes[i:j]]) @ M_disp.T, display_white)
+        start = 0
+        for r, c in boxes[i:j]:
+            yield lab[start:start + _pixels((r, c))].reshape(r.stop - r.start, c.stop - c.start, 3)
+            start += _pixels((r, c))
+        i = j
+
+
+def _pixels(box) -> int:
+    r, c = box
+    return (r.stop - r.start) * (c.stop - c.start)
+
+
+def chart_truth_xyz(reference: ChartReference, rows: slice, cols: slice) -> np.ndarray:
+    """``(h, w, 3)`` CIE 1931 XYZ of the scene's pixels ``[rows, cols]`` under its light (the light's white has Y = 1):
+    each patch's reference colour (``reference.patch_xyz``) over the part of the pixel it covers
+    (:func:`spectracam.scene.chart.patch_coverage`, what a box-filtered render converges to), the surround's
+    (``chart.surround_reflectance`` × the white) over the rest."""
+    from spectracam.scene.chart import View, patch_coverage
+
+    cy, cx = patch_coverage(reference.chart, View.fit(reference.chart, reference.width_px, reference.height_px))
+    surround = reference.chart.surround_reflectance * np.asarray(reference.white_xyz, float)
+    step = np.asarray(reference.patch_xyz, float) - surround                     # (24, 3)
+    cy, cx = cy[:, rows], cx[:, cols]
+    # (h, w·3): Σ_p cy·cx·(XYZ_p − XYZ_s)
+    mix = cy.T @ (cx[:, :, None] * step[:, None, :]).reshape(len(step), -1)
+    return surround + mix.reshape(cy.shape[1], cx.shape[1], 3)
+
+
+#: Pixels of the chart's S-CIELAB filtered at once: a band of rows (with the kernel's reach above and below) at a
+#: time, so a 12-Mpx chart never holds a full-size opponent image; a 640×480 chart is one band.
+SCIELAB_CHUNK_PIXELS = 1 << 20
+
+
+def _scored_mask(reference: ChartReference) -> np.ndarray:
+    mask = np.zeros((reference.height_px, reference.width_px), bool)
+    for r, c in reference.boxes:
+        mask[r, c] = True
+    return mask
+
+
+def _scielab_bands(reference: ChartReference, spd: float):
+    """``(reach px, crop (rows, cols), input cols, [(out rows, in rows)])``: the scored pixels' bounding box, the
+    columns its filters read, and its bands of output rows with the input rows each needs (the kernel's reach either
+    side, within the image): filtering a band's input gives its output rows exactly as filtering the whole image
+    would."""
+    from spectracam.evaluation.scielab import scielab_kernels
+
+    reach = scielab_kernels(spd)[0].shape[0] // 2
+    boxes = [(r, c) for r, c in reference.boxes if r.stop > r.start and c.stop > c.start]
+    r0, r1 = min(r.start for r, _ in boxes), max(r.stop for r, _ in boxes)
+    c0, c1 = min(c.start for _, c in boxes), max(c.stop for _, c in boxes)
+    cols_in = slice(max(0, c0 - reach), min(reference.width_px, c1 + reach))
+    band = max(1, SCIELAB_CHUNK_PIXELS // (cols_in.stop - cols_in.start))
+    bands = [(slice(lo, min(lo + band, r1)), slice(max(0, lo - reach), min(reference.height_px, min(lo + band, r1)
+                                                                          + reach))) for lo in range(r0, r1, band)]
+    return reach, (slice(r0, r1), slice(c0, c1)), cols_in, bands
+
+
+def _filtered_lab(xyz: np.ndarray, out_rows: slice, in_rows: slice, out_cols: slice, cols_in: slice, keep: np.ndarray,
+                  spd: float, white: np.ndarray) -> np.ndarray:
+    """CIELAB (against ``white``) of the S-CIELAB-filtered ``xyz`` (the band's input) at the ``keep`` pixels of
+    its output rows and columns."""
+    from spectracam.evaluation.scielab import scielab_filter_fft
+
+    f = scielab_filter_fft(xyz, spd)   # float64 FFT: the row and column passes' result to 1e-15, 2× faster
+    f = f[out_rows.start - in_rows.start:out_rows.stop - in_rows.start,
+          out_cols.start - cols_in.start:out_cols.stop - cols_in.start]
+    return xyz_to_lab(f[keep], white)
+
+
+@lru_cache(maxsize=2)
+def _truth_scielab_lab(reference: ChartReference, display: str, adaptation: str, spd: float) -> np.ndarray:
+    """``(n, 3)``: CIELAB against the display white of the scene's truth image carried to the display white
+    (``processing.adaptation``) and through the S-CIELAB filters, at the scored pixels in row-major order.
+    Memoised: every capture of a scene (designs, seeds, noise steps) is scored against the same truth."""
+    from spectracam.processing.color import adaptation_matrix
+
+    M_disp = display_rgb_to_xyz(display)
+    white = M_disp.sum(axis=1)
+    to_display = adaptation_matrix(reference.white_xyz, white, adaptation)
+    _, (_, cols), cols_in, bands = _scielab_bands(reference, spd)
+    mask = _scored_mask(reference)
+    out = [_filtered_lab(chart_truth_xyz(reference, in_rows, cols_in) @ to_display.T, rows, in_rows, cols, cols_in,
+                         mask[rows, cols], spd, white) for rows, in_rows in bands]
+    lab = np.concatenate(out)
+    lab.flags.writeable = False
+    return lab
+
+
+def chart_scielab_map(rgb: np.ndarray, reference: ChartReference, processing: ProcessingSpec) -> np.ndarray:
+    """``(H, W)`` float32 S-CIELAB ΔE (Zhang & Wandell 1997; :mod:`spectracam.evaluation.scielab`) of a chart's
+    rendering, NaN outside the patches' scoring boxes (the pixels the per-pixel ΔE is scored on).
+
+    The rendered display XYZ (``rgb`` through the display) and the scene's truth (:func:`chart_truth_xyz`, carried to
+    the display white by ``processing.adaptation``, as the target scores do) pass through the same opponent-channel
+    filters sampled at ``processing.samples_per_degree`` (the viewing distance and the display's pixel pitch, one
+    image pixel per display pixel); then CIELAB against the display white and ΔE (``processing.delta_e``) per pixel.
+    On a uniform area (wider than the filters' 1° support) it equals the per-pixel ΔE (with the default XYZ-scaling
+    adaptation, exactly); noise is averaged as the eye averages it.  Separable Gaussians on the scored pixels'
+    bounding box and the filters' reach only, a band of rows at a time; no random numbers."""
+    spd = processing.samples_per_degree
+    M_disp = display_rgb_to_xyz(processing.display)
+    white = M_disp.sum(axis=1)
+    truth = _truth_scielab_lab(reference, processing.display, processing.adaptation, spd)
+    _, (_, cols), cols_in, bands = _scielab_bands(reference, spd)
+    mask = _scored_mask(reference)
+    out = np.full(mask.shape, np.nan, np.float32)
+    start = 0
+    for rows, in_rows in bands:
+        keep = mask[rows, cols]
+        lab = _filtered_lab(rgb[in_rows, cols_in] @ M_disp.T, rows, in_rows, cols, cols_in, keep, spd, white)
+        block = out[rows, cols]
+        block[keep] = delta_e(lab, truth[start:start + len(lab)], processing.delta_e)
+        out[rows, cols] = block
+        start += len(lab)
+    return out
+
+
+def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec,
+          delta_e_reference: str = "scene") -> ChartScore:
+    """Render a capture on the display and score it against the chart reference (see the module
+    docstring).  ``delta_e_reference="camera"`` scores per-pixel ΔE against the noise-free rendering
+    of the same camera instead (:data:`DELTA_E_REFERENCES`); ``delta_e_of_mean`` and
+    ``delta_e_conversion`` are always against the scene."""
+    if delta_e_reference not in DELTA_E_REFERENCES:
+        raise SpectracamError(f"delta_e_reference = {delta_e_reference!r}: must be one of "
+                              + ", ".join(map(repr, DELTA_E_REFERENCES)))
+    check_raw(raw)
+    h, w = raw.digital.shape[-2:]
+    if (w, h) != (reference.width_px, reference.height_px):
+        raise SpectracamError(f"image = {w}x{h}: the capture does not match the scene "
+                              f"({reference.width_px}x{reference.height_px})")
+    if raw.scene is not None and (table := reference.matches(raw.scene)) is not None:
+        raise SpectracamError(f"{table} = {str(raw.scene.get(table))[:120]}: the capture was taken of another scene "
+                              f"than the one it is scored against")
+    check_exposure_matches(raw, reference)
+    method = processing.delta_e
+    camera = raw.camera
+    chart_rates = reference.patch_rates(camera)
+    M_disp = display_rgb_to_xyz(processing.display)
+    display_white = M_disp.sum(axis=1)
+    rgb, M, wb = developed_rgb(raw, reference, processing)
+    scene_lab = xyz_to_lab(reference.patch_xyz, reference.white_xyz)
+    conversion_lab = xyz_to_lab(chart_rates @ M @ M_disp.T, display_white)
+    against = scene_lab if delta_e_reference == "scene" else conversion_lab
+
+    boxes = reference.boxes
+    channels = raw.layout.channels
+    de_map = np.full((h, w), np.nan, np.float32)
+    means, stds = channel_stats(raw, boxes)
+    # display luminance per unit of each channel's rate, and each channel's exposure (rates = e⁻/t)
+    luminance = M @ M_disp[1]
+    times_s = np.asarray(raw.exposure_times_s, float)
+    mean_labs = xyz_to_lab(np.stack([rgb[r, c].reshape(-1, 3).mean(axis=0) for r, c in boxes]) @ M_disp.T,
+                           display_white)
+    sc_map = chart_scielab_map(rgb, reference, processing)
+    patches, de2000 = [], []
+    for p, (r, c), lab_box in zip(range(len(boxes)), boxes, _box_labs(rgb, boxes, M_disp, display_white)):
+        de = delta_e(lab_box, against[p], method)
+        de_map[r, c] = de
+        de2000.append(float(np.mean(de if method == "ciede2000" else delta_e(lab_box, against[p], "ciede2000"))))
+        with np.errstate(divide="ignore", invalid="ignore"):  # noise-free: infinite; mean ≤ 0: undefined (named)
+            snr = snr_db(means[p], stds[p])
+            combined = combine_snr_db(means[p], stds[p], processing.snr_combination)
+            rendered = snr_db(luminance @ (means[p] / times_s), np.linalg.norm(luminance * stds[p] / times_s))
+        by_name = dict(zip(channels, snr))
+        patches.append(PatchScore(
+            patch=p, name=reference.names[p], scene_lab=tuple(scene_lab[p].round(4).tolist()),
+            rendered_lab=tuple(mean_labs[p].round(4).tolist()), delta_e_mean=float(de.mean()),
+            delta_e_of_mean=float(delta_e(mean_labs[p], scene_lab[p], method)),
+            delta_e_conversion=float(delta_e(conversion_lab[p], scene_lab[p], method)),
+            **{f"snr_{k}_db": _finite(by_name[k]) if k in by_name else None for k in "RGB"},
+            snr_combined_db=_finite(combined), pixels=int((r.stop - r.start) * (c.stop - c.start)),
+            snr_undefined=tuple(k for k, m, sd in zip(channels, means[p], stds[p]) if m <= 0 and sd > 0),
+            snr_by_channel_db={k: _finite(v) for k, v in by_name.items()}, snr_rendered_db=_finite(rendered),
+            s_cielab_mean=float(sc_map[r, c].mean(dtype=np.float64))))
+    times_ms = 1e3 * np.asarray(raw.exposure_times_s, float)
+    summary = ChartSummary(
+        delta_e_mean=float(np.mean([p.delta_e_mean for p in patches])),
+        delta_e_of_mean=float(np.mean([p.delta_e_of_mean for p in patches])),
+        delta_e_conversion=float(np.mean([p.delta_e_conversion for p in patches])),
+        snr_combined_db=_mean_or_none([p.snr_combined_db for p in patches]),
+        **{f"snr_{k}_db": _mean_or_none([getattr(p, f"snr_{k}_db") for p in patches]) for k in "RGB"},
+        capture_time_ms=1e3 * float(raw.capture_time_s),
+        **{f"exposure_{k}_ms": float(times_ms[channels.index(k)]) if k in channels else None for k in "RGB"},
+        snr_undefined_patches=int(sum(len(p.snr_undefined) for p in patches)),
+        snr_rendered_db=_mean_or_none([p.snr_rendered_db for p in patches]),
+        delta_e_p95=float(np.nanpercentile(de_map, 95)), delta_e2000_mean=float(np.mean(de2000)),
+        awb_recovery_deg=wb["recovery_deg"], awb_reproduction_deg=wb["reproduction_deg"],
+        s_cielab_mean=float(np.mean([p.s_cielab_mean for p in patches])),
+        s_cielab_p95=float(np.nanpercentile(sc_map, 95)), snr_white_rendered_db=patches[WHITE_PATCH].snr_rendered_db)
+    parameters = {
+        "scene": raw.scene, "camera": camera.to_dict(), "processing": processing.to_dict(), "seed": raw.seed,
+        "delta_e_reference": delta_e_reference, "conversion_matrix": M.tolist(),
+        "snr_definition": "20*log10(mean/std) of the dark-subtracted electrons of each channel's own pixels in "
+                          "the patch mask; combined: "
+                          + (SNR_COMBINATIONS[processing.snr_combination].__doc__ or processing.snr_combination),
+        "s_cielab": {"viewing_distance_m": processing.viewing_distance_m,
+                     "display_pixel_pitch_mm": processing.display_pixel_pitch_mm,
+                     "samples_per_degree": processing.samples_per_degree,
+                     "definition": "S-CIELAB (Zhang & Wandell 1997): the rendered display XYZ and the scene's truth "
+                                   "(each patch's reference XYZ over its pixel area, the surround's elsewhere, carried "
+                                   "to the display white) through the eye's opponent-channel filters, then "
+                                   f"{processing.delta_e} per pixel on the patches' scored pixels; docs/metrics.md"},
+    }
+    training = held_out = None
+    if processing.held_out != "none":
+        from spectracam.evaluation.heldout import held_out_block
+        from spectracam.evaluation.heldout import summary as error_summary
+
+        training = error_summary([p.delta_e_conversion for p in patches], "the chart (training: the conversion is "
+                                 "fitted on it)")
+        held_out = held_out_block(processing.held_out, reference.illuminant, reference.grid, camera, M, processing)
+    return ChartScore(summary, tuple(patches), parameters, rgb.astype(np.float32), de_map, training, held_out, wb)

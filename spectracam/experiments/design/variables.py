@@ -1,0 +1,327 @@
+"""Design variables: what the optimiser moves, and how each choice becomes responsivities and a camera.
+
+A :class:`Parametrisation` maps a vector ``x`` (with box bounds) to the three primary transmittances T_k(λ)
+(R, G, B) — or, for stacked photodiodes, to the depths of the collection windows — evaluated at the same
+sample points and trapezoid weights as :func:`spectracam.core.spectra.band_average` (400 a band), times QE × IR cut:
+the band-averaged responsivities are then those the pipeline computes for the camera :meth:`camera` returns
+(a test holds them together).  The architecture derives its channels from them as it does in the pipeline
+(:func:`channels_from_primaries`: W, Y, C, M capped at the unfiltered pixel).  Optional extra variables: the
+IR-cut edge (nm) and the exposure split of a field-sequential or prism camera.
+
+=============  =====================================================  =================================
+name           variables                                              pipeline camera
+=============  =====================================================  =================================
+``block``      the two cutoffs, nm (edges ``edge_width_nm`` wide)     ``kind = "block"``
+``gaussian``   three centres and three FWHM, nm                       ``kind = "gaussian"``
+``freeform``   transmittances at knots every ``knot_step_nm``, in     ``kind = "transmittance"``
+               [``min_transmittance``, 1], linear between, smoothness
+               penalised
+``depths``     the stacked photodiodes' dead layer and window widths  ``stacked_depths_um``
+=============  =====================================================  =================================
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from spectracam.core.errors import SpectracamError
+from spectracam.architecture.filters import QE_MODELS, logistic_scale_nm, quantum_efficiency
+from spectracam.core.registry import Registry
+from spectracam.core.spectra import band_sample_points
+from spectracam.experiments.design.ad import backend, fresh, tensor
+
+#: Points per band of the responsivities' trapezoid rule: those of the pipeline's smooth filters
+#: (:func:`spectracam.architecture.filters._smooth`), so the two agree to rounding.
+POINTS_PER_BAND = 400
+
+PARAMETRISATIONS: Registry = Registry("design.filters", "filter parametrisation")
+
+
+@dataclass(frozen=True, eq=False)
+class Samples:
+    """The wavelengths ``lam (B, P + 1)`` every transmittance is evaluated at, the trapezoid weights ``q (P + 1,)``
+    of a band average, and QE there (with the camera's fixed IR cut, or without it when the edge is designed)."""
+
+    lam: np.ndarray
+    q: np.ndarray
+    qe: np.ndarray
+
+    @classmethod
+    def of(cls, camera, grid, ir_cut_designed: bool) -> "Samples":
+        lam = band_sample_points(grid, POINTS_PER_BAND)
+        q = np.full(POINTS_PER_BAND + 1, 1.0 / POINTS_PER_BAND)
+        q[[0, -1]] *= 0.5
+        f = camera.filters
+        qe = (QE_MODELS[f.qe](f) if ir_cut_designed else quantum_efficiency(f))(lam)
+        return cls(lam, q, np.asarray(qe, float))
+
+
+def band_average(values, samples: Samples):
+    """``(B,)`` trapezoid band averages of values at the sample points ``(B, P + 1)``."""
+    dr, _ = backend()
+    return dr.sum(values * tensor(samples.q)[None, :], axis=1)
+
+
+def logistic(x):
+    dr, _ = backend()
+    return 1.0 / (1.0 + dr.exp(-x))
+
+
+def channels_from_primaries(name: str, R: list, clear) -> list:
+    """The architecture's channels from the primaries' responsivities R, G, B and the unfiltered pixel's ``clear``
+    (:func:`spectracam.architecture.base.complementary`: a pair's sum capped at ``clear``)."""
+    dr, _ = backend()
+
+    def pair(a, b):
+        return dr.minimum(R[a] + R[b], clear)
+
+    return {"rgbw": lambda: [*R, clear], "ryyb": lambda: [R[0], pair(0, 1), R[2]],
+            "cmy": lambda: [pair(1, 2), pair(0, 1), pair(0, 2)]}.get(name, lambda: list(R))()
+
+
+class Parametrisation:
+    """One way of designing filters (see the module).  ``x`` is a numpy vector; :meth:`transmittances` takes it
+    as a Dr.Jit tensor."""
+
+    name = ""
+    #: Can this parametrisation design an architecture with these filters (``stacked`` has none)?
+    stacked = False
+
+    def __init__(self, settings, camera, grid):
+        self.settings, self.camera, self.grid = settings, camera, grid
+
+    def initial(self) -> np.ndarray:
+        raise NotImplementedError
+
+    def bounds(self) -> list:
+        raise NotImplementedError
+
+    def transmittances(self, x, samples: Samples) -> list:
+        """Three tensors ``(B, P + 1)``: T_R, T_G, T_B at the sample points."""
+        raise NotImplementedError
+
+    def penalty(self, x):
+        """The realisability term (0 unless a parametrisation has one)."""
+        return 0.0
+
+    def filters(self, x: np.ndarray):
+        """The :class:`~spectracam.architecture.filters.FilterSpec` of design ``x`` (for the pipeline)."""
+        raise NotImplementedError
+
+    def describe(self, x: np.ndarray) -> dict:
+        """The design's numbers, named (results.json)."""
+        raise NotImplementedError
+
+
+def _t(x, i):
+    """Element ``i`` of a tensor as a one-element tensor (a fresh view: see :func:`~spectracam.experiments.design.ad.fresh`)."""
+    return fresh(x[i])
+
+
+@PARAMETRISATIONS.register("block")
+class Block(Parametrisation):
+    """Block filters (paper 4.3) with the two cutoffs free; ideal steps (``edge_width_nm = 0``: a ramp one
+    sample wide, so the band average is the exact overlap to 1/400 of a band) or logistic edges."""
+
+    name = "block"
+
+    def initial(self):
+        return np.asarray(self.settings.start_cutoffs_nm, float)
+
+    def bounds(self):
+        lo, hi = float(self.grid.edges_nm[0]), float(self.grid.edges_nm[-1])
+        return [(lo + 5.0, hi - 5.0)] * 2
+
+    def transmittances(self, x, samples):
+        dr, _ = backend()
+        lam = tensor(samples.lam)
+        w = self.settings.edge_width_nm
+        if w > 0:
+            s = float(logistic_scale_nm(w))
+
+            def rise(c):
+                return logistic((lam - c) / s)
+        else:
+            h = float(samples.lam[0, 1] - samples.lam[0, 0])
+
+            def rise(c):
+                return dr.clip((lam - c) / h + 0.5, 0.0, 1.0)
+        r1, r2 = rise(_t(x, 0)), rise(_t(x, 1))
+        return [r2, r1 * (1.0 - r2), 1.0 - r1]
+
+    def penalty(self, x):
+        dr, _ = backend()
+        gap = _t(x, 1) - _t(x, 0) - 10.0   # the green band at least 10 nm wide
+        return 1e3 * dr.square(dr.minimum(gap, 0.0))
+
+    def filters(self, x):
+        return self.camera.filters.replace(kind="block", cutoffs_nm=(float(x[0]), float(x[1])),
+                                           edge_width_nm=float(self.settings.edge_width_nm))
+
+    def describe(self, x):
+        return {"cutoffs_nm": [round(float(v), 2) for v in x[:2]], "edge_width_nm": self.settings.edge_width_nm}
+
+
+@PARAMETRISATIONS.register("gaussian")
+class Gaussian(Parametrisation):
+    """Three Gaussian transmittances of peak 1: centres and full widths at half maximum, nm."""
+
+    name = "gaussian"
+
+    def initial(self):
+        return np.array([*self.settings.start_centres_nm, *self.settings.start_fwhm_nm], float)
+
+    def bounds(self):
+        lo, hi = float(self.grid.edges_nm[0]), float(self.grid.edges_nm[-1])
+        return [(lo, hi)] * 3 + [(10.0, 300.0)] * 3
+
+    def transmittances(self, x, samples):
+        dr, _ = backend()
+        lam = tensor(samples.lam)
+        k = float(2 * np.sqrt(2 * np.log(2)))   # a numpy scalar would take the tensor apart
+        return [dr.exp(-0.5 * dr.square((lam - _t(x, i)) * (k / _t(x, 3 + i)))) for i in range(3)]
+
+    def filters(self, x):
+        return self.camera.filters.replace(kind="gaussian", centres_nm=tuple(float(v) for v in x[:3]),
+                                           fwhm_nm=tuple(float(v) for v in x[3:6]))
+
+    def describe(self, x):
+        return {"centres_nm": [round(float(v), 2) for v in x[:3]], "fwhm_nm": [round(float(v), 2) for v in x[3:6]]}
+
+
+@PARAMETRISATIONS.register("freeform")
+class FreeForm(Parametrisation):
+    """Transmittances at knots every ``knot_step_nm`` over the scene's range, linear between, bounded to
+    [``min_transmittance``, 1] (no real dye blocks completely), with a smoothness penalty:
+    ``smoothness`` × the mean squared second difference of the knots per (10 nm)²."""
+
+    name = "freeform"
+
+    @property
+    def knots_nm(self) -> np.ndarray:
+        lo, hi = float(self.grid.edges_nm[0]), float(self.grid.edges_nm[-1])
+        n = int(np.ceil((hi - lo) / self.settings.knot_step_nm - 1e-9))
+        return np.linspace(lo, hi, n + 1)
+
+    def initial(self):
+        """The paper's block filters sampled at the knots (or the start cutoffs), lifted to the floor."""
+        c1, c2 = self.settings.start_cutoffs_nm
+        k = self.knots_nm
+        T = np.stack([(k > c2), (k > c1) & (k <= c2), (k <= c1)]).astype(float)
+        return np.clip(T, self.settings.min_transmittance, 1.0).ravel()
+
+    def bounds(self):
+        return [(self.settings.min_transmittance, 1.0)] * (3 * self.knots_nm.size)
+
+    def _hat(self, samples):
+        """``(B·(P + 1), K)`` linear-interpolation weights from knots to sample points."""
+        k = self.knots_nm
+        lam = samples.lam.ravel()
+        H = np.zeros((lam.size, k.size))
+        j = np.clip(np.searchsorted(k, lam, side="right") - 1, 0, k.size - 2)
+        f = np.clip((lam - k[j]) / (k[j + 1] - k[j]), 0.0, 1.0)
+        H[np.arange(lam.size), j] = 1.0 - f
+        H[np.arange(lam.size), j + 1] += f
+        return H
+
+    def _matrix(self, rows: np.ndarray, i: int, width: int) -> np.ndarray:
+        """``rows`` acting on channel i's knots, as columns of the whole vector x (Dr.Jit 1.5 loses the gradient
+        of a tensor slice that starts inside and ends inside a tensor — checked — so no slices: products)."""
+        K = self.knots_nm.size
+        out = np.zeros((rows.shape[0], width))
+        out[:, i * K:(i + 1) * K] = rows
+        return out
+
+    def transmittances(self, x, samples):
+        dr, _ = backend()
+        width = dr.width(x)
+        key = (id(samples), width)
+        if getattr(self, "_hat_key", None) != key:
+            hat = self._hat(samples)
+            self._hats, self._hat_key = [tensor(self._matrix(hat, i, width)) for i in range(3)], key
+        out = []
+        for H in self._hats:   # linear in the knots: a (samples × x) product
+            T = dr.sum(H * x[None, :], axis=1)
+            out.append(dr.reshape(type(T), T, samples.lam.shape))
+        return out
+
+    def penalty(self, x):
+        dr, _ = backend()
+        K = self.knots_nm.size
+        width = dr.width(x)
+        D = np.zeros((K - 2, K))
+        for j in range(K - 2):
+            D[j, j:j + 3] = (1.0, -2.0, 1.0)
+        total = 0.0
+        scale = (10.0 / self.settings.knot_step_nm) ** 2
+        for i in range(3):
+            d2 = dr.sum(tensor(self._matrix(D, i, width)) * x[None, :], axis=1)
+            total = total + dr.mean(dr.square(d2)) * scale
+        return self.settings.smoothness * total / 3.0
+
+    def filters(self, x):
+        K = self.knots_nm.size
+        rows = np.clip(np.asarray(x, float)[:3 * K].reshape(3, K).T, 0.0, 1.0)
+        return self.camera.filters.replace(kind="transmittance", transmittance_nm=tuple(self.knots_nm.tolist()),
+                                           transmittance=tuple(tuple(r) for r in rows.tolist()))
+
+    def describe(self, x):
+        return {"knot_step_nm": self.settings.knot_step_nm, "knots": int(self.knots_nm.size),
+                "min_transmittance": self.settings.min_transmittance, "smoothness": self.settings.smoothness}
+
+
+@PARAMETRISATIONS.register("depths")
+class Depths(Parametrisation):
+    """Stacked photodiodes: the surface dead layer z₀ and each window's width, µm (so the boundaries stay
+    ordered); QE_k = (1 − R)(exp(−α·z_k) − exp(−α·z_{k+1})) (:mod:`spectracam.architecture.stacked`)."""
+
+    name = "depths"
+    stacked = True
+
+    def initial(self):
+        z = np.asarray(self.camera.filters.stacked_depths_um, float)
+        return np.concatenate([[z[0]], np.diff(z)])
+
+    def bounds(self):
+        n = len(self.camera.filters.stacked_depths_um)
+        return [(0.01, 2.0)] + [(0.05, 20.0)] * (n - 1)
+
+    def layer_qe(self, x, samples, ir_cut=None):
+        """Bottom-first layer responsivities at the sample points (the pipeline's ``layer_qe`` × IR cut)."""
+        dr, _ = backend()
+        from spectracam.architecture.silicon import absorption_coefficient_per_um, reflectance
+
+        alpha = tensor(absorption_coefficient_per_um(samples.lam))
+        front = tensor(1.0 - reflectance(samples.lam))
+        n = len(self.camera.filters.stacked_depths_um)
+        z = [_t(x, 0)]
+        for i in range(1, n):
+            z.append(fresh(z[-1] + _t(x, i)))
+        reach = [dr.exp(-alpha * fresh(zi)) for zi in z]
+        # the filters in front of the layers: the stacked sensor's own IR cut (architectures.stacked.stacked_cut)
+        # times the shared one, fixed — or, when the design varies the shared IR cut, the designed one instead
+        from spectracam.architecture.stacked import stacked_cut
+
+        f = self.camera.filters if ir_cut is None else self.camera.filters.replace(ir_cut_nm=None)
+        fixed = stacked_cut(f)
+        cut = tensor(np.asarray(fixed(samples.lam), float)) if fixed is not None else 1.0
+        if ir_cut is not None:
+            cut = cut * ir_cut
+        return [front * (reach[k] - reach[k + 1]) * cut for k in reversed(range(n - 1))]
+
+    def filters(self, x):
+        z = np.cumsum(np.asarray(x, float))
+        return self.camera.filters.replace(stacked_depths_um=tuple(float(v) for v in z))
+
+    def describe(self, x):
+        return {"stacked_depths_um": [round(float(v), 4) for v in np.cumsum(x)]}
+
+
+def check_parametrisation(name: str, architecture: str) -> None:
+    """Stacked photodiodes are designed by their depths, every other architecture by its filters."""
+    p = PARAMETRISATIONS[name]
+    if p.stacked != (architecture == "stacked"):
+        raise SpectracamError(f"design: filters = {name!r} cannot design a {architecture} camera; "
+                              + ("stacked photodiodes are designed by 'depths'" if architecture == "stacked"
+                                 else "'depths' designs stacked photodiodes only; use block, gaussian or freeform"))

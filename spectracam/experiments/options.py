@@ -1,0 +1,242 @@
+"""Command-line options shared by spectracam's commands (and by commands that live with their stage,
+such as ``spectracam spatial``): registry-backed choices, --set, -o, --quiet, and the checks every
+command makes before it works."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from spectracam.architecture.base import ARCHITECTURES
+from spectracam.processing.color import ADAPTATIONS, DEMOSAIC_METHODS, DISPLAYS
+from spectracam.core.errors import ConfigError, SpectracamError
+from spectracam.sensor.exposure import EXPOSURE_SCHEMES
+from spectracam.core.cielab import DELTA_E_METHODS
+from spectracam.render import RENDERERS
+
+
+class RegistryChoice(click.ParamType):
+    """A name from a registry, read when the command runs, so registered plug-ins are accepted; an
+    unknown name is the registry's one-line error."""
+
+    name = "name"
+
+    def __init__(self, registry, option: str):
+        self.registry, self.option = registry, option
+
+    def get_metavar(self, param, ctx=None):
+        return "[" + "|".join(self.registry.names) + "]"
+
+    def convert(self, value, param, ctx):
+        return self.registry.check(value, self.option)
+
+
+def progress_log(quiet: bool):
+    """One-line notices on stderr (none with ``--quiet``); a line printed while a progress bar is drawn
+    goes above the bar instead of through it."""
+    if quiet:
+        return lambda msg: None
+    from spectracam.core.progress import note
+
+    return note
+
+
+# ------------------------------------------------------------------------------------------------
+# shipped files by name: `spectracam simulate d65`, `sweep cfa_cutoffs`, `design design` from any install
+
+#: The shipped files each kind of argument may name (besides a path): sweeps live in sweeps/; the
+#: experiment and the design file are one each; every other shipped file is a scene.
+_SHIPPED_ONLY = {"experiment file": ("paper",), "design file": ("design",)}
+
+
+def shipped_files(what: str) -> dict[str, Path]:
+    """``name → path`` of the shipped files an argument of kind ``what`` may name (``"scene file"``,
+    ``"sweep file"``, ``"experiment file"``, ``"design file"``); a sweep's name is ``sweeps/NAME``."""
+    from spectracam.pipeline.scene_file import shipped_dir
+
+    root = shipped_dir()
+    if root is None:
+        return {}
+    out = {}
+    for p in sorted(root.rglob("*.toml")):
+        name = p.relative_to(root).with_suffix("").as_posix()
+        if (what == "sweep file") != name.startswith("sweeps/"):
+            continue
+        if what in _SHIPPED_ONLY and name not in _SHIPPED_ONLY[what]:
+            continue
+        if what == "scene file" and name in {n for v in _SHIPPED_ONLY.values() for n in v}:
+            continue
+        out[name] = p
+    return out
+
+
+def shipped_named(value: str | Path, what: str = "scene file") -> Path | None:
+    """The shipped file of kind ``what`` that ``value`` names — with or without ``.toml``, with or without
+    the checkout's ``scenes/`` — or None.  (``--experiment paper`` and a design file's ``experiment =
+    "paper"`` both name files through this.)"""
+    shipped = shipped_files(what)
+    name = str(value).strip().removeprefix("./").removeprefix("scenes/").removesuffix(".toml")
+    if name in shipped:
+        return shipped[name]
+    return {k.rsplit("/", 1)[-1]: v for k, v in shipped.items()}.get(name)
+
+
+def resolve_shipped(value: str | Path, what: str = "scene file") -> Path:
+    """A path that exists, else the shipped file ``value`` names — with or without ``.toml``, with or
+    without the checkout's ``scenes/`` (``d65``, ``scenes/d65.toml``, ``cfa_cutoffs``,
+    ``scenes/sweeps/cfa_cutoffs.toml``); else one line listing what ships.
+
+    A bare name (no ``/``, no ``.toml``) of a shipped file when ``NAME.toml`` is also in the working
+    directory (``d65`` with a ``d65.toml`` here) is refused as ambiguous, naming both: neither may silently
+    win, because the command a report records keeps the name as typed (``spectracam simulate d65``) and
+    must mean one file wherever it is run again.  ``./d65.toml`` (a
+    path) says the local file, ``scenes/d65`` the shipped one."""
+    p = Path(value)
+    if p.exists():
+        return p
+    text = str(value).strip()
+    found = shipped_named(value, what)
+    local = Path(text + ".toml")
+    if found is not None and "/" not in text and not text.endswith(".toml") and local.is_file() \
+            and local.resolve() != found.resolve():
+        kind = what.split()[0]
+        raise ConfigError(what, text, f"ambiguous: names both {local} here and the shipped {kind} {text} ({found}); "
+                          f"write ./{local} for yours or scenes/{text} for the shipped one")
+    if found is not None:
+        return found
+    kind = what.split()[0]
+    names = ", ".join(k.rsplit("/", 1)[-1] for k in shipped_files(what)) or "none in this installation"
+    raise ConfigError(what, str(value), f"no such file, and not the name of a shipped {kind} (shipped: {names})")
+
+
+class ShippedFile(click.ParamType):
+    """A TOML file argument: a path, or the name of a file shipped with spectracam (:func:`resolve_shipped`)."""
+
+    name = "file"
+
+    def __init__(self, what: str):
+        self.what = what
+
+    def convert(self, value, param, ctx):
+        path = resolve_shipped(value, self.what)
+        if ctx is not None and param is not None:
+            ctx.meta.setdefault(_GIVEN, {})[param.name] = str(value)
+        return path
+
+
+_GIVEN = "spectracam.given"
+
+
+def as_given(name: str, value) -> str:
+    """How the user wrote the :class:`ShippedFile` parameter ``name`` (a shipped file's name stays a name
+    in the command a report records), else ``str(value)``."""
+    ctx = click.get_current_context(silent=True)
+    given = ctx.meta.get(_GIVEN, {}).get(name) if ctx is not None else None
+    return given if given is not None else str(value)
+
+
+def shipped_summary() -> str:
+    """One paragraph for ``spectracam --help``: what a file argument may name."""
+    kinds = [(what, list(shipped_files(what))) for what in ("scene file", "sweep file", "experiment file",
+                                                             "design file")]
+    listed = "; ".join(f"{what.split()[0]}s: " + ", ".join(n.rsplit("/", 1)[-1] for n in names)
+                       for what, names in kinds if names)
+    return ("A scene, sweep, experiment or design file argument is a path, or the name of a file shipped with "
+            "spectracam, with or without .toml (spectracam simulate d65 -o out) — "
+            + (listed or "none shipped") + ".")
+
+
+# ------------------------------------------------------------------------------------------------
+# shared options: every flag is an override of a scene-file field, applied in the order
+# scene file < --config < flags < --set
+
+_SET_HELP = ("Override a field of the scene (or experiment/sweep) file: PATH=VALUE, e.g. sensor.adc_bits=12, "
+             "filters.cutoffs_nm[1]=600, capture.design=fsc/optimal; VALUE is TOML, a bare word a string. Repeatable.")
+
+
+class _OutputDir(click.Path):
+    """A directory to write into; an empty name (which would write into the current directory) is refused."""
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, str) and not value.strip():
+            self.fail("must name a directory (an empty name would write into the current directory)", param, ctx)
+        return super().convert(value, param, ctx)
+
+
+def output_option(help_text: str):
+    return click.option("-o", "--output", "out_dir", required=True, type=_OutputDir(file_okay=False, path_type=Path),
+                        help=help_text)
+
+
+def view_option(f):
+    """``--view``: after the command's outputs are written, also write DIR/index.html (``spectracam view``).
+    The request is recorded here and carried out by the command group once the outputs are in place
+    (:meth:`spectracam.cli._Group.invoke`), so the page sees the files under their final names."""
+    import functools
+
+    @functools.wraps(f)
+    def wrapper(*args, view: bool = False, **kwargs):
+        if view:
+            ctx = click.get_current_context()
+            ctx.meta[VIEW_REQUEST] = (Path(kwargs["out_dir"]), bool(kwargs.get("quiet", False)))
+        return f(*args, **kwargs)
+
+    return click.option("--view", is_flag=True, help=VIEW_HELP)(wrapper)
+
+
+#: Where a command's ``--view`` request waits for the group (``ctx.meta`` is shared by nested contexts).
+VIEW_REQUEST = "spectracam.view"
+VIEW_HELP = "Also write DIR/index.html, an interactive page (spectracam view)."
+
+
+set_option = click.option("--set", "sets", multiple=True, metavar="PATH=VALUE", help=_SET_HELP)
+quiet_option = click.option("--quiet", is_flag=True, help="No progress or notices on stderr.")
+renderer_option = click.option("--renderer", type=RegistryChoice(RENDERERS, "--renderer"), default="mitsuba",
+                                show_default=True, help="Mitsuba (Monte Carlo) or the closed form.")
+
+
+def camera_options(f):
+    f = click.option("--seed", type=click.IntRange(0, 2**31 - 1), default=None,
+                     help="Noise seed [default: the scene's render.seed].")(f)
+    f = click.option("--config", "config_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
+                     help="TOML with [optics], [filters], [sensor], [capture] tables, over the scene's.")(f)
+    f = click.option("--exposure", type=RegistryChoice(EXPOSURE_SCHEMES, "--exposure"), default=None,
+                     help="Exposure control [default: the scene's capture.exposure].")(f)
+    f = click.option("--arch", type=RegistryChoice(ARCHITECTURES, "--arch"), default=None,
+                     help="Colour architecture [default: the scene's capture.architecture].")(f)
+    return f
+
+
+def processing_options(f):
+    f = click.option("--gamut-clip/--no-gamut-clip", default=None, help="Clip display RGB to [0, 1].")(f)
+    f = click.option("--delta-e", "delta_e", type=RegistryChoice(DELTA_E_METHODS, "--delta-e"), default=None,
+                     help="Colour difference formula [default: the scene's, else cie1976].")(f)
+    f = click.option("--adaptation", type=RegistryChoice(ADAPTATIONS, "--adaptation"), default=None,
+                     help="How scene XYZ is carried to the display white [default: xyz_scaling].")(f)
+    f = click.option("--display", type=RegistryChoice(DISPLAYS, "--display"), default=None,
+                     help="Display model [default: the scene's, else crt].")(f)
+    f = click.option("--demosaic", type=RegistryChoice(DEMOSAIC_METHODS, "--demosaic"), default=None,
+                     help="Demosaicking of a mosaic [default: the scene's, else bilinear].")(f)
+    return f
+
+
+def flag_overrides(**flags) -> list[tuple[str, object]]:
+    """``(path, value)`` overrides of the flags given on the command line."""
+    paths = {"arch": "capture.architecture", "exposure": "capture.exposure", "demosaic": "processing.demosaic",
+             "display": "processing.display", "adaptation": "processing.adaptation", "delta_e": "processing.delta_e",
+             "gamut_clip": "processing.gamut_clip"}
+    return [(paths[k], v) for k, v in flags.items() if v is not None]
+
+
+def check_writable(out_dir: Path) -> None:
+    """Refuse before any work when the output directory could not be made or written (nothing is
+    created here: a run that fails later leaves no empty directory behind)."""
+    import os
+
+    p = out_dir.absolute()
+    while not p.exists():
+        p = p.parent
+    if not p.is_dir():
+        raise SpectracamError(f"output = {str(out_dir)!r}: {str(p)!r} is a file, not a directory")
+    if not os.access(p, os.W_OK | os.X_OK):
+        raise SpectracamError(f"output = {str(out_dir)!r}: {str(p)!r} is not writable")

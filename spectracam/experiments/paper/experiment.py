@@ -1,0 +1,457 @@
+"""The paper's experiment (section 5): exposure, Figure 4, Figures 5a/5b and Figure 6.
+
+For each blackbody illuminant the chart is rendered once (cached), then captured and scored by every
+design with the same noise seed (common random numbers: the designs differ only in the design).
+Figure 6 adds the error sources one at a time on the colour filter array under D65: the noise steps
+are scored against the noise-free rendering of the same camera (the conversion error removed); the
+last step scores against the scene, adding the conversion error.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from spectracam.camera import CameraSpec
+from spectracam.camera.capture import capture
+from spectracam.scene.chart import WHITE_PATCH
+from spectracam.processing.color import ProcessingSpec
+from spectracam.core.errors import ConfigError, SpectracamError
+from spectracam.scene.illuminant import IlluminantSpec
+from spectracam.pipeline.overrides import apply_overrides, parse_assignment
+from spectracam.scene.reference import ChartReference
+from spectracam.render import RadianceCube
+from spectracam.pipeline.scene_file import Scene, experiment_base_scene, read_toml
+from spectracam.evaluation.score import score
+from spectracam.core.spec import _is_number
+
+
+@dataclass(frozen=True)
+class BudgetStep:
+    """One step of Figure 6: the error sources on (``sensor`` noise switches) and what ΔE is
+    measured against (``"camera"``: the same camera without noise; ``"scene"``: adds the conversion)."""
+
+    id: str
+    label: str
+    sources: tuple
+    against: str
+
+
+#: Figure 6's steps, each adding one error source to the last (paper, Fig. 6).
+BUDGET_STEPS = (
+    BudgetStep("perfect", "perfect system", (), "camera"),
+    BudgetStep("shot_noise", "+ photon shot noise", ("shot_noise",), "camera"),
+    BudgetStep("cmos_noise", "+ CMOS noise (read, dark, FPN)", ("shot_noise", "dark_current", "read_noise", "fpn"),
+               "camera"),
+    BudgetStep("quantization", "+ 8-bit quantization",
+               ("shot_noise", "dark_current", "read_noise", "fpn", "quantization"), "camera"),
+    BudgetStep("conversion", "+ colour conversion", ("shot_noise", "dark_current", "read_noise", "fpn", "quantization"),
+               "scene"),
+)
+#: Keys of an experiment file (``--set`` paths starting with one of these name the experiment;
+#: any other path names a field of the base scene).
+EXPERIMENT_KEYS = ("base_scene", "scene", "temperatures_K", "budget_illuminant", "budget_design", "designs", "light",
+                   "sensitivity")
+
+
+@dataclass(frozen=True)
+class Alternative:
+    """Another reading of a choice the paper leaves open: camera/processing tables over the base's."""
+
+    name: str
+    reason: str
+    tables: dict = field(default_factory=dict)  # optics/filters/sensor/processing overrides
+    light_scale: float = 1.0
+
+    def camera(self, base: CameraSpec, source: str | None = None) -> CameraSpec:
+        return CameraSpec.from_dict({k: v for k, v in self.tables.items() if k != "processing"}, source, base)
+
+    def processing(self, base: ProcessingSpec, source: str | None = None) -> ProcessingSpec:
+        return ProcessingSpec.from_dict(self.tables.get("processing", {}), source, base)
+
+
+@dataclass(frozen=True)
+class PaperExperiment:
+    base: Scene
+    temperatures_K: tuple = (3000.0, 4000.0, 5000.0, 6000.0, 7000.0)
+    budget_illuminant: str = "D65"
+    budget_design: str = "cfa/single"
+    designs: tuple = ("cfa/single", "fsc/optimal", "fsc/balanced", "prism/optimal")
+    cfa_exposure_ms: float | None = 28.0
+    calibration_temperature_K: float = 5000.0
+    white_luminance_cd_m2: float | None = None
+    alternatives: tuple = ()
+
+
+def _list(data: dict, key: str, default, ok, allowed: str, source: str) -> list:
+    v = data.pop(key, default)
+    if not isinstance(v, list) or not v or not all(ok(x) for x in v):
+        raise ConfigError(key, v, allowed, source)
+    return v
+
+
+def load_experiment(path: str | Path, overrides=()) -> PaperExperiment:
+    """Read and validate an experiment file (see scenes/paper.toml).  ``overrides`` (``--set``):
+    a path whose table is an experiment key changes the experiment, any other the base scene."""
+    import colour
+
+    p = Path(path)
+    src = str(p)
+    pairs = [parse_assignment(o) if isinstance(o, str) else o for o in overrides]
+    mine = [(k, v) for k, v in pairs if k.split(".")[0].split("[")[0] in EXPERIMENT_KEYS]
+    scene_overrides = [(k, v) for k, v in pairs if (k, v) not in mine]
+    t = read_toml(p, "experiment file")
+    light_sets = {k.split(".", 1)[1] for k, _ in mine if k.startswith("light.")}
+    if isinstance(t.get("light"), dict) and light_sets & {"white_luminance_cd_m2", "cfa_exposure_ms"}:
+        # --set of one way to give the light replaces the file's other way (the command line comes last)
+        t["light"] = {k: v for k, v in t["light"].items()
+                      if k not in {"white_luminance_cd_m2", "cfa_exposure_ms"} - light_sets}
+    t = apply_overrides(t, mine)
+    for k in t:
+        if k not in EXPERIMENT_KEYS:
+            raise ConfigError(k, t[k], "unknown key; an experiment file has " + ", ".join(EXPERIMENT_KEYS), src)
+    base = experiment_base_scene(t, p.parent, scene_overrides, src)
+    t.pop("base_scene", None)
+    t.pop("scene", None)
+    if base.target.textured:
+        raise ConfigError("target.kind", base.target.kind, "the paper's experiment scores the ColorChecker; a "
+                          "textured target is scored by simulate or score", src)
+    temps = _list(t, "temperatures_K", list(PaperExperiment.temperatures_K),
+                  lambda x: _is_number(x) and 1000 <= x <= 40000,
+                  "must be a non-empty list of colour temperatures, 1000–40000 K", src)
+    designs = _list(t, "designs", list(PaperExperiment.designs), lambda x: isinstance(x, str),
+                    "must be a non-empty list like ['cfa/single', 'fsc/optimal']", src)
+    for field_, d in [("designs", d) for d in designs] + [("budget_design", t.get("budget_design", "cfa/single"))]:
+        try:
+            base.camera.with_design(d, field_)
+        except ConfigError as e:
+            raise e.with_source(src) from None
+    budget_design = t.pop("budget_design", PaperExperiment.budget_design)
+    budget_illuminant = t.pop("budget_illuminant", PaperExperiment.budget_illuminant)
+    if budget_illuminant not in colour.SDS_ILLUMINANTS:
+        raise ConfigError("budget_illuminant", budget_illuminant,
+                          "must be a CIE illuminant colour-science ships, e.g. D65", src)
+    light = t.pop("light", {})
+    if not isinstance(light, dict):
+        raise ConfigError("light", light, "must be a table", src)
+    for k in light:
+        if k not in ("white_luminance_cd_m2", "cfa_exposure_ms", "at_temperature_K"):
+            raise ConfigError(f"light.{k}", light[k], "unknown key; allowed: white_luminance_cd_m2, cfa_exposure_ms, "
+                              "at_temperature_K", src)
+    if "white_luminance_cd_m2" in light and "cfa_exposure_ms" in light:
+        raise ConfigError("light", light, "give either white_luminance_cd_m2 (a fixed level) or cfa_exposure_ms (the "
+                                          "level at which cfa/single needs that time), not both", src)
+    level = light.get("white_luminance_cd_m2")
+    cfa_ms = None if level is not None else light.get("cfa_exposure_ms", 28.0)
+    cal_T = light.get("at_temperature_K", 5000.0)
+    for k, v, lo, hi in (("white_luminance_cd_m2", level, 0, None), ("cfa_exposure_ms", cfa_ms, 0, None),
+                         ("at_temperature_K", cal_T, 1000, 40000)):
+        if v is not None and not (_is_number(v) and v > lo and (hi is None or v <= hi)):
+            raise ConfigError(f"light.{k}", v, f"must be a number > {lo}" + (f" and ≤ {hi}" if hi else ""), src)
+    alternatives = []
+    for i, alt in enumerate(t.pop("sensitivity", [])):
+        where = f"sensitivity[{i}]"
+        if not isinstance(alt, dict):
+            raise ConfigError(where, alt, "must be a table", src)
+        a = dict(alt)
+        name, reason = a.pop("name", f"alternative {i}"), a.pop("reason", "")
+        scale = a.pop("light_scale", 1.0)
+        if not (_is_number(scale) and scale > 0):
+            raise ConfigError(f"{where}.light_scale", scale, "must be a number > 0", src)
+        tables = {k: a.pop(k) for k in ("optics", "filters", "sensor", "processing") if k in a}
+        for k in a:
+            raise ConfigError(f"{where}.{k}", a[k], "unknown key; allowed: name, reason, light_scale, optics, "
+                              "filters, sensor, processing", src)
+        alternative = Alternative(str(name), str(reason), tables, float(scale))
+        alternative.camera(base.camera, f"{src}: {name}")  # validate now
+        alternative.processing(base.processing, f"{src}: {name}")
+        alternatives.append(alternative)
+    return PaperExperiment(base=base, temperatures_K=tuple(float(x) for x in temps), budget_illuminant=budget_illuminant,
+                           budget_design=budget_design, designs=tuple(designs), cfa_exposure_ms=cfa_ms,
+                           calibration_temperature_K=float(cal_T), white_luminance_cd_m2=level,
+                           alternatives=tuple(alternatives))
+
+
+def calibrated_luminance(exp: PaperExperiment, camera: CameraSpec) -> float:
+    """White-diffuser luminance at which cfa/single needs ``cfa_exposure_ms`` at the calibration
+    temperature: rates scale with the level, so solve white_fill·q_max = (level/L₁·w₁ + dark)·T in closed form."""
+    if exp.white_luminance_cd_m2 is not None:
+        return exp.white_luminance_cd_m2
+    ref = exp.base.replace(illuminant=IlluminantSpec("blackbody", exp.calibration_temperature_K, None, 100.0))
+    white = ChartReference.of(ref).patch_rates(camera)[WHITE_PATCH]
+    s = camera.sensor
+    T = exp.cfa_exposure_ms * 1e-3
+    need = camera.capture.white_fill * s.q_max_e / T - s.dark_rate_e_per_s
+    if need <= 0:
+        raise SpectracamError(f"light.cfa_exposure_ms = {exp.cfa_exposure_ms:g}: dark current alone fills the well "
+                              "sooner; choose a shorter exposure")
+    return 100.0 * need / white.max()
+
+
+def scaled(scene: Scene, cube: RadianceCube, factor: float) -> tuple[Scene, RadianceCube]:
+    """Rendering is linear in the light level: a scaled cube is the render at a scaled level (the
+    scene says so too, so that scoring fits the conversion on the light the camera saw)."""
+    if factor == 1.0:
+        return scene, cube
+    ill = scene.illuminant.replace(white_luminance_cd_m2=scene.illuminant.white_luminance_cd_m2 * factor)
+    scene = scene.replace(illuminant=ill)
+    return scene, RadianceCube(cube.radiance * np.float32(factor), cube.wavelengths_nm, {**cube.metadata, "scene": scene.to_dict()})
+
+
+def design_case(cube, scene: Scene, camera: CameraSpec, processing: ProcessingSpec, design: str, seed: int):
+    """One design under one light: its capture, score and the numbers the figures show."""
+    cam = camera.with_design(design)
+    if not processing.told_the_light:   # a camera that finds its own white meters itself too (issue 33)
+        from spectracam.processing import metered_camera
+
+        cam = metered_camera(cam, processing)
+    reference = ChartReference.of(scene)
+    raw = capture(cube, cam, seed, reference.white_box)
+    result = score(raw, reference, processing)
+    s = cam.sensor
+    white = (raw.metered_rate_e_per_s + s.dark_rate_e_per_s) * raw.exposure_times_s / s.q_max_e
+    c = result.summary
+    return {"exposure_ms": c.capture_time_ms, "channel_ms": (1e3 * raw.exposure_times_s).tolist(),
+            "white_response": white.tolist(), "snr_db": c.snr_combined_db, "delta_e": c.delta_e_mean,
+            "delta_e_of_mean": c.delta_e_of_mean, "delta_e_conversion": c.delta_e_conversion,
+            "s_cielab": c.s_cielab_mean, "s_cielab_p95": c.s_cielab_p95,
+            "held_out": result.held_out, "training": result.training, "raw": raw, "score": result}
+
+
+def error_budget(cube, scene: Scene, camera: CameraSpec, processing: ProcessingSpec, design: str, seed: int):
+    """Figure 6: ``[(step, ΔE, raw, score)]`` for each of :data:`BUDGET_STEPS`."""
+    cam = camera.with_design(design)
+    reference = ChartReference.of(scene)
+    s0 = cam.sensor
+    out, raws = [], {}
+    for step in BUDGET_STEPS:
+        # a source the camera has switched off stays off; everything not yet added is off
+        sensor = s0.off(*(n for n in ("shot_noise", "dark_current", "read_noise", "fpn", "quantization")
+                          if n not in step.sources))
+        if sensor not in raws:
+            raws[sensor] = capture(cube, cam.replace(sensor=sensor), seed, reference.white_box)
+        raw = raws[sensor]
+        res = score(raw, reference, processing, delta_e_reference=step.against)
+        out.append((step, res.summary.delta_e_mean, raw, res))
+    return out
+
+
+def comparison(exp: PaperExperiment, cubes: dict, camera: CameraSpec, processing: ProcessingSpec,
+               light_scale: float = 1.0, keep_cases: bool = False, tick=lambda: None) -> tuple[dict, dict]:
+    """Every design under every blackbody, and Figure 6.  ``cubes``: label → (scene, cube); ``tick`` is
+    called after each case (a progress bar's step: :func:`comparison_cases` of them)."""
+    seed = exp.base.render.seed
+    res = {"exposure_ms": {}, "channel_exposure_ms": {}, "fig4_white_response": {}, "fig5a_snr_db": {},
+           "fig5b_delta_e": {}, "fig5b_delta_e_of_mean": {}, "delta_e_conversion": {}, "delta_e_conversion_p95": {},
+           "held_out_delta_e": {}, "held_out_delta_e_p95": {}, "fig5b_s_cielab": {}, "fig5b_s_cielab_p95": {}}
+    cases = {}
+    for T in exp.temperatures_K:
+        key = f"{T:g}"
+        scene, cube = scaled(*cubes[key], light_scale)
+        for design in exp.designs:
+            c = design_case(cube, scene, camera, processing, design, seed)
+            for field_, value in (("exposure_ms", c["exposure_ms"]), ("channel_exposure_ms", c["channel_ms"]),
+                                  ("fig4_white_response", c["white_response"]), ("fig5a_snr_db", c["snr_db"]),
+                                  ("fig5b_delta_e", c["delta_e"]), ("fig5b_delta_e_of_mean", c["delta_e_of_mean"]),
+                                  ("delta_e_conversion", c["delta_e_conversion"]),
+                                  ("fig5b_s_cielab", c["s_cielab"]), ("fig5b_s_cielab_p95", c["s_cielab_p95"])):
+                res[field_].setdefault(design, {})[key] = value
+            if c["held_out"] is not None:   # the conversion on colours it was not fitted on (spectracam.evaluation.heldout)
+                for field_, value in (("delta_e_conversion_p95", c["training"]["delta_e_p95"]),
+                                      ("held_out_delta_e", c["held_out"]["delta_e_mean"]),
+                                      ("held_out_delta_e_p95", c["held_out"]["delta_e_p95"])):
+                    res[field_].setdefault(design, {})[key] = value
+                res["held_out_library"] = {k: c["held_out"][k] for k in ("library", "samples")}
+            if keep_cases:
+                cases[(key, design)] = c
+            tick()
+    scene, cube = scaled(*cubes[exp.budget_illuminant], light_scale)
+    budget = error_budget(cube, scene, camera, processing, exp.budget_design, seed)
+    res["fig6_budget_delta_e"] = [{"step": step.id, "label": step.label, "delta_e": de,
+                                   "s_cielab": r.summary.s_cielab_mean} for step, de, _, r in budget]
+    if keep_cases:
+        cases[(exp.budget_illuminant, "budget")] = budget
+    tick()
+    return res, cases
+
+
+def both_ways(exp: PaperExperiment, cubes: dict, camera: CameraSpec, processing: ProcessingSpec, cases: dict,
+              tick=lambda: None) -> dict:
+    """Every design under every blackbody scored by the oracle camera (the cases of :func:`comparison`) and by the
+    developed one (``processing.camera = "developed"``: its own metering, white and calibration; captured anew with
+    the same seed): ``{"oracle": {field: {design: {T: v}}}, "developed": {...}, "white_balance": {design: {T: block}}}``."""
+    from spectracam.pipeline import BOTH_WAYS_FIELDS, camera_processing, score_row
+    from spectracam.processing import metered_camera
+
+    seed = exp.base.render.seed
+    developed = camera_processing(processing, "developed")
+    out = {"oracle": {f: {} for f in BOTH_WAYS_FIELDS}, "developed": {f: {} for f in BOTH_WAYS_FIELDS},
+           "white_balance": {}, "developed_processing": {k: developed.to_dict()[k] for k in
+                                                         ("camera", "white_balance", "calibration")}}
+    for T in exp.temperatures_K:
+        key = f"{T:g}"
+        scene, cube = cubes[key]
+        reference = ChartReference.of(scene)
+        for design in exp.designs:
+            cam = metered_camera(camera.with_design(design), developed)
+            raw = capture(cube, cam, seed, reference.white_box)
+            result = score(raw, reference, developed)
+            for name, r in (("oracle", cases[(key, design)]["score"]), ("developed", result)):
+                for f, v in score_row(r).items():
+                    out[name][f].setdefault(design, {})[key] = v
+            out["white_balance"].setdefault(design, {})[key] = result.white_balance
+            tick()
+    return out
+
+
+def comparison_cases(exp: PaperExperiment) -> int:
+    """How many cases :func:`comparison` runs: every design under every blackbody, and the budget."""
+    return len(exp.temperatures_K) * len(exp.designs) + 1
+
+
+#: ``--quick``: a first look at a quarter of the pixels each way, the same physics.
+QUICK_IMAGE_PX = (160, 120)
+
+
+def quick_scene(scene: Scene, quick: bool = True) -> Scene:
+    """``scene`` at :data:`QUICK_IMAGE_PX` when ``quick``."""
+    w, h = QUICK_IMAGE_PX
+    return scene.replace(image=scene.image.replace(width=w, height=h)) if quick else scene
+
+
+def scenes_for(exp: PaperExperiment, level: float, quick: bool) -> dict[str, Scene]:
+    base = quick_scene(exp.base, quick)
+    out = {f"{T:g}": base.replace(illuminant=IlluminantSpec("blackbody", T, None, level)) for T in exp.temperatures_K}
+    out[exp.budget_illuminant] = base.replace(illuminant=IlluminantSpec("cie", None, exp.budget_illuminant, level))
+    return out
+
+
+_SHARED: dict = {}  # what forked workers inherit instead of receiving it pickled (the cubes are large)
+
+
+def _alternative(i: int):
+    exp, cubes = _SHARED["exp"], _SHARED["cubes"]
+    alt = exp.alternatives[i]
+    camera, processing = alt.camera(exp.base.camera, alt.name), alt.processing(exp.base.processing, alt.name)
+    return comparison(exp, cubes, camera, processing, light_scale=alt.light_scale)[0]
+
+
+def _one_thread():
+    import os
+
+    from spectracam.core.processes import die_with_parent
+
+    die_with_parent()  # no orphan if the command is killed
+    os.environ["SPECTRACAM_THREADS"] = "1"  # one process per core already
+
+
+def _alternatives(exp: PaperExperiment, cubes: dict, tick=lambda: None) -> list[dict]:
+    """Every sensitivity alternative's comparison, in processes forked from this one (they share
+    the cubes; the same seeds, so the same numbers as one after the other), one per core; ``tick``
+    is called as each one's result arrives (in order)."""
+    import multiprocessing
+    import os
+
+    _SHARED.update(exp=exp, cubes=cubes)
+    try:
+        jobs = range(len(exp.alternatives))
+        workers = min(len(jobs), int(os.environ.get("SPECTRACAM_THREADS") or os.cpu_count() or 1))
+        out = []
+        if workers < 2 or "fork" not in multiprocessing.get_all_start_methods():
+            for j in jobs:
+                out.append(_alternative(j))
+                tick()
+            return out
+        from concurrent.futures import ProcessPoolExecutor
+
+        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork"),
+                                 initializer=_one_thread) as ex:
+            for r in ex.map(_alternative, jobs):
+                out.append(r)
+                tick()
+        return out
+    finally:
+        _SHARED.clear()
+
+
+def run_paper(exp: PaperExperiment, renderer: str = "mitsuba", quick: bool = False, use_cache: bool = True,
+              step=lambda msg: None, log=None, progress: bool = False) -> tuple[dict, dict, dict]:
+    """Run the whole experiment; returns (results, cases, cubes).  ``step`` receives one line per step;
+    ``progress``: bars over the lights rendered, the cases and the sensitivity alternatives on a terminal."""
+    import time
+
+    from spectracam.io.cache import cached_render
+    from spectracam.core.progress import bar
+    from spectracam.render import render
+
+    timings = {}
+    t0 = time.perf_counter()
+    level = calibrated_luminance(exp, exp.base.camera)
+    cubes = {}
+    scenes = scenes_for(exp, level, quick)
+    for key, scene in bar(scenes.items(), total=len(scenes), desc="render lights", unit="light", progress=progress):
+        t = time.perf_counter()
+        if use_cache:
+            cube, hit = cached_render(scene, renderer, progress=progress, log=log)
+        else:
+            cube, hit = render(scene, renderer=renderer, progress=progress, log=log), False
+        cubes[key] = (scene, cube)
+        step(f"render {key}{' K' if key[0].isdigit() else ''}: {'cached' if hit else renderer} "
+             f"({time.perf_counter() - t:.1f} s)")
+    timings["render_s"] = time.perf_counter() - t0
+    t = time.perf_counter()
+    with bar(total=comparison_cases(exp), desc="paper cases", unit="case", progress=progress) as b:
+        main, cases = comparison(exp, cubes, exp.base.camera, exp.base.processing, keep_cases=True,
+                                 tick=lambda: b.update(1))
+    timings["designs_and_budget_s"] = time.perf_counter() - t
+    step(f"designs and error budget ({timings['designs_and_budget_s']:.1f} s)")
+    t = time.perf_counter()
+    with bar(total=len(exp.temperatures_K) * len(exp.designs), desc="developed camera", unit="case",
+             progress=progress) as b:
+        developed = both_ways(exp, cubes, exp.base.camera, exp.base.processing, cases, tick=lambda: b.update(1))
+    timings["developed_s"] = time.perf_counter() - t
+    step(f"the developed camera ({timings['developed_s']:.1f} s)")
+    from spectracam.experiments.paper.claims import evaluate, survival
+
+    claims = evaluate(main)
+    t = time.perf_counter()
+    alt_results, alt_claims = {}, {}
+    with bar(total=len(exp.alternatives), desc="sensitivity", unit="reading", progress=progress) as b:
+        alternatives = _alternatives(exp, cubes, tick=lambda: b.update(1))
+    for alt, r in zip(exp.alternatives, alternatives):
+        alt_results[alt.name] = {"reason": alt.reason, **r}
+        alt_claims[alt.name] = evaluate(r)
+        step(f"sensitivity: {alt.name}")
+    timings["sensitivity_s"] = time.perf_counter() - t
+    base = exp.base.replace(illuminant=IlluminantSpec("blackbody", exp.calibration_temperature_K, None, level))
+    results = {
+        "parameters": {
+            "renderer": renderer, "quick": quick, "seed": exp.base.render.seed,
+            "designs": list(exp.designs), "temperatures_K": [f"{T:g}" for T in exp.temperatures_K],
+            "budget_illuminant": exp.budget_illuminant, "budget_design": exp.budget_design,
+            "white_luminance_cd_m2": level, "illuminance_lux": base.illuminant.illuminance_lux,
+            "light_calibration": (f"cfa/single needs {exp.cfa_exposure_ms:g} ms at {exp.calibration_temperature_K:g} K"
+                                  if exp.white_luminance_cd_m2 is None else "fixed in the experiment file"),
+            "scene": base.to_dict(),
+            "fig6_method": "noise steps: per-pixel ΔE*ab against the noise-free rendering of the same camera (the "
+                           "conversion error removed), sources added in the order shown, so the perfect system's "
+                           "residual is the Monte Carlo noise of the render; last step: against the scene, adding "
+                           "the colour conversion error",
+            "snr": "chart average of each patch's combined SNR (see processing.snr_combination)",
+            "delta_e": "chart average of each patch's mean per-pixel ΔE (processing.delta_e)",
+            "s_cielab": "S-CIELAB (Zhang & Wandell 1997): the rendered image and the scene's truth image through the "
+                        "eye's filters, then the per-pixel ΔE (processing.delta_e) on the same patch pixels; chart "
+                        "average of each patch's mean (fig5b_s_cielab; fig5b_s_cielab_p95: the 95th percentile over "
+                        "every patch's pixels); always against the scene (the budget steps too); docs/metrics.md",
+            "s_cielab_viewing": {"viewing_distance_m": exp.base.processing.viewing_distance_m,
+                                 "display_pixel_pitch_mm": exp.base.processing.display_pixel_pitch_mm,
+                                 "samples_per_degree": exp.base.processing.samples_per_degree},
+        },
+        **main,
+        "claims": claims,
+        "both_ways": developed,
+        "sensitivity": {"alternatives": alt_results, "claims": survival(claims, alt_claims)},
+        "timings_s": timings,
+    }
+    return results, cases, cubes

@@ -1,0 +1,115 @@
+"""The architectures spatially: sample, record and process an image of photo-electron rates.
+
+A *spatial design* is an architecture/exposure design of the registry (``cfa/single``,
+``prism/optimal``, ``fsc/optimal``, ``rgbw/single``, …), the demosaicking method when its layout is a
+mosaic, an optical low-pass filter's spot separation (mosaics; 0 for none), and a misregistration of
+its sensors in pixels (the prism: each sensor is glued to the prism with some error; the paper says
+the prism "requires precise alignment"). The misregistration is a sub-pixel shift of where the red
+and blue sensors sample the image relative to the green one — :func:`misregistration_shifts`: red by
+``+m`` along x, blue by ``+m`` along y — applied by the optics stage before sampling
+(:class:`spectracam.experiments.spatial.optics.OpticsSettings`).
+
+Recording uses the architecture's own ``record`` (the registry's; ``sensor.expose`` with its fixed
+patterns) after metering on the ColorChecker's white patch under the same light (paper 4.5);
+processing is :func:`spectracam.evaluation.score.camera_rates` (dark subtraction, demosaicking by layout, exposure
+normalisation) and the 3×3 conversion fitted on the chart (paper 3.5) to the display's XYZ.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from spectracam.architecture.base import MosaicLayout
+from spectracam.camera import CameraSpec
+from spectracam.camera.capture import RawCapture
+from spectracam.scene.chart import WHITE_PATCH
+from spectracam.processing.color import ProcessingSpec, adaptation_matrix, display_rgb_to_xyz, fit_conversion
+from spectracam.sensor.exposure import exposure_times_s
+from spectracam.scene.reference import ChartReference
+from spectracam.evaluation.score import camera_rates
+from spectracam.core.spectra import K_M_LM_PER_W, cmf_band_weights
+
+
+@dataclass(frozen=True)
+class SpatialDesign:
+    """One design of the spatial comparison."""
+
+    design: str                       # "arch/scheme", e.g. "cfa/single"
+    demosaic: str | None = None       # for a mosaic layout
+    misregistration_px: float | None = None   # for separate sensors (a prism); None where it does not apply
+    olpf_separation_px: float = 0.0   # a 4-spot optical low-pass filter's spot separation (0: none)
+
+    @property
+    def label(self) -> str:
+        s = self.design
+        if self.demosaic:
+            s += f" {self.demosaic}"
+        if self.olpf_separation_px > 0:
+            s += f" OLPF {self.olpf_separation_px:g} px"
+        if self.misregistration_px is not None:
+            s += f" {'aligned' if self.misregistration_px == 0 else f'misaligned {self.misregistration_px:g} px'}"
+        return s
+
+
+def misregistration_shifts(m_px: float | None) -> tuple:
+    """Sampling offsets (dx, dy) px of the R, G, B sensors: red ``+m`` along x, blue ``+m`` along y
+    (``()``: every channel at the pixel centre)."""
+    if not m_px:
+        return ()
+    return ((float(m_px), 0.0), (0.0, 0.0), (0.0, float(m_px)))
+
+
+@dataclass(frozen=True)
+class Conversion:
+    """Camera rates → display XYZ, fitted on the chart; the scene's XYZ → the display white's."""
+
+    matrix: np.ndarray            # camera rates (e⁻/s) → linear display RGB
+    rgb_to_xyz: np.ndarray        # display RGB → XYZ (white Y = 1)
+    display_white: np.ndarray
+    scene_white: np.ndarray
+    scene_to_display: np.ndarray  # XYZ under the scene's white → under the display's (the adaptation)
+
+    @classmethod
+    def fit(cls, reference: ChartReference, camera: CameraSpec, processing: ProcessingSpec) -> "Conversion":
+        M_disp = display_rgb_to_xyz(processing.display)
+        white = M_disp.sum(axis=1)
+        adapt = adaptation_matrix(reference.white_xyz, white, processing.adaptation)
+        target = reference.patch_xyz @ adapt.T @ np.linalg.inv(M_disp).T
+        M = fit_conversion(reference.patch_rates(camera), target)
+        return cls(M, M_disp, white, np.asarray(reference.white_xyz, float), adapt)
+
+
+def white_rate(reference: ChartReference, camera: CameraSpec) -> np.ndarray:
+    """Noise-free photo-electron rates (N,) of the ColorChecker's white patch: where exposure is metered."""
+    return reference.patch_rates(camera)[WHITE_PATCH]
+
+
+def record(rates: np.ndarray, camera: CameraSpec, metered_rate: np.ndarray, seed: int, times=None) -> RawCapture:
+    """Expose an ``(H, W, N)`` rate image with the camera's architecture and exposure scheme (or the
+    exposure ``times`` given: a noise-free twin of a noisy capture keeps the noisy one's times)."""
+    arch = camera.architecture()
+    if times is None:
+        times = exposure_times_s(camera.capture.exposure, metered_rate, camera.sensor, arch, camera.capture.white_fill,
+                                 camera.capture.exposure_split)
+    digital, expected = arch.record(np.ascontiguousarray(rates, np.float32), times, camera.sensor, seed)
+    return RawCapture(digital=digital, expected_e=expected, exposure_times_s=times,
+                      capture_time_s=arch.capture_time_s(times), layout=arch.layout, camera=camera, seed=seed,
+                      metered_rate_e_per_s=np.asarray(metered_rate, float))
+
+
+def process(raw: RawCapture, processing: ProcessingSpec, conversion: Conversion) -> tuple[np.ndarray, np.ndarray]:
+    """``(camera rates (H, W, N) e⁻/s, display XYZ (H, W, 3), white Y = 1)`` of a capture."""
+    if not isinstance(raw.layout, MosaicLayout):
+        processing = processing.replace(demosaic="bilinear")  # unused for planes
+    rates = camera_rates(raw, processing)
+    xyz = rates @ conversion.matrix @ conversion.rgb_to_xyz.T
+    return rates, xyz
+
+
+def radiance_to_display_xyz(radiance: np.ndarray, grid, white_luminance_cd_m2: float,
+                            conversion: Conversion) -> np.ndarray:
+    """XYZ (white Y = 1) of band-averaged radiance ``(..., B)``, carried to the display white: the ideal
+    rendering S-CIELAB and CIELAB compare against."""
+    xyz = K_M_LM_PER_W * (np.asarray(radiance, float) @ cmf_band_weights(grid)) / white_luminance_cd_m2
+    return xyz @ conversion.scene_to_display.T

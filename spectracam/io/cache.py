@@ -1,0 +1,80 @@
+"""A render cache keyed on everything that determines the radiance cube.
+
+Key: SHA-256 of the scene's render-relevant tables (chart, illuminant, wavelengths, image, render),
+the renderer, and the spectracam and Mitsuba versions.  An entry is a spectral EXR and, beside it, the
+SHA-256 of its pixel data; on a hit the scene recorded in the file is compared with the request and
+the pixels with their checksum, so a collision, a hand-edited file or a damaged one is rendered again,
+never served.  Location: ``$SPECTRACAM_CACHE`` or ``~/.cache/spectracam/renders``.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from pathlib import Path
+
+from spectracam._version import __version__
+from spectracam.io.exr import read_radiance_exr, write_radiance_exr
+from spectracam.render import render
+
+RENDER_TABLES = ("chart", "illuminant", "wavelengths", "image", "render")
+#: Bumped whenever a renderer's method changes what it writes for the same scene, so older entries
+#: are never served: 2 = Mitsuba renders light-weighted band-constant spectra (issue 17).
+RENDER_METHOD = 2
+#: The same for a textured target (spectracam.render.target), whose ``[target]`` table is keyed too (a chart
+#: scene's key is unchanged): 3 = every band traced through the same sample positions, one per texel centre
+#: (issue 34; before, each band drew new positions and an edge pixel was no mixture of its texels).
+TEXTURED_RENDER_METHOD = 3
+
+
+def cache_dir() -> Path:
+    return Path(os.environ.get("SPECTRACAM_CACHE") or Path.home() / ".cache" / "spectracam" / "renders")
+
+
+def render_key(scene, renderer: str) -> tuple[str, dict]:
+    import mitsuba
+
+    d = scene.to_dict()
+    tables = ("target", *RENDER_TABLES) if "target" in d else RENDER_TABLES   # to_dict has it when textured
+    ident = {"scene": {k: d[k] for k in tables}, "renderer": renderer,
+             "method": TEXTURED_RENDER_METHOD if "target" in d else RENDER_METHOD,
+             "spectracam": __version__, "mitsuba": mitsuba.__version__ if renderer == "mitsuba" else None}
+    text = json.dumps(ident, sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()[:32], ident
+
+
+def pixel_checksum(cube) -> str:
+    """SHA-256 of a cube's float32 pixel data."""
+    import numpy as np
+
+    return hashlib.sha256(np.ascontiguousarray(cube.radiance, dtype=np.float32).tobytes()).hexdigest()
+
+
+def cached_render(scene, renderer: str = "mitsuba", progress: bool = False, log=None, directory: Path | None = None):
+    """``(cube, hit)``: the cached cube for this scene and renderer, or a fresh render stored for next time."""
+    from spectracam.core.files import atomic_write
+
+    key, ident = render_key(scene, renderer)
+    path = (directory or cache_dir()) / f"{key}.exr"
+    checksum = path.with_suffix(".sha256")
+    if path.exists():
+        try:
+            cube, attrs = read_radiance_exr(path)
+            recorded = json.loads(attrs.get("spectracamScene", "{}"))
+            if ({k: recorded.get(k) for k in ident["scene"]} == ident["scene"]
+                    and attrs.get("spectracamRenderer") == renderer
+                    and checksum.read_text().strip() == pixel_checksum(cube)):
+                cube.metadata["scene"] = scene.to_dict()
+                return cube, True
+            if log:
+                log(f"render cache entry {path.name} does not match its scene or checksum: rendering again")
+        except Exception:  # unreadable or damaged entry: render again and overwrite it
+            pass
+    cube = render(scene, renderer=renderer, progress=progress, log=log)
+    try:
+        write_radiance_exr(path, cube)
+        atomic_write(checksum, pixel_checksum(cube).encode())
+    except OSError as e:  # a read-only cache never stops a run
+        if log:
+            log(f"render cache not written ({e.strerror or e}); the run goes on")
+    return cube, False

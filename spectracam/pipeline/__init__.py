@@ -1,0 +1,308 @@
+"""The pipeline from Python in one call per stage, each finding what it needs in what came before.
+
+``render(scene) → RadianceCube → capture(cube) → RawCapture → score(raw) → ChartScore``.  A cube
+records its scene, a capture records its scene and camera, so each call needs only the previous
+result; explicit arguments win over what is recorded.  The stage functions themselves
+(:func:`spectracam.camera.capture.capture`, :func:`spectracam.evaluation.score.score`) take everything explicitly.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from spectracam.camera import CameraSpec
+from spectracam.camera.capture import RawCapture
+from spectracam.camera.capture import capture as capture_stage
+from spectracam.processing.color import ProcessingSpec
+from spectracam.core.errors import ArgumentTypeError, SpectracamError, expect, expect_integer
+from spectracam.scene.reference import ChartReference
+from spectracam.render import RENDERERS, RadianceCube
+from spectracam.render import render as render_stage
+from spectracam.pipeline.scene_file import Scene
+from spectracam.evaluation.score import ChartScore
+from spectracam.evaluation.score import score as score_stage
+from spectracam.sensor import SensorSpec
+
+
+def scene_of(obj, what: str = "cube") -> Scene:
+    """The scene a cube or capture records."""
+    recorded = obj.metadata.get("scene") if isinstance(obj, RadianceCube) else getattr(obj, "scene", None)
+    if recorded is None:
+        raise SpectracamError(f"{what}: records no scene, so the chart (for metering and scoring) is unknown; "
+                              "pass scene=")
+    return Scene.from_dict(recorded, source=f"the scene recorded in the {what}")
+
+
+def capture(cube: RadianceCube, camera: CameraSpec | None = None, seed: int | None = None, *,
+            scene: Scene | None = None, sensor: SensorSpec | None = None, design: str | None = None,
+            white=None) -> RawCapture:
+    """Capture a cube.  The camera, seed and chart default to those of ``scene`` (default: the scene
+    the cube records); ``sensor`` and ``design`` (``"arch/scheme"``) replace the camera's parts.
+
+    A spectral image from any other tool (no recorded scene, no ``scene=``) is captured too: the
+    camera is ``camera`` (default: spectracam's), the scene :func:`stand_in_scene`, and the exposure is
+    metered on ``white`` (:func:`spectracam.sensor.metering.parse_white`; default ``"brightest"``; for a
+    chart scene the white patch).  Such a capture records no scene: there is no chart truth to score."""
+    from spectracam.sensor.metering import metered_radiance, parse_white
+
+    expect(cube, RadianceCube, "capture(cube)")
+    expect(camera, CameraSpec, "capture(camera)", optional=True)
+    expect_integer(seed, "capture(seed)", optional=True)
+    expect(scene, Scene, "capture(scene)", optional=True)
+    expect(sensor, SensorSpec, "capture(sensor)", optional=True)
+    expect(design, str, "capture(design)", "an 'architecture/exposure' name such as 'fsc/optimal'", optional=True)
+    if cube.metadata.get("renderer") is None:  # made by hand, not rendered or read (both checked)
+        cube.check()
+    foreign = scene is None and cube.metadata.get("scene") is None
+    if foreign:
+        cube, scene = stand_in_scene(cube)
+    else:
+        scene = scene or scene_of(cube)
+        check_cube_matches(cube, scene)
+    camera = camera or scene.camera
+    if not foreign:   # capture.metering "auto": the metering of processing.camera (spectracam.processing)
+        from spectracam.processing import metered_camera
+
+        camera = metered_camera(camera, scene.processing)
+    if sensor is not None:
+        camera = camera.replace(sensor=sensor)
+    if design is not None:
+        camera = camera.with_design(design)
+    if foreign:
+        return capture_spectral_image(cube, scene.replace(camera=camera), seed, white)
+    seed = scene.render.seed if seed is None else seed
+    white = parse_white(white if white is not None else "patch", "white")
+    if white.kind == "patch" and scene.target.textured:   # the chart's white patch under the same light
+        from spectracam.scene.chart import WHITE_PATCH
+
+        return capture_stage(cube, camera, seed, white_radiance=ChartReference.of(scene).patch_radiance[WHITE_PATCH])
+    if white.kind == "patch":
+        return capture_stage(cube, camera, seed, ChartReference.of(scene).white_box)
+    return capture_stage(cube, camera, seed, white_radiance=metered_radiance(cube, white, scene),
+                         metering=white.to_dict())
+
+
+def capture_spectral_image(cube: RadianceCube, stand_in: Scene, seed: int | None = None, white=None) -> RawCapture:
+    """Capture a spectral image that records no spectracam scene with ``stand_in``'s camera
+    (:func:`stand_in_scene`), metered on ``white`` (default: the brightest neutral; there is no white
+    patch).  The capture records no scene: there is no chart truth to score."""
+    from spectracam.sensor.metering import metered_radiance, parse_white
+
+    white = parse_white(white if white is not None else "brightest", "white")
+    white_radiance = metered_radiance(cube, white, None if white.kind == "patch" else stand_in)  # patch: refused
+    seed = stand_in.render.seed if seed is None else seed
+    return capture_stage(cube, stand_in.camera, seed, white_radiance=white_radiance, metering=white.to_dict())
+
+
+#: What a spectral image from another tool is captured as (:func:`stand_in_scene`).
+STAND_IN_SCENE = {"name": "spectral image (no spectracam scene): conversion fitted on the ColorChecker under CIE D65",
+                  "illuminant": {"type": "cie", "name": "D65"}}
+
+
+def stand_in_scene(cube: RadianceCube, data: dict | None = None, source: str = "a spectral image without a "
+                   "spectracam scene") -> tuple[RadianceCube, Scene]:
+    """``(cube, scene)`` for a spectral image that records no spectracam scene: the scene holds the
+    camera and the chart-and-light the colour conversion and the DNG's matrices are fitted on
+    (:data:`STAND_IN_SCENE`, i.e. the ColorChecker under D65, over ``data``); the cube keeps only the
+    bands inside the chart's reflectance data (the conversion knows nothing beyond them)."""
+    from spectracam.scene.chart import ChartSpec, dataset_range_nm
+
+    merged = {**STAND_IN_SCENE, **(data or {})}
+    chart = ChartSpec.from_dict(merged.get("chart", {}), source)
+    lo, hi = dataset_range_nm(chart.dataset)
+    edges = cube.grid.edges_nm
+    keep = (edges[:-1] >= lo - 1e-9) & (edges[1:] <= hi + 1e-9)
+    if keep.sum() < 2:
+        raise SpectracamError(f"{source}: its bands ({cube.wavelengths_nm[0]:g}–{cube.wavelengths_nm[-1]:g} nm) hold "
+                              f"fewer than two inside {lo:g}–{hi:g} nm, the range of the chart the conversion is "
+                              "fitted on")
+    if not keep.all():
+        cube = RadianceCube(np.ascontiguousarray(cube.radiance[:, :, keep]), np.asarray(cube.wavelengths_nm)[keep],
+                            {**cube.metadata, "bands_dropped_outside_nm": [lo, hi]})
+    merged["wavelengths"] = {"centres_nm": [float(c) for c in cube.wavelengths_nm]}
+    return cube, Scene.from_dict(merged, source)
+
+
+#: A recorded chart scene's pixels must match it: the largest relative rms difference allowed between
+#: a patch's mean spectrum in the cube and the chart reference's.  Mitsuba's renders match to 1e-6
+#: (issue 17); a 3000 K label on 5000 K pixels differs by ~30 %, the other chart dataset by up to 19 %.
+RADIANCE_MATCH_TOLERANCE = 0.01
+
+
+def check_cube_matches(cube: RadianceCube, scene: Scene, source: str = "cube", radiance: bool = True) -> None:
+    """Refuse a cube whose bands or size contradict the scene it is captured as, or (``radiance``)
+    whose pixels do: each patch's mean spectrum must be the chart reference's within
+    :data:`RADIANCE_MATCH_TOLERANCE` (another light, level, chart or unit shows here)."""
+    h, w, b = cube.radiance.shape
+    if (w, h) != (scene.image.width, scene.image.height):
+        raise SpectracamError(f"{source}: {w}x{h} pixels, but its scene says {scene.image.width}x{scene.image.height}")
+    if b != len(scene.grid) or not np.allclose(cube.wavelengths_nm, scene.grid.centres_nm, rtol=0, atol=1e-6):
+        raise SpectracamError(f"{source}: {b} bands at {float(cube.wavelengths_nm[0]):g}…"
+                              f"{float(cube.wavelengths_nm[-1]):g} nm, but its scene's grid has {len(scene.grid)} "
+                              f"bands at {scene.grid.centres_nm[0]:g}…{scene.grid.centres_nm[-1]:g} nm")
+    if not radiance:
+        return
+    if scene.target.textured:
+        from spectracam.scene.reference import TargetReference
+
+        want = TargetReference.of(scene).mean_radiance()
+        mean = cube.radiance.mean(axis=(0, 1), dtype=np.float64)
+        err = float(np.sqrt(np.mean((mean - want) ** 2) / np.mean(want ** 2)))
+        if err > RADIANCE_MATCH_TOLERANCE:
+            raise SpectracamError(f"{source}: its pixels contradict the scene it records ({scene.target.kind} of "
+                                  f"{scene.target.library} under {scene.illuminant.label}, "
+                                  f"{scene.illuminant.white_luminance_cd_m2:g} cd/m²): the mean spectrum differs by "
+                                  f"{100 * err:.1f} % rms from the target's, at most {100 * RADIANCE_MATCH_TOLERANCE:g} % "
+                                  "is allowed; a file edited or from another scene is not captured as this one")
+        return
+    ref = ChartReference.of(scene)
+    worst, patch = 0.0, 0
+    for p, (r, c) in enumerate(ref.boxes):
+        mean = cube.radiance[r, c].mean(axis=(0, 1), dtype=np.float64)
+        want = ref.patch_radiance[p]
+        err = float(np.sqrt(np.mean((mean - want) ** 2) / np.mean(want ** 2)))
+        if err > worst:
+            worst, patch = err, p
+    if worst > RADIANCE_MATCH_TOLERANCE:
+        raise SpectracamError(f"{source}: its pixels contradict the scene it records ({scene.illuminant.label}, "
+                              f"{scene.illuminant.white_luminance_cd_m2:g} cd/m², {scene.chart.dataset}): patch "
+                              f"{patch} ({ref.names[patch]}) differs by {100 * worst:.1f} % rms from its radiance, "
+                              f"at most {100 * RADIANCE_MATCH_TOLERANCE:g} % is allowed; a file edited or from "
+                              "another scene is not captured as this one")
+
+
+#: How much memory a run needs, in float32 radiance cubes: the cube, the renderer's film, the
+#: capture's (H, W, 3) float32 planes and scoring's float64 images.  An independent measurement of
+#: render → capture → score found a peak of 3.2 cubes (issue 18; the earlier 2.5 was too low): 3.5.
+MEMORY_PER_CUBE = 3.5
+
+
+def memory_available() -> tuple[float | None, str]:
+    """Bytes this process may still allocate, and what limits it: the system's MemAvailable, or the
+    process's own address-space limit (``ulimit -v``, ``prlimit --as``) less what it has mapped."""
+    import resource
+
+    avail, why = None, "available"
+    try:
+        with open("/proc/meminfo") as f:
+            info = {line.split(":")[0]: int(line.split()[1]) * 1024 for line in f}
+        avail = info.get("MemAvailable")
+    except (OSError, ValueError, IndexError):
+        pass  # not Linux
+    soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    if soft != resource.RLIM_INFINITY:
+        try:
+            with open("/proc/self/status") as f:
+                vm = next(int(line.split()[1]) * 1024 for line in f if line.startswith("VmSize:"))
+        except (OSError, StopIteration, ValueError):
+            vm = 0
+        left = max(soft - vm, 0)
+        if avail is None or left < avail:
+            avail, why = left, "left under this process's address-space limit"
+    return avail, why
+
+
+def check_bytes(need: float, what: str, advice: str) -> None:
+    """Refuse, before any work, a run that needs ``need`` bytes when this process may not have them;
+    ``what`` names the sizes that cost them, ``advice`` what to make smaller."""
+    avail, why = memory_available()
+    if avail is not None and need > avail:
+        raise SpectracamError(f"{what}: needs about {need / 2**30:.1f} GiB, {avail / 2**30:.1f} GiB {why}; {advice}")
+
+
+def check_memory(scene: Scene, copies: float = 1.0, what: str = "") -> None:
+    """Refuse, before any work, a scene whose cubes (``copies`` of them held at once) would not fit in
+    the memory available to this process."""
+    need = scene.image.width * scene.image.height * len(scene.grid) * 4 * MEMORY_PER_CUBE * copies
+    check_bytes(need, f"image = {scene.image.width}x{scene.image.height} with {len(scene.grid)} bands{what}",
+                "use a smaller image or fewer bands")
+
+
+def score(raw: RawCapture, scene: Scene | None = None, processing: ProcessingSpec | None = None,
+          delta_e_reference: str = "scene"):
+    """Score a capture against its scene (default: the scene it records), with ``processing``
+    (default: the scene's): a :class:`ChartScore`, or for a textured target a
+    :class:`~spectracam.evaluation.target_score.TargetScore` (per pixel against its known spectra)."""
+    expect(raw, RawCapture, "score(raw)")
+    expect(scene, Scene, "score(scene)", optional=True)
+    expect(processing, ProcessingSpec, "score(processing)", optional=True)
+    expect(delta_e_reference, str, "score(delta_e_reference)", "'scene' or 'camera'")
+    scene = scene or scene_of(raw, "capture")
+    if scene.target.textured:
+        from spectracam.scene.reference import TargetReference
+        from spectracam.evaluation.target_score import score_target
+
+        if delta_e_reference != "scene":
+            raise SpectracamError(f"delta_e_reference = {delta_e_reference!r}: a textured target is scored against "
+                                  "its scene only")
+        return score_target(raw, ChartReference.of(scene), TargetReference.of(scene), scene.target,
+                            processing or scene.processing)
+    return score_stage(raw, ChartReference.of(scene), processing or scene.processing, delta_e_reference)
+
+
+def render(scene: Scene, renderer: str = "mitsuba", progress: bool = False, log=None) -> RadianceCube:
+    """Render ``scene`` with a registered renderer (:func:`spectracam.render.render`), its arguments
+    checked here, at the API's boundary."""
+    expect(scene, Scene, "render(scene)")
+    expect(renderer, str, "render(renderer)", "a renderer's name: " + ", ".join(map(repr, RENDERERS.names)))
+    if log is not None and not callable(log):
+        raise ArgumentTypeError(f"render(log): got {type(log).__name__}; allowed: a function of one string, or None")
+    return render_stage(scene, renderer, progress=progress, log=log)
+
+
+def simulate(scene: Scene, renderer: str = "mitsuba", seed: int | None = None):
+    """render → capture → score: ``(cube, raw, score)``."""
+    expect(scene, Scene, "simulate(scene)")
+    expect_integer(seed, "simulate(seed)", optional=True)
+    cube = render(scene, renderer)
+    raw = capture(cube, seed=seed, scene=scene)
+    return cube, raw, score(raw, scene)
+
+
+#: What every command reports for each camera, oracle and developed, side by side (issue 33).
+BOTH_WAYS_FIELDS = ("delta_e_mean", "delta_e_p95", "delta_e2000_mean", "held_out_delta_e", "held_out_delta_e_p95",
+                    "awb_recovery_deg", "awb_reproduction_deg", "metered_exposure_ms", "s_cielab_mean", "s_cielab_p95")
+
+
+def score_row(result) -> dict:
+    """The :data:`BOTH_WAYS_FIELDS` of a :class:`ChartScore` or a textured target's score (whose per-pixel scores are
+    on colours the conversion was not fitted on); S-CIELAB beside the per-pixel ΔE in both (the chart's at
+    processing.viewing_distance_m, the target's at its own viewing geometry)."""
+    if isinstance(result, ChartScore):
+        c, held = result.summary, result.held_out or {}
+        return {"delta_e_mean": c.delta_e_mean, "delta_e_p95": c.delta_e_p95, "delta_e2000_mean": c.delta_e2000_mean,
+                "held_out_delta_e": held.get("delta_e_mean"), "held_out_delta_e_p95": held.get("delta_e_p95"),
+                "awb_recovery_deg": c.awb_recovery_deg, "awb_reproduction_deg": c.awb_reproduction_deg,
+                "metered_exposure_ms": c.capture_time_ms, "s_cielab_mean": c.s_cielab_mean,
+                "s_cielab_p95": c.s_cielab_p95}
+    h = result.held_out
+    return {"delta_e_mean": h["delta_e_mean"], "delta_e_p95": h["delta_e_p95"],
+            "delta_e2000_mean": h["delta_e2000_mean"], "held_out_delta_e": h.get("sample_delta_e_conversion_mean"),
+            "held_out_delta_e_p95": h.get("sample_delta_e_conversion_p95"), "awb_recovery_deg": h["awb_recovery_deg"],
+            "awb_reproduction_deg": h["awb_reproduction_deg"], "metered_exposure_ms": result.capture_time_ms,
+            "s_cielab_mean": h["s_cielab_mean"], "s_cielab_p95": h["s_cielab_p95"]}
+
+
+def camera_processing(processing: ProcessingSpec, camera: str) -> ProcessingSpec:
+    """``processing`` as the named camera (spectracam.processing.CAMERAS) runs it: the scene's own chain when it is
+    that camera (its overridden steps kept), else that camera's steps."""
+    if processing.camera == camera:
+        return processing
+    return processing.replace(camera=camera, white_balance="auto", calibration="auto")
+
+
+def both_ways(raw: RawCapture, scene: Scene, cube: RadianceCube | None = None, result=None) -> dict:
+    """``{"oracle": row, "developed": row}`` (:func:`score_row`): the capture scored by the oracle camera and by the
+    developed one.  With the ``cube``, each camera captures it with its own metering (same seed); without it (a raw
+    file), both develop the same capture, metered as it was.  ``result``: the score of ``raw`` under the scene's own
+    processing, reused for its camera's row."""
+    out = {}
+    for name in ("oracle", "developed"):
+        processing = camera_processing(scene.processing, name)
+        if result is not None and processing == scene.processing:
+            out[name] = score_row(result)
+            continue
+        s = scene.replace(processing=processing)
+        r = capture(cube, seed=raw.seed, scene=s) if cube is not None else raw
+        out[name] = score_row(score(r, s, processing))
+    out["metering"] = "each camera's own (captured anew)" if cube is not None else "as the capture was metered"
+    return out

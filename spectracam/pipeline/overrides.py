@@ -1,0 +1,107 @@
+"""One override mechanism for every file a command reads: ``--set table.field=VALUE``.
+
+A path names a field of a scene, camera or experiment file: ``table.field``, ``table.field[i]`` for
+one element of a list, or a top-level ``key``; ``capture.design = "arch/scheme"`` sets the
+architecture and the exposure scheme together.  VALUE is read as a TOML value (``3``, ``1.5``,
+``true``, ``[490, 610]``, ``"text"``); a bare word is taken as a string.  Sweep axes use the same
+path engine, so a path that works in one place works in all.
+
+>>> apply_overrides({"sensor": {"adc_bits": 8}}, ["sensor.adc_bits=12", "capture.design=fsc/optimal"])
+{'sensor': {'adc_bits': 12}, 'capture': {'architecture': 'fsc', 'exposure': 'optimal'}}
+"""
+from __future__ import annotations
+
+import copy
+import re
+import tomllib
+from typing import Callable, Iterable
+
+from spectracam.core.errors import ConfigError
+
+#: ``key``, ``key[i]``, ``table.field`` or ``table.field[i]``; names in either case (``temperatures_K``).
+PATH = re.compile(r"^([A-Za-z_][A-Za-z_0-9]*)(?:\.([A-Za-z_][A-Za-z_0-9]*))?(?:\[(\d+)\])?$")
+#: "arch/scheme" in one value, so an invalid pair is one error, never two half-applied fields.
+DESIGN_PATH = "capture.design"
+#: Keys that say what kind of thing their table describes: set to another kind, the old kind's keys go
+#: (``--set illuminant.file=spd.csv`` turns a blackbody or CIE scene into a measured SPD; issue 34).
+SWITCHES = {"illuminant": ("type", "file")}
+
+
+def parse_value(text: str):
+    """A TOML value, or the text itself when it is a bare word."""
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return text
+
+
+def parse_assignment(text: str, source: str = "--set") -> tuple[str, object]:
+    """``"table.field[i]=VALUE"`` → ``(path, value)``."""
+    path, eq, value = text.partition("=")
+    path = path.strip()
+    if not eq or not PATH.match(path):
+        raise ConfigError(source, text, "must be PATH=VALUE with PATH a 'table.field', 'table.field[i]', 'key' or "
+                                        "'key[i]'")
+    return path, parse_value(value.strip())
+
+
+def apply_override(data: dict, path: str, value, defaults: Callable[[], dict] | None = None,
+                   source: str | None = None, kept: Iterable[str] = ()) -> dict:
+    """A copy of ``data`` with ``path`` set to ``value``.  ``defaults()`` supplies a list that the
+    file leaves at its default when one element of it is set.  A key that chooses what the rest of its
+    table means (:data:`SWITCHES`: ``illuminant.type``, ``illuminant.file``) set to another kind drops
+    the old kind's keys, except those named in ``kept`` (paths the same overrides set earlier)."""
+    m = PATH.match(path) if isinstance(path, str) else None
+    if not m:
+        raise ConfigError(path, value, "not a path: use 'table.field', 'table.field[i]' or 'key'", source)
+    out = copy.deepcopy(data)
+    table, key, index = m.groups()
+    if path == DESIGN_PATH:
+        from spectracam.camera import split_design
+
+        arch, scheme = split_design(value, DESIGN_PATH)
+        out.setdefault("capture", {}).update(architecture=arch, exposure=scheme)
+        return out
+    if index is None and key in SWITCHES.get(table, ()) and isinstance(out.get(table, {}), dict):
+        from spectracam.scene.illuminant import switched_table
+
+        mine = {p.split(".", 1)[1].split("[")[0] for p in kept if p.startswith(table + ".")}
+        out[table] = switched_table(out.get(table, {}), key, value, mine)
+        return out
+    if key is None:
+        if index is None:
+            out[table] = value
+            return out
+        lst = out.get(table)
+        if lst is None and defaults is not None:
+            lst = copy.deepcopy(defaults().get(table))
+        if not isinstance(lst, list) or int(index) >= len(lst):
+            raise ConfigError(path, value, f"{table} is not a list with an element {index}", source)
+        lst[int(index)] = value
+        out[table] = lst
+        return out
+    t = out.setdefault(table, {})
+    if not isinstance(t, dict):
+        raise ConfigError(path, value, f"{table!r} is not a table here", source)
+    if index is None:
+        t[key] = value
+        return out
+    lst = t.get(key)
+    if lst is None and defaults is not None:
+        lst = copy.deepcopy(defaults().get(table, {}).get(key))
+    if not isinstance(lst, list) or int(index) >= len(lst):
+        raise ConfigError(path, value, f"{table}.{key} is not a list with an element {index}", source)
+    lst[int(index)] = value
+    t[key] = lst
+    return out
+
+
+def apply_overrides(data: dict, overrides: Iterable, defaults: Callable[[], dict] | None = None,
+                    source: str = "--set") -> dict:
+    """Apply ``overrides`` (``"path=value"`` strings or ``(path, value)`` pairs) in order."""
+    done: list[str] = []
+    for o in overrides:
+        path, value = parse_assignment(o, source) if isinstance(o, str) else o
+        data = apply_override(data, path, value, defaults, source, kept=done)
+        done.append(path)
+    return data

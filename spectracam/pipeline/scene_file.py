@@ -1,0 +1,327 @@
+"""The scene file: assembles every stage's spec from one TOML document.
+
+A scene file has the tables ``[target]`` (what the camera looks at: the chart, or a textured target of
+measured reflectances, :mod:`spectracam.scene.target`), ``[chart]``, ``[wavelengths]``, ``[image]``,
+``[render]``, the camera's ``[optics]``, ``[filters]``, ``[sensor]``, ``[capture]`` and
+``[processing]`` (all optional, defaults in each stage's spec) and an optional top-level ``name``.
+Each stage validates its own table; this module holds only the rules that tie stages together
+(the grid within the data, patches large enough to score).  Any unknown key, wrong type or
+out-of-range value raises :class:`ConfigError` naming the field, the value and what is allowed.
+"""
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from spectracam.camera import CAMERA_TABLES, CameraSpec
+from spectracam.scene.chart import ChartSpec, dataset_range_nm, patch_boxes
+from spectracam.processing.color import ProcessingSpec
+from spectracam.core.errors import ConfigError
+from spectracam.scene.illuminant import IlluminantSpec
+from spectracam.render import RenderSpec
+from spectracam.scene.target import TargetSpec, resolve_target_files
+from spectracam.core.spec import Spec, _is_number
+from spectracam.core.spectra import CIE_RANGE_NM, WavelengthGrid
+
+#: Fewest pixels across a patch's mask: a 4×4 mask still holds 4 pixels of each Bayer colour.
+MIN_PATCH_PX = 4
+#: The tables of a scene file, in order.
+SCENE_TABLES = ("target", "chart", "illuminant", "wavelengths", "image", "render", *CAMERA_TABLES, "processing")
+
+
+@dataclass(frozen=True)
+class ImageSpec(Spec):
+    """The ``[image]`` table: pixels across and down."""
+
+    TABLE = "image"
+
+    width: int = 640
+    height: int = 480
+
+    def validate(self) -> None:
+        self.integer("width", 8, 16384)
+        self.integer("height", 8, 16384)
+
+
+def parse_grid(data: dict, source: str | None = None) -> WavelengthGrid:
+    """The ``[wavelengths]`` table: ``start_nm``/``stop_nm``/``step_nm`` or ``centres_nm``."""
+    if not isinstance(data, dict):
+        raise ConfigError("wavelengths", data, "must be a table", source)
+    d = dict(data)
+    known = ("start_nm", "stop_nm", "step_nm", "centres_nm")
+    for k in d:
+        if k not in known:
+            raise ConfigError(f"wavelengths.{k}", d[k], "unknown key; allowed: " + ", ".join(known), source)
+    if "centres_nm" in d:
+        c = d.pop("centres_nm")
+        if not isinstance(c, (list, tuple)) or not c or not all(_is_number(x) for x in c):
+            raise ConfigError("wavelengths.centres_nm", c, "must be a non-empty list of wavelengths in nm", source)
+        arr = np.asarray(c, dtype=float)
+        if np.any(np.diff(arr) <= 0):
+            raise ConfigError("wavelengths.centres_nm", c, "must be strictly increasing", source)
+        for k in d:
+            raise ConfigError(f"wavelengths.{k}", d[k], "give either centres_nm or start_nm/stop_nm/step_nm, not both",
+                              source)
+    else:
+        start, stop, step = d.get("start_nm", 400.0), d.get("stop_nm", 700.0), d.get("step_nm", 10.0)
+        for k, v in (("start_nm", start), ("stop_nm", stop)):
+            if not _is_number(v):
+                raise ConfigError(f"wavelengths.{k}", v, "must be a number nm", source)
+        if not _is_number(step) or step <= 0:
+            raise ConfigError("wavelengths.step_nm", step, "must be a number > 0 nm", source)
+        if stop <= start:
+            raise ConfigError("wavelengths.stop_nm", stop, f"must be > start_nm ({start:g}); the range would be empty",
+                              source)
+        n = (stop - start) / step
+        if n < 1.5:
+            raise ConfigError("wavelengths.step_nm", step, f"must give at least two bands in {start:g}–{stop:g} nm",
+                              source)
+        if abs(n - round(n)) > 1e-6 * max(1.0, n):
+            raise ConfigError("wavelengths.step_nm", step, f"must divide the range {start:g}–{stop:g} nm into whole "
+                              "bands (band edges lie on the stated limits)", source)
+        # bands tile the stated range exactly: edges start, start + step, ..., stop; centres between
+        arr = start + step * (np.arange(int(round(n))) + 0.5)
+    if arr.size == 1 and "centres_nm" in data:
+        raise ConfigError("wavelengths", arr.tolist(), "needs at least two wavelengths", source)
+    grid = WavelengthGrid(arr)
+    lo, hi = grid.edges_nm[0], grid.edges_nm[-1]
+    if lo < CIE_RANGE_NM[0] or hi > CIE_RANGE_NM[1]:
+        raise ConfigError("wavelengths", f"{arr[0]:g}–{arr[-1]:g} nm",
+                          f"bands must lie within {CIE_RANGE_NM[0]:g}–{CIE_RANGE_NM[1]:g} nm (CIE 1931 range); "
+                          f"these span {lo:g}–{hi:g} nm", source)
+    return grid
+
+
+def _default_grid() -> WavelengthGrid:
+    """400–700 nm in 10-nm bands (the paper's range, 4.1), edges on the limits: centres 405 … 695 nm."""
+    return WavelengthGrid(np.arange(405.0, 700.0, 10.0))
+
+
+@dataclass(frozen=True)
+class Scene(Spec):
+    """A whole simulation: what is in front of the camera, how it is rendered, the camera and the
+    processing.  Frozen, comparable and hashable."""
+
+    name: str = "Macbeth ColorChecker"
+    #: What the camera looks at; the chart (``[chart]``) is also what the conversion is fitted on and
+    #: the exposure metered on (its white patch under the same light), whatever the target.
+    target: TargetSpec = field(default_factory=TargetSpec)
+    chart: ChartSpec = field(default_factory=ChartSpec)
+    illuminant: IlluminantSpec = field(default_factory=IlluminantSpec)
+    grid: WavelengthGrid = field(default_factory=_default_grid)
+    image: ImageSpec = field(default_factory=ImageSpec)
+    render: RenderSpec = field(default_factory=RenderSpec)
+    camera: CameraSpec = field(default_factory=CameraSpec)
+    processing: ProcessingSpec = field(default_factory=ProcessingSpec)
+
+    def validate(self) -> None:
+        self.string("name")
+        chart, image, grid = self.chart, self.image, self.grid
+        if self.target.textured:
+            self.target.check_size(image.width, image.height)
+            from spectracam.scene.reflectances import check_available
+
+            check_available(self.target.library, "target.library")
+        smallest = min(min(r.stop - r.start, c.stop - c.start) for r, c in patch_boxes(chart, image.width, image.height))
+        if smallest < MIN_PATCH_PX and not self.target.textured:
+            raise ConfigError("image", f"{image.width}x{image.height}",
+                              f"too small: the smallest patch mask is {smallest} px across, at least {MIN_PATCH_PX} "
+                              "are needed to meter and score a patch")
+        light = self.illuminant
+        if light.kind == "measured" and (light.wavelengths_nm[0] > grid.edges_nm[0] + 1e-9
+                                         or light.wavelengths_nm[-1] < grid.edges_nm[-1] - 1e-9):
+            raise ConfigError("illuminant.wavelengths_nm", f"{light.wavelengths_nm[0]:g}–{light.wavelengths_nm[-1]:g} nm",
+                              f"the measured SPD must cover the scene's bands, {grid.edges_nm[0]:g}–"
+                              f"{grid.edges_nm[-1]:g} nm")
+        if self.target.textured:
+            from spectracam.scene.reflectances import load
+
+            load(self.target.library, "target.library").check_covers(float(grid.edges_nm[0]),
+                                                                       float(grid.edges_nm[-1]), "target.library")
+        proc = self.processing
+        if proc.white_balance_method == "corrected_moments":   # never trained on what is scored (issue 33)
+            from spectracam.evaluation.target_score import CHART_LIBRARIES
+
+            lib = proc.white_balance_training
+            scored = {self.target.library} if self.target.textured else set()
+            scored |= {name for name, dataset in CHART_LIBRARIES.items() if dataset == chart.dataset}
+            if lib in scored:
+                raise ConfigError("processing.white_balance_training", lib,
+                                  "is the scored scene's own library (" + ", ".join(sorted(scored)) + "); the trained "
+                                  "white balance must be trained on other colours, e.g. 'rawtoaces190'")
+        d_lo, d_hi = dataset_range_nm(chart.dataset)
+        if grid.edges_nm[0] < d_lo or grid.edges_nm[-1] > d_hi:
+            raise ConfigError("wavelengths", f"{grid.centres_nm[0]:g}–{grid.centres_nm[-1]:g} nm",
+                              f"bands span {grid.edges_nm[0]:g}–{grid.edges_nm[-1]:g} nm, beyond the reflectance "
+                              f"data of {chart.dataset!r} ({d_lo:g}–{d_hi:g} nm)")
+
+    def to_dict(self) -> dict:
+        """A plain, JSON-serialisable description that round-trips through :meth:`from_dict`."""
+        target = {"target": self.target.to_dict()} if self.target.textured else {}
+        return {"name": self.name, **target, "chart": self.chart.to_dict(), "illuminant": self.illuminant.to_dict(),
+                "wavelengths": {"centres_nm": list(self.grid.centres_nm)}, "image": self.image.to_dict(),
+                "render": self.render.to_dict(), **self.camera.to_dict(), "processing": self.processing.to_dict()}
+
+    @classmethod
+    def from_dict(cls, data, source: str | None = None, base: "Scene | None" = None) -> "Scene":
+        """Validate a parsed TOML/JSON dict and build a Scene; tables not given keep ``base``'s values
+        (default: the defaults)."""
+        if not isinstance(data, dict):
+            raise ConfigError("scene", data, "must be a table", source)
+        base = base or cls()
+        for k, v in data.items():
+            if k != "name" and k not in SCENE_TABLES:
+                raise ConfigError(k, v, "unknown key", source)
+        try:
+            grid = parse_grid(data["wavelengths"], source) if "wavelengths" in data else base.grid
+            return cls(name=data.get("name", base.name),
+                       target=TargetSpec.from_dict(data.get("target", {}), source, base.target),
+                       chart=ChartSpec.from_dict(data.get("chart", {}), source, base.chart),
+                       illuminant=IlluminantSpec.from_dict(data.get("illuminant", {}), source, base.illuminant),
+                       grid=grid,
+                       image=ImageSpec.from_dict(data.get("image", {}), source, base.image),
+                       render=RenderSpec.from_dict(data.get("render", {}), source, base.render),
+                       camera=CameraSpec.from_dict({k: data[k] for k in CAMERA_TABLES if k in data}, source,
+                                                   base.camera),
+                       processing=ProcessingSpec.from_dict(data.get("processing", {}), source, base.processing))
+        except ConfigError as e:
+            raise e.with_source(source) from None
+
+
+def parse_scene(data: dict, source: str | None = None) -> Scene:
+    """Validate a parsed TOML/JSON dict and build a :class:`Scene`."""
+    from collections.abc import Mapping
+
+    from spectracam.core.errors import expect
+
+    expect(data, Mapping, "parse_scene(data)", "a dict of scene tables, e.g. {'image': {'width': 320}} (a scene "
+           "file: spectracam.load_scene(path))")
+    return Scene.from_dict(data, source)
+
+
+def read_toml(path: str | Path, what: str) -> dict:
+    """Parse a TOML file; an unreadable or invalid file is one ConfigError naming ``what``."""
+    from spectracam.core.files import regular_file
+
+    p = regular_file(path, what)
+    try:
+        text = p.read_bytes().decode("utf-8")
+    except OSError as e:
+        raise ConfigError(what, str(p), f"cannot be read ({e.strerror})") from None
+    except UnicodeDecodeError:
+        raise ConfigError(what, str(p), "is not a text (UTF-8 TOML) file") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise ConfigError(what, str(p), f"is not valid TOML ({e})") from None
+
+
+#: Curves a scene file may give as a file, relative to the scene file: (table, file key, fields).
+CURVE_FILES = (("illuminant", "file", "wavelengths_nm", "values"),
+               ("filters", "qe_file", "qe_curve_nm", "qe_curve"),
+               ("optics", "transmittance_file", "transmittance_curve_nm", "transmittance_curve"))
+
+
+def resolve_curve_files(data: dict, base_dir: Path) -> dict:
+    """Replace ``illuminant.file`` / ``filters.qe_file`` / ``optics.transmittance_file`` /
+    ``filters.camera_file`` by the curves they hold, so the scene (and every file made from it) records
+    the data, not a path (``type = "measured"``, ``qe = "data"``, respectively ``kind = "camera"`` and
+    ``camera = "file"``, are implied), and a target's files by absolute paths (:mod:`spectracam.scene.target`)."""
+    from spectracam.architecture.filters import load_curve
+
+    data = dict(data)
+    if isinstance(data.get("target"), dict):
+        data["target"] = resolve_target_files(data["target"], base_dir)
+    for table, key, wl_field, value_field in CURVE_FILES:
+        t = data.get(table)
+        if isinstance(t, dict) and key in t:
+            t = dict(t)
+            path = t.pop(key)
+            if not isinstance(path, str):
+                raise ConfigError(f"{table}.{key}", path, "must be a path to a CSV or TOML file")
+            t[wl_field], t[value_field] = load_curve(Path(base_dir) / path, f"{table}.{key}")
+            if table == "illuminant":   # a measured SPD, named after its file
+                if t.setdefault("type", "measured") != "measured":
+                    raise ConfigError("illuminant.type", t["type"], f"contradicts illuminant.file = {path!r} (a "
+                                      "measured SPD): leave type out or make it 'measured'")
+                t.setdefault("name", Path(path).name)
+            if table == "filters":
+                t.setdefault("qe", "data")
+            data[table] = t
+    t = data.get("filters")
+    if isinstance(t, dict) and "camera_file" in t:  # a camera's curves: wavelength, R, G, B
+        from spectracam.architecture.cameras import FROM_FILE, load_camera_csv
+
+        t = dict(t)
+        path = t.pop("camera_file")
+        if not isinstance(path, str):
+            raise ConfigError("filters.camera_file", path, "must be a path to a CSV file (wavelength nm, R, G, B)")
+        t["camera_curve_nm"], t["camera_curve"] = load_camera_csv(Path(base_dir) / path)
+        t["camera"] = FROM_FILE
+        t.setdefault("kind", "camera")
+        data["filters"] = t
+    return data
+
+
+def load_scene(path: str | Path, overrides=()) -> Scene:
+    """Read and validate a TOML scene file, with ``--set``-style overrides applied first."""
+    import os
+
+    from spectracam.core.errors import ArgumentTypeError, expect
+    from spectracam.pipeline.overrides import apply_overrides
+
+    expect(path, (str, os.PathLike), "load_scene(path)", "a path to a TOML scene file, str or Path (a dict: "
+           "spectracam.parse_scene(data))")
+    if isinstance(overrides, (str, bytes)) or not hasattr(overrides, "__iter__"):
+        raise ArgumentTypeError(f"load_scene(overrides): got {type(overrides).__name__}; allowed: a list of "
+                                "'PATH=VALUE' strings or (path, value) pairs, e.g. ['image.width=320']")
+    data = apply_overrides(read_toml(path, "scene file"), overrides)
+    return parse_scene(resolve_curve_files(data, Path(path).parent), source=str(path))
+
+
+def experiment_base_scene(table: dict, directory: str | Path, overrides=(), source: str | None = None) -> Scene:
+    """The scene an experiment file (``scenes/paper.toml``) builds on: its ``base_scene`` file (relative to
+    ``directory``) with its ``[scene.*]`` tables and then ``overrides`` applied."""
+    base_name = table.get("base_scene", "blackbody_5000K.toml")
+    if not isinstance(base_name, str):
+        raise ConfigError("base_scene", base_name, "must be a path to a scene file", source)
+    scene_tables = table.get("scene", {})
+    if not isinstance(scene_tables, dict) or not all(isinstance(v, dict) for v in scene_tables.values()):
+        raise ConfigError("scene", scene_tables, "must be a table of scene tables, e.g. [scene.sensor]", source)
+    from_file = [(f"{t}.{k}", v) for t, kv in scene_tables.items() for k, v in kv.items()]
+    return load_scene(Path(directory) / base_name, from_file + list(overrides))
+
+
+def paper_scene() -> Scene:
+    """The camera, chart, bands and processing of ``spectracam paper`` (the base scene of the shipped
+    ``scenes/paper.toml``): the one camera every experiment means by "the paper's camera"."""
+    path = shipped_scene_file("paper.toml")
+    return experiment_base_scene(read_toml(path, "experiment file"), path.parent, source=str(path))
+
+
+def load_camera_config(path: str | Path, base: CameraSpec | None = None) -> CameraSpec:
+    """Read a camera config file (the scene file's camera tables only), over ``base``."""
+    return CameraSpec.from_dict(read_toml(path, "config file"), source=str(path), base=base)
+
+
+def shipped_dir() -> Path | None:
+    """The directory of the shipped scene, sweep, experiment and design files: the package's
+    ``spectracam/scenes`` (in a wheel), else the checkout's ``scenes/``."""
+    from importlib.resources import files
+
+    d = files("spectracam") / "scenes"
+    if d.is_dir():
+        return Path(str(d))
+    here = Path(__file__).resolve().parents[2] / "scenes"
+    return here if here.is_dir() else None
+
+
+def shipped_scene_file(name: str) -> Path:
+    """A scene file shipped with spectracam (``spectracam/scenes/NAME``, or the checkout's ``scenes/``)."""
+    root = shipped_dir()
+    if root is None or not (root / name).is_file():
+        raise ConfigError("scene", name, "not shipped with this installation")
+    return root / name

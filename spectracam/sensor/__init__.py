@@ -1,0 +1,458 @@
+"""CMOS image sensor in current-integration mode (paper, sections 3.4 and 4.4).
+
+Per pixel and channel the recorded value is built by named steps, each one term of the paper's
+section 3.4: :func:`integrate_charge` (photo-electrons ``ρ·T``, times the pixel's PRNU gain, plus
+dark electrons ``i_d·A·T``, times its DSNU factor), :func:`add_shot_noise`, :func:`clip_to_well`
+(``q_max``), :func:`add_read_noise` (``Q_r``), :func:`add_offset_fpn` (``V_FPN``, pixel and column)
+and :func:`adc`: ``DN = K·Q + black level``, an n-bit uniform quantiser clipped to its codes, with
+the system gain ``K = 2ⁿ·g / V_fs`` (EMVA 1288: DN per electron) from the conversion gain ``g`` and
+the ADC's full-scale voltage ``V_fs``; :func:`adc_inverse` sits beside it.  The well clip and the
+ADC clip are separate stages.  Each noise source switches off on its own.  :func:`expose` runs the
+steps in place, chunk by chunk, on all cores: the reference implementation.  A capture normally
+runs :mod:`spectracam.sensor.kernels` instead — the same model fused into one pass over the radiance cube,
+with counter-based random numbers — and falls back to these steps where it cannot run.  The fixed
+pattern (:func:`fixed_pattern`) is a counter-based draw of each pixel on both paths.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from typing import Callable, NamedTuple
+
+import numpy as np
+
+from spectracam.core.errors import ConfigError
+from spectracam.sensor.kernels import CounterRNG
+from spectracam.core.registry import Registry
+from spectracam.core.spec import Spec
+
+
+class FpnReading(NamedTuple):
+    """How a stated FPN fraction of full swing becomes per-pixel offsets."""
+
+    rms_per_swing: float  # rms offset / (fraction × full swing)
+    draw: Callable  # (rng, out float32 array, swing_e) → fills ``out`` with offsets in electrons
+
+
+def _draw_std(rng, out, swing_e):
+    rng.standard_normal(out=out, dtype=np.float32)
+    out *= np.float32(swing_e)
+
+
+def _draw_bound(rng, out, swing_e):
+    rng.random(out=out, dtype=np.float32)
+    out -= np.float32(0.5)
+    out *= np.float32(swing_e)
+
+
+#: Readings of "FPN < x % of full swing": ``std`` — the rms across pixels is that fraction (how
+#: datasheets quote FPN; the worst case the statement allows); ``bound`` — every offset lies within
+#: a spread of that fraction (uniform, rms = fraction/√12).
+FPN_READINGS: Registry = Registry("sensor.fpn_reading", "FPN reading")
+FPN_READINGS.register("std", FpnReading(1.0, _draw_std))
+FPN_READINGS.register("bound", FpnReading(1.0 / np.sqrt(12.0), _draw_bound))
+
+
+def _gaussian_shot(mean, out, rng):
+    """The paper's 3.4: Gaussian with variance = mean."""
+    rng.standard_normal(out=out, dtype=np.float32)
+    out *= np.sqrt(mean)
+    out += mean
+
+
+def _poisson_shot(mean, out, rng):
+    """Exact counting statistics."""
+    out[...] = rng.poisson(mean)
+
+
+#: Shot-noise models: name → function ``(mean_e, out, rng)`` filling ``out`` with noisy electrons.
+SHOT_NOISE_MODELS: Registry = Registry("sensor.shot_noise_model", "shot-noise model")
+SHOT_NOISE_MODELS.register("gaussian", _gaussian_shot)
+SHOT_NOISE_MODELS.register("poisson", _poisson_shot)
+
+#: The switchable error sources, in the order the paper's Figure 6 adds them.
+NOISE_SOURCES = ("shot_noise", "dark_current", "read_noise", "fpn", "quantization")
+
+
+@dataclass(frozen=True)
+class SensorSpec(Spec):
+    TABLE = "sensor"
+
+    #: Full-well capacity, electrons (paper, 4.4).
+    q_max_e: float = 131072.0
+    #: Read noise σ_r, electrons rms (paper, 4.4).
+    read_noise_e: float = 20.0
+    #: Dark current density, electrons per second per µm² of photodiode (paper, 4.4).
+    dark_current_e_per_s_um2: float = 10.0
+    #: ADC resolution, bits (paper, 4.4).
+    adc_bits: int = 8
+    #: Black level (pedestal) added before the ADC, DN.  The paper's ADC clips at code 0, which
+    #: truncates the negative half of the dark noise (EMVA 1288 allows ≤ 0.5 % of dark pixels at 0).
+    #: Default (None): 2ⁿ⁻⁵ DN, 1/32 of the range — 8 DN at 8 bits, 3 σ of the default offset FPN.
+    black_level_DN: float | None = None
+    #: ADC full-scale input, V.  Default (None): the full well above the pedestal,
+    #: ``g·q_max·2ⁿ/(2ⁿ − black level)``, so a full well reads the top code as in the paper.
+    adc_full_scale_V: float | None = None
+    #: Offset fixed-pattern noise as a fraction of full swing (paper, 4.4: "FPN < 1 % full output swing").
+    fpn_fraction: float = 0.01
+    #: How to read "FPN < 1 %": "std" — the rms across pixels is that fraction (how datasheets quote
+    #: FPN; the worst case the spec allows), or "bound" — every pixel's offset lies within a spread of
+    #: that fraction (uniform, rms = fraction/√12).
+    fpn_reading: str = "std"
+    #: Gain FPN (PRNU), rms fraction of the signal; the paper ignores it (footnote §), so 0.
+    prnu_fraction: float = 0.0
+    #: Dark-signal non-uniformity: rms of each pixel's dark current, fraction of the mean; the paper
+    #: has none, so 0 (typical CMOS: 0.1–0.5).
+    dsnu_fraction: float = 0.0
+    #: Column FPN: rms of per-column offsets, fraction of full swing (column amplifiers and ADCs);
+    #: the paper has none, so 0.
+    column_fpn_fraction: float = 0.0
+    #: The physical sensor: the seed of its fixed pattern.  None: the capture's seed (every capture a
+    #: new sensor, as the paper's trials); a number: one sensor, many frames.
+    pattern_seed: int | None = None
+    #: Pixel pitch, µm.  The paper gives none; a full well of 131072 e⁻ at ~1300 e⁻/µm² suggests
+    #: ~100 µm² of photodiode, i.e. a 10 µm pixel.
+    pixel_pitch_um: float = 10.0
+    #: Fraction of the pixel that collects light (microlenses make the effective value near 1).
+    fill_factor: float = 1.0
+    #: Conversion gain g, µV per electron (sets only the voltage scale of V = g·Q + V_FPN).
+    conversion_gain_uV_per_e: float = 5.0
+    #: "gaussian" (the paper's 3.4: variance = mean) or "poisson" (exact counting statistics).
+    shot_noise_model: str = "gaussian"
+    shot_noise: bool = True
+    dark_current: bool = True
+    read_noise: bool = True
+    fpn: bool = True
+    quantization: bool = True
+    clipping: bool = True
+
+    def validate(self) -> None:
+        self.number("q_max_e", 1, 1e9, unit="e-")
+        self.number("read_noise_e", 0, 1e6, unit="e-")
+        self.number("dark_current_e_per_s_um2", 0, 1e9)
+        self.integer("adc_bits", 1, 24)
+        if self.black_level_DN is not None:
+            self.number("black_level_DN", 0, 2 ** (self.adc_bits - 1), unit="DN")
+        if self.adc_full_scale_V is not None:
+            self.number("adc_full_scale_V", 0, 1000, lo_open=True, unit="V")
+        self.number("fpn_fraction", 0, 1)
+        self.choice("fpn_reading", FPN_READINGS)
+        self.number("prnu_fraction", 0, 1)
+        self.number("dsnu_fraction", 0, 10)
+        self.number("column_fpn_fraction", 0, 1)
+        if self.pattern_seed is not None:
+            self.integer("pattern_seed", 0, 2**63 - 1)
+        self.number("pixel_pitch_um", 0.1, 1000, unit="µm")
+        self.number("fill_factor", 0, 1, lo_open=True)
+        self.number("conversion_gain_uV_per_e", 0, lo_open=True)
+        self.choice("shot_noise_model", SHOT_NOISE_MODELS)
+        self.boolean(*NOISE_SOURCES, "clipping")
+
+    @property
+    def pixel_area_um2(self) -> float:
+        """Photosensitive area A = pitch² × fill factor, µm²."""
+        return self.pixel_pitch_um**2 * self.fill_factor
+
+    @property
+    def dark_rate_e_per_s(self) -> float:
+        return self.dark_current_e_per_s_um2 * self.pixel_area_um2 if self.dark_current else 0.0
+
+    @property
+    def black_level_dn(self) -> float:
+        """The pedestal, DN (see ``black_level_DN``)."""
+        return float(2 ** (self.adc_bits - 5) if self.black_level_DN is None else self.black_level_DN)
+
+    @property
+    def adc_full_scale_v(self) -> float:
+        """The ADC's full-scale input, V (see ``adc_full_scale_V``)."""
+        if self.adc_full_scale_V is not None:
+            return self.adc_full_scale_V
+        n = 2**self.adc_bits
+        return self.conversion_gain_uV_per_e * 1e-6 * self.q_max_e * n / (n - self.black_level_dn)
+
+    @property
+    def system_gain_dn_per_e(self) -> float:
+        """K = 2ⁿ·g/V_fs, digital numbers per electron (EMVA 1288's system gain)."""
+        return 2**self.adc_bits * self.conversion_gain_uV_per_e * 1e-6 / self.adc_full_scale_v
+
+    @property
+    def quantization_step_e(self) -> float:
+        """Electrons per digital number, 1/K."""
+        return 1.0 / self.system_gain_dn_per_e
+
+    @property
+    def fpn_rms_e(self) -> float:
+        return self.fpn_fraction * self.q_max_e * FPN_READINGS[self.fpn_reading].rms_per_swing
+
+    def off(self, *sources: str) -> "SensorSpec":
+        """A copy with the named noise sources (or ``clipping``) switched off (e.g. ``off("fpn", "read_noise")``)."""
+        for s in sources:
+            if s not in (*NOISE_SOURCES, "clipping"):
+                raise ConfigError("sensor", s, "not a switch; one of " + ", ".join((*NOISE_SOURCES, "clipping")))
+        return self.replace(**{s: False for s in sources})
+
+
+def noise_stream(seed: int, *stream: int) -> np.random.SeedSequence:
+    """The seed sequence for one purpose (fixed pattern, a frame's temporal noise), from the one seed."""
+    return np.random.SeedSequence([seed, *stream])
+
+
+FPN_STREAM, TEMPORAL_STREAM = 1, 2
+#: Pixels per independently seeded chunk: chunks run on all cores, and the result does not depend
+#: on how many there are.
+CHUNK_PX = 1 << 20
+
+
+def _chunk_rng(seq: np.random.SeedSequence, i: int) -> np.random.Generator:
+    return np.random.default_rng(np.random.SeedSequence(seq.entropy, spawn_key=(*seq.spawn_key, i)))
+
+
+def _pool():
+    global _POOL
+    if _POOL is None:
+        from concurrent.futures import ThreadPoolExecutor
+
+        # SPECTRACAM_THREADS: e.g. 1 in each worker process of a Dask cluster, which already has one per core
+        _POOL = ThreadPoolExecutor(max_workers=int(os.environ.get("SPECTRACAM_THREADS") or os.cpu_count() or 1))
+    return _POOL
+
+
+_POOL = None
+
+
+def _map_chunks(fn, n: int) -> None:
+    """Run ``fn(i, slice)`` over the flat chunks of an n-pixel frame (NumPy releases the GIL)."""
+    chunks = [(i, slice(a, min(a + CHUNK_PX, n))) for i, a in enumerate(range(0, n, CHUNK_PX))]
+    if len(chunks) == 1:
+        fn(*chunks[0])
+    else:
+        for f in [_pool().submit(fn, i, sl) for i, sl in chunks]:
+            f.result()
+
+
+class FixedPattern(NamedTuple):
+    """One physical sensor's per-pixel non-uniformities (``None`` where absent): additive offset, e⁻
+    (pixel and column FPN); PRNU gain; DSNU factor on the dark current."""
+
+    offset_e: np.ndarray | None = None
+    gain: np.ndarray | None = None
+    dark_gain: np.ndarray | None = None
+
+
+def _draw(seq, n: int, fill) -> np.ndarray:
+    """``n`` float32 values, ``fill(rng, out)`` per chunk; value ``i`` of ``rng.standard_normal`` and
+    ``rng.random`` is the counter-based draw ``i`` of ``seq`` (:class:`~spectracam.sensor.kernels.CounterRNG`),
+    the same whatever the chunking, the number of threads and the backend."""
+    out = np.empty(n, np.float32)
+    _map_chunks(lambda i, sl: fill(CounterRNG(seq, sl.start), out[sl]), n)
+    return out
+
+
+def _normal_around_one(rms: float):
+    def fill(rng, out):
+        rng.standard_normal(out=out, dtype=np.float32)
+        out *= np.float32(rms)
+        out += np.float32(1.0)
+
+    return fill
+
+
+def fixed_pattern(sensor: SensorSpec, shape: tuple[int, int], seed: int, sensor_index: int = 0) -> FixedPattern:
+    """The fixed pattern of one physical sensor: the same for every frame with this seed (or the
+    sensor's ``pattern_seed``) and sensor index, different across pixels and sensors.  Every value
+    is a counter-based draw of its pixel (:class:`~spectracam.sensor.kernels.CounterRNG`)."""
+    return fixed_pattern_parts(sensor, shape, seed, sensor_index, defer=False)[0]
+
+
+class PixelDraw(NamedTuple):
+    """One per-pixel part of a fixed pattern as a draw, for a kernel that makes it in its own pass:
+    value ``i`` of the counter-based stream ``seq`` (N standard normal, U uniform on [0, 1)) gives
+    ``scale``·N (``kind`` "offset", FPN reading ``std``), ``scale``·(U − ½) ("offset-bound"),
+    1 + ``scale``·N ("gain", PRNU) or max(1 + ``scale``·N, 0) ("dark_gain", DSNU) — exactly the
+    float32 values :func:`fixed_pattern` draws."""
+
+    seq: np.random.SeedSequence
+    kind: str
+    scale: float
+
+
+class PatternDraws(NamedTuple):
+    """The parts of a fixed pattern left to the fused kernel (each a :class:`PixelDraw` or None)."""
+
+    offset: PixelDraw | None = None
+    gain: PixelDraw | None = None
+    dark_gain: PixelDraw | None = None
+
+
+def fixed_pattern_parts(sensor: SensorSpec, shape: tuple[int, int], seed: int, sensor_index: int = 0,
+                        defer: bool = True) -> tuple[FixedPattern, PatternDraws]:
+    """:func:`fixed_pattern` with its per-pixel parts left undrawn (``defer``; offsets only for the
+    built-in FPN readings): returns the pattern — whose ``offset_e`` then holds only the column FPN,
+    a row broadcast to ``shape``, or None — and the :class:`PatternDraws` the fused kernel makes."""
+    if sensor.pattern_seed is not None:
+        seed = sensor.pattern_seed
+    if not sensor.fpn:
+        return FixedPattern(), PatternDraws()
+    n = int(np.prod(shape))
+    offset = gain = dark_gain = None
+    draws = PatternDraws()
+    if sensor.fpn_fraction > 0:
+        reading = FPN_READINGS[sensor.fpn_reading]
+        swing = sensor.fpn_fraction * sensor.q_max_e
+        seq = noise_stream(seed, FPN_STREAM, sensor_index, 0)
+        if defer and reading.draw in (_draw_std, _draw_bound):
+            draws = draws._replace(offset=PixelDraw(seq, "offset-bound" if reading.draw is _draw_bound else "offset",
+                                                    swing))
+        else:
+            offset = _draw(seq, n, lambda rng, out: reading.draw(rng, out, swing)).reshape(shape)
+    if sensor.prnu_fraction > 0:
+        seq = noise_stream(seed, FPN_STREAM, sensor_index, 1)
+        if defer:
+            draws = draws._replace(gain=PixelDraw(seq, "gain", sensor.prnu_fraction))
+        else:
+            gain = _draw(seq, n, _normal_around_one(sensor.prnu_fraction)).reshape(shape)
+    if sensor.column_fpn_fraction > 0:
+        cols = _draw(noise_stream(seed, FPN_STREAM, sensor_index, 2), shape[-1],
+                     lambda rng, out: _draw_std(rng, out, sensor.column_fpn_fraction * sensor.q_max_e))
+        if offset is not None:
+            offset = offset + cols
+        else:
+            offset = np.broadcast_to(cols, shape)
+            offset = offset if draws.offset is not None else offset.copy()
+    if sensor.dsnu_fraction > 0 and sensor.dark_current:
+        seq = noise_stream(seed, FPN_STREAM, sensor_index, 3)
+        if defer:
+            draws = draws._replace(dark_gain=PixelDraw(seq, "dark_gain", sensor.dsnu_fraction))
+        else:
+            dark_gain = _draw(seq, n, _normal_around_one(sensor.dsnu_fraction))
+            dark_gain = np.maximum(dark_gain, 0.0, out=dark_gain).reshape(shape)  # a dark current is never negative
+    return FixedPattern(offset, gain, dark_gain), draws
+
+
+class PatternRef(NamedTuple):
+    """A physical sensor's fixed pattern before it is drawn: :meth:`draw` is :func:`fixed_pattern`;
+    the fused capture takes :meth:`parts` and draws the per-pixel parts in its own pass."""
+
+    sensor: SensorSpec
+    shape: tuple[int, int]
+    seed: int
+    sensor_index: int = 0
+
+    def draw(self) -> FixedPattern:
+        return fixed_pattern(self.sensor, self.shape, self.seed, self.sensor_index)
+
+    def parts(self) -> tuple[FixedPattern, PatternDraws]:
+        return fixed_pattern_parts(self.sensor, self.shape, self.seed, self.sensor_index)
+
+
+def integrate_charge(rate_e_per_s, time_s: float, dark_e: float, gain=None, dark_gain=None, out=None):
+    """Expected charge ``ρ·T·g + i_d·A·T·d`` (paper 3.4; ``g`` the PRNU gain and ``d`` the DSNU
+    factor of each pixel, 1 without them), e⁻."""
+    out = np.multiply(rate_e_per_s, np.float32(time_s), out=out)
+    if gain is not None:
+        out *= gain
+    if dark_gain is None:
+        out += np.float32(dark_e)
+    else:
+        out += np.float32(dark_e) * dark_gain
+    return out
+
+
+def add_shot_noise(mean_e, out, rng, model: str = "gaussian"):
+    """Photon and dark-current shot noise on ``mean_e`` into ``out`` (registered ``model``)."""
+    SHOT_NOISE_MODELS[model](mean_e, out, rng)
+    return out
+
+
+def clip_to_well(charge_e, q_max_e: float):
+    """The well holds 0..q_max electrons (paper 3.4)."""
+    return np.clip(charge_e, 0.0, q_max_e, out=charge_e)
+
+
+def add_read_noise(charge_e, rng, read_noise_e: float):
+    """Gaussian read noise σ_r added on readout (paper 3.4: Q_r)."""
+    r = rng.standard_normal(charge_e.size, dtype=np.float32).reshape(charge_e.shape)
+    r *= np.float32(read_noise_e)
+    charge_e += r
+    return charge_e
+
+
+def add_offset_fpn(charge_e, offset_e):
+    """The pixel's fixed offset, V_FPN/g (paper 3.4)."""
+    charge_e += offset_e
+    return charge_e
+
+
+def adc_full_scale_dn(sensor: SensorSpec) -> float:
+    """Largest output: code 2ⁿ − 1 when quantising, else the continuous full scale 2ⁿ."""
+    return float(2**sensor.adc_bits - 1 if sensor.quantization else 2**sensor.adc_bits)
+
+
+def adc(charge_e, sensor: SensorSpec):
+    """n-bit uniform ADC, in place: ``DN = K·Q + black level``, floored to a code and clipped to
+    ``0 … 2ⁿ − 1`` (the ADC clip; without quantisation the output is continuous, clipped to
+    ``0 … 2ⁿ``).  With the default full scale the top code holds ``[q_max − 1/K, q_max)``.
+
+    >>> s = SensorSpec(q_max_e=256.0, adc_bits=8, black_level_DN=0.0)
+    >>> adc(np.array([-3.0, 0.4, 1.0, 254.9, 300.0], np.float32), s).tolist()
+    [0.0, 0.0, 1.0, 254.0, 255.0]
+    """
+    charge_e *= np.float32(sensor.system_gain_dn_per_e)
+    charge_e += np.float32(sensor.black_level_dn)
+    if sensor.quantization:
+        np.floor(charge_e, out=charge_e)
+    if sensor.clipping:
+        np.clip(charge_e, 0.0, np.float32(adc_full_scale_dn(sensor)), out=charge_e)
+    return charge_e
+
+
+def adc_inverse(digital, sensor: SensorSpec) -> np.ndarray:
+    """Electrons from digital numbers: the black level removed, at mid-step, ``(DN − b + ½)/K`` (or
+    ``(DN − b)/K`` when not quantised) — the least-error estimate for a uniform quantiser.
+
+    >>> s = SensorSpec(q_max_e=256.0, adc_bits=8, black_level_DN=8.0, adc_full_scale_V=256 * 5e-6)  # K = 1
+    >>> adc_inverse(np.array([8.0, 18.0]), s).round(9).tolist()
+    [0.5, 10.5]
+    """
+    return (digital - sensor.black_level_dn + (0.5 if sensor.quantization else 0.0)) * sensor.quantization_step_e
+
+
+def expose(photo_rate_e_per_s: np.ndarray, time_s: float, sensor: SensorSpec, noise: np.random.SeedSequence,
+           pattern: FixedPattern = FixedPattern()) -> tuple[np.ndarray, np.ndarray]:
+    """One exposure of one frame.  Returns (digital numbers, expected electrons without noise).
+
+    ``photo_rate_e_per_s`` is ``A·∫E_q·R_k dλ`` per pixel (paper, 3.3); ``noise`` seeds this frame's
+    temporal noise; ``pattern`` is the sensor's :class:`FixedPattern`.  Digital numbers are
+    float32 integers in ``[0, 2ⁿ − 1]`` (or continuous in ``[0, 2ⁿ]`` when quantisation is off);
+    expected electrons are the noise-free charge, photo + dark.  Works in place, chunk by chunk, on
+    all cores.
+    """
+    offset, gain, dark_gain = pattern
+    shape = photo_rate_e_per_s.shape
+    rate = np.ascontiguousarray(photo_rate_e_per_s, dtype=np.float32).reshape(-1)
+    off = None if offset is None else offset.reshape(-1)
+    g = None if gain is None else gain.reshape(-1)
+    dg = None if dark_gain is None else dark_gain.reshape(-1)
+    n = rate.size
+    mean = np.empty(n, np.float32)
+    q = np.empty(n, np.float32)
+    dark = sensor.dark_rate_e_per_s * time_s
+
+    def run(i, sl):
+        rng = _chunk_rng(noise, i)
+        m, out = mean[sl], q[sl]
+        integrate_charge(rate[sl], time_s, dark, None if g is None else g[sl], None if dg is None else dg[sl], out=m)
+        if sensor.shot_noise:
+            add_shot_noise(m, out, rng, sensor.shot_noise_model)
+        else:
+            out[...] = m
+        if sensor.clipping:
+            clip_to_well(out, sensor.q_max_e)
+        if sensor.read_noise and sensor.read_noise_e > 0:
+            add_read_noise(out, rng, sensor.read_noise_e)
+        if off is not None:
+            add_offset_fpn(out, off[sl])
+        adc(out, sensor)
+
+    _map_chunks(run, n)
+    return q.reshape(shape), mean.reshape(shape)
