@@ -45,21 +45,14 @@ OLD_MODULES = {
     "spectracam.design.variables": "spectracam.experiments.design.variables",
     "spectracam.emva1288": "spectracam.evaluation.emva1288",
     "spectracam.errors": "spectracam.core.errors",
-    "spectracam.experiments.architectures": "spectracam.experiments.architectures.experiment",
     "spectracam.experiments.architectures_report": "spectracam.experiments.architectures.report",
     "spectracam.experiments.architectures_spacetime": "spectracam.experiments.architectures.spacetime",
     "spectracam.experiments.claims": "spectracam.experiments.paper.claims",
-    "spectracam.experiments.consistency": "spectracam.experiments.consistency.experiment",
-    "spectracam.experiments.emva": "spectracam.experiments.emva.experiment",
     "spectracam.experiments.figures": "spectracam.experiments.paper.figures",
-    "spectracam.experiments.paper": "spectracam.experiments.paper.experiment",
     "spectracam.experiments.report": "spectracam.experiments.paper.report",
-    "spectracam.experiments.sweep": "spectracam.experiments.sweep.experiment",
     "spectracam.experiments.sweep_plot": "spectracam.experiments.sweep.plot",
     "spectracam.experiments.usability": "spectracam.evaluation.usability",
-    "spectracam.experiments.validate": "spectracam.experiments.validate.experiment",
     "spectracam.experiments.validate_wb": "spectracam.experiments.validate.white_balance",
-    "spectracam.experiments.white_balance": "spectracam.experiments.white_balance.experiment",
     "spectracam.exposure": "spectracam.sensor.exposure",
     "spectracam.filters": "spectracam.architecture.filters",
     "spectracam.heldout": "spectracam.evaluation.heldout",
@@ -83,7 +76,6 @@ OLD_MODULES = {
     "spectracam.reference": "spectracam.scene.reference",
     "spectracam.reflectances": "spectracam.scene.reflectances",
     "spectracam.registry": "spectracam.core.registry",
-    "spectracam.scene": "spectracam.pipeline.scene_file",
     "spectracam.score": "spectracam.evaluation.score",
     "spectracam.silicon": "spectracam.architecture.silicon",
     "spectracam.spatial": "spectracam.experiments.spatial",
@@ -144,7 +136,7 @@ def _scene_file_name(name: str):
 def install() -> None:
     """Register the old names (called once by the package's face)."""
     if not any(isinstance(f, _Finder) for f in sys.meta_path):
-        sys.meta_path.append(_Finder())
+        sys.meta_path.insert(0, _Finder())  # before the path finder: an old package name must not load its files twice
     for old in _BOUND:
         sys.modules.setdefault(old, importlib.import_module(OLD_MODULES[old]))
     scene = importlib.import_module("spectracam.scene")

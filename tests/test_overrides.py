@@ -118,8 +118,9 @@ def test_atomic_write_gives_files_the_umask(tmp_path, mask, mode):
     assert [f.name for f in tmp_path.iterdir() if f.name.startswith(".tmp")] == []
 
 
-@pytest.mark.parametrize("module", ["registry", "spec", "spectra", "illuminant", "optics", "filters", "sensor",
-                                    "architecture", "exposure", "camera", "color", "metrics", "overrides", "bridges"])
+@pytest.mark.parametrize("module", ["core.registry", "core.spec", "core.spectra", "scene.illuminant", "optics",
+                                    "architecture.filters", "sensor", "architecture.base", "sensor.exposure", "camera",
+                                    "processing.color", "core.cielab", "pipeline.overrides", "pipeline.bridges"])
 def test_doctests(module):
     m = importlib.import_module(f"spectracam.{module}")
     result = doctest.testmod(m, optionflags=doctest.ELLIPSIS)

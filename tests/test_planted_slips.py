@@ -409,7 +409,7 @@ def test_a_false_flag_reaches_the_spec_as_false():
     import click
     from click.testing import CliRunner
 
-    from spectracam.cli import _scene
+    from spectracam.experiments.options import scene_from as _scene
     from spectracam.experiments.options import flag_overrides, processing_options
 
     data = {**SMALL, "processing": {"gamut_clip": True}}

@@ -166,7 +166,7 @@ def test_winners_skip_unusable_cases_and_say_when_none_is_usable():
 @pytest.fixture(scope="module")
 def dim_and_normal():
     """architectures at the paper's light and at 1/100 of it (quick, analytic, one seed, chart only)."""
-    from spectracam.cli import default_experiment
+    from spectracam.experiments.options import default_experiment
     from spectracam.experiments.architectures.experiment import ArchitecturesRun, run_architectures
     from spectracam.experiments.paper.experiment import load_experiment
 

@@ -8,6 +8,11 @@ and DNG writers) dispatch on the layout, never on the architecture's name, so a 
 one subclass registered in :data:`ARCHITECTURES` (``@ARCHITECTURES.register("name")``) in one file:
 the paper's three are here, later ones in :mod:`spectracam.architecture` (every module there is
 imported by the package face).
+
+An architecture is described once, here: what it records (its layout), what its channels are made of
+(:attr:`Architecture.primaries`: the three filters of ``[filters]``, alone, in pairs or none) and so
+what the filter design (:mod:`spectracam.experiments.design`) can vary to shape them
+(:meth:`Architecture.design_variables`); the design asks the architecture, never its name.
 """
 from __future__ import annotations
 
@@ -20,6 +25,10 @@ from spectracam.sensor import kernels
 from spectracam.architecture.filters import CHANNELS, responsivities
 from spectracam.core.registry import Registry
 from spectracam.sensor import TEMPORAL_STREAM, PatternRef, SensorSpec, expose, noise_stream
+
+__all__ = ["ARCHITECTURES", "CFA_PATTERNS", "FIXED_PATTERN_CHOICES", "PLANE_KINDS", "Architecture",
+           "ColourFilterArray", "DichroicPrism", "FieldSequential", "MosaicArchitecture", "MosaicLayout",
+           "PlanesLayout", "complementary", "make_architecture"]
 
 #: Architectures: name → :class:`Architecture` subclass.
 ARCHITECTURES: Registry = Registry("capture.architecture", "architecture")
@@ -114,13 +123,20 @@ class PlanesLayout:
 class Architecture(ABC):
     """A way of sampling colour channels.  Subclasses set ``name``, ``independent_exposures``
     and ``layout`` and implement :meth:`capture_time_s` and :meth:`record`; one whose channels are
-    not the three filters of ``[filters]`` also implements :meth:`responsivities`."""
+    made of the three filters of ``[filters]`` otherwise than one each says how in :attr:`primaries`, and
+    one whose channels are not made of them at all implements :meth:`responsivities` (and, to be
+    designed, :meth:`design_variables`)."""
 
     name: str = ""
     #: Can each channel have its own exposure time?
     independent_exposures: bool = True
     #: Physical sensors the channels are recorded on (1 or 3).
     sensors: int = 1
+    #: What each channel is made of, in the channels' order, from the three filters R, G, B of ``[filters]``
+    #: (× QE × IR cut): one of them (``"R"``), two passed together (``"RG"``: yellow, ``"GB"``: cyan, ``"RB"``:
+    #: magenta — the sum, capped at the unfiltered pixel, :func:`complementary`) or none (``"W"``: the unfiltered
+    #: pixel).  What :meth:`responsivities` computes, and what the filter design models.
+    primaries: tuple[str, ...] = CHANNELS
 
     def __init__(self, cfa_pattern: str = "RGGB", fixed_pattern: str = "physical"):
         self.cfa_pattern, self.fixed_pattern = cfa_pattern, fixed_pattern
@@ -138,8 +154,22 @@ class Architecture(ABC):
 
     def responsivities(self, filters, grid) -> np.ndarray:
         """``(N, n_bands)`` band-averaged responsivities of the channels, electrons per photon (paper
-        3.3): the three filters of ``[filters]`` × QE × IR cut."""
-        return responsivities(filters, grid)
+        3.3): the three filters of ``[filters]`` × QE × IR cut, combined as :attr:`primaries` says."""
+        R = responsivities(filters, grid)
+        if tuple(self.primaries) == CHANNELS:
+            return R
+        combined = [p for p in self.primaries if p not in CHANNELS]
+        rows = dict(zip(combined, complementary(R, filters, grid, *combined)))
+        return np.stack([R[CHANNELS.index(p)] if p in CHANNELS else rows[p] for p in self.primaries])
+
+    @classmethod
+    def design_variables(cls) -> str | None:
+        """What the filter design (:mod:`spectracam.experiments.design`) varies to shape this architecture's
+        channels: ``"filters"`` — the three filters of ``[filters]``, each channel made of them as
+        :attr:`primaries` says — when its channels are those :meth:`responsivities` makes of them; ``None`` when
+        an architecture computes its channels its own way, which the design cannot model (it refuses it by
+        name).  Stacked photodiodes answer ``"depths"``."""
+        return "filters" if cls.responsivities is Architecture.responsivities else None
 
     def channel_patterns(self, sensor: SensorSpec, shape, seed: int, drawn: bool = True) -> list:
         """The fixed pattern each of the channels is recorded with (see FIXED_PATTERN_CHOICES);

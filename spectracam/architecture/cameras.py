@@ -31,6 +31,12 @@ import numpy as np
 from spectracam.core.errors import ConfigError
 from spectracam.core.spectra import PLANCK_H_J_S, SPEED_OF_LIGHT_M_S
 
+__all__ = ["CAMERAS", "CAMERA_UNITS", "ELEMENTARY_CHARGE_C", "FROM_FILE", "PEAK_TOLERANCE",
+           "PUBLISHED_MATRICES", "SINGULAR_CONDITION", "CameraCurves", "PublishedMatrix", "camera_curves_of",
+           "channel_condition", "check_covers", "d65_response", "d65_white_xyz", "energy_sensitivities",
+           "file_gains", "library_curves", "library_table", "load_camera_csv", "peak_normalised",
+           "restored_gains", "to_electrons_per_photon"]
+
 #: Units a camera's curves may be given in (module docstring).
 CAMERA_UNITS = ("relative", "A/W", "electrons_per_photon")
 #: Elementary charge, C (CODATA 2018, exact): A/W → electrons per photon is ``S·hc/(qλ)``.

@@ -11,7 +11,9 @@ its reason — a luminance/chroma read-out of interlaced video — does not aris
 """
 from __future__ import annotations
 
-from spectracam.architecture.base import ARCHITECTURES, MosaicArchitecture, complementary
+from spectracam.architecture.base import ARCHITECTURES, MosaicArchitecture
+
+__all__ = ["CyanYellowMagenta"]
 
 
 @ARCHITECTURES.register("cmy")
@@ -20,6 +22,4 @@ class CyanYellowMagenta(MosaicArchitecture):
 
     name = "cmy"
     channel_names = ("C", "Y", "M")
-
-    def responsivities(self, filters, grid):
-        return complementary(super().responsivities(filters, grid), filters, grid, "GB", "RG", "RB")
+    primaries = ("GB", "RG", "RB")

@@ -17,6 +17,9 @@ from spectracam.core.spectra import (WavelengthGrid, band_average, cmf_band_weig
                                      tabulated)
 from spectracam.architecture.layers import LAYER_COUNTS, MAX_CONDITION, check_layers
 
+__all__ = ["CHANNELS", "FILTER_KINDS", "QE_MODELS", "SILICON_QE_SHAPE", "FilterSpec", "clear_responsivity", "ir_cut",
+           "load_curve", "quantum_efficiency", "responsivities"]
+
 CHANNELS = ("R", "G", "B")
 #: Filter kinds: name → function ``(spec, grid) → (3, n_bands)`` band-averaged responsivities.
 FILTER_KINDS: Registry = Registry("filters.kind", "filter kind")

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from spectracam.architecture.base import ARCHITECTURES, MosaicArchitecture, MosaicLayout
 
+__all__ = ["QuadBayer"]
+
 
 @ARCHITECTURES.register("quad_bayer")
 class QuadBayer(MosaicArchitecture):

@@ -18,9 +18,9 @@ diagonal pairs:
 """
 from __future__ import annotations
 
-import numpy as np
+from spectracam.architecture.base import ARCHITECTURES, MosaicArchitecture
 
-from spectracam.architecture.base import ARCHITECTURES, MosaicArchitecture, complementary
+__all__ = ["TILE", "RedGreenBlueWhite"]
 
 #: Kodak CFA 2.0, row by row, as indices into R, G, B, W.
 TILE = ((3, 2, 3, 1), (2, 3, 1, 3), (3, 1, 3, 0), (1, 3, 0, 3))
@@ -32,10 +32,7 @@ class RedGreenBlueWhite(MosaicArchitecture):
 
     name = "rgbw"
     channel_names = ("R", "G", "B", "W")
+    primaries = ("R", "G", "B", "W")
 
     def tile_for(self, cfa_pattern):
         return TILE
-
-    def responsivities(self, filters, grid) -> np.ndarray:
-        R = super().responsivities(filters, grid)
-        return np.concatenate([R, complementary(R, filters, grid, "W")])

@@ -8,9 +8,9 @@ tile of ``cfa_pattern`` with Y where G would be, so the Bayer demosaickers work 
 """
 from __future__ import annotations
 
-import numpy as np
+from spectracam.architecture.base import ARCHITECTURES, MosaicArchitecture
 
-from spectracam.architecture.base import ARCHITECTURES, MosaicArchitecture, complementary
+__all__ = ["RedYellowYellowBlue"]
 
 
 @ARCHITECTURES.register("ryyb")
@@ -19,7 +19,4 @@ class RedYellowYellowBlue(MosaicArchitecture):
 
     name = "ryyb"
     channel_names = ("R", "Y", "B")
-
-    def responsivities(self, filters, grid) -> np.ndarray:
-        R = super().responsivities(filters, grid)
-        return np.stack([R[0], complementary(R, filters, grid, "RG")[0], R[2]])
+    primaries = ("R", "RG", "B")

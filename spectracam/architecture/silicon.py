@@ -22,6 +22,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+__all__ = ["DATA_FILE", "absorption_coefficient_per_um", "photodiode_qe", "reflectance"]
+
 DATA_FILE = "silicon_green2008.csv"
 
 
@@ -59,6 +61,12 @@ def _checked_wavelength(wavelength_nm) -> np.ndarray:
     return wl
 
 
+def _alpha_per_um(wl: np.ndarray) -> np.ndarray:
+    """α in 1/µm at checked wavelengths: linear interpolation in log α, then exp."""
+    t = _table()
+    return np.exp(np.interp(wl, t.wavelength_nm, t.log_alpha_per_um))
+
+
 def absorption_coefficient_per_um(wavelength_nm):
     """Band-to-band absorption coefficient α of intrinsic silicon at 300 K, in 1/µm.
 
@@ -89,16 +97,14 @@ def absorption_coefficient_per_um(wavelength_nm):
     >>> [round(float(x), 4) for x in a]
     [0.639, 0.279]
     """
-    wl = _checked_wavelength(wavelength_nm)
-    t = _table()
-    return np.exp(np.interp(wl, t.wavelength_nm, t.log_alpha_per_um))
+    return _alpha_per_um(_checked_wavelength(wavelength_nm))
 
 
 def _n_k(wl: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """n linearly interpolated; k = α·λ/(4π) from the log-interpolated α (consistent with α)."""
     t = _table()
     n = np.interp(wl, t.wavelength_nm, t.n)
-    k = np.exp(np.interp(wl, t.wavelength_nm, t.log_alpha_per_um)) * (wl * 1e-3) / (4 * np.pi)
+    k = _alpha_per_um(wl) * (wl * 1e-3) / (4 * np.pi)
     return n, k
 
 

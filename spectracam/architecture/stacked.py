@@ -57,6 +57,9 @@ from spectracam.core.spectra import band_average
 from spectracam.architecture.layers import (LAYER_COUNTS, MAX_CONDITION, MIN_WHITE_FRACTION, check_layers,  # noqa: F401
                                            layer_diagnostics, layer_names, layer_qe, stacked_cut)
 
+__all__ = ["LAYER_COUNTS", "MAX_CONDITION", "MIN_WHITE_FRACTION", "StackedPhotodiodes", "check_layers",
+           "layer_diagnostics", "layer_names", "layer_qe", "stacked_cut"]
+
 
 @ARCHITECTURES.register("stacked")
 class StackedPhotodiodes(Architecture):
@@ -75,13 +78,33 @@ class StackedPhotodiodes(Architecture):
         return PlanesLayout("layers", "the photodiodes stacked in each pixel, bottom first, exposed together",
                             layer_names(self.layers))
 
+    #: Not made of the filters of ``[filters]``: each channel is a depth window in silicon.
+    primaries = None
+
+    @staticmethod
+    def depths_um(filters) -> tuple[float, ...]:
+        """The window boundaries below the surface, µm, as a camera gives them: ``filters.stacked_depths_um`` of
+        the scene file (a dead layer, then the bottom of each layer from the top; validated with the filters,
+        :func:`~spectracam.architecture.layers.check_layers`)."""
+        return tuple(filters.stacked_depths_um)
+
+    @staticmethod
+    def with_depths(filters, depths_um):
+        """``filters`` with other window boundaries (validated as a scene file's)."""
+        return filters.replace(stacked_depths_um=tuple(float(v) for v in depths_um))
+
+    @classmethod
+    def design_variables(cls) -> str:
+        """The filter design varies the window boundaries (:meth:`depths_um`), not filters."""
+        return "depths"
+
     def configure(self, camera) -> "StackedPhotodiodes":
-        return type(self)(self.cfa_pattern, self.fixed_pattern, len(camera.filters.stacked_depths_um) - 1)
+        return type(self)(self.cfa_pattern, self.fixed_pattern, len(self.depths_um(camera.filters)) - 1)
 
     def responsivities(self, filters, grid) -> np.ndarray:
         """``(n, B)`` band-averaged layer QE × IR cuts (400 points a band)."""
         cut = stacked_cut(filters)
-        depths = filters.stacked_depths_um
+        depths = self.depths_um(filters)
 
         def layer(k):
             return lambda lam: layer_qe(lam, depths)[k] * (1.0 if cut is None else cut(lam))

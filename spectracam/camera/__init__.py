@@ -19,6 +19,9 @@ from spectracam.sensor import SensorSpec
 from spectracam.core.spec import Spec
 from spectracam.core.spectra import WavelengthGrid
 
+__all__ = ["CAMERA_TABLES", "CameraSpec", "CaptureSpec", "band_weights", "camera_responsivities",
+           "photo_electron_rates", "split_design"]
+
 #: The tables of a scene or config file that describe the camera.
 CAMERA_TABLES = ("optics", "filters", "sensor", "capture")
 

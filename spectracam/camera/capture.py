@@ -19,6 +19,8 @@ from spectracam.camera import CameraSpec, band_weights
 from spectracam.sensor.exposure import exposure_times_s
 from spectracam.sensor.kernels import SpectralRates
 
+__all__ = ["RawCapture", "capture"]
+
 
 @dataclass
 class RawCapture:

@@ -9,6 +9,8 @@ import numpy as np
 
 from spectracam.core.registry import Registry
 
+__all__ = ["DELTA_E_METHODS", "SNR_COMBINATIONS", "combine_snr_db", "delta_e", "snr_db", "xyz_to_lab"]
+
 #: Colour-difference formulas: name → function ``(lab1, lab2) → ΔE`` over the last axis.
 DELTA_E_METHODS: Registry = Registry("processing.delta_e", "colour-difference formula")
 #: SNR combinations: name → function ``(means, stds) → dB`` over the last (channel) axis.

@@ -1,6 +1,8 @@
 """The one exception type a user sees: a single line naming the field, the value and what is allowed."""
 from __future__ import annotations
 
+__all__ = ["MADE_BY", "ArgumentTypeError", "ConfigError", "SpectracamError", "expect", "expect_integer"]
+
 
 class SpectracamError(Exception):
     """An error caused by the user's input or environment; the CLI prints it as one line, exit 2."""

@@ -18,6 +18,9 @@ import tempfile
 from pathlib import Path
 from typing import Callable
 
+__all__ = ["WriteError", "atomic_write", "json_default", "regular_file", "remove_unfinished",
+           "stage_outputs", "staged", "staged_after"]
+
 _STAGES: list[dict] = []
 #: Temporary files that exist right now (being written, or staged): what a signal handler removes.
 _LIVE: set = set()

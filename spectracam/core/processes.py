@@ -7,6 +7,8 @@ import os
 import signal
 import time
 
+__all__ = ["die_with_parent", "is_main", "mark_main", "terminate_children"]
+
 #: The process that installed the command's signal handlers (children inherit the handler, not the role).
 _MAIN_PID: list = []
 

@@ -13,6 +13,8 @@ from __future__ import annotations
 import os
 import sys
 
+__all__ = ["DEFAULT_SIZE", "Counter", "bar", "close_bars", "duration_text", "note", "on_terminal"]
+
 #: The size given to a terminal that reports none (0 × 0): the VT100's.
 DEFAULT_SIZE = (80, 24)
 

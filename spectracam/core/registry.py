@@ -24,6 +24,8 @@ from typing import Generic, TypeVar
 
 from spectracam.core.errors import ConfigError
 
+__all__ = ["T", "Registry"]
+
 T = TypeVar("T")
 
 

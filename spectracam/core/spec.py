@@ -32,6 +32,8 @@ import numpy as np
 
 from spectracam.core.errors import ConfigError
 
+__all__ = ["Spec", "check_curve"]
+
 
 def _is_number(v) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)

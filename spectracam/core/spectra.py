@@ -13,6 +13,11 @@ from typing import Callable
 
 import numpy as np
 
+__all__ = ["BOLTZMANN_K_J_PER_K", "CIE_RANGE_NM", "CMFS_NAME", "K_M_LM_PER_W", "PLANCK_H_J_S",
+           "SPEED_OF_LIGHT_M_S", "Spectrum", "WavelengthGrid", "band_average", "band_sample_points",
+           "cie_1931_cmfs", "cmf_band_weights", "energy_to_photons", "logistic_cut", "logistic_scale_nm",
+           "luminance_cd_m2", "planck_radiance", "tabulated"]
+
 #: CODATA 2018 exact SI constants.
 PLANCK_H_J_S = 6.62607015e-34
 SPEED_OF_LIGHT_M_S = 299792458.0

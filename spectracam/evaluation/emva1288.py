@@ -38,10 +38,17 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from statistics import NormalDist
+from typing import NamedTuple
 
 import numpy as np
 
 from spectracam.core.errors import ConfigError
+
+__all__ = ["DARK_VARIANCE_FLOOR_DN2", "LINEARITY_FIT_RANGE", "LINEARITY_METHODS", "PLANCK_H_J_S",
+           "RESULT_KEYS", "SATURATED_FRACTION_TARGET", "SATURATED_FRACTION_WINDOW", "SATURATION_METHODS",
+           "SENSITIVITY_FIT_MAX", "SIGMA_Q2_DN2", "SPEED_OF_LIGHT_M_S", "EmvaSeries", "analyse", "expected",
+           "linearity_fit", "pair_statistics", "photons_per_pixel", "sensitivity_threshold",
+           "spatial_statistics", "temporal_dark_noise"]
 
 #: Quantisation noise variance of a uniform quantiser with a step of 1 DN, DN² (section 2, noise model).
 SIGMA_Q2_DN2 = 1.0 / 12.0
@@ -391,16 +398,71 @@ def analyse(series: EmvaSeries, *, saturation: str = "pixel_fraction", linearity
     ``beyond_saturation_mask``, which no fit uses) and ``"details"`` (intermediate scalars, the methods
     used and the alternative definitions).
     """
-    if saturation not in SATURATION_METHODS:
-        raise ConfigError("saturation", saturation, f"one of {', '.join(SATURATION_METHODS)}")
-    if linearity not in LINEARITY_METHODS:
-        raise ConfigError("linearity", linearity, f"one of {', '.join(LINEARITY_METHODS)}")
-    n = series.n_steps
-    mu_p = series.mu_p
-    t = series.exposure_times_s
-    M, N = series.frame_shape
+    _check_choice("saturation", saturation, SATURATION_METHODS)
+    _check_choice("linearity", linearity, LINEARITY_METHODS)
+    st = _step_statistics(series)
+    sat = _saturation_point(series, st, saturation)
+    gain = _photon_transfer(series.mu_p, st, sat)
+    dark = _dark_noise(st, gain.K)
+    cap = _saturation_capacity(gain, sat.mu_p, dark.var_used, series.pixel_area_um2)
+    current = _dark_current(st, gain.K, dark.var_slope)
+    lin = _linearity(series.mu_p, st.signal, sat)
+    nu = _nonuniformity(series, gain.K, sat.signal)
+    le = lin.mean_abs if linearity == "mean_abs" else lin.half_range
+    quantities = _quantities(gain.K, gain.eta, dark.sigma_d, cap.mu_e_sat, cap.dynamic_range, current.e_per_s,
+                             nu.dsnu, nu.prnu, le)
+    details = {**sat.details, **gain.details, **dark.details, **cap.details, **current.details, **lin.details,
+               **nu.details}
+    return {**quantities, "curves": _curves(series, st, gain, dark.var_used, sat.mu_p, lin), "details": details}
 
-    # 1. per-step statistics
+
+def _check_choice(name: str, value, allowed: tuple) -> None:
+    """Refuse a method name that is not one of ``allowed`` (ConfigError naming it)."""
+    if value not in allowed:
+        raise ConfigError(name, value, f"one of {', '.join(allowed)}")
+
+
+def _quantities(K, eta, sigma_d, mu_e_sat, dynamic_range, dark_current, dsnu, prnu, linearity_error) -> dict:
+    """The main results keyed by :data:`RESULT_KEYS`; SNR_max = √μ_e.sat (section 2) and DR (eq. 28) in dB."""
+    return dict(zip(RESULT_KEYS, (K, eta, sigma_d, mu_e_sat, _db(math.sqrt(mu_e_sat)), _db(dynamic_range),
+                                  dark_current, dsnu, prnu, linearity_error)))
+
+
+class _StepStatistics(NamedTuple):
+    """Step 1: per-step means and temporal variances of the bright and dark pairs (eqs. 16, 18), DN and DN²."""
+
+    mu_y: np.ndarray
+    var_y: np.ndarray
+    saturated_fraction: np.ndarray
+    mu_d: np.ndarray            # one per dark pair
+    var_d: np.ndarray
+    t_dark: np.ndarray          # the dark pairs' exposure times
+    mu_y_dark: np.ndarray       # the dark pairs' values, one per step
+    var_y_dark: np.ndarray
+    signal: np.ndarray          # μ_y − μ_y.dark, DN
+    excess_var: np.ndarray      # σ²_y − σ²_y.dark, DN²
+
+
+def _step_statistics(series: EmvaSeries) -> _StepStatistics:
+    """Step 1: mean and temporal variance of every bright and dark pair (eqs. 16, 18), dark-corrected per step."""
+    n = series.n_steps
+    mu_y, var_y, frac = _bright_statistics(series)
+    nd = series.dark_pairs.shape[0]
+    mu_d = np.empty(nd)
+    var_d = np.empty(nd)
+    for i in range(nd):
+        mu_d[i], var_d[i] = pair_statistics(*series.dark_pairs[i])
+    t_dark = series.exposure_times_s if nd == n else series.exposure_times_s[:1]
+    mu_y_dark = np.broadcast_to(mu_d, (n,)) if nd == 1 else mu_d
+    var_y_dark = np.broadcast_to(var_d, (n,)) if nd == 1 else var_d
+    return _StepStatistics(mu_y, var_y, frac, mu_d, var_d, t_dark, mu_y_dark, var_y_dark, mu_y - mu_y_dark,
+                           var_y - var_y_dark)
+
+
+def _bright_statistics(series: EmvaSeries) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(μ_y, σ²_y, fraction of pixels at max_dn)`` per step of the bright pairs (eqs. 16, 18; section 6.5)."""
+    n = series.n_steps
+    M, N = series.frame_shape
     mu_y = np.empty(n)
     var_y = np.empty(n)
     frac = np.zeros(n)
@@ -409,41 +471,61 @@ def analyse(series: EmvaSeries, *, saturation: str = "pixel_fraction", linearity
         mu_y[i], var_y[i] = pair_statistics(a, b)
         if series.max_dn is not None:
             frac[i] = (np.count_nonzero(a >= series.max_dn) + np.count_nonzero(b >= series.max_dn)) / (2.0 * M * N)
-    nd = series.dark_pairs.shape[0]
-    mu_d = np.empty(nd)
-    var_d = np.empty(nd)
-    for i in range(nd):
-        mu_d[i], var_d[i] = pair_statistics(*series.dark_pairs[i])
-    t_dark = t if nd == n else t[:1]
-    mu_y_dark = np.broadcast_to(mu_d, (n,)) if nd == 1 else mu_d
-    var_y_dark = np.broadcast_to(var_d, (n,)) if nd == 1 else var_d
-    signal = mu_y - mu_y_dark           # μ_y − μ_y.dark, DN
-    excess_var = var_y - var_y_dark     # σ²_y − σ²_y.dark, DN²
+    return mu_y, var_y, frac
 
-    # 2. saturation
-    details: dict = {}
+
+class _Saturation(NamedTuple):
+    """Step 2: the saturation point (sections 2.7, 6.5)."""
+
+    mu_p: float       # μ_p.sat, photons
+    signal: float     # μ_y.sat − μ_y.dark, DN
+    details: dict
+
+
+def _saturation_point(series: EmvaSeries, st: _StepStatistics, saturation: str) -> _Saturation:
+    """Step 2: μ_p.sat and μ_y.sat − μ_y.dark, interpolated between the steps around it (sections 2.7, 6.5)."""
+    mu_p, signal = series.mu_p, st.signal
+    i_sat, w_sat, how, method = _saturation_step(series, st, saturation)
+    j_sat = min(i_sat + 1, series.n_steps - 1)
+    mu_p_sat = float(mu_p[i_sat] + w_sat * (mu_p[j_sat] - mu_p[i_sat]))
+    signal_sat = float(signal[i_sat] + w_sat * (signal[j_sat] - signal[i_sat]))
+    if not signal_sat > 0:
+        raise ConfigError("bright_pairs", "saturation signal", "above the dark level")
+    return _Saturation(mu_p_sat, signal_sat, dict(saturation_method=method, saturation_how=how,
+                                                  saturation_index=i_sat, mu_p_sat=mu_p_sat,
+                                                  mu_y_sat_minus_dark_DN=signal_sat))
+
+
+def _saturation_step(series: EmvaSeries, st: _StepStatistics, saturation: str) -> tuple[int, float, str, str]:
+    """``(index_lo, weight, how, method)``: Release 4's 0.1-0.2 % of pixels at max_dn, else the variance maximum."""
     sat = None
     method = saturation
     if saturation == "pixel_fraction":
         if series.max_dn is None:
             method = "variance_max (fallback: max_dn is None)"
         else:
-            sat = _saturation_by_pixel_fraction(mu_p, frac, 2 * M * N)
+            M, N = series.frame_shape
+            sat = _saturation_by_pixel_fraction(series.mu_p, st.saturated_fraction, 2 * M * N)
             if sat is None:
                 method = "variance_max (fallback: no step has 0.1 % of its pixels at max_dn)"
     if sat is None:
-        sat = (int(np.argmax(var_y)), 0.0, "step of maximum temporal variance")
-    i_sat, w_sat, how = sat
-    j_sat = min(i_sat + 1, n - 1)
-    mu_p_sat = float(mu_p[i_sat] + w_sat * (mu_p[j_sat] - mu_p[i_sat]))
-    signal_sat = float(signal[i_sat] + w_sat * (signal[j_sat] - signal[i_sat]))
-    if not signal_sat > 0:
-        raise ConfigError("bright_pairs", "saturation signal", "above the dark level")
-    details.update(saturation_method=method, saturation_how=how, saturation_index=i_sat,
-                   mu_p_sat=mu_p_sat, mu_y_sat_minus_dark_DN=signal_sat)
+        sat = (int(np.argmax(st.var_y)), 0.0, "step of maximum temporal variance")
+    return (*sat, method)
 
-    # 3./4. photon transfer and responsivity, 0-70 % of saturation
-    in_range = (mu_p <= mu_p_sat) & (signal <= SENSITIVITY_FIT_MAX * signal_sat)
+
+class _Gain(NamedTuple):
+    """Steps 3 and 4: system gain K (DN/e⁻), quantum efficiency η and the steps their fits used."""
+
+    K: float
+    eta: float
+    in_range: np.ndarray
+    details: dict
+
+
+def _photon_transfer(mu_p: np.ndarray, st: _StepStatistics, sat: _Saturation) -> _Gain:
+    """Steps 3, 4: K from the photon transfer (eq. 50), R through the origin (eq. 49), η = R/K (eq. 52), 0-70 %."""
+    signal, excess_var = st.signal, st.excess_var
+    in_range = (mu_p <= sat.mu_p) & (signal <= SENSITIVITY_FIT_MAX * sat.signal)
     if np.count_nonzero(in_range) < 3:
         raise ConfigError("mu_p", f"{np.count_nonzero(in_range)} steps below 70 % of saturation", "at least 3")
     K, ptc_offset = _slope_intercept(signal[in_range], excess_var[in_range])
@@ -454,99 +536,147 @@ def analyse(series: EmvaSeries, *, saturation: str = "pixel_fraction", linearity
     p = mu_p[in_range]
     R = float(np.dot(p, signal[in_range]) / np.dot(p, p))
     eta = R / K
-    details.update(K_through_origin=K_origin, ptc_offset_DN2=ptc_offset, responsivity_DN_per_photon=R,
-                   n_sensitivity_points=int(np.count_nonzero(in_range)))
+    return _Gain(K, eta, in_range, dict(K_through_origin=K_origin, ptc_offset_DN2=ptc_offset,
+                                        responsivity_DN_per_photon=R,
+                                        n_sensitivity_points=int(np.count_nonzero(in_range))))
 
-    # 5. temporal dark noise
-    if np.unique(t_dark).size >= 3:
-        var_dark_slope, var_dark_0 = _slope_intercept(t_dark, var_d)
+
+class _DarkNoise(NamedTuple):
+    """Step 5: the temporal dark noise and the dark variance it came from."""
+
+    sigma_d: float       # e⁻ (or its upper limit)
+    var_used: float      # σ²_y.dark after the 0.24 DN² rule, DN²
+    var_slope: float     # slope of σ²_y.dark against t_exp, DN²/s (NaN with fewer than 3 exposure times)
+    details: dict
+
+
+def _dark_noise(st: _StepStatistics, K: float) -> _DarkNoise:
+    """Step 5: σ_d from σ²_y.dark extrapolated to t_exp = 0 (or the dark pairs' mean) (section 6.6, eqs. 53, 54)."""
+    details: dict = {}
+    if np.unique(st.t_dark).size >= 3:
+        var_dark_slope, var_dark_0 = _slope_intercept(st.t_dark, st.var_d)
         details["var_y_dark_how"] = "extrapolated to t_exp = 0"
     else:
-        var_dark_slope, var_dark_0 = math.nan, float(np.mean(var_d))
+        var_dark_slope, var_dark_0 = math.nan, float(np.mean(st.var_d))
         details["var_y_dark_how"] = "mean of the dark pairs"
     sigma_d, upper_limit, var_dark_used = temporal_dark_noise(var_dark_0, K)
-    details.update(var_y_dark_DN2=var_dark_0, var_y_dark_min_texp_DN2=float(var_d[np.argmin(t_dark)]),
+    details.update(var_y_dark_DN2=var_dark_0, var_y_dark_min_texp_DN2=float(st.var_d[np.argmin(st.t_dark)]),
                    dark_noise_is_upper_limit=upper_limit)
+    return _DarkNoise(sigma_d, var_dark_used, var_dark_slope, details)
 
-    # 6./7. saturation capacity, SNR_max, threshold, dynamic range
+
+class _Capacity(NamedTuple):
+    """Steps 6 and 7: saturation capacity μ_e.sat (e⁻) and dynamic range μ_p.sat/μ_p.min."""
+
+    mu_e_sat: float
+    dynamic_range: float
+    details: dict
+
+
+def _saturation_capacity(gain: _Gain, mu_p_sat: float, var_dark_used: float, area: float) -> _Capacity:
+    """Steps 6, 7: μ_e.sat = η·μ_p.sat (section 2), μ_p.min (eq. 26) and DR = μ_p.sat/μ_p.min (eq. 28)."""
+    K, eta = gain.K, gain.eta
     mu_e_sat = eta * mu_p_sat
     mu_p_min = sensitivity_threshold(eta, var_dark_used, K)
     dr = mu_p_sat / mu_p_min
-    area = series.pixel_area_um2
-    details.update(mu_e_sat=mu_e_sat, mu_p_min=mu_p_min, mu_e_min=eta * mu_p_min,
-                   mu_p_sat_per_um2=mu_p_sat / area, mu_p_min_per_um2=mu_p_min / area,
-                   mu_e_sat_per_um2=mu_e_sat / area, mu_e_min_per_um2=eta * mu_p_min / area,
-                   snr_max=math.sqrt(mu_e_sat), dynamic_range=dr)
+    return _Capacity(mu_e_sat, dr, dict(
+        mu_e_sat=mu_e_sat, mu_p_min=mu_p_min, mu_e_min=eta * mu_p_min,
+        mu_p_sat_per_um2=mu_p_sat / area, mu_p_min_per_um2=mu_p_min / area,
+        mu_e_sat_per_um2=mu_e_sat / area, mu_e_min_per_um2=eta * mu_p_min / area,
+        snr_max=math.sqrt(mu_e_sat), dynamic_range=dr))
 
-    # 8. dark current
-    if np.unique(t_dark).size >= 3:
-        dark_slope_DN, dark_offset = _slope_intercept(t_dark, mu_d)
+
+class _DarkCurrent(NamedTuple):
+    """Step 8: the dark current, e⁻/s (NaN with fewer than 3 exposure times)."""
+
+    e_per_s: float
+    details: dict
+
+
+def _dark_current(st: _StepStatistics, K: float, var_dark_slope: float) -> _DarkCurrent:
+    """Step 8: slope of μ_y.dark against t_exp over K (section 7.1); from σ²_y.dark's slope over K² in details."""
+    if np.unique(st.t_dark).size >= 3:
+        dark_slope_DN, dark_offset = _slope_intercept(st.t_dark, st.mu_d)
         dark_current = dark_slope_DN / K
         dark_current_var = var_dark_slope / K**2
     else:
-        dark_offset, dark_current, dark_current_var = float(np.mean(mu_d)), math.nan, math.nan
-    details.update(dark_current_from_variance_e_per_s=dark_current_var, mu_y_dark_at_zero_DN=dark_offset)
+        dark_offset, dark_current, dark_current_var = float(np.mean(st.mu_d)), math.nan, math.nan
+    return _DarkCurrent(dark_current, dict(dark_current_from_variance_e_per_s=dark_current_var,
+                                           mu_y_dark_at_zero_DN=dark_offset))
 
-    # 9. linearity, 5-95 % of saturation
+
+class _Linearity(NamedTuple):
+    """Step 9: the linearity errors (%), the per-step deviation δ_y (%) and the steps the fit used."""
+
+    mean_abs: float
+    half_range: float
+    deviation: np.ndarray
+    in_range: np.ndarray
+    details: dict
+
+
+def _linearity(mu_p: np.ndarray, signal: np.ndarray, sat: _Saturation) -> _Linearity:
+    """Step 9: relative-weight fit over 5-95 % of saturation (section 6.9); LE = mean |δ_y| and (max − min)/2."""
     lo, hi = LINEARITY_FIT_RANGE
-    lin_range = (mu_p <= mu_p_sat) & (signal >= lo * signal_sat) & (signal <= hi * signal_sat)
+    lin_range = (mu_p <= sat.mu_p) & (signal >= lo * sat.signal) & (signal <= hi * sat.signal)
     a0, a1, _ = linearity_fit(mu_p[lin_range], signal[lin_range])
     fit = a0 + a1 * mu_p
     deviation = np.where(fit != 0, 100.0 * (signal - fit) / np.where(fit != 0, fit, 1.0), np.nan)
     dev_in = deviation[lin_range]
     le_mean_abs = float(np.mean(np.abs(dev_in)))
     le_half_range = float((dev_in.max() - dev_in.min()) / 2.0)
-    details.update(linearity_error_mean_abs_percent=le_mean_abs, linearity_error_half_range_percent=le_half_range,
-                   linearity_error_min_percent=float(dev_in.min()), linearity_error_max_percent=float(dev_in.max()),
-                   linearity_fit_offset_DN=a0, linearity_fit_slope_DN_per_photon=a1)
+    return _Linearity(le_mean_abs, le_half_range, deviation, lin_range, dict(
+        linearity_error_mean_abs_percent=le_mean_abs, linearity_error_half_range_percent=le_half_range,
+        linearity_error_min_percent=float(dev_in.min()), linearity_error_max_percent=float(dev_in.max()),
+        linearity_fit_offset_DN=a0, linearity_fit_slope_DN_per_photon=a1))
 
-    # 10. spatial nonuniformity
-    dsnu = prnu = math.nan
-    if series.spatial_dark is not None:
-        sd = spatial_statistics(series.spatial_dark)
-        sb = spatial_statistics(series.spatial_bright)
-        dsnu = _sqrt_or_nan(sd["s2_y"]) / K
-        contrast = sb["mu_y"] - sd["mu_y"]  # μ_y.50 − μ_y.dark
 
-        def prnu_of(part):
-            return 100.0 * _sqrt_or_nan(sb[part] - sd[part]) / contrast if contrast > 0 else math.nan
+class _Nonuniformity(NamedTuple):
+    """Step 10: DSNU1288 (e⁻) and PRNU1288 (%), NaN without the spatial stacks."""
 
-        prnu = prnu_of("s2_y")
-        details.update(
-            spatial_dark=sd, spatial_bright=sb,
-            dsnu_col_e=_sqrt_or_nan(sd["s2_y_col"]) / K, dsnu_row_e=_sqrt_or_nan(sd["s2_y_row"]) / K,
-            dsnu_pixel_e=_sqrt_or_nan(sd["s2_y_pixel"]) / K, dsnu_DN=_sqrt_or_nan(sd["s2_y"]),
-            prnu_col_percent=prnu_of("s2_y_col"), prnu_row_percent=prnu_of("s2_y_row"),
-            prnu_pixel_percent=prnu_of("s2_y_pixel"),
-            spatial_mu_p=series.spatial_mu_p, spatial_exposure_time_s=series.spatial_exposure_time_s,
-            spatial_fraction_of_saturation=contrast / signal_sat,
-        )
+    dsnu: float
+    prnu: float
+    details: dict
 
+
+def _nonuniformity(series: EmvaSeries, K: float, signal_sat: float) -> _Nonuniformity:
+    """Step 10: DSNU1288 = s_y.dark/K, PRNU1288 = √(s²_y.50 − s²_y.dark)/(μ_y.50 − μ_y.dark) (section 8, eq. 66, 67)."""
+    if series.spatial_dark is None:
+        return _Nonuniformity(math.nan, math.nan, {})
+    sd = spatial_statistics(series.spatial_dark)
+    sb = spatial_statistics(series.spatial_bright)
+    dsnu = _sqrt_or_nan(sd["s2_y"]) / K
+    contrast = sb["mu_y"] - sd["mu_y"]  # μ_y.50 − μ_y.dark
+
+    def prnu_of(part):
+        return 100.0 * _sqrt_or_nan(sb[part] - sd[part]) / contrast if contrast > 0 else math.nan
+
+    return _Nonuniformity(dsnu, prnu_of("s2_y"), dict(
+        spatial_dark=sd, spatial_bright=sb,
+        dsnu_col_e=_sqrt_or_nan(sd["s2_y_col"]) / K, dsnu_row_e=_sqrt_or_nan(sd["s2_y_row"]) / K,
+        dsnu_pixel_e=_sqrt_or_nan(sd["s2_y_pixel"]) / K, dsnu_DN=_sqrt_or_nan(sd["s2_y"]),
+        prnu_col_percent=prnu_of("s2_y_col"), prnu_row_percent=prnu_of("s2_y_row"),
+        prnu_pixel_percent=prnu_of("s2_y_pixel"),
+        spatial_mu_p=series.spatial_mu_p, spatial_exposure_time_s=series.spatial_exposure_time_s,
+        spatial_fraction_of_saturation=contrast / signal_sat,
+    ))
+
+
+def _curves(series: EmvaSeries, st: _StepStatistics, gain: _Gain, var_dark_used: float, mu_p_sat: float,
+            lin: _Linearity) -> dict:
+    """Per-step arrays for plots: photon transfer, SNR measured and modelled (eq. 21), linearity, fit masks."""
+    mu_p, K, eta = series.mu_p, gain.K, gain.eta
     with np.errstate(divide="ignore", invalid="ignore"):
-        snr = np.where(var_y > 0, signal / np.sqrt(np.maximum(var_y, 0)), np.nan)
+        snr = np.where(st.var_y > 0, st.signal / np.sqrt(np.maximum(st.var_y, 0)), np.nan)
     snr_model = eta * mu_p / np.sqrt(var_dark_used / K**2 + eta * mu_p)  # eq. 21 with the fitted K, η, σ²_y.dark
-    curves = {
-        "mu_p": mu_p.copy(), "exposure_times_s": t.copy(),
-        "mu_y": mu_y, "var_y": var_y, "mu_y_dark": np.array(mu_y_dark), "var_y_dark": np.array(var_y_dark),
+    return {
+        "mu_p": mu_p.copy(), "exposure_times_s": series.exposure_times_s.copy(),
+        "mu_y": st.mu_y, "var_y": st.var_y, "mu_y_dark": np.array(st.mu_y_dark), "var_y_dark": np.array(st.var_y_dark),
         "snr": snr, "snr_model": snr_model, "snr_ideal": np.sqrt(mu_p),
-        "saturated_fraction": frac, "sensitivity_fit_mask": in_range, "linearity_fit_mask": lin_range,
-        "beyond_saturation_mask": mu_p > mu_p_sat, "linearity_deviation_percent": deviation,
+        "saturated_fraction": st.saturated_fraction, "sensitivity_fit_mask": gain.in_range,
+        "linearity_fit_mask": lin.in_range, "beyond_saturation_mask": mu_p > mu_p_sat,
+        "linearity_deviation_percent": lin.deviation,
     }
-    result = {
-        "system_gain_DN_per_e": K,
-        "quantum_efficiency": eta,
-        "dark_noise_e": sigma_d,
-        "saturation_capacity_e": mu_e_sat,
-        "snr_max_db": _db(math.sqrt(mu_e_sat)),
-        "dynamic_range_db": _db(dr),
-        "dark_current_e_per_s": dark_current,
-        "dsnu_e": dsnu,
-        "prnu_percent": prnu,
-        "linearity_error_percent": le_mean_abs if linearity == "mean_abs" else le_half_range,
-        "curves": curves,
-        "details": details,
-    }
-    return result
 
 
 # --------------------------------------------------------------------------------------------------
@@ -610,70 +740,92 @@ def expected(
     Returns the keys of :data:`RESULT_KEYS` and ``"details"``.
     """
     K, eta = float(gain_DN_per_e), float(quantum_efficiency)
-    if saturation not in SATURATION_METHODS:
-        raise ConfigError("saturation", saturation, f"one of {', '.join(SATURATION_METHODS)}")
-    for name, v in (("gain_DN_per_e", K), ("quantum_efficiency", eta), ("full_well_e", full_well_e)):
-        if not (math.isfinite(v) and v > 0):
-            raise ConfigError(name, v, "a finite number > 0")
+    _check_choice("saturation", saturation, SATURATION_METHODS)
+    _check_positive(gain_DN_per_e=K, quantum_efficiency=eta, full_well_e=full_well_e)
     max_dn = 2.0**adc_bits - 1.0
-    dark_per_photo_e = 0.0
-    if series_photon_rate_per_s is not None:
-        dark_per_photo_e = dark_current_e_per_s / (eta * series_photon_rate_per_s)
-
+    dark_per_photo_e = 0.0 if series_photon_rate_per_s is None else \
+        dark_current_e_per_s / (eta * series_photon_rate_per_s)
     var_dark_DN2 = (K * read_noise_e) ** 2 + SIGMA_Q2_DN2
     sigma_d, upper, var_dark_used = temporal_dark_noise(var_dark_DN2, K)
-
-    clip_adc_e = (max_dn - 0.5 - black_level_DN) / K   # K·v + black ≥ max − 0.5 rounds to the max code
-    fixed2 = lambda mu: (prnu_fraction * mu) ** 2 + dsnu_e**2            # noqa: E731
-    temporal2 = lambda mu: mu * (1 + dark_per_photo_e) + read_noise_e**2  # noqa: E731
-    method = saturation
-    # can the ADC's maximum be reached before the well is full? (fraction at the full well)
-    z_fw = (clip_adc_e - full_well_e) / math.sqrt(read_noise_e**2 + dsnu_e**2 + 1e-12)
-    adc_limits = _NORMAL.cdf(-z_fw) >= SATURATED_FRACTION_WINDOW[0]
-    if saturation == "pixel_fraction" and not adc_limits:
-        method = "variance_max (fallback: the full well clips below the maximum code)"
-    if method == "pixel_fraction":
-        z = _NORMAL.inv_cdf(1.0 - SATURATED_FRACTION_TARGET)
-        lo, hi = 0.0, clip_adc_e
-        for _ in range(200):   # μ + d + z·σ_tot = clip is monotone in μ
-            mid = 0.5 * (lo + hi)
-            if mid * (1 + dark_per_photo_e) + z * math.sqrt(temporal2(mid) + fixed2(mid)) < clip_adc_e:
-                lo = mid
-            else:
-                hi = mid
-        mu_e_sat = 0.5 * (lo + hi)
-    else:
-        nodes, weights = np.polynomial.hermite_e.hermegauss(41)
-        weights = weights / weights.sum()
-        if full_well_e < clip_adc_e:
-            # the well clips the charge; the dark offset (DSNU) and the read noise come after it
-            clip, after = full_well_e, read_noise_e**2
-            before_t = lambda mu: mu * (1 + dark_per_photo_e)  # noqa: E731
-            before_f = lambda mu: (prnu_fraction * mu) ** 2   # noqa: E731
-        else:
-            clip, after, before_t, before_f = clip_adc_e, 0.0, temporal2, fixed2
-        grid = np.linspace(0.3 * clip, 1.2 * clip, 3001)
-        var = [after + _clipped_variance(mu * (1 + dark_per_photo_e), before_t(mu), clip, nodes, weights,
-                                         math.sqrt(before_f(mu)))
-               for mu in grid]
-        mu_e_sat = float(grid[int(np.argmax(var))])
-
+    cam = _IdealCamera(read_noise_e, dsnu_e, prnu_fraction, full_well_e, dark_per_photo_e,
+                       (max_dn - 0.5 - black_level_DN) / K)
+    method = _expected_saturation_method(cam, saturation)
+    mu_e_sat = _saturation_at_pixel_fraction(cam) if method == "pixel_fraction" else _saturation_at_variance_max(cam)
     mu_p_min = sensitivity_threshold(eta, var_dark_used, K)
     mu_e_min = eta * mu_p_min
-    return {
-        "system_gain_DN_per_e": K,
-        "quantum_efficiency": eta,
-        "dark_noise_e": sigma_d,
-        "saturation_capacity_e": mu_e_sat,
-        "snr_max_db": _db(math.sqrt(mu_e_sat)),
-        "dynamic_range_db": _db(mu_e_sat / mu_e_min),
-        "dark_current_e_per_s": float(dark_current_e_per_s),
-        "dsnu_e": float(dsnu_e),
-        "prnu_percent": 100.0 * float(prnu_fraction),
-        "linearity_error_percent": 0.0,
-        "details": {
-            "saturation_method": method, "mu_e_sat": mu_e_sat, "mu_p_sat": mu_e_sat / eta,
-            "mu_e_min": mu_e_min, "mu_p_min": mu_p_min, "var_y_dark_DN2": var_dark_DN2,
-            "dark_noise_is_upper_limit": upper, "adc_clip_e": clip_adc_e, "max_dn": max_dn,
-        },
-    }
+    quantities = _quantities(K, eta, sigma_d, mu_e_sat, mu_e_sat / mu_e_min, float(dark_current_e_per_s),
+                             float(dsnu_e), 100.0 * float(prnu_fraction), 0.0)
+    details = dict(saturation_method=method, mu_e_sat=mu_e_sat, mu_p_sat=mu_e_sat / eta, mu_e_min=mu_e_min,
+                   mu_p_min=mu_p_min, var_y_dark_DN2=var_dark_DN2, dark_noise_is_upper_limit=upper,
+                   adc_clip_e=cam.clip_adc_e, max_dn=max_dn)
+    return {**quantities, "details": details}
+
+
+def _check_positive(**values) -> None:
+    """Refuse any value that is not a finite number > 0 (ConfigError naming it)."""
+    for name, v in values.items():
+        if not (math.isfinite(v) and v > 0):
+            raise ConfigError(name, v, "a finite number > 0")
+
+
+@dataclass(frozen=True)
+class _IdealCamera:
+    """The ideal linear camera of :func:`expected`, in electrons (section 2's noise model)."""
+
+    read_noise_e: float
+    dsnu_e: float
+    prnu_fraction: float
+    full_well_e: float
+    #: Dark electrons per photo-electron along the series (0: irradiance varied at a short exposure time).
+    dark_per_photo_e: float
+    #: The charge at which K·v + black ≥ max − 0.5 rounds to the maximum code, e⁻.
+    clip_adc_e: float
+
+    def temporal2(self, mu):
+        """Temporal variance at μ_e photo-electrons, e⁻²: photo and dark shot noise and the read noise."""
+        return mu * (1 + self.dark_per_photo_e) + self.read_noise_e**2
+
+    def fixed2(self, mu):
+        """Fixed-pattern variance at μ_e photo-electrons, e⁻²: PRNU and DSNU."""
+        return (self.prnu_fraction * mu) ** 2 + self.dsnu_e**2
+
+
+def _expected_saturation_method(cam: _IdealCamera, saturation: str) -> str:
+    """``saturation``, or the variance maximum when the full well clips before 0.1 % reach the maximum code (6.5)."""
+    # can the ADC's maximum be reached before the well is full? (fraction at the full well)
+    z_fw = (cam.clip_adc_e - cam.full_well_e) / math.sqrt(cam.read_noise_e**2 + cam.dsnu_e**2 + 1e-12)
+    adc_limits = _NORMAL.cdf(-z_fw) >= SATURATED_FRACTION_WINDOW[0]
+    if saturation == "pixel_fraction" and not adc_limits:
+        return "variance_max (fallback: the full well clips below the maximum code)"
+    return saturation
+
+
+def _saturation_at_pixel_fraction(cam: _IdealCamera) -> float:
+    """μ_e.sat where 0.15 % of the pixels reach the maximum code: μ_e + d + z·σ_tot = clip (sections 2.7, 6.5)."""
+    z = _NORMAL.inv_cdf(1.0 - SATURATED_FRACTION_TARGET)
+    lo, hi = 0.0, cam.clip_adc_e
+    for _ in range(200):   # μ + d + z·σ_tot = clip is monotone in μ
+        mid = 0.5 * (lo + hi)
+        if mid * (1 + cam.dark_per_photo_e) + z * math.sqrt(cam.temporal2(mid) + cam.fixed2(mid)) < cam.clip_adc_e:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
+
+
+def _saturation_at_variance_max(cam: _IdealCamera) -> float:
+    """μ_e.sat where the mean temporal variance of the clipped signal peaks (Release 3.1's definition, section 6.5)."""
+    nodes, weights = np.polynomial.hermite_e.hermegauss(41)
+    weights = weights / weights.sum()
+    if cam.full_well_e < cam.clip_adc_e:
+        # the well clips the charge; the dark offset (DSNU) and the read noise come after it
+        clip, after = cam.full_well_e, cam.read_noise_e**2
+        before_t = lambda mu: mu * (1 + cam.dark_per_photo_e)  # noqa: E731
+        before_f = lambda mu: (cam.prnu_fraction * mu) ** 2   # noqa: E731
+    else:
+        clip, after, before_t, before_f = cam.clip_adc_e, 0.0, cam.temporal2, cam.fixed2
+    grid = np.linspace(0.3 * clip, 1.2 * clip, 3001)
+    var = [after + _clipped_variance(mu * (1 + cam.dark_per_photo_e), before_t(mu), clip, nodes, weights,
+                                     math.sqrt(before_f(mu)))
+           for mu in grid]
+    return float(grid[int(np.argmax(var))])

@@ -43,8 +43,11 @@ the Hamming window's (it falls as the square of the region's width).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
+
+__all__ = ["ESFRResult", "NoEdge", "esfr"]
 
 
 class NoEdge(ValueError):
@@ -174,16 +177,38 @@ def esfr(image, *, fit_order: int = 1, oversampling: int = 4, derivative: str = 
     >>> round(float(res.sfr[0]), 6), bool(res.frequencies_cy_per_px[-1] >= 1.0)
     (1.0, True)
     """
-    a = _checked(image, fit_order, derivative, oversampling)
-    a, orientation = _oriented(a)
+    a, orientation = _oriented(_checked(image, fit_order, derivative, oversampling))
+    edge = _slanted_edge(a, orientation, fit_order)
+    return _edge_sfr(edge, oversampling, derivative, correct_binning, max_frequency_cy_per_px)
+
+
+class _SlantedEdge(NamedTuple):
+    """An edge found and fitted (ISO 12233:2017, D.2): the region turned near-vertical and its fitted edge."""
+
+    image: np.ndarray        # the region as a float array, the edge near-vertical
+    orientation: str         # "vertical" or "horizontal": the edge's orientation in the given image
+    sign: float              # the polarity (+1: dark to bright along the columns)
+    slope: float             # columns per row of the linear fit
+    edge: np.ndarray         # the fit's polynomial coefficients, lowest order first
+
+
+def _slanted_edge(a: np.ndarray, orientation: str, fit_order: int) -> _SlantedEdge:
+    """Steps 1-2: the edge's polarity, its per-row centroids and their polynomial fit (ISO 12233:2017, D.2)."""
     sign = _polarity(a)
     slope, edge = _fit_edge(a, sign, fit_order)
-    esf, n_use = _project(a, edge, slope, sign, int(oversampling), correct_binning)
+    return _SlantedEdge(a, orientation, sign, slope, edge)
+
+
+def _edge_sfr(e: _SlantedEdge, oversampling, derivative: str, correct_binning: bool,
+              max_frequency_cy_per_px: float) -> ESFRResult:
+    """Steps 3-6: the binned ESF, its windowed LSF and the corrected e-SFR along the edge normal (ISO 12233:2017,
+    annex D)."""
+    esf, n_use = _project(e.image, e.edge, e.slope, e.sign, int(oversampling), correct_binning)
     lsf = _line_spread(esf, derivative)
-    freq, sfr = _sfr(lsf, slope, int(oversampling), derivative, correct_binning, max_frequency_cy_per_px)
+    freq, sfr = _sfr(lsf, e.slope, int(oversampling), derivative, correct_binning, max_frequency_cy_per_px)
     return ESFRResult(frequencies_cy_per_px=freq, sfr=sfr, mtf50_cy_per_px=_mtf50(freq, sfr),
-                      edge_angle_deg=float(np.degrees(np.arctan(slope))), orientation=orientation, esf=esf, lsf=lsf,
-                      bin_width_px=float(np.cos(np.arctan(slope)) / oversampling), rows_used=n_use)
+                      edge_angle_deg=float(np.degrees(np.arctan(e.slope))), orientation=e.orientation, esf=esf,
+                      lsf=lsf, bin_width_px=float(np.cos(np.arctan(e.slope)) / oversampling), rows_used=n_use)
 
 
 def _checked(image, fit_order, derivative, oversampling) -> np.ndarray:

@@ -24,6 +24,8 @@ from spectracam.core.cielab import delta_e, xyz_to_lab
 from spectracam.scene.reference import LibraryColours, library_colours
 from spectracam.core.spectra import WavelengthGrid
 
+__all__ = ["conversion_errors", "held_out_block", "summary"]
+
 #: The library's colours under a light: moved to :mod:`spectracam.scene.reference` (the truth of a scene),
 #: where a textured target (:mod:`spectracam.scene.target`) finds them too.
 HeldOutColours, held_out_colours = LibraryColours, library_colours

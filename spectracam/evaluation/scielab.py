@@ -40,6 +40,9 @@ from spectracam.core.cielab import delta_e as _delta_e
 from spectracam.core.cielab import xyz_to_lab as _xyz_to_lab
 from spectracam.processing.color import samples_per_degree  # noqa: F401  (the viewing geometry is the display's)
 
+__all__ = ["SCIELAB_FILTERS", "XYZ_TO_OPPONENT", "XYZ_TO_OPPONENT_AS_PRINTED", "scielab", "scielab_filter",
+           "scielab_filter_fft", "scielab_kernels"]
+
 #: The published filters, Zhang & Wandell (1997), table: per opponent channel, (weight w_i, spread s_i in
 #: degrees of visual angle) of the Gaussians ``k_i exp(-(x² + y²)/s_i²)``.
 SCIELAB_FILTERS: dict[str, tuple[tuple[float, float], ...]] = {

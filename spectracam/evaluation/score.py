@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import NamedTuple
 
 import numpy as np
 
@@ -23,6 +24,11 @@ from spectracam.processing import develop, oracle_block
 from spectracam.processing.calibration import conversion_matrix, conversion_target_rgb  # noqa: F401  (the paper's 3.5)
 from spectracam.scene.reference import ChartReference
 from spectracam.sensor import adc_full_scale_dn, adc_inverse
+
+__all__ = ["DELTA_E_REFERENCES", "EXPOSURE_MATCH_TOLERANCE", "LAB_CHUNK_PIXELS", "SCIELAB_CHUNK_PIXELS",
+           "SUMMARY_METRICS", "ChartScore", "ChartSummary", "PatchScore", "camera_rates", "channel_stats",
+           "chart_scielab_map", "chart_truth_xyz", "check_exposure_matches", "check_raw", "developed_rgb",
+           "display_rgb", "recorded_electrons", "score"]
 
 #: What a per-pixel ΔE is measured against: the scene (the default), or the noise-free rendering of
 #: the same camera (the conversion error removed; how the paper's Figure 6 isolates the noise steps).
@@ -413,6 +419,23 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
     docstring).  ``delta_e_reference="camera"`` scores per-pixel ΔE against the noise-free rendering
     of the same camera instead (:data:`DELTA_E_REFERENCES`); ``delta_e_of_mean`` and
     ``delta_e_conversion`` are always against the scene."""
+    _check_scorable(raw, reference, delta_e_reference)
+    h, w = raw.digital.shape[-2:]
+    chart_rates = reference.patch_rates(raw.camera)
+    M_disp = display_rgb_to_xyz(processing.display)
+    rgb, M, wb = developed_rgb(raw, reference, processing)
+    colours = _chart_colours(reference, chart_rates, M, M_disp, delta_e_reference)
+    de_map = np.full((h, w), np.nan, np.float32)
+    patches, de2000, sc_map = _patch_scores(raw, reference, processing, rgb, M, colours, de_map)
+    summary = _chart_summary(raw, patches, de_map, de2000, sc_map, wb)
+    parameters = _score_parameters(raw, processing, delta_e_reference, M)
+    training, held_out = _held_out_blocks(raw, reference, processing, M, patches)
+    return ChartScore(summary, tuple(patches), parameters, rgb.astype(np.float32), de_map, training, held_out, wb)
+
+
+def _check_scorable(raw: RawCapture, reference: ChartReference, delta_e_reference: str) -> None:
+    """Refuse a capture that cannot be scored against ``reference``: a bad ΔE reference, an impossible capture,
+    another image size, another scene or exposure times its white patch does not meter."""
     if delta_e_reference not in DELTA_E_REFERENCES:
         raise SpectracamError(f"delta_e_reference = {delta_e_reference!r}: must be one of "
                               + ", ".join(map(repr, DELTA_E_REFERENCES)))
@@ -425,19 +448,46 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
         raise SpectracamError(f"{table} = {str(raw.scene.get(table))[:120]}: the capture was taken of another scene "
                               f"than the one it is scored against")
     check_exposure_matches(raw, reference)
-    method = processing.delta_e
-    camera = raw.camera
-    chart_rates = reference.patch_rates(camera)
-    M_disp = display_rgb_to_xyz(processing.display)
+
+
+class _ChartColours(NamedTuple):
+    """The display (RGB → XYZ matrix, white) and the patches' CIELAB: the scene's, the noise-free conversion's, and
+    the one per-pixel ΔE is measured against (:data:`DELTA_E_REFERENCES`)."""
+
+    M_disp: np.ndarray
+    display_white: np.ndarray
+    scene_lab: np.ndarray
+    conversion_lab: np.ndarray
+    against: np.ndarray
+
+
+def _chart_colours(reference: ChartReference, chart_rates: np.ndarray, M: np.ndarray, M_disp: np.ndarray,
+                   delta_e_reference: str) -> _ChartColours:
+    """The scene's patch CIELAB (against its light's white) and the conversion's (the chart's rates through ``M``,
+    against the display white; paper 3.5)."""
     display_white = M_disp.sum(axis=1)
-    rgb, M, wb = developed_rgb(raw, reference, processing)
     scene_lab = xyz_to_lab(reference.patch_xyz, reference.white_xyz)
     conversion_lab = xyz_to_lab(chart_rates @ M @ M_disp.T, display_white)
     against = scene_lab if delta_e_reference == "scene" else conversion_lab
+    return _ChartColours(M_disp, display_white, scene_lab, conversion_lab, against)
 
-    boxes = reference.boxes
-    channels = raw.layout.channels
-    de_map = np.full((h, w), np.nan, np.float32)
+
+def _patch_snrs(means: np.ndarray, stds: np.ndarray, luminance: np.ndarray, times_s: np.ndarray, combination: str):
+    """``(per channel, combined, rendered luminance)`` SNR of one patch, dB (paper 5): infinite noise-free,
+    undefined (NaN) when a mean is ≤ 0; the rendered one carries each channel's rate (e⁻/t) to display luminance."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        snr = snr_db(means, stds)
+        combined = combine_snr_db(means, stds, combination)
+        rendered = snr_db(luminance @ (means / times_s), np.linalg.norm(luminance * stds / times_s))
+    return snr, combined, rendered
+
+
+def _patch_scores(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec, rgb: np.ndarray,
+                  M: np.ndarray, colours: _ChartColours, de_map: np.ndarray) -> tuple[list, list, np.ndarray]:
+    """``(patch scores, each patch's mean CIEDE2000, S-CIELAB map)``, filling ``de_map`` with the per-pixel ΔE."""
+    method, boxes, channels = processing.delta_e, reference.boxes, raw.layout.channels
+    M_disp, display_white, scene_lab, against = colours.M_disp, colours.display_white, colours.scene_lab, \
+        colours.against
     means, stds = channel_stats(raw, boxes)
     # display luminance per unit of each channel's rate, and each channel's exposure (rates = e⁻/t)
     luminance = M @ M_disp[1]
@@ -450,23 +500,27 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
         de = delta_e(lab_box, against[p], method)
         de_map[r, c] = de
         de2000.append(float(np.mean(de if method == "ciede2000" else delta_e(lab_box, against[p], "ciede2000"))))
-        with np.errstate(divide="ignore", invalid="ignore"):  # noise-free: infinite; mean ≤ 0: undefined (named)
-            snr = snr_db(means[p], stds[p])
-            combined = combine_snr_db(means[p], stds[p], processing.snr_combination)
-            rendered = snr_db(luminance @ (means[p] / times_s), np.linalg.norm(luminance * stds[p] / times_s))
+        snr, combined, rendered = _patch_snrs(means[p], stds[p], luminance, times_s, processing.snr_combination)
         by_name = dict(zip(channels, snr))
         patches.append(PatchScore(
             patch=p, name=reference.names[p], scene_lab=tuple(scene_lab[p].round(4).tolist()),
             rendered_lab=tuple(mean_labs[p].round(4).tolist()), delta_e_mean=float(de.mean()),
             delta_e_of_mean=float(delta_e(mean_labs[p], scene_lab[p], method)),
-            delta_e_conversion=float(delta_e(conversion_lab[p], scene_lab[p], method)),
+            delta_e_conversion=float(delta_e(colours.conversion_lab[p], scene_lab[p], method)),
             **{f"snr_{k}_db": _finite(by_name[k]) if k in by_name else None for k in "RGB"},
             snr_combined_db=_finite(combined), pixels=int((r.stop - r.start) * (c.stop - c.start)),
             snr_undefined=tuple(k for k, m, sd in zip(channels, means[p], stds[p]) if m <= 0 and sd > 0),
             snr_by_channel_db={k: _finite(v) for k, v in by_name.items()}, snr_rendered_db=_finite(rendered),
             s_cielab_mean=float(sc_map[r, c].mean(dtype=np.float64))))
+    return patches, de2000, sc_map
+
+
+def _chart_summary(raw: RawCapture, patches: list, de_map: np.ndarray, de2000: list, sc_map: np.ndarray,
+                   wb: dict) -> ChartSummary:
+    """The chart averages of the patch scores, the capture's timing and the white balance's errors."""
+    channels = raw.layout.channels
     times_ms = 1e3 * np.asarray(raw.exposure_times_s, float)
-    summary = ChartSummary(
+    return ChartSummary(
         delta_e_mean=float(np.mean([p.delta_e_mean for p in patches])),
         delta_e_of_mean=float(np.mean([p.delta_e_of_mean for p in patches])),
         delta_e_conversion=float(np.mean([p.delta_e_conversion for p in patches])),
@@ -480,8 +534,12 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
         awb_recovery_deg=wb["recovery_deg"], awb_reproduction_deg=wb["reproduction_deg"],
         s_cielab_mean=float(np.mean([p.s_cielab_mean for p in patches])),
         s_cielab_p95=float(np.nanpercentile(sc_map, 95)), snr_white_rendered_db=patches[WHITE_PATCH].snr_rendered_db)
-    parameters = {
-        "scene": raw.scene, "camera": camera.to_dict(), "processing": processing.to_dict(), "seed": raw.seed,
+
+
+def _score_parameters(raw: RawCapture, processing: ProcessingSpec, delta_e_reference: str, M: np.ndarray) -> dict:
+    """The report's ``parameters`` block: what was scored, how, and the definitions of the SNR and S-CIELAB."""
+    return {
+        "scene": raw.scene, "camera": raw.camera.to_dict(), "processing": processing.to_dict(), "seed": raw.seed,
         "delta_e_reference": delta_e_reference, "conversion_matrix": M.tolist(),
         "snr_definition": "20*log10(mean/std) of the dark-subtracted electrons of each channel's own pixels in "
                           "the patch mask; combined: "
@@ -494,12 +552,18 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
                                    "to the display white) through the eye's opponent-channel filters, then "
                                    f"{processing.delta_e} per pixel on the patches' scored pixels; docs/metrics.md"},
     }
-    training = held_out = None
-    if processing.held_out != "none":
-        from spectracam.evaluation.heldout import held_out_block
-        from spectracam.evaluation.heldout import summary as error_summary
 
-        training = error_summary([p.delta_e_conversion for p in patches], "the chart (training: the conversion is "
-                                 "fitted on it)")
-        held_out = held_out_block(processing.held_out, reference.illuminant, reference.grid, camera, M, processing)
-    return ChartScore(summary, tuple(patches), parameters, rgb.astype(np.float32), de_map, training, held_out, wb)
+
+def _held_out_blocks(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec, M: np.ndarray,
+                     patches: list) -> tuple[dict | None, dict | None]:
+    """``(training, held_out)``: the conversion's noise-free error on the chart it was fitted on and on the colours of
+    ``processing.held_out`` (both None when that is "none")."""
+    if processing.held_out == "none":
+        return None, None
+    from spectracam.evaluation.heldout import held_out_block
+    from spectracam.evaluation.heldout import summary as error_summary
+
+    training = error_summary([p.delta_e_conversion for p in patches], "the chart (training: the conversion is "
+                             "fitted on it)")
+    held_out = held_out_block(processing.held_out, reference.illuminant, reference.grid, raw.camera, M, processing)
+    return training, held_out

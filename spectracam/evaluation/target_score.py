@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -33,6 +34,8 @@ from spectracam.evaluation.heldout import summary as error_summary
 from spectracam.core.cielab import delta_e, xyz_to_lab
 from spectracam.scene.reference import ChartReference, TargetReference, library_colours
 from spectracam.evaluation.score import check_exposure_matches, check_raw, developed_rgb
+
+__all__ = ["CHART_LIBRARIES", "MIN_SAMPLE_PX", "SampleScore", "TargetScore", "score_target"]
 
 #: Fewest interior pixels for a sample's mean colour to be scored.
 MIN_SAMPLE_PX = 4
@@ -101,8 +104,26 @@ def _stats(values: np.ndarray) -> tuple[float, float, float]:
 def score_target(raw: RawCapture, chart: ChartReference, ref: TargetReference, target, processing: ProcessingSpec
                  ) -> TargetScore:
     """Score a capture of a textured target (module docstring)."""
-    from spectracam.evaluation.scielab import samples_per_degree, scielab
+    _check_target_capture(raw, chart, ref, target)
+    M_disp = display_rgb_to_xyz(processing.display)
+    rgb, M, wb = developed_rgb(raw, chart, processing, ref)
+    maps = _pixel_maps(rgb, ref, target, processing, M_disp)
+    samples = _sample_scores(raw, chart, ref, target, processing, M, maps)
+    training = _training_block(raw, chart, M, M_disp, processing.delta_e)
+    held_out = _held_out_block(chart, ref, target, processing.delta_e, maps, samples, wb)
+    parameters = {"scene": raw.scene, "camera": raw.camera.to_dict(), "processing": processing.to_dict(),
+                  "seed": raw.seed, "conversion_matrix": M.tolist(), "samples_per_degree": maps.spd,
+                  "definitions": __doc__.split("\n\n", 1)[1].strip()}
+    if raw.layout.channels != ("R", "G", "B"):   # the exposure times' names (R, G, B when not given)
+        parameters["channels"] = list(raw.layout.channels)
+    times = tuple(float(1e3 * t) for t in raw.exposure_times_s)
+    return TargetScore(parameters, training, held_out, tuple(samples), 1e3 * float(raw.capture_time_s), times,
+                       rgb.astype(np.float32), maps.de_map, maps.sc_map, wb)
 
+
+def _check_target_capture(raw: RawCapture, chart: ChartReference, ref: TargetReference, target) -> None:
+    """Refuse a capture that cannot be scored against this target: an impossible capture, another image size, another
+    target or scene, or exposure times the chart's white patch does not meter."""
     check_raw(raw)
     h, w = raw.digital.shape[-2:]
     if (h, w) != ref.shape_px:
@@ -116,10 +137,29 @@ def score_target(raw: RawCapture, chart: ChartReference, ref: TargetReference, t
             raise SpectracamError(f"{table} = {str(raw.scene.get(table))[:120]}: the capture was taken of another "
                                   "scene than the one it is scored against")
     check_exposure_matches(raw, chart)
+
+
+class _PixelMaps(NamedTuple):
+    """The per-pixel scores of a target's rendering and what they were computed from."""
+
+    rendered_xyz: np.ndarray    # (H, W, 3) display XYZ of the rendering
+    display_white: np.ndarray
+    labels: np.ndarray          # (H, W) the sample each pixel shows most of (ref.surround: the surround)
+    scored: np.ndarray          # (H, W) not wholly surround
+    de_map: np.ndarray          # (H, W) float32 ΔE, NaN on the surround
+    de2000: np.ndarray          # CIEDE2000: the (H, W) map, or the scored pixels' values
+    sc_map: np.ndarray          # (H, W) float32 S-CIELAB ΔE, NaN on the surround
+    spd: float                  # S-CIELAB samples per degree at the target's viewing geometry
+
+
+def _pixel_maps(rgb: np.ndarray, ref: TargetReference, target, processing: ProcessingSpec,
+                M_disp: np.ndarray) -> _PixelMaps:
+    """Per-pixel ΔE (rendered against the display white, truth against the light's white) and S-CIELAB (the truth
+    carried to the display white; Zhang & Wandell) of the rendering against the target's truth."""
+    from spectracam.evaluation.scielab import samples_per_degree, scielab
+
     method = processing.delta_e
-    M_disp = display_rgb_to_xyz(processing.display)
     display_white = M_disp.sum(axis=1)
-    rgb, M, wb = developed_rgb(raw, chart, processing, ref)
     rendered_xyz = rgb.astype(np.float64) @ M_disp.T
     truth_xyz = ref.pixel_mean(ref.xyz)
     labels = ref.pixel_labels()
@@ -132,34 +172,50 @@ def score_target(raw: RawCapture, chart: ChartReference, ref: TargetReference, t
     sc_map = scielab(rendered_xyz, truth_xyz @ to_display.T, display_white, spd, method)
     de_map = np.where(scored, de_map, np.nan).astype(np.float32)
     sc_map = np.where(scored, sc_map, np.nan).astype(np.float32)
+    return _PixelMaps(rendered_xyz, display_white, labels, scored, de_map, de2000, sc_map, spd)
 
-    # per sample: the interior pixels' mean colour
+
+def _sample_scores(raw: RawCapture, chart: ChartReference, ref: TargetReference, target, processing: ProcessingSpec,
+                   M: np.ndarray, maps: _PixelMaps) -> list:
+    """Per sample with at least :data:`MIN_SAMPLE_PX` interior pixels: their mean colour against its truth, their mean
+    per-pixel ΔE and the sample's noise-free conversion error."""
+    method = processing.delta_e
     n = ref.surround
-    inside = _interior(labels, target.interior_margin_px) & scored
-    lab_in = labels[inside]
+    inside = _interior(maps.labels, target.interior_margin_px) & maps.scored
+    lab_in = maps.labels[inside]
     counts = np.bincount(lab_in, minlength=n + 1)
-    sums = np.stack([np.bincount(lab_in, rendered_xyz[inside][:, k], minlength=n + 1) for k in range(3)], axis=-1)
-    de_sums = np.bincount(lab_in, de_map[inside].astype(np.float64), minlength=n + 1)
+    sums = np.stack([np.bincount(lab_in, maps.rendered_xyz[inside][:, k], minlength=n + 1) for k in range(3)], axis=-1)
+    de_sums = np.bincount(lab_in, maps.de_map[inside].astype(np.float64), minlength=n + 1)
     chosen = np.flatnonzero(counts[:n] >= MIN_SAMPLE_PX)
     colours = library_colours(ref.library, chart.illuminant, chart.grid)
     conv = conversion_errors(colours, raw.camera, chart.grid, M, processing)
     samples = []
     if chosen.size:
-        mean_lab = xyz_to_lab(sums[chosen] / counts[chosen, None], display_white)
+        mean_lab = xyz_to_lab(sums[chosen] / counts[chosen, None], maps.display_white)
         truth_lab = xyz_to_lab(ref.xyz[chosen], ref.white_xyz)
         of_mean = np.atleast_1d(delta_e(mean_lab, truth_lab, method))
         for i, lab_m, lab_t, d in zip(chosen, mean_lab, truth_lab, of_mean):
             samples.append(SampleScore(int(i), ref.names[i], int(counts[i]), tuple(lab_t.round(4).tolist()),
                                        tuple(lab_m.round(4).tolist()), float(d), float(de_sums[i] / counts[i]),
                                        float(conv[i])))
+    return samples
 
-    # the training error: the conversion on the 24 patches it was fitted on (noise-free)
+
+def _training_block(raw: RawCapture, chart: ChartReference, M: np.ndarray, M_disp: np.ndarray, method: str) -> dict:
+    """The training error: the conversion on the 24 patches it was fitted on (noise-free)."""
+    display_white = M_disp.sum(axis=1)
     chart_lab = xyz_to_lab(chart.patch_xyz, chart.white_xyz)
     chart_conv = delta_e(xyz_to_lab(chart.patch_rates(raw.camera) @ M @ M_disp.T, display_white), chart_lab, method)
-    training = error_summary(np.asarray(chart_conv), "the chart (training: the conversion is fitted on it)")
+    return error_summary(np.asarray(chart_conv), "the chart (training: the conversion is fitted on it)")
+
+
+def _held_out_block(chart: ChartReference, ref: TargetReference, target, method: str, maps: _PixelMaps, samples: list,
+                    wb: dict) -> dict:
+    """The held-out block: the per-pixel ΔE and S-CIELAB statistics over the scored pixels, and the samples'."""
     shown = np.unique(ref.labels)
-    shown = shown[shown != n]
-    de_px, sc_px = de_map[scored], sc_map[scored]
+    shown = shown[shown != ref.surround]
+    scored, de2000 = maps.scored, maps.de2000
+    de_px, sc_px = maps.de_map[scored], maps.sc_map[scored]
     if de_px.size == 0:
         raise SpectracamError("target: every pixel is the surround; there is nothing to score")
     held_out = {"library": ref.library, "kind": target.kind, "unit": "pixel", "pixels": int(de_px.size),
@@ -174,11 +230,4 @@ def score_target(raw: RawCapture, chart: ChartReference, ref: TargetReference, t
         if samples:
             mean, p95, _ = _stats(np.array([getattr(s, field) for s in samples]))
             held_out.update({f"sample_{field}_mean": mean, f"sample_{field}_p95": p95})
-    parameters = {"scene": raw.scene, "camera": raw.camera.to_dict(), "processing": processing.to_dict(),
-                  "seed": raw.seed, "conversion_matrix": M.tolist(), "samples_per_degree": spd,
-                  "definitions": __doc__.split("\n\n", 1)[1].strip()}
-    if raw.layout.channels != ("R", "G", "B"):   # the exposure times' names (R, G, B when not given)
-        parameters["channels"] = list(raw.layout.channels)
-    times = tuple(float(1e3 * t) for t in raw.exposure_times_s)
-    return TargetScore(parameters, training, held_out, tuple(samples), 1e3 * float(raw.capture_time_s), times,
-                       rgb.astype(np.float32), de_map, sc_map, wb)
+    return held_out

@@ -25,6 +25,8 @@ from dataclasses import dataclass
 
 from spectracam.core.spec import Spec
 
+__all__ = ["MAX_S_CIELAB_MEAN", "MIN_WHITE_SNR_DB", "NO_USABLE_IMAGE", "UsabilitySpec"]
+
 #: ISO 12232's "acceptable" noise-based criterion: luminance SNR 10, in dB.
 MIN_WHITE_SNR_DB = 20.0
 #: The chart's ΔE*ab when every patch is shown as a flat grey of the chart's mean lightness (≈ 41).

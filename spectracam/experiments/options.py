@@ -1,8 +1,10 @@
-"""Command-line options shared by spectracam's commands (and by commands that live with their stage,
-such as ``spectracam spatial``): registry-backed choices, --set, -o, --quiet, and the checks every
-command makes before it works."""
+"""Command-line options shared by spectracam's commands (each command lives in a ``command.py`` beside
+the code it runs, registered by :mod:`spectracam.cli`): registry-backed choices, --set, -o, --quiet, the
+scene a command's flags make, the command a report records, and the checks every command makes before
+it works."""
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import click
@@ -13,6 +15,12 @@ from spectracam.core.errors import ConfigError, SpectracamError
 from spectracam.sensor.exposure import EXPOSURE_SCHEMES
 from spectracam.core.cielab import DELTA_E_METHODS
 from spectracam.render import RENDERERS
+
+__all__ = ["EXPERIMENT_HELP", "RegistryChoice", "ShippedFile", "VIEW_HELP", "VIEW_REQUEST", "as_given", "camera_options",
+           "check_target_renderer", "check_writable", "default_experiment", "experiment_option", "flag_overrides",
+           "given", "log_report", "no_cache_option", "output_option", "processing_options", "progress_log",
+           "quiet_option", "renderer_option", "resolve_shipped", "scene_from", "set_option", "shipped_files",
+           "shipped_named", "shipped_summary", "target_command", "timed_step"]
 
 
 class RegistryChoice(click.ParamType):
@@ -171,7 +179,7 @@ def output_option(help_text: str):
 def view_option(f):
     """``--view``: after the command's outputs are written, also write DIR/index.html (``spectracam view``).
     The request is recorded here and carried out by the command group once the outputs are in place
-    (:meth:`spectracam.cli._Group.invoke`), so the page sees the files under their final names."""
+    (``spectracam.cli``'s group, in its ``invoke``), so the page sees the files under their final names."""
     import functools
 
     @functools.wraps(f)
@@ -195,29 +203,51 @@ renderer_option = click.option("--renderer", type=RegistryChoice(RENDERERS, "--r
                                 show_default=True, help="Mitsuba (Monte Carlo) or the closed form.")
 
 
-def camera_options(f):
-    f = click.option("--seed", type=click.IntRange(0, 2**31 - 1), default=None,
-                     help="Noise seed [default: the scene's render.seed].")(f)
-    f = click.option("--config", "config_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
-                     help="TOML with [optics], [filters], [sensor], [capture] tables, over the scene's.")(f)
-    f = click.option("--exposure", type=RegistryChoice(EXPOSURE_SCHEMES, "--exposure"), default=None,
-                     help="Exposure control [default: the scene's capture.exposure].")(f)
-    f = click.option("--arch", type=RegistryChoice(ARCHITECTURES, "--arch"), default=None,
-                     help="Colour architecture [default: the scene's capture.architecture].")(f)
-    return f
+def _stacked(*options):
+    """One decorator of several options, listed in ``--help`` in the order given."""
+    def apply(f):
+        for option in reversed(options):
+            f = option(f)
+        return f
+
+    return apply
 
 
-def processing_options(f):
-    f = click.option("--gamut-clip/--no-gamut-clip", default=None, help="Clip display RGB to [0, 1].")(f)
-    f = click.option("--delta-e", "delta_e", type=RegistryChoice(DELTA_E_METHODS, "--delta-e"), default=None,
-                     help="Colour difference formula [default: the scene's, else cie1976].")(f)
-    f = click.option("--adaptation", type=RegistryChoice(ADAPTATIONS, "--adaptation"), default=None,
-                     help="How scene XYZ is carried to the display white [default: xyz_scaling].")(f)
-    f = click.option("--display", type=RegistryChoice(DISPLAYS, "--display"), default=None,
-                     help="Display model [default: the scene's, else crt].")(f)
-    f = click.option("--demosaic", type=RegistryChoice(DEMOSAIC_METHODS, "--demosaic"), default=None,
-                     help="Demosaicking of a mosaic [default: the scene's, else bilinear].")(f)
-    return f
+#: --arch, --exposure, --config and --seed: the camera of a scene file, overridden.
+camera_options = _stacked(
+    click.option("--arch", type=RegistryChoice(ARCHITECTURES, "--arch"), default=None,
+                 help="Colour architecture [default: the scene's capture.architecture]."),
+    click.option("--exposure", type=RegistryChoice(EXPOSURE_SCHEMES, "--exposure"), default=None,
+                 help="Exposure control [default: the scene's capture.exposure]."),
+    click.option("--config", "config_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
+                 help="TOML with [optics], [filters], [sensor], [capture] tables, over the scene's."),
+    click.option("--seed", type=click.IntRange(0, 2**31 - 1), default=None,
+                 help="Noise seed [default: the scene's render.seed]."))
+
+#: --demosaic, --display, --adaptation, --delta-e and --gamut-clip: the scene file's [processing], overridden.
+processing_options = _stacked(
+    click.option("--demosaic", type=RegistryChoice(DEMOSAIC_METHODS, "--demosaic"), default=None,
+                 help="Demosaicking of a mosaic [default: the scene's, else bilinear]."),
+    click.option("--display", type=RegistryChoice(DISPLAYS, "--display"), default=None,
+                 help="Display model [default: the scene's, else crt]."),
+    click.option("--adaptation", type=RegistryChoice(ADAPTATIONS, "--adaptation"), default=None,
+                 help="How scene XYZ is carried to the display white [default: xyz_scaling]."),
+    click.option("--delta-e", "delta_e", type=RegistryChoice(DELTA_E_METHODS, "--delta-e"), default=None,
+                 help="Colour difference formula [default: the scene's, else cie1976]."),
+    click.option("--gamut-clip/--no-gamut-clip", default=None, help="Clip display RGB to [0, 1]."))
+
+#: ``--experiment``'s help where the whole experiment file is used (paper, consistency).
+EXPERIMENT_HELP = ("Experiment file: a path or a shipped one's name [default: paper, scenes/paper.toml shipped with "
+                   "spectracam].")
+
+
+def experiment_option(help_text: str = EXPERIMENT_HELP):
+    """``--experiment FILE``: a path or a shipped experiment's name (:func:`default_experiment` when not given)."""
+    return click.option("--experiment", "experiment_file", type=ShippedFile("experiment file"), default=None,
+                        help=help_text)
+
+
+no_cache_option = click.option("--no-cache", is_flag=True, help="Render again even if the render cache has the scene.")
 
 
 def flag_overrides(**flags) -> list[tuple[str, object]]:
@@ -240,3 +270,72 @@ def check_writable(out_dir: Path) -> None:
         raise SpectracamError(f"output = {str(out_dir)!r}: {str(p)!r} is a file, not a directory")
     if not os.access(p, os.W_OK | os.X_OK):
         raise SpectracamError(f"output = {str(out_dir)!r}: {str(p)!r} is not writable")
+
+
+# ------------------------------------------------------------------------------------------------
+# what several commands do alike: the scene their flags make, the command a report records, the log
+
+
+def scene_from(data: dict, source: str, config_file=None, flags=(), sets=()):
+    """A Scene from a scene dict with the config file's camera tables, the flags and ``--set``."""
+    from spectracam.camera import CAMERA_TABLES
+    from spectracam.pipeline.overrides import apply_overrides
+    from spectracam.pipeline.scene_file import Scene, parse_scene, read_toml, resolve_curve_files
+
+    here = Path(source).parent if Path(source).is_file() else Path.cwd()  # where file paths are relative to
+    data = resolve_curve_files(data, here)
+    if config_file is not None:
+        config = read_toml(config_file, "config file")
+        for k, v in config.items():
+            if k not in CAMERA_TABLES or not isinstance(v, dict):
+                raise ConfigError(k, v, "a config file has the camera tables " + ", ".join(CAMERA_TABLES),
+                                  str(config_file))
+            data = {**data, k: {**data.get(k, {}), **v}}
+        data = resolve_curve_files(data, Path(config_file).parent)
+        Scene.from_dict(data, source=str(config_file))  # the config file's own errors name it
+    data = apply_overrides(data, flags, source="command line")
+    defaults = lambda: parse_scene(data, source).to_dict()  # noqa: E731  lists a --set element refers to
+    data = resolve_curve_files(apply_overrides(data, sets, defaults=defaults), Path.cwd())
+    return parse_scene(data, source if not (flags or sets) else f"{source} with the command line's options")
+
+
+def default_experiment() -> Path:
+    """The paper's experiment file shipped with spectracam (scenes/paper.toml)."""
+    from spectracam.pipeline.scene_file import shipped_scene_file
+
+    try:
+        return shipped_scene_file("paper.toml")
+    except ConfigError:
+        raise SpectracamError("experiment = scenes/paper.toml: not shipped with this installation; "
+                              "pass --experiment FILE") from None
+
+
+def given(flag: str, name: str, value) -> str:
+    """`` FLAG VALUE`` for the command a report records, as the user wrote it (a shipped file's name stays a
+    name); empty when the option was not given."""
+    return f" {flag} {as_given(name, value)}" if value else ""
+
+
+def timed_step(log):
+    """``log``, each line stamped with the seconds since this call (``[  12.3 s] …``)."""
+    t0 = time.perf_counter()
+    return lambda msg: log(f"[{time.perf_counter() - t0:6.1f} s] {msg}")
+
+
+def check_target_renderer(renderer: str, what: str) -> None:
+    """The spatial and moving targets are rendered by Mitsuba or the closed form, no other renderer."""
+    if renderer not in ("mitsuba", "analytic"):
+        raise ConfigError("--renderer", renderer, f"{what} are rendered by 'mitsuba' or 'analytic'")
+
+
+def target_command(name: str, out_dir: Path, quick: bool, renderer: str, sets) -> str:
+    """The command a spatial or motion report records: ``spectracam NAME -o DIR`` and the options given."""
+    return f"spectracam {name} -o {out_dir}" + (" --quick" if quick else "") \
+        + (f" --renderer {renderer}" if renderer != "mitsuba" else "") + "".join(f" --set {s}" for s in sets)
+
+
+def log_report(log, t0: float, lines, paths, out_dir: Path) -> None:
+    """A report's answer, line by line, then how many files were written in how long, and where the report is."""
+    for line in lines:
+        log(line)
+    log(f"[{time.perf_counter() - t0:6.1f} s] wrote {len(paths)} files; report: {Path(out_dir) / 'report.md'}")

@@ -1,1 +1,3 @@
 """File formats spectracam reads and writes."""
+
+__all__: list = []

@@ -17,6 +17,9 @@ from spectracam._version import __version__
 from spectracam.io.exr import read_radiance_exr, write_radiance_exr
 from spectracam.render import render
 
+__all__ = ["RENDER_METHOD", "RENDER_TABLES", "TEXTURED_RENDER_METHOD", "cache_dir", "cached_render",
+           "pixel_checksum", "render_key"]
+
 RENDER_TABLES = ("chart", "illuminant", "wavelengths", "image", "render")
 #: Bumped whenever a renderer's method changes what it writes for the same scene, so older entries
 #: are never served: 2 = Mitsuba renders light-weighted band-constant spectra (issue 17).

@@ -107,6 +107,12 @@ from spectracam.core.errors import SpectracamError
 from spectracam.processing.calibration import D50_XYZ, constrained_lstsq, white_neutral  # D50: the DNG SDK's normalisation
 from spectracam.core.files import atomic_write
 
+__all__ = ["CALIBRATION_ILLUMINANTS", "DNG_MAX_BITS", "ISO_SATURATION_CONSTANT", "MAKE", "as_shot_neutral",
+           "calibration_reference", "camera_model", "camera_patches", "camera_to_xyz_matrix", "camera_white",
+           "color_matrices", "dng_image", "dng_levels", "dng_tags", "exif_entries", "forward_matrices",
+           "linear_raw_pedestal", "normalise_color_matrix", "saturation_exposure_lux_s", "saturation_iso",
+           "white_radiance", "white_rates", "write_dng", "xyz_to_camera_matrix"]
+
 #: DNG CFAPattern colour codes.
 _CFA_CODE = {"R": 0, "G": 1, "B": 2, "C": 3, "M": 4, "Y": 5, "W": 6}
 #: The DNG calibrations, ``(colour-science illuminant name, EXIF LightSource code)``: ColorMatrix1 under CIE

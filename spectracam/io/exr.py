@@ -29,6 +29,13 @@ from spectracam.render import RadianceCube
 from spectracam.core.spectra import K_M_LM_PER_W, WavelengthGrid, cmf_band_weights
 from spectracam.core.files import atomic_write
 
+__all__ = ["EMISSIVE_UNITS", "PREVIEW_NOTE", "SPECTRAL_CHANNEL", "SPECTRAL_LAYOUT_VERSION",
+           "attribute_number", "check_raw_attributes", "describe", "dn_scale_offset", "double",
+           "emissive_scale", "json_object_attribute", "layout_from_dict", "layout_to_dict",
+           "parse_spectral_channel", "preview_rgb", "radiance_attributes", "raw_attributes",
+           "raw_channel_names", "read_exr", "read_exr_header", "read_radiance_exr", "read_raw_exr",
+           "spectral_channel_name", "write_exr", "write_radiance_exr", "write_raw_exr"]
+
 SPECTRAL_CHANNEL = re.compile(r"^S0\.(\d+(?:,\d+)?)nm$")
 SPECTRAL_LAYOUT_VERSION = "1.0"
 #: Fichet 2021's unit string for emissive channels (per nm is implied by the layout).

@@ -8,6 +8,8 @@ import numpy as np
 
 from spectracam.core.files import atomic_write
 
+__all__ = ["pyplot", "save_figure", "srgb_image"]
+
 
 def pyplot():
     """matplotlib.pyplot on the Agg backend (no display needed); SVG text is written as text

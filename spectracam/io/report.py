@@ -16,6 +16,10 @@ from spectracam.io.exr import write_exr
 from spectracam.core.files import atomic_write
 from spectracam.io.plots import save_figure
 
+__all__ = ["DELTA_E_VMAX", "REC709_CHROMATICITIES", "delta_e_figure", "display_chromaticities", "report_csv",
+           "srgb_preview", "target_csv", "write_display_exr", "write_figure_json_markdown", "write_png",
+           "write_rendered_exr", "write_score_outputs", "write_target_outputs"]
+
 
 #: ITU-R BT.709 / sRGB primaries and D65 white, CIE 1931 xy (IEC 61966-2-1).
 REC709_CHROMATICITIES = (0.64, 0.33, 0.30, 0.60, 0.15, 0.06, 0.3127, 0.3290)

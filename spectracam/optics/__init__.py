@@ -13,6 +13,8 @@ from spectracam.core.registry import Registry
 from spectracam.core.spec import Spec, check_curve
 from spectracam.core.spectra import WavelengthGrid, band_average, energy_to_photons, tabulated
 
+__all__ = ["IRRADIANCE_FORMS", "OpticsSpec", "irradiance_factor", "radiance_to_photon_irradiance"]
+
 #: Irradiance forms: name → image irradiance per unit scene radiance (sr) as a function of f-number.
 IRRADIANCE_FORMS: Registry = Registry("optics.irradiance_form", "irradiance form")
 IRRADIANCE_FORMS.register("paraxial", lambda n: np.pi / (4 * n**2))  # the paper's equation, 3.2

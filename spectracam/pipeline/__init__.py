@@ -22,6 +22,11 @@ from spectracam.evaluation.score import ChartScore
 from spectracam.evaluation.score import score as score_stage
 from spectracam.sensor import SensorSpec
 
+__all__ = ["BOTH_WAYS_FIELDS", "MEMORY_PER_CUBE", "RADIANCE_MATCH_TOLERANCE", "STAND_IN_SCENE", "Scene",
+           "both_ways", "camera_processing", "capture", "capture_spectral_image", "check_bytes",
+           "check_cube_matches", "check_memory", "memory_available", "render", "scene_of", "score",
+           "score_row", "simulate", "stand_in_scene"]
+
 
 def scene_of(obj, what: str = "cube") -> Scene:
     """The scene a cube or capture records."""

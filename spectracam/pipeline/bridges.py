@@ -7,6 +7,8 @@ import numpy as np
 from spectracam.camera import CameraSpec, camera_responsivities
 from spectracam.core.spectra import WavelengthGrid
 
+__all__ = ["camera_sensitivities", "patch_spectra"]
+
 
 def patch_spectra(scene):
     """The chart's 24 patch radiances (band averages on the scene's grid, W·m⁻²·sr⁻¹·nm⁻¹) as a

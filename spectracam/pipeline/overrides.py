@@ -18,6 +18,9 @@ from typing import Callable, Iterable
 
 from spectracam.core.errors import ConfigError
 
+__all__ = ["DESIGN_PATH", "PATH", "SWITCHES", "apply_override", "apply_overrides", "parse_assignment",
+           "parse_value"]
+
 #: ``key``, ``key[i]``, ``table.field`` or ``table.field[i]``; names in either case (``temperatures_K``).
 PATH = re.compile(r"^([A-Za-z_][A-Za-z_0-9]*)(?:\.([A-Za-z_][A-Za-z_0-9]*))?(?:\[(\d+)\])?$")
 #: "arch/scheme" in one value, so an invalid pair is one error, never two half-applied fields.

@@ -26,6 +26,10 @@ from spectracam.scene.target import TargetSpec, resolve_target_files
 from spectracam.core.spec import Spec, _is_number
 from spectracam.core.spectra import CIE_RANGE_NM, WavelengthGrid
 
+__all__ = ["CURVE_FILES", "MIN_PATCH_PX", "SCENE_TABLES", "ImageSpec", "Scene", "experiment_base_scene",
+           "load_camera_config", "load_scene", "paper_scene", "parse_grid", "parse_scene", "read_toml",
+           "resolve_curve_files", "shipped_dir", "shipped_scene_file"]
+
 #: Fewest pixels across a patch's mask: a 4×4 mask still holds 4 pixels of each Bayer colour.
 MIN_PATCH_PX = 4
 #: The tables of a scene file, in order.

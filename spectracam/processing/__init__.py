@@ -1,125 +1,19 @@
-"""A camera's own decisions (issue 33): the white it estimates and the calibration it interpolates by it.
+"""Processing: what a camera does with its capture — demosaicking, colour conversion and display
+(:mod:`~spectracam.processing.color`), the white it estimates (:mod:`~spectracam.processing.white_balance`), the
+calibration it interpolates by it (:mod:`~spectracam.processing.calibration`), the developed-camera chain that joins
+them (:mod:`~spectracam.processing.develop`, issue 33) and the tone curves of the written pictures
+(:mod:`~spectracam.processing.tone`).
 
-The paper's camera knows the light: its conversion is fitted on the chart under the scene's own illuminant and its
-exposure is metered on the chart's white patch.  ``processing.camera`` names the whole chain:
-
-``oracle``     metering ``white_patch``, white balance ``oracle``, calibration ``scene_light`` — the paper's reading,
-               computed exactly as before (its numbers do not move);
-``developed``  metering ``percentile``, white balance ``corrected_moments`` (trained, never on the scored colours),
-               calibration ``dual_illuminant`` (the DNG model) — a camera that must find its own white.
-
-Each step can be overridden on its own (``capture.metering``, ``processing.white_balance``,
-``processing.calibration``); ``auto`` takes the camera's.  :func:`develop` turns a capture's camera image into the
-N×3 matrix the camera renders it with, and reports the white it found.
+The modules form a chain with no loop: :mod:`~spectracam.processing.registries` (the cameras and the registries the
+estimators and calibrations register into) < :mod:`~spectracam.processing.color` (with ``ProcessingSpec``, which
+validates against them) < :mod:`~spectracam.processing.white_balance`, :mod:`~spectracam.processing.calibration` <
+:mod:`~spectracam.processing.develop`.  This face imports them all, so every registry is complete once
+``spectracam.processing`` (or any module under it) is imported, and re-exports the developed-camera chain.
 """
-from __future__ import annotations
+from spectracam.processing.registries import CALIBRATIONS, CAMERAS, WHITE_BALANCE_METHODS
+from spectracam.processing import calibration, white_balance  # noqa: F401  (each registers its methods)
+from spectracam.processing.develop import (Development, develop, metered_camera, metering_method, oracle_block,
+                                           scored_reflectances, training_camera)
 
-from dataclasses import dataclass
-from functools import lru_cache
-
-import numpy as np
-
-from spectracam.processing.calibration import CALIBRATIONS, Calibration, white_neutral
-from spectracam.processing.white_balance import (WHITE_BALANCE_METHODS, Estimation, estimate_neutral, recovery_error_deg,
-                            reproduction_error_deg, usable_pixels)
-
-#: Each camera's steps: ``capture.metering``, ``processing.white_balance``, ``processing.calibration``.
-CAMERAS = {
-    "oracle": {"metering": "white_patch", "white_balance": "oracle", "calibration": "scene_light"},
-    "developed": {"metering": "percentile", "white_balance": "corrected_moments", "calibration": "dual_illuminant"},
-}
-
-__all__ = ["CAMERAS", "CALIBRATIONS", "WHITE_BALANCE_METHODS", "Development", "develop", "metered_camera"]
-
-
-def metering_method(camera, processing) -> str:
-    """``capture.metering`` with ``auto`` resolved by ``processing.camera``."""
-    m = camera.capture.metering
-    return CAMERAS[processing.camera]["metering"] if m == "auto" else m
-
-
-def metered_camera(camera, processing):
-    """``camera`` with its metering resolved by ``processing.camera`` (the capture stage reads ``auto`` as the white
-    patch: whoever holds the processing resolves it)."""
-    m = metering_method(camera, processing)
-    return camera if m == camera.capture.metering else camera.replace(capture=camera.capture.replace(metering=m))
-
-
-@dataclass(frozen=True, eq=False)
-class Development:
-    """What the camera decided for one image: the matrix ``(N, 3)`` from camera rates to linear display RGB, and the
-    report's ``white_balance`` block."""
-
-    matrix: np.ndarray
-    white_balance: dict
-    #: The estimated neutral ``(N,)``, e⁻/s up to scale (unit norm): the DNG's AsShotNeutral.
-    neutral: np.ndarray | None = None
-
-
-def scored_reflectances(reference, target_reference=None) -> tuple:
-    """The scored scene's colours as band reflectances ``(n, B)``, whatever the light (the trained estimator never
-    trains on them): the chart's patches, and a textured target's library."""
-    return _scored(reference.chart, reference.grid, None if target_reference is None else target_reference.library)
-
-
-@lru_cache(maxsize=16)
-def _scored(chart, grid, library) -> tuple:
-    from spectracam.scene.chart import patch_reflectances
-    from spectracam.scene.reflectances import load
-    from spectracam.core.spectra import band_average
-    from spectracam.processing.white_balance import band_reflectance
-
-    out = [np.stack([band_average(rho, grid) for _, rho in patch_reflectances(chart)])]
-    if library is not None:
-        out.append(band_reflectance(load(library, "target.library"), grid))
-    return tuple(np.ascontiguousarray(a, np.float64) for a in out)
-
-
-def training_camera(camera):
-    """The part of a camera its responses depend on (its exposure and metering do not change a neutral's
-    direction): one trained estimator serves every exposure scheme and metering of a sensor."""
-    cap = camera.capture
-    return camera.replace(capture=type(cap)(architecture=cap.architecture, cfa_pattern=cap.cfa_pattern,
-                                            fixed_pattern=cap.fixed_pattern))
-
-
-def develop(image: np.ndarray, raw, reference, processing, target_reference=None) -> Development:
-    """The developed camera's rendering matrix for the camera image ``(H, W, N)`` (e⁻/s; demosaicked,
-    exposure-normalised) of ``raw``: estimate the neutral (``processing.white_balance``), calibrate by it
-    (``processing.calibration``), and show the metered white at display Y = 1."""
-    from spectracam.processing.color import display_rgb_to_xyz
-
-    camera = raw.camera
-    true = white_neutral(reference.illuminant, reference.grid, camera)
-    ctx = Estimation(image, usable_pixels(image, raw.exposure_times_s, camera.sensor), processing, camera,
-                     reference.grid, true, scored_reflectances(reference, target_reference))
-    estimate = estimate_neutral(ctx)
-    M, info = CALIBRATIONS[processing.calibration_method](Calibration(reference, camera, processing, true), estimate)
-    metered = raw.metered_rate_e_per_s if raw.metered_rate_e_per_s is not None else true
-    Y = float(np.asarray(metered, float) @ M @ display_rgb_to_xyz(processing.display)[1])
-    if not np.isfinite(Y) or Y <= 0:
-        from spectracam.core.errors import SpectracamError
-
-        raise SpectracamError(f"processing: the metered white renders at luminance {Y:g}; the estimated neutral "
-                              f"{np.round(estimate, 6).tolist()} leaves the camera no white to show")
-    M = M / Y
-    block = {"method": processing.white_balance_method, "calibration": processing.calibration_method,
-             "neutral": (estimate / estimate.max()).tolist(), "true_neutral": (true / true.max()).tolist(),
-             "recovery_deg": float(recovery_error_deg(estimate, true)),
-             "reproduction_deg": float(reproduction_error_deg(estimate, true)),
-             "pixels_used": int(ctx.valid.sum()), **info}
-    if processing.white_balance_method == "corrected_moments":
-        from spectracam.processing.white_balance import exclusion_key, trained_correction
-
-        block["training"] = trained_correction(training_camera(camera), reference.grid,
-                                               processing.white_balance_training,
-                                               exclusion_key(ctx.scored_reflectances)).to_dict()
-    return Development(M, block, estimate)
-
-
-def oracle_block(reference, camera, processing) -> dict:
-    """The ``white_balance`` block of the oracle chain: the true neutral, errors 0."""
-    true = white_neutral(reference.illuminant, reference.grid, camera)
-    n = (true / true.max()).tolist()
-    return {"method": "oracle", "calibration": "scene_light", "neutral": n, "true_neutral": n,
-            "recovery_deg": 0.0, "reproduction_deg": 0.0}
+__all__ = ["CAMERAS", "CALIBRATIONS", "WHITE_BALANCE_METHODS", "Development", "develop", "metered_camera",
+           "metering_method", "oracle_block", "scored_reflectances", "training_camera"]

@@ -35,10 +35,13 @@ from functools import lru_cache
 import numpy as np
 
 from spectracam.core.errors import SpectracamError
-from spectracam.core.registry import Registry
+from spectracam.processing.color import CONVERSION_RCOND, adaptation_matrix, display_rgb_to_xyz, fit_conversion
+from spectracam.processing.registries import CALIBRATIONS  # noqa: F401  (the calibrations register into it)
 
-#: Calibrations: name → function ``(ctx: Calibration, neutral (N,)) → (N×3 camera→XYZ-at-display-white, info)``.
-CALIBRATIONS: Registry = Registry("processing.calibration", "colour calibration")
+__all__ = ["CALIBRATIONS", "CALIBRATION_LIGHTS", "CCT_RANGE_K", "D50_XYZ", "NEUTRAL_XY_ITERATIONS",
+           "NEUTRAL_XY_TOLERANCE", "Calibration", "DualIlluminant", "constrained_lstsq", "conversion_matrix",
+           "conversion_target_rgb", "dual_illuminant_matrices", "white_neutral", "xy_to_cct", "xyz_to_display_rgb",
+           "xyz_to_xy"]
 
 #: The DNG's two calibration lights (EXIF LightSource 17 = Standard light A, 21 = D65), as spectracam names them.
 CALIBRATION_LIGHTS = ("A", "D65")
@@ -81,8 +84,6 @@ def constrained_lstsq(A: np.ndarray, B: np.ndarray, c: np.ndarray, d: np.ndarray
     >>> np.allclose(np.ones(3) @ X, 1.0)
     True
     """
-    from spectracam.processing.color import CONVERSION_RCOND
-
     c = np.asarray(c, float)
     X0 = np.outer(c, np.asarray(d, float)) / (c @ c)
     _, _, vt = np.linalg.svd(c[None, :])
@@ -172,7 +173,6 @@ def _illuminant_cct(name: str) -> float:
 def dual_illuminant_matrices(reference, camera, adaptation: str) -> DualIlluminant:
     """The ColorMatrix and ForwardMatrix of ``camera`` under each of :data:`CALIBRATION_LIGHTS`, fitted on the chart
     of ``reference`` (memoised)."""
-    from spectracam.processing.color import adaptation_matrix
     from spectracam.scene.illuminant import IlluminantSpec
 
     cms, fms, ns, ccts = [], [], [], []
@@ -194,8 +194,6 @@ def dual_illuminant_matrices(reference, camera, adaptation: str) -> DualIllumina
 
 def xyz_to_display_rgb(processing) -> tuple[np.ndarray, np.ndarray]:
     """``(3×3 inverse display matrix, display white XYZ)``."""
-    from spectracam.processing.color import display_rgb_to_xyz
-
     M_disp = display_rgb_to_xyz(processing.display)
     return np.linalg.inv(M_disp), M_disp.sum(axis=1)
 
@@ -203,8 +201,6 @@ def xyz_to_display_rgb(processing) -> tuple[np.ndarray, np.ndarray]:
 def conversion_target_rgb(reference, processing) -> np.ndarray:
     """``(24, 3)`` what the conversion aims at (paper 3.5): the display RGB that shows each patch's XYZ carried
     from the light's white to the display's."""
-    from spectracam.processing.color import adaptation_matrix, display_rgb_to_xyz
-
     M_disp = display_rgb_to_xyz(processing.display)
     to_display_xyz = adaptation_matrix(reference.white_xyz, M_disp.sum(axis=1), processing.adaptation)
     return reference.patch_xyz @ to_display_xyz.T @ np.linalg.inv(M_disp).T
@@ -213,8 +209,6 @@ def conversion_target_rgb(reference, processing) -> np.ndarray:
 def conversion_matrix(reference, camera, processing) -> np.ndarray:
     """The N×3 colour conversion (paper 3.5; 3×3 for three channels): least squares from the chart's noise-free
     camera rates to :func:`conversion_target_rgb` — the paper's camera's, fitted under the scene's own light."""
-    from spectracam.processing.color import fit_conversion
-
     return fit_conversion(reference.patch_rates(camera), conversion_target_rgb(reference, processing))
 
 
@@ -229,7 +223,6 @@ def _scene_light(ctx: Calibration, neutral: np.ndarray):
 @CALIBRATIONS.register("dual_illuminant")
 def _dual_illuminant(ctx: Calibration, neutral: np.ndarray):
     """The DNG's two calibrations interpolated at the CCT the camera finds from ê (module docstring)."""
-    from spectracam.processing.color import adaptation_matrix
 
     dual = dual_illuminant_matrices(ctx.reference, ctx.camera, ctx.processing.adaptation)
     xy, cct, iterations = dual.neutral_to_xy(neutral)

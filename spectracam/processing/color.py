@@ -19,6 +19,12 @@ from spectracam.core.errors import ConfigError
 from spectracam.core.cielab import DELTA_E_METHODS, SNR_COMBINATIONS
 from spectracam.core.registry import Registry
 from spectracam.core.spec import Spec
+from spectracam.processing.registries import CALIBRATIONS, CAMERAS, WHITE_BALANCE_METHODS
+
+__all__ = ["ADAPTATIONS", "CONVERSION_RCOND", "CRT_PRIMARIES", "DEMOSAIC_BAND_ROWS", "DEMOSAIC_MARGIN",
+           "DEMOSAIC_METHODS", "DISPLAYS", "SCIELAB_SAMPLES_PER_DEGREE", "ProcessingSpec", "adaptation_matrix",
+           "demosaic", "demosaic_applies", "display_rgb_to_xyz", "fit_conversion", "periodic_bilinear",
+           "remosaic_to_bayer", "samples_per_degree", "tile_replicate"]
 
 #: colour-science's phosphor spectra of a typical CRT (Brainard 1997), the paper's "simple CRT display".
 CRT_PRIMARIES = "Typical CRT Brainard 1997"
@@ -85,7 +91,6 @@ class ProcessingSpec(Spec):
     display_pixel_pitch_mm: float = 25.4 / 120
 
     def validate(self) -> None:
-        from spectracam.processing import CALIBRATIONS, CAMERAS, WHITE_BALANCE_METHODS
         from spectracam.scene.reflectances import LIBRARIES
 
         self.choice("camera", tuple(CAMERAS))
@@ -140,15 +145,11 @@ class ProcessingSpec(Spec):
     @property
     def white_balance_method(self) -> str:
         """``white_balance`` with ``auto`` resolved by ``camera``."""
-        from spectracam.processing import CAMERAS
-
         return CAMERAS[self.camera]["white_balance"] if self.white_balance == "auto" else self.white_balance
 
     @property
     def calibration_method(self) -> str:
         """``calibration`` with ``auto`` resolved by ``camera``."""
-        from spectracam.processing import CAMERAS
-
         return CAMERAS[self.camera]["calibration"] if self.calibration == "auto" else self.calibration
 
     @property

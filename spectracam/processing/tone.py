@@ -13,6 +13,8 @@ import numpy as np
 
 from spectracam.core.registry import Registry
 
+__all__ = ["FILMIC_EXPOSURE", "HABLE", "HABLE_WHITE", "TONE_CURVES", "tone_map"]
+
 #: Tone curves: name → function ``(linear RGB, ≥ 0 where shown) → values in [0, 1] before the sRGB encoding``.
 TONE_CURVES: Registry = Registry("processing.tone_curve", "tone curve")
 

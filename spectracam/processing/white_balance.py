@@ -39,10 +39,14 @@ from functools import lru_cache
 import numpy as np
 
 from spectracam.core.errors import SpectracamError
-from spectracam.core.registry import Registry
+from spectracam.processing.registries import WHITE_BALANCE_METHODS  # noqa: F401  (the estimators register into it)
 
-#: Estimators: name → function ``(ctx: Estimation) → neutral (N,)``.
-WHITE_BALANCE_METHODS: Registry = Registry("processing.white_balance", "white-balance estimator")
+__all__ = ["CLIP_SHARE", "EDGE_ORDERS", "EXCLUDE_RMS", "MOMENT_ORDERS", "TRAINING_EDGES_PER_SURFACE",
+           "TRAINING_LIGHTS", "TRAINING_RIDGE", "TRAINING_SCENES_PER_LIGHT", "TRAINING_SEED", "TRAINING_SURFACES",
+           "WHITE_BALANCE_METHODS", "WHITE_PATCH_PERCENTILE", "Estimation", "TrainedCorrection", "band_reflectance",
+           "edge_magnitudes", "estimate_neutral", "exclusion_key", "minkowski_mean", "moment_features",
+           "recovery_error_deg", "reproduction_error_deg", "trained_correction", "training_camera", "training_lights",
+           "usable_pixels"]
 
 #: ``white_patch``: the percentile of each channel taken as the white.  Max-RGB would take 100; 99.9 ignores up to
 #: 1 pixel in 1000 (hot pixels, a specular glint) while the chart's white patch covers ≈ 3 % of its image.
@@ -180,11 +184,17 @@ def edge_magnitudes(ctx: Estimation) -> np.ndarray:
 @WHITE_BALANCE_METHODS.register("corrected_moments")
 def _corrected_moments(ctx: Estimation) -> np.ndarray:
     """The moments of the usable pixels through the correction trained for this camera (module docstring)."""
-    from spectracam.processing import training_camera
-
     model = trained_correction(training_camera(ctx.camera), ctx.grid, ctx.processing.white_balance_training,
                                exclusion_key(ctx.scored_reflectances))
     return moment_features(ctx.pixels(), edge_magnitudes(ctx)) @ model.correction
+
+
+def training_camera(camera):
+    """The part of a camera its responses depend on (its exposure and metering do not change a neutral's
+    direction): one trained estimator serves every exposure scheme and metering of a sensor."""
+    cap = camera.capture
+    return camera.replace(capture=type(cap)(architecture=cap.architecture, cfa_pattern=cap.cfa_pattern,
+                                            fixed_pattern=cap.fixed_pattern))
 
 
 @dataclass(frozen=True, eq=False)

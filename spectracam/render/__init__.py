@@ -10,6 +10,8 @@ from __future__ import annotations
 from spectracam.core.registry import Registry
 from spectracam.render.cube import VARIANTS, RadianceCube, RenderSpec
 
+__all__ = ["RENDERERS", "VARIANTS", "RadianceCube", "RenderSpec", "render"]
+
 #: Renderers: name → function ``(scene, progress: bool, log) → RadianceCube``.
 RENDERERS: Registry = Registry("renderer", "renderer")
 

@@ -13,6 +13,8 @@ from spectracam.scene.chart import View, patch_coverage
 from spectracam.scene.reference import ChartReference
 from spectracam.render.cube import RadianceCube
 
+__all__ = ["render_analytic"]
+
 
 def render_analytic(scene) -> RadianceCube:
     """The chart's radiance cube in closed form: each pixel mixes the surround and the patches in

@@ -38,6 +38,11 @@ from spectracam.scene.illuminant import spectral_irradiance
 from spectracam.core.spectra import band_average, band_sample_points
 from spectracam.render.cube import RadianceCube
 
+__all__ = ["CAMERA_DISTANCE_MM", "PATCH_LIFT_MM", "POINTS_PER_BAND", "REFERENCE_WINDOW_NM", "VARIANT_NAMES",
+           "WITHIN_BAND", "activate_variant", "band_scene", "band_seed", "build_scene", "even_band_width_nm",
+           "find_libllvm19", "load_scene", "open_variant", "probe_variant", "regular_spectrum",
+           "render_bands", "render_metadata", "render_mitsuba", "run_probe", "select_variant"]
+
 #: Start of the reference wavelength window every band is mapped into (any visible value works).
 REFERENCE_WINDOW_NM = 500.0
 #: Linear segments per band in the spectra handed to Mitsuba (0.5 nm for 10 nm bands).
@@ -211,20 +216,55 @@ def band_seed(seed: int, band: int) -> int:
 WITHIN_BAND = ("light-weighted", "sampled")
 
 
-def render_mitsuba(scene, progress: bool = False, log=None, within_band: str = "light-weighted") -> RadianceCube:
-    if within_band not in WITHIN_BAND:
-        raise SpectracamError(f"within_band = {within_band!r}: must be one of " + ", ".join(map(repr, WITHIN_BAND)))
+def open_variant(scene, log=None):
+    """``(mi, variant, reason, band width nm)``: Mitsuba with the variant ``scene.render.variant`` resolves
+    to active (said to ``log``), and the one band width of ``scene``'s grid (evenly spaced grids only)."""
     variant, reason = select_variant(scene.render.variant)
     if log:
         log(f"Mitsuba variant {variant} ({reason})")
     mi = activate_variant(variant)
+    return mi, variant, reason, even_band_width_nm(scene.grid)
 
+
+def load_scene(mi, d: dict):
+    """``(mi_scene, params)`` of a scene dictionary.  optimize=False: the loader would otherwise merge
+    rectangles with identical placeholder BSDFs into one mesh, and their spectra could no longer be
+    updated per band."""
+    mi_scene = mi.load_dict(d, optimize=False)
+    return mi_scene, mi.traverse(mi_scene)
+
+
+def render_bands(mi, mi_scene, params, scene, set_band, seed, progress: bool = False) -> np.ndarray:
+    """The ``(H, W, B)`` float32 cube of ``scene``'s image and grid from the one compiled scene: per
+    band ``b``, ``set_band(b)`` writes its spectra into ``params``, then one render with sampler seed
+    ``seed(b)``."""
+    from spectracam.core.progress import bar
+
+    H, W, B = scene.image.height, scene.image.width, len(scene.grid)
+    cube = np.empty((H, W, B), dtype=np.float32)
+    # a bar on a terminal only; a log (stderr redirected) gets the one line the caller writes per stage
+    for b in bar(range(B), desc="render bands", unit="band", progress=progress):
+        set_band(b)
+        params.update()
+        img = mi.render(mi_scene, params, seed=seed(b))
+        cube[:, :, b] = np.asarray(img)[:, :, 0]
+    return cube
+
+
+def render_metadata(mi, variant: str, reason: str, samples_per_pixel: int, seed: int, within_band: str,
+                    **more) -> dict:
+    """A Mitsuba cube's ``metadata`` (``more``: the caller's own entries, before the version)."""
+    return {"renderer": "mitsuba", "variant": variant, "variant_reason": reason,
+            "samples_per_pixel": samples_per_pixel, "seed": seed, "within_band": within_band, **more,
+            "mitsuba_version": mi.__version__}
+
+
+def render_mitsuba(scene, progress: bool = False, log=None, within_band: str = "light-weighted") -> RadianceCube:
+    if within_band not in WITHIN_BAND:
+        raise SpectracamError(f"within_band = {within_band!r}: must be one of " + ", ".join(map(repr, WITHIN_BAND)))
+    mi, variant, reason, ref_width = open_variant(scene, log)
     grid = scene.grid
-    ref_width = even_band_width_nm(grid)
-    # optimize=False: the loader would otherwise merge the 25 rectangles (and their BSDFs, identical
-    # placeholders) into one mesh, and the per-patch spectra could no longer be updated.
-    mi_scene = mi.load_dict(build_scene(mi, scene, ref_width), optimize=False)
-    params = mi.traverse(mi_scene)
+    mi_scene, params = load_scene(mi, build_scene(mi, scene, ref_width))
 
     E = spectral_irradiance(scene.illuminant)
     reflectances = patch_reflectances(scene.chart)
@@ -234,15 +274,10 @@ def render_mitsuba(scene, progress: bool = False, log=None, within_band: str = "
     with np.errstate(invalid="ignore", divide="ignore"):
         rho_band = [np.nan_to_num(band_average(lambda lam, rho=rho: E(lam) * rho(lam), grid) / light_band)
                     for _, rho in reflectances]
-    H, W, B = scene.image.height, scene.image.width, len(grid)
-    cube = np.empty((H, W, B), dtype=np.float32)
     Float = type(params["board.bsdf.reflectance.values"])  # mi.Float, or a buffer type in scalar variants
     params["board.bsdf.reflectance.values"] = Float(np.full(POINTS_PER_BAND + 1, scene.chart.surround_reflectance))
 
-    from spectracam.core.progress import bar
-
-    # a bar on a terminal only; a log (stderr redirected) gets the one line the caller writes per stage
-    for b in bar(range(B), desc="render bands", unit="band", progress=progress):
+    def set_band(b):
         if within_band == "sampled":
             params["light.irradiance.values"] = Float(E(lam[b]).astype(np.float32))
             for p, (_, rho) in enumerate(reflectances):
@@ -252,10 +287,7 @@ def render_mitsuba(scene, progress: bool = False, log=None, within_band: str = "
             for p, rho in enumerate(rho_band):
                 params[f"patch{p:02d}.bsdf.reflectance.values"] = Float(np.full(POINTS_PER_BAND + 1, rho[b],
                                                                                 np.float32))
-        params.update()
-        img = mi.render(mi_scene, params, seed=band_seed(scene.render.seed, b))
-        cube[:, :, b] = np.asarray(img)[:, :, 0]
-    meta = {"renderer": "mitsuba", "variant": variant, "variant_reason": reason,
-            "samples_per_pixel": scene.render.samples_per_pixel, "seed": scene.render.seed,
-            "within_band": within_band, "mitsuba_version": mi.__version__}
+
+    cube = render_bands(mi, mi_scene, params, scene, set_band, lambda b: band_seed(scene.render.seed, b), progress)
+    meta = render_metadata(mi, variant, reason, scene.render.samples_per_pixel, scene.render.seed, within_band)
     return RadianceCube(cube, np.asarray(grid.centres_nm, float), meta)

@@ -37,6 +37,9 @@ from spectracam.scene.reference import TargetReference
 from spectracam.core.spectra import band_average
 from spectracam.render.cube import RadianceCube
 
+__all__ = ["SAMPLERS", "TEXTURE_SEED_STREAM", "render_target_analytic", "render_target_mitsuba",
+           "texture_seed"]
+
 
 #: Where a textured Mitsuba render places each pixel's samples, the same in every band (module docstring):
 #: "texels" — one at each texel centre (exact); "independent" — ``render.samples_per_pixel`` random positions.
@@ -59,18 +62,15 @@ def render_target_analytic(scene) -> RadianceCube:
 
 
 def render_target_mitsuba(scene, progress: bool = False, log=None, sampler: str = "texels") -> RadianceCube:
-    from spectracam.render.mitsuba import POINTS_PER_BAND, activate_variant, band_scene, even_band_width_nm, select_variant
+    from spectracam.render.mitsuba import (POINTS_PER_BAND, band_scene, load_scene, open_variant, render_bands,
+                                           render_metadata)
 
     if sampler not in SAMPLERS:
         raise SpectracamError(f"sampler = {sampler!r}: must be one of " + ", ".join(map(repr, SAMPLERS)))
-    variant, reason = select_variant(scene.render.variant)
-    if log:
-        log(f"Mitsuba variant {variant} ({reason})")
-    mi = activate_variant(variant)
+    mi, variant, reason, width_nm = open_variant(scene, log)
     grid = scene.grid
-    width_nm = even_band_width_nm(grid)
     ref = TargetReference.of(scene)
-    W, H, B = scene.image.width, scene.image.height, len(grid)
+    W, H = scene.image.width, scene.image.height
     E = spectral_irradiance(scene.illuminant)
     light_band = band_average(E, grid)                                     # ⟨E⟩ per band
     with np.errstate(invalid="ignore", divide="ignore"):                   # ⟨E·S⟩/⟨E⟩: 0 where there is no light
@@ -85,20 +85,15 @@ def render_target_mitsuba(scene, progress: bool = False, log=None, sampler: str 
                    "bsdf": {"type": "diffuse", "reflectance": {
                        "type": "bitmap", "data": mi.TensorXf(rho[labels, 0][..., None]), "raw": True,
                        "filter_type": "nearest", "wrap_mode": "clamp"}}}
-    mi_scene = mi.load_dict(d, optimize=False)
-    params = mi.traverse(mi_scene)
+    mi_scene, params = load_scene(mi, d)
     Float = type(params["light.irradiance.values"])
     seed = texture_seed(scene.render.seed)          # one seed for every band: the positions repeat (docstring)
-    cube = np.empty((H, W, B), dtype=np.float32)
-    from spectracam.core.progress import bar
 
-    for b in bar(range(B), desc="render bands", unit="band", progress=progress):
+    def set_band(b):
         params["light.irradiance.values"] = Float(np.full(POINTS_PER_BAND + 1, light_band[b], np.float32))
         params["target.bsdf.reflectance.data"] = mi.TensorXf(rho[labels, b][..., None])
-        params.update()
-        img = mi.render(mi_scene, params, seed=seed)
-        cube[:, :, b] = np.asarray(img)[:, :, 0]
-    meta = {"renderer": "mitsuba", "variant": variant, "variant_reason": reason,
-            "samples_per_pixel": spp, "seed": scene.render.seed, "within_band": "light-weighted",
-            "sampler": sampler, "sample_positions": "the same in every band", "mitsuba_version": mi.__version__}
+
+    cube = render_bands(mi, mi_scene, params, scene, set_band, lambda b: seed, progress)
+    meta = render_metadata(mi, variant, reason, spp, scene.render.seed, "light-weighted", sampler=sampler,
+                           sample_positions="the same in every band")
     return RadianceCube(cube, np.asarray(grid.centres_nm, float), meta)

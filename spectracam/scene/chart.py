@@ -13,6 +13,10 @@ import numpy as np
 from spectracam.core.spec import Spec
 from spectracam.core.spectra import Spectrum, tabulated
 
+__all__ = ["DATASETS", "WHITE_PATCH", "ChartSpec", "View", "dataset_range_nm", "patch_boxes",
+           "patch_coverage", "patch_masks", "patch_means", "patch_names_and_data", "patch_rectangles_mm",
+           "patch_reflectances"]
+
 ROWS, COLUMNS = 4, 6
 
 #: Reflectance datasets colour-science ships for the ColorChecker Classic (24 patches, standard order).

@@ -17,6 +17,10 @@ from spectracam.core.registry import Registry
 from spectracam.core.spec import Spec, _is_number
 from spectracam.core.spectra import K_M_LM_PER_W, Spectrum, cie_1931_cmfs, planck_radiance, tabulated
 
+__all__ = ["ILLUMINANTS", "MIN_SPD_SAMPLES", "TEMPERATURE_RANGE_K", "TYPE_KEYS", "IlluminantSpec",
+           "irradiance_scale", "relative_spd", "spectral_irradiance", "switched_table",
+           "white_diffuser_radiance"]
+
 #: Colour temperatures accepted for a blackbody, K: below 1000 K almost nothing is visible; above
 #: 40000 K the spectral shape no longer changes appreciably across the visible.
 TEMPERATURE_RANGE_K = (1000.0, 40000.0)

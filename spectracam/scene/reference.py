@@ -22,6 +22,10 @@ from spectracam.core.spectra import WavelengthGrid, band_average, band_sample_po
 if TYPE_CHECKING:  # the camera stage sits above the scene: a camera is only asked for its rates
     from spectracam.camera import CameraSpec
 
+__all__ = ["LIBRARY_CHUNK", "LIBRARY_POINTS_PER_BAND", "TARGET_ROWS", "XYZ_STEP_NM", "ChartReference",
+           "LibraryColours", "TargetReference", "colorimetry", "library_colours", "material_radiance",
+           "observer_grid"]
+
 #: Wavelength step of the reference colorimetry, nm: fine enough that the XYZ of every patch is
 #: converged (0.1 nm and 1 nm differ by < 1e-4 ΔE*ab), whatever the scene's band width.
 XYZ_STEP_NM = 0.1

@@ -38,6 +38,9 @@ import numpy as np
 
 from spectracam.core.errors import ConfigError, SpectracamError
 
+__all__ = ["CITATIONS", "LIBRARIES", "LUXPY_LIBRARIES", "MAX_REFLECTANCE", "MIN_REFLECTANCE",
+           "ReflectanceSet", "check_available", "load", "read_csv"]
+
 #: Reflectances above this are refused: a measured, non-fluorescent surface stays below ~1.05.
 MAX_REFLECTANCE = 1.5
 #: Measurement noise leaves some dark samples slightly below 0 (rawtoaces: −2e-18): down to this they

@@ -39,9 +39,16 @@ from pathlib import Path
 import numpy as np
 
 from spectracam.core.errors import ConfigError, SpectracamError
+from spectracam.core.registry import Registry
 from spectracam.core.spec import Spec
 
-TARGET_KINDS = ("chart", "samples", "mondrian", "dead_leaves", "photo")
+__all__ = ["BATCH", "MAX_PHOTO_PIXELS", "MAX_SHAPES", "MAX_TEXELS", "SHIPPED_PHOTOS", "TARGET_KINDS", "TargetSpec",
+           "file_sha256", "photo_path", "power_law", "resolve_target_files", "texel_labels"]
+
+#: Target kinds (module docstring): name → function ``(spec, shape, n_samples, library_lab) → labels``, the label image
+#: ``(rows, columns)`` int32 on a texel grid of ``shape`` (:func:`texel_labels`).  A kind's place in this order is part
+#: of its painted targets' seed: a new kind is registered after these.
+TARGET_KINDS: Registry = Registry("target.kind", "target kind")
 #: The photograph shipped with the package: Grace Hopper, U.S. Navy portrait, public domain (the copy
 #: matplotlib ships as sample data, matplotlib PR #1599), reduced to 160 × 188 px.
 SHIPPED_PHOTOS = {"grace_hopper": "grace_hopper_160.png"}
@@ -219,7 +226,7 @@ def _paint(kind: str, spec: TargetSpec, n: int, shape: tuple[int, int]) -> np.nd
 
     s = spec.supersampling
     h, w = shape
-    rng = np.random.default_rng(np.random.SeedSequence([spec.seed, TARGET_KINDS.index(kind)]))
+    rng = np.random.default_rng(np.random.SeedSequence([spec.seed, TARGET_KINDS.names.index(kind)]))
     labels = np.full(shape, -1, np.int32)
     lo, hi = spec.size_min_px * s, spec.size_max_px * s
     bare, drawn = h * w, 0
@@ -287,21 +294,32 @@ def _read_photo(path: Path) -> np.ndarray:
     """Linear sRGB ``(h, w, 3)`` in 0–1 of an image file: 8- or 16-bit (sRGB-encoded: decoded here), or a
     floating-point TIFF (linear light already, 1 = white: read as is, its values checked); one line if it
     is not one, or is larger than :data:`MAX_PHOTO_PIXELS` (checked on its header, before its pixels)."""
-    import warnings
-
-    from PIL import Image, UnidentifiedImageError
-
     from spectracam.core.files import regular_file
 
     path = regular_file(path, "target.photo")
+    arr, floating = _decode_photo(path, _file_magic(path))
+    arr = _photo_rgb(path, arr)
+    return _checked_linear(path, arr) if floating else _srgb_decoded(arr)
+
+
+def _file_magic(path: Path) -> bytes:
+    """The file's first 4 bytes (a TIFF's signature: :data:`_TIFF_MAGIC`)."""
     try:
         with open(path, "rb") as f:
-            magic = f.read(4)
+            return f.read(4)
     except FileNotFoundError:
         raise _photo_error(path, "no such file") from None
     except OSError as e:
         raise _photo_error(path, f"cannot be read ({e.strerror})") from None
-    linear = None
+
+
+def _decode_photo(path: Path, magic: bytes) -> tuple[np.ndarray, bool]:
+    """``(pixels, floating)``: the image as PIL decodes it — or tifffile, a floating-point RGB TIFF PIL cannot read —
+    and whether it is floating point (linear light); its size checked on its header first."""
+    import warnings
+
+    from PIL import Image, UnidentifiedImageError
+
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", Image.DecompressionBombWarning)
@@ -309,9 +327,8 @@ def _read_photo(path: Path) -> np.ndarray:
                 _check_photo_size(path, *im.size)
                 im.load()
                 if im.mode == "F":   # 32-bit float (one channel): linear light; convert("RGB") would clip it to 0/1
-                    linear = np.asarray(im, dtype=np.float64)
-                else:
-                    arr = np.asarray(im.convert("RGB") if im.mode not in ("I;16", "I;16B", "RGB") else im)
+                    return np.asarray(im, dtype=np.float64), True
+                return np.asarray(im.convert("RGB") if im.mode not in ("I;16", "I;16B", "RGB") else im), False
     except FileNotFoundError:
         raise _photo_error(path, "no such file") from None
     except Image.DecompressionBombError as e:   # a header declaring more pixels than PIL will decode at all
@@ -324,11 +341,13 @@ def _read_photo(path: Path) -> np.ndarray:
     except UnidentifiedImageError as e:
         if magic not in _TIFF_MAGIC:
             raise _photo_error(path, f"not an image file PIL can read ({e}); give a PNG, JPEG or TIFF") from None
-        linear = _read_float_tiff(path).astype(np.float64)
+        return _read_float_tiff(path).astype(np.float64), True
     except (OSError, SyntaxError, ValueError) as e:
         raise _photo_error(path, f"not an image file PIL can read ({e}); give a PNG, JPEG or TIFF") from None
-    if linear is not None:
-        arr = linear
+
+
+def _photo_rgb(path: Path, arr: np.ndarray) -> np.ndarray:
+    """``(h, w, 3)``: grey repeated, alpha dropped; one line for any other shape or one under 2×2 pixels."""
     if arr.ndim == 2:
         arr = np.repeat(arr[:, :, None], 3, axis=2)
     if arr.ndim != 3 or arr.shape[2] not in (1, 3, 4):
@@ -338,16 +357,23 @@ def _read_photo(path: Path) -> np.ndarray:
     arr = arr[:, :, :3]
     if arr.shape[0] < 2 or arr.shape[1] < 2:
         raise _photo_error(path, f"{arr.shape[1]}x{arr.shape[0]} px; at least 2x2 needed")
-    if linear is not None:   # floating point: linear light, 1 = a perfect white; nothing is clipped unsaid
-        if not np.all(np.isfinite(arr)):
-            raise _photo_error(path, "a floating-point image with NaN or infinite values")
-        lo, hi = float(arr.min()), float(arr.max())
-        if lo < 0 or hi > 1:
-            raise _photo_error(path, f"a floating-point image is read as linear light 0–1 (1 = white); this one "
-                               f"spans {lo:.4g}–{hi:.4g}: scale it into 0–1")
-        return np.ascontiguousarray(arr, dtype=np.float64)
+    return arr
+
+
+def _checked_linear(path: Path, arr: np.ndarray) -> np.ndarray:
+    """A floating-point image: linear light, 1 = a perfect white, as is; nothing is clipped unsaid."""
+    if not np.all(np.isfinite(arr)):
+        raise _photo_error(path, "a floating-point image with NaN or infinite values")
+    lo, hi = float(arr.min()), float(arr.max())
+    if lo < 0 or hi > 1:
+        raise _photo_error(path, f"a floating-point image is read as linear light 0–1 (1 = white); this one "
+                           f"spans {lo:.4g}–{hi:.4g}: scale it into 0–1")
+    return np.ascontiguousarray(arr, dtype=np.float64)
+
+
+def _srgb_decoded(arr: np.ndarray) -> np.ndarray:
+    """8- or 16-bit sRGB-encoded values as linear light 0–1 (IEC 61966-2-1 decoding)."""
     encoded = arr.astype(np.float64) / (65535.0 if arr.dtype == np.uint16 or arr.max() > 255 else 255.0)
-    # IEC 61966-2-1 decoding
     return np.where(encoded <= 0.04045, encoded / 12.92, ((encoded + 0.055) / 1.055) ** 2.4)
 
 
@@ -398,13 +424,35 @@ def texel_labels(spec: TargetSpec, width_px: int, height_px: int, n_samples: int
     the surround.  ``library_lab`` (``photo`` only): the samples' CIELAB ``(n, 3)`` under D65."""
     spec.check_size(width_px, height_px)
     shape = spec.texel_shape(width_px, height_px)
-    if spec.kind == "samples":
-        labels = _samples_layout(spec, n_samples, shape)
-    elif spec.kind in ("mondrian", "dead_leaves"):
-        labels = _paint(spec.kind, spec, n_samples, shape)
-    elif spec.kind == "photo":
-        labels = _photo_layout(spec, shape, np.asarray(library_lab, float))
-    else:
-        raise SpectracamError(f"target.kind = {spec.kind!r}: the ColorChecker is not a textured target")
+    labels = TARGET_KINDS[spec.kind](spec, shape, n_samples, library_lab)
     labels.setflags(write=False)
     return labels
+
+
+# -- the kinds, registered in the order of their seeds ------------------------------------------------
+
+@TARGET_KINDS.register("chart")
+def _chart(spec: TargetSpec, shape, n_samples: int, library_lab) -> np.ndarray:
+    """The ColorChecker of ``[chart]``: no texel grid (the chart's own geometry draws it)."""
+    raise SpectracamError(f"target.kind = {spec.kind!r}: the ColorChecker is not a textured target")
+
+
+@TARGET_KINDS.register("samples")
+def _samples(spec: TargetSpec, shape, n_samples: int, library_lab) -> np.ndarray:
+    """The library's samples as a chart (:func:`_samples_layout`)."""
+    return _samples_layout(spec, n_samples, shape)
+
+
+def _painted(spec: TargetSpec, shape, n_samples: int, library_lab) -> np.ndarray:
+    """Occluding rectangles (``mondrian``) or discs (``dead_leaves``): :func:`_paint`."""
+    return _paint(spec.kind, spec, n_samples, shape)
+
+
+TARGET_KINDS.register("mondrian", _painted)
+TARGET_KINDS.register("dead_leaves", _painted)
+
+
+@TARGET_KINDS.register("photo")
+def _photo(spec: TargetSpec, shape, n_samples: int, library_lab) -> np.ndarray:
+    """A photograph, each texel its nearest library sample (:func:`_photo_layout`)."""
+    return _photo_layout(spec, shape, np.asarray(library_lab, float))

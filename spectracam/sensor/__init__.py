@@ -26,6 +26,11 @@ from spectracam.sensor.kernels import CounterRNG
 from spectracam.core.registry import Registry
 from spectracam.core.spec import Spec
 
+__all__ = ["CHUNK_PX", "FPN_READINGS", "NOISE_SOURCES", "SHOT_NOISE_MODELS", "CounterRNG", "FixedPattern",
+           "FpnReading", "PatternDraws", "PatternRef", "PixelDraw", "SensorSpec", "adc", "adc_full_scale_dn",
+           "adc_inverse", "add_offset_fpn", "add_read_noise", "add_shot_noise", "clip_to_well", "expose",
+           "fixed_pattern", "fixed_pattern_parts", "integrate_charge", "noise_stream"]
+
 
 class FpnReading(NamedTuple):
     """How a stated FPN fraction of full swing becomes per-pixel offsets."""

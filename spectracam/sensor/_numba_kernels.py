@@ -99,38 +99,20 @@ _MASK, _S32, _S8 = np.uint64(0xFFFFFFFF), np.uint64(32), np.uint64(8)
 
 
 @nb.njit(inline="always")
+def _philox_round(c0, c1, c2, c3, k0, k1):
+    """One Philox4x32 round: two 32x32 -> 64-bit products, their halves mixed with the other words and the key."""
+    p0, p1 = _M0 * c0, _M1 * c2
+    return ((p1 >> _S32) ^ c1 ^ k0) & _MASK, p1 & _MASK, ((p0 >> _S32) ^ c3 ^ k1) & _MASK, p0 & _MASK
+
+
+@nb.njit(inline="always")
 def philox(c0, c1, c2, c3, k0, k1):
-    """Philox4x32-10 of counter (c0..c3) under key (k0, k1); unrolled, so loops over it vectorise."""
-    p0, p1 = _M0 * c0, _M1 * c2
-    c0, c1, c2, c3 = ((p1 >> _S32) ^ c1 ^ k0) & _MASK, p1 & _MASK, ((p0 >> _S32) ^ c3 ^ k1) & _MASK, p0 & _MASK
-    k0, k1 = (k0 + _W0) & _MASK, (k1 + _W1) & _MASK
-    p0, p1 = _M0 * c0, _M1 * c2
-    c0, c1, c2, c3 = ((p1 >> _S32) ^ c1 ^ k0) & _MASK, p1 & _MASK, ((p0 >> _S32) ^ c3 ^ k1) & _MASK, p0 & _MASK
-    k0, k1 = (k0 + _W0) & _MASK, (k1 + _W1) & _MASK
-    p0, p1 = _M0 * c0, _M1 * c2
-    c0, c1, c2, c3 = ((p1 >> _S32) ^ c1 ^ k0) & _MASK, p1 & _MASK, ((p0 >> _S32) ^ c3 ^ k1) & _MASK, p0 & _MASK
-    k0, k1 = (k0 + _W0) & _MASK, (k1 + _W1) & _MASK
-    p0, p1 = _M0 * c0, _M1 * c2
-    c0, c1, c2, c3 = ((p1 >> _S32) ^ c1 ^ k0) & _MASK, p1 & _MASK, ((p0 >> _S32) ^ c3 ^ k1) & _MASK, p0 & _MASK
-    k0, k1 = (k0 + _W0) & _MASK, (k1 + _W1) & _MASK
-    p0, p1 = _M0 * c0, _M1 * c2
-    c0, c1, c2, c3 = ((p1 >> _S32) ^ c1 ^ k0) & _MASK, p1 & _MASK, ((p0 >> _S32) ^ c3 ^ k1) & _MASK, p0 & _MASK
-    k0, k1 = (k0 + _W0) & _MASK, (k1 + _W1) & _MASK
-    p0, p1 = _M0 * c0, _M1 * c2
-    c0, c1, c2, c3 = ((p1 >> _S32) ^ c1 ^ k0) & _MASK, p1 & _MASK, ((p0 >> _S32) ^ c3 ^ k1) & _MASK, p0 & _MASK
-    k0, k1 = (k0 + _W0) & _MASK, (k1 + _W1) & _MASK
-    p0, p1 = _M0 * c0, _M1 * c2
-    c0, c1, c2, c3 = ((p1 >> _S32) ^ c1 ^ k0) & _MASK, p1 & _MASK, ((p0 >> _S32) ^ c3 ^ k1) & _MASK, p0 & _MASK
-    k0, k1 = (k0 + _W0) & _MASK, (k1 + _W1) & _MASK
-    p0, p1 = _M0 * c0, _M1 * c2
-    c0, c1, c2, c3 = ((p1 >> _S32) ^ c1 ^ k0) & _MASK, p1 & _MASK, ((p0 >> _S32) ^ c3 ^ k1) & _MASK, p0 & _MASK
-    k0, k1 = (k0 + _W0) & _MASK, (k1 + _W1) & _MASK
-    p0, p1 = _M0 * c0, _M1 * c2
-    c0, c1, c2, c3 = ((p1 >> _S32) ^ c1 ^ k0) & _MASK, p1 & _MASK, ((p0 >> _S32) ^ c3 ^ k1) & _MASK, p0 & _MASK
-    k0, k1 = (k0 + _W0) & _MASK, (k1 + _W1) & _MASK
-    p0, p1 = _M0 * c0, _M1 * c2
-    c0, c1, c2, c3 = ((p1 >> _S32) ^ c1 ^ k0) & _MASK, p1 & _MASK, ((p0 >> _S32) ^ c3 ^ k1) & _MASK, p0 & _MASK
-    return c0, c1, c2, c3
+    """Philox4x32-10 of counter (c0..c3) under key (k0, k1); the fixed-count loop is unrolled by the
+    compiler, so loops over it vectorise."""
+    for _ in range(9):
+        c0, c1, c2, c3 = _philox_round(c0, c1, c2, c3, k0, k1)
+        k0, k1 = (k0 + _W0) & _MASK, (k1 + _W1) & _MASK
+    return _philox_round(c0, c1, c2, c3, k0, k1)
 
 
 _F2M24 = np.float32(2.0**-24)
@@ -255,6 +237,68 @@ def poisson(lam, i, k0, k1):
             return k
 
 
+@nb.njit(inline="always")
+def _words(i, k0, k1):
+    """The four Philox words of pixel (or value) ``i``'s first draw: counter ``(i low, i high, 0, 0)``."""
+    return philox(i & _MASK, i >> _S32, np.uint64(0), np.uint64(0), k0, k1)
+
+
+#: What :func:`_pattern_row` draws (``sensor.fixed_pattern``'s per-pixel parts): an offset s·N plus the
+#: column FPN (FPN reading "std"), an offset s·(U − ½) plus the column FPN ("bound"), a PRNU gain
+#: 1 + s·N, a DSNU factor max(1 + s·N, 0).
+_OFFSET, _OFFSET_BOUND, _GAIN, _DARK_GAIN = 0, 1, 2, 3
+
+
+@nb.njit(inline="always")
+def _pattern_row(buf, row0, key, scale, column, part):
+    """``buf[x]`` = the fixed pattern's ``part`` (a constant at each call, so the loop keeps no branch
+    and vectorises) of pixel ``row0 + x``, drawn from ``key``; ``column``: the column FPN the offsets
+    add.  Returns ``buf``."""
+    k0, k1 = np.uint64(key[0]), np.uint64(key[1])
+    for x in range(buf.shape[0]):
+        b0, b1, b2, b3 = _words(row0 + np.uint64(x), k0, k1)
+        if part == _OFFSET_BOUND:
+            buf[x] = (uniform(b0) - _HALF) * scale + column[x]
+        elif part == _OFFSET:
+            buf[x] = normal_pair(b0, b1)[0] * scale + column[x]
+        elif part == _GAIN:
+            buf[x] = normal_pair(b0, b1)[0] * scale + _ONE
+        else:  # the DSNU factor, never negative
+            buf[x] = max(normal_pair(b0, b1)[0] * scale + _ONE, _ZERO)
+    return buf
+
+
+@nb.njit(inline="always")
+def _sensor_row(dn, mean, r, t, grow, dark, drow, orow, row0, k0, k1, shot, poisson_shot, clip, qmax, sigma_r,
+                gain_k, black, quant, full_scale):
+    """One row of one output: charge ``r·t·gain + dark·DSNU`` (into ``mean``), shot noise (Gaussian
+    ``z0·√m``, or a Poisson count where ``poisson_shot``), the well, read noise ``z1·σ``, the offset,
+    the ADC (into ``dn``).  ``poisson_shot`` is a constant at each call: the Gaussian loop has no calls
+    and no branches the compiler cannot turn into selects, so it vectorises."""
+    for x in range(dn.shape[0]):
+        i = row0 + np.uint64(x)
+        a0, a1, a2, a3 = _words(i, k0, k1)
+        z0, z1 = normal_pair(a0, a1)
+        m = r[x] * t
+        m = m * grow[x]
+        m = m + dark * drow[x]
+        mean[x] = m
+        if poisson_shot:
+            q = np.float32(poisson(np.float64(m), i, k0, k1)) if shot else m
+        else:
+            q = z0 * np.float32(math.sqrt(m)) + m if shot else m
+        if clip:
+            q = min(max(q, _ZERO), qmax)
+        q = q + z1 * sigma_r
+        q = q + orow[x]
+        q = q * gain_k + black
+        if quant:
+            q = np.floor(q)
+        if clip:
+            q = min(max(q, _ZERO), full_scale)
+        dn[x] = q
+
+
 @_njit(nogil=True)
 def capture_kernel(y_start, y_stop, cube, nbands, wpad, wstride, chan, times, darks, offs, gains, dgains, keys,
                    draw_mode, draw_keys, draw_scale, qmax, sigma_r, gain_k, black, full_scale, shot, use_poisson, clip,
@@ -311,77 +355,22 @@ def capture_kernel(y_start, y_stop, cube, nbands, wpad, wstride, chan, times, da
             drow = dg[y if dg.shape[0] > 1 else np.int64(0)]
             row0 = np.uint64(y * W)
             # the fixed pattern's per-pixel parts drawn here, each in its own vectorised loop
-            om, osc = draw_mode[j, 0], draw_scale[j, 0]
-            o0, o1 = np.uint64(draw_keys[j, 0, 0]), np.uint64(draw_keys[j, 0, 1])
+            om = draw_mode[j, 0]
             if om == 1:  # offset, FPN reading "std", plus the column FPN in orow
-                for x in range(W):
-                    i = row0 + np.uint64(x)
-                    b0, b1, b2, b3 = philox(i & _MASK, i >> _S32, np.uint64(0), np.uint64(0), o0, o1)
-                    obuf[x] = normal_pair(b0, b1)[0] * osc + orow[x]
-                orow = obuf
+                orow = _pattern_row(obuf, row0, draw_keys[j, 0], draw_scale[j, 0], orow, _OFFSET)
             elif om == 2:  # FPN reading "bound"
-                for x in range(W):
-                    i = row0 + np.uint64(x)
-                    b0, b1, b2, b3 = philox(i & _MASK, i >> _S32, np.uint64(0), np.uint64(0), o0, o1)
-                    obuf[x] = (uniform(b0) - _HALF) * osc + orow[x]
-                orow = obuf
+                orow = _pattern_row(obuf, row0, draw_keys[j, 0], draw_scale[j, 0], orow, _OFFSET_BOUND)
             if draw_mode[j, 1] == 1:  # PRNU gain
-                gsc, g0, g1 = draw_scale[j, 1], np.uint64(draw_keys[j, 1, 0]), np.uint64(draw_keys[j, 1, 1])
-                for x in range(W):
-                    i = row0 + np.uint64(x)
-                    b0, b1, b2, b3 = philox(i & _MASK, i >> _S32, np.uint64(0), np.uint64(0), g0, g1)
-                    gbuf[x] = normal_pair(b0, b1)[0] * gsc + _ONE
-                grow = gbuf
-            if draw_mode[j, 2] == 1:  # DSNU factor, never negative
-                dsc, d0, d1 = draw_scale[j, 2], np.uint64(draw_keys[j, 2, 0]), np.uint64(draw_keys[j, 2, 1])
-                for x in range(W):
-                    i = row0 + np.uint64(x)
-                    b0, b1, b2, b3 = philox(i & _MASK, i >> _S32, np.uint64(0), np.uint64(0), d0, d1)
-                    dbuf[x] = max(normal_pair(b0, b1)[0] * dsc + _ONE, _ZERO)
-                drow = dbuf
-            r = rates[j]
-            dn = out_dn[j, y]
-            mean = out_mean[j, y]
+                grow = _pattern_row(gbuf, row0, draw_keys[j, 1], draw_scale[j, 1], orow, _GAIN)
+            if draw_mode[j, 2] == 1:  # DSNU factor
+                drow = _pattern_row(dbuf, row0, draw_keys[j, 2], draw_scale[j, 2], orow, _DARK_GAIN)
+            dn, mean, r = out_dn[j, y], out_mean[j, y], rates[j]
             if use_poisson:
-                for x in range(W):
-                    i = row0 + np.uint64(x)
-                    a0, a1, a2, a3 = philox(i & _MASK, i >> _S32, np.uint64(0), np.uint64(0), k0, k1)
-                    z0, z1 = normal_pair(a0, a1)
-                    m = r[x] * t
-                    m = m * grow[x]
-                    m = m + dark * drow[x]
-                    mean[x] = m
-                    q = np.float32(poisson(np.float64(m), i, k0, k1)) if shot else m
-                    if clip:
-                        q = min(max(q, _ZERO), qmax)
-                    q = q + z1 * sigma_r
-                    q = q + orow[x]
-                    q = q * gain_k + black
-                    if quant:
-                        q = np.floor(q)
-                    if clip:
-                        q = min(max(q, _ZERO), full_scale)
-                    dn[x] = q
+                _sensor_row(dn, mean, r, t, grow, dark, drow, orow, row0, k0, k1, shot, True, clip, qmax, sigma_r,
+                            gain_k, black, quant, full_scale)
             else:
-                for x in range(W):  # vectorised: no calls, no branches the compiler cannot turn into selects
-                    i = row0 + np.uint64(x)
-                    a0, a1, a2, a3 = philox(i & _MASK, i >> _S32, np.uint64(0), np.uint64(0), k0, k1)
-                    z0, z1 = normal_pair(a0, a1)
-                    m = r[x] * t
-                    m = m * grow[x]
-                    m = m + dark * drow[x]
-                    mean[x] = m
-                    q = z0 * np.float32(math.sqrt(m)) + m if shot else m
-                    if clip:
-                        q = min(max(q, _ZERO), qmax)
-                    q = q + z1 * sigma_r
-                    q = q + orow[x]
-                    q = q * gain_k + black
-                    if quant:
-                        q = np.floor(q)
-                    if clip:
-                        q = min(max(q, _ZERO), full_scale)
-                    dn[x] = q
+                _sensor_row(dn, mean, r, t, grow, dark, drow, orow, row0, k0, k1, shot, False, clip, qmax, sigma_r,
+                            gain_k, black, quant, full_scale)
 
 
 @_njit(nogil=True)
@@ -389,11 +378,9 @@ def fill_kernel(out, start, k0, k1, normal):
     """``out[i]`` = the standard normal (or [0, 1) uniform) of counter ``start + i`` under (k0, k1)."""
     if normal:
         for x in range(out.shape[0]):
-            i = np.uint64(start + x)
-            a0, a1, a2, a3 = philox(i & _MASK, i >> _S32, np.uint64(0), np.uint64(0), k0, k1)
+            a0, a1, a2, a3 = _words(np.uint64(start + x), k0, k1)
             out[x] = normal_pair(a0, a1)[0]
     else:
         for x in range(out.shape[0]):
-            i = np.uint64(start + x)
-            a0, a1, a2, a3 = philox(i & _MASK, i >> _S32, np.uint64(0), np.uint64(0), k0, k1)
+            a0, a1, a2, a3 = _words(np.uint64(start + x), k0, k1)
             out[x] = uniform(a0)

@@ -21,6 +21,9 @@ from spectracam.core.errors import SpectracamError
 from spectracam.core.registry import Registry
 from spectracam.sensor import SensorSpec
 
+__all__ = ["EXPOSURE_SCHEMES", "METERED_SCHEMES", "MIN_PHOTO_SHARE", "exposure_times_s",
+           "saturation_times_s"]
+
 #: Smallest share of the white patch's charge at saturation that must come from light: below it the
 #: dark current fills the well and the "exposure" measures the dark current, not the scene.
 MIN_PHOTO_SHARE = 0.01

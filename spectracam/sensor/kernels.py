@@ -33,6 +33,9 @@ import os
 
 import numpy as np
 
+__all__ = ["LANES", "CounterRNG", "SpectralRates", "available", "expose", "normal_pair_np", "philox_np",
+           "record", "stream_key", "threads", "uniform_np"]
+
 #: Bands weighted per SIMD instruction; the weight rows are padded to a multiple of it.
 LANES = 16
 _STATE: dict = {}

@@ -22,6 +22,9 @@ from spectracam.core.errors import ConfigError, SpectracamError
 from spectracam.core.registry import Registry
 from spectracam.core.spectra import cmf_band_weights
 
+__all__ = ["BRIGHTEST_SHARE", "METERING_METHODS", "METERING_STRIDE", "NEUTRAL_UV_TOLERANCE", "WhiteSpec",
+           "metered_radiance", "metered_white_rates", "metering_record", "parse_white", "white_radiance_of"]
+
 #: u′v′ distance from the illuminant's white within which a pixel counts as neutral: the
 #: ColorChecker's greys lie within 0.0032 of D65's white and its least saturated colours (light skin,
 #: bluish green) 0.045 away (measured), so 0.02 admits greys under a light somewhat off the stated one

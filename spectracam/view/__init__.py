@@ -3,6 +3,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+__all__ = ["write_view"]
+
 
 def write_view(directory: str | Path, log=None) -> Path:
     """Write ``DIR/index.html`` for an output directory of any command (:mod:`.page`); returns its path."""

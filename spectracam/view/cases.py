@@ -22,6 +22,8 @@ import numpy as np
 
 from spectracam.core.errors import SpectracamError
 
+__all__ = ["CHANNEL_COLOURS", "PAGE_VALUES", "Case", "load_case", "rgba", "srgb8"]
+
 #: 4-byte values (spectra, digital numbers, CIELAB, image pixels) a page's cases carry at most: 6 M
 #: (24 MB; 32 MB as base64), shared equally among them.
 PAGE_VALUES = 6_000_000

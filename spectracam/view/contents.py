@@ -10,6 +10,8 @@ from pathlib import Path
 
 from spectracam.core.errors import SpectracamError
 
+__all__ = ["MAX_CASES", "MAX_FIGURES", "SHOT_FILES", "Contents", "find_contents"]
+
 #: The files of one shot, by role.
 SHOT_FILES = {"radiance": "radiance.exr", "raw": "raw.exr", "rendered": "rendered.exr"}
 #: Interactive cases one page carries at most (the rest are listed; their figures are still shown).

@@ -23,6 +23,10 @@ from spectracam.io.report import DELTA_E_VMAX  # the ΔE*ab colour scale of the 
 from spectracam.view.cases import CHANNEL_COLOURS, Case, load_case
 from spectracam.view.contents import Contents, find_contents
 
+__all__ = ["BOTH_WAYS_ROWS", "EMBED_BYTES", "IMAGE_ROLES", "JSON_CHARS", "TABLE_ROWS", "both_ways_table",
+           "build_page", "case_json", "curve_colours", "interactive", "markdown_html", "patch_table",
+           "table_html", "write_page"]
+
 #: Figure bytes a page embeds at most; later figures are linked (relative, so they open beside it).
 EMBED_BYTES = 40_000_000
 #: Rows of a table shown (the rest counted).
@@ -79,10 +83,23 @@ def _image_data(case: Case, role: str) -> dict:
 def interactive(cases: list[Case]):
     """The Bokeh layout: case selector, linked images, spectrum and probe read-out."""
     from bokeh.layouts import column, gridplot, row
-    from bokeh.models import (Button, ColorBar, ColumnDataSource, CustomJS, Div, LinearAxis, LinearColorMapper,
-                              Range1d, Select)
-    from bokeh.palettes import Inferno256
-    from bokeh.plotting import figure
+    from bokeh.models import Button, CustomJS, Div
+
+    figures = _image_figures(cases)
+    spectrum = _spectrum_figure(cases[0])
+    info = Div(text="<i>move over or click an image to probe a pixel</i>", name="probe_info", width=480)
+    follow = Button(label="follow the pointer again", width=200)
+    follow.js_on_click(CustomJS(code="window.spectracam.pinned = false;"))
+    title = Div(text="", name="case_title", width=1200)
+    parts = [_case_select(cases)] if len(cases) > 1 else []
+    parts += [title, gridplot(figures, ncols=2, toolbar_location="right"),
+              row(spectrum, column(info, follow))]
+    return column(*parts)
+
+
+def _image_figures(cases: list[Case]) -> list:
+    """One figure per image role any case has, sharing zoom and pan, each probing the pixel under the pointer."""
+    from bokeh.models import ColumnDataSource, CustomJS, Range1d
 
     first = cases[0]
     x_range, y_range = Range1d(0, first.width, name="image_x"), Range1d(0, first.height, name="image_y")
@@ -95,15 +112,7 @@ def interactive(cases: list[Case]):
     for role, title in IMAGE_ROLES:
         if not any(role in c.images for c in cases):
             continue
-        f = figure(title=title, x_range=x_range, y_range=y_range, width=size, height=h + 40, match_aspect=True,
-                   tools="pan,wheel_zoom,box_zoom,reset,tap,save", active_scroll="wheel_zoom", name=f"figure_{role}")
-        src = ColumnDataSource(_image_data(first, role), name=f"image_{role}")
-        if role == "error":
-            mapper = LinearColorMapper(palette=Inferno256, low=0.0, high=DELTA_E_VMAX, nan_color="#bbbbbb")
-            f.image(image="image", x="x", y="y", dw="dw", dh="dh", source=src, color_mapper=mapper)
-            f.add_layout(ColorBar(color_mapper=mapper, title="ΔE*ab", width=8), "right")
-        else:
-            f.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=src)
+        f = _image_figure(first, role, title, x_range, y_range, size, h)
         f.scatter("x", "y", source=mark, size=14, marker="circle_cross", fill_alpha=0, line_color="#00e5ff",
                   line_width=2)
         f.js_on_event("mousemove", on_move)
@@ -111,7 +120,33 @@ def interactive(cases: list[Case]):
         f.axis.visible = False
         f.grid.visible = False
         figures.append(f)
-    wl = [float(w) for w in first.wavelengths_nm]
+    return figures
+
+
+def _image_figure(case: Case, role: str, title: str, x_range, y_range, size: int, h: int):
+    """The figure of one image role of ``case``: RGBA, or the ΔE*ab map on the scores' colour scale."""
+    from bokeh.models import ColorBar, ColumnDataSource, LinearColorMapper
+    from bokeh.palettes import Inferno256
+    from bokeh.plotting import figure
+
+    f = figure(title=title, x_range=x_range, y_range=y_range, width=size, height=h + 40, match_aspect=True,
+               tools="pan,wheel_zoom,box_zoom,reset,tap,save", active_scroll="wheel_zoom", name=f"figure_{role}")
+    src = ColumnDataSource(_image_data(case, role), name=f"image_{role}")
+    if role == "error":
+        mapper = LinearColorMapper(palette=Inferno256, low=0.0, high=DELTA_E_VMAX, nan_color="#bbbbbb")
+        f.image(image="image", x="x", y="y", dw="dw", dh="dh", source=src, color_mapper=mapper)
+        f.add_layout(ColorBar(color_mapper=mapper, title="ΔE*ab", width=8), "right")
+    else:
+        f.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=src)
+    return f
+
+
+def _spectrum_figure(case: Case):
+    """The probed pixel's radiance spectrum (filled by page.js) beside the camera's responsivities R_k(λ)."""
+    from bokeh.models import ColumnDataSource, LinearAxis, Range1d
+    from bokeh.plotting import figure
+
+    wl = [float(w) for w in case.wavelengths_nm]
     lo, hi = (min(wl), max(wl)) if wl else (380.0, 780.0)
     spectrum = figure(title="radiance at the probe, and the camera's responsivities", width=620, height=330,
                       x_axis_label="wavelength (nm)", y_axis_label="radiance (W·m⁻²·sr⁻¹·nm⁻¹)",
@@ -120,32 +155,30 @@ def interactive(cases: list[Case]):
     spectrum.line("wavelength_nm", "radiance", source=ColumnDataSource({"wavelength_nm": [], "radiance": []},
                                                                        name="probe_spectrum"),
                   line_width=2.5, color="#222222", legend_label="radiance L(λ)")
-    spectrum.extra_y_ranges = {"resp": Range1d(0, 1.05 * max([max(v) for v in first.responsivities.values()] + [1e-3]))}
+    spectrum.extra_y_ranges = {"resp": Range1d(0, 1.05 * max([max(v) for v in case.responsivities.values()] + [1e-3]))}
     spectrum.add_layout(LinearAxis(y_range_name="resp", axis_label="R_k(λ) = filter × QE × IR cut (e⁻/photon)"),
                         "right")
-    names = list(first.responsivities)
-    colour_of = curve_colours(first)
-    resp = ColumnDataSource({"xs": [wl] * len(names), "ys": [first.responsivities[n] for n in names],
+    names = list(case.responsivities)
+    colour_of = curve_colours(case)
+    resp = ColumnDataSource({"xs": [wl] * len(names), "ys": [case.responsivities[n] for n in names],
                              "color": [colour_of.get(n, "#444444") for n in names], "label": names},
                             name="responsivities")
     spectrum.multi_line("xs", "ys", color="color", legend_field="label", source=resp, y_range_name="resp",
                         line_dash="dashed", line_width=1.5)
     spectrum.legend.location = "top_left"
-    info = Div(text="<i>move over or click an image to probe a pixel</i>", name="probe_info", width=480)
-    follow = Button(label="follow the pointer again", width=200)
-    follow.js_on_click(CustomJS(code="window.spectracam.pinned = false;"))
-    title = Div(text="", name="case_title", width=1200)
-    parts = []
-    if len(cases) > 1:
-        args = {f"c{i}_{role}": ColumnDataSource(_image_data(c, role), name=f"case_{i}_{role}")
-                for i, c in enumerate(cases) for role, _ in IMAGE_ROLES}
-        select = Select(title="case", value="0", options=[(str(i), c.name) for i, c in enumerate(cases)], width=600,
-                        name="case_select")
-        select.js_on_change("value", CustomJS(args=args, code="window.spectracam.select(parseInt(cb_obj.value));"))
-        parts.append(select)
-    parts += [title, gridplot(figures, ncols=2, toolbar_location="right"),
-              row(spectrum, column(info, follow))]
-    return column(*parts)
+    return spectrum
+
+
+def _case_select(cases: list[Case]):
+    """The case selector: every case's images as named data sources, switched by page.js."""
+    from bokeh.models import ColumnDataSource, CustomJS, Select
+
+    args = {f"c{i}_{role}": ColumnDataSource(_image_data(c, role), name=f"case_{i}_{role}")
+            for i, c in enumerate(cases) for role, _ in IMAGE_ROLES}
+    select = Select(title="case", value="0", options=[(str(i), c.name) for i, c in enumerate(cases)], width=600,
+                    name="case_select")
+    select.js_on_change("value", CustomJS(args=args, code="window.spectracam.select(parseInt(cb_obj.value));"))
+    return select
 
 
 def _swatch(lab) -> str:

@@ -54,6 +54,10 @@ from spectracam.evaluation.score import score
 from spectracam.experiments.paper.experiment import PaperExperiment, calibrated_luminance, quick_scene, scaled
 from spectracam.evaluation.usability import NO_USABLE_IMAGE, UsabilitySpec
 
+__all__ = ["LIGHT_FACTORS", "NATURAL_SCENES", "SEEDS", "WINNER_METRICS", "ArchitecturesRun", "case",
+           "designs", "developed_case", "judge", "natural_case", "run_architectures", "run_natural",
+           "time_limit_s", "winners", "write_architectures_outputs"]
+
 #: Light levels, as fractions of the paper's (its calibrated white luminance).
 LIGHT_FACTORS = (1.0, 0.1, 0.01)
 #: Noise seeds per case (the full run; ``--quick`` uses 2).
@@ -115,6 +119,24 @@ def _stats(values) -> tuple[float | None, float | None]:
     return float(np.mean(v)), float(np.std(v, ddof=1)) if len(v) > 1 else 0.0
 
 
+#: A chart case's fields averaged over the seeds (each with its spread, ``_sd``): row key → the score summary's field.
+_CASE_STATS = (("delta_e_mean", "delta_e_mean"), ("delta_e2000_mean", "delta_e2000_mean"),
+               ("delta_e_of_mean", "delta_e_of_mean"), ("snr_db", "snr_combined_db"),
+               ("snr_rendered_db", "snr_rendered_db"), ("s_cielab_mean", "s_cielab_mean"),
+               ("s_cielab_p95", "s_cielab_p95"), ("snr_white_rendered_db", "snr_white_rendered_db"))
+#: The developed camera's (:func:`developed_case`), each row key prefixed ``developed_``.
+_DEVELOPED_STATS = tuple((k, k) for k in ("delta_e_mean", "delta_e2000_mean", "delta_e_p95", "awb_recovery_deg",
+                                          "snr_rendered_db", "s_cielab_mean", "snr_white_rendered_db"))
+
+
+def _seed_stats(scores: list, fields: tuple, prefix: str = "") -> dict:
+    """``{prefix + key: mean, prefix + key_sd: spread}`` over the seeds' scores of each ``(key, summary field)``."""
+    row = {}
+    for key, name in fields:
+        row[f"{prefix}{key}"], row[f"{prefix}{key}_sd"] = _stats([getattr(s.summary, name) for s in scores])
+    return row
+
+
 def time_limit_s(scene) -> float:
     """The longest capture the dimmed cases allow: cfa/single's exposure on ``scene``'s white patch."""
     from spectracam.scene.chart import WHITE_PATCH
@@ -156,15 +178,7 @@ def case(scene, cube, design: str, seeds, limit_s: float | None = None) -> dict:
            "capture_time_ms": 1e3 * float(raw.capture_time_s),
            "exposure_ms": [1e3 * float(t) for t in raw.exposure_times_s],
            "delta_e_training": s0.summary.delta_e_conversion}
-    for key, get in (("delta_e_mean", lambda s: s.summary.delta_e_mean),
-                     ("delta_e2000_mean", lambda s: s.summary.delta_e2000_mean),
-                     ("delta_e_of_mean", lambda s: s.summary.delta_e_of_mean),
-                     ("snr_db", lambda s: s.summary.snr_combined_db),
-                     ("snr_rendered_db", lambda s: s.summary.snr_rendered_db),
-                     ("s_cielab_mean", lambda s: s.summary.s_cielab_mean),
-                     ("s_cielab_p95", lambda s: s.summary.s_cielab_p95),
-                     ("snr_white_rendered_db", lambda s: s.summary.snr_white_rendered_db)):
-        row[key], row[f"{key}_sd"] = _stats([get(s) for s in scores])
+    row.update(_seed_stats(scores, _CASE_STATS))
     if s0.held_out is not None:
         row["held_out_delta_e"] = s0.held_out["delta_e_mean"]
         row["held_out_delta_e_p95"] = s0.held_out["delta_e_p95"]
@@ -188,14 +202,7 @@ def developed_case(scene, cube, design: str, seeds, limit_s: float | None = None
         raw = capture(cube, camera, seed, time_limit_s=limit_s)
         scores.append(score(raw, reference, processing))
     row = {"developed_capture_time_ms": 1e3 * float(raw.capture_time_s)}
-    for key, get in (("delta_e_mean", lambda s: s.summary.delta_e_mean),
-                     ("delta_e2000_mean", lambda s: s.summary.delta_e2000_mean),
-                     ("delta_e_p95", lambda s: s.summary.delta_e_p95),
-                     ("awb_recovery_deg", lambda s: s.summary.awb_recovery_deg),
-                     ("snr_rendered_db", lambda s: s.summary.snr_rendered_db),
-                     ("s_cielab_mean", lambda s: s.summary.s_cielab_mean),
-                     ("snr_white_rendered_db", lambda s: s.summary.snr_white_rendered_db)):
-        row[f"developed_{key}"], row[f"developed_{key}_sd"] = _stats([get(s) for s in scores])
+    row.update(_seed_stats(scores, _DEVELOPED_STATS, "developed_"))
     if scores[0].held_out is not None:
         row["developed_held_out_delta_e"] = _stats([s.held_out["delta_e_mean"] for s in scores])[0]
     return row
@@ -207,17 +214,43 @@ def run_architectures(run: ArchitecturesRun, renderer: str = "mitsuba", use_cach
     ``spacetime`` the spatial and motion comparisons too (``space``, ``time``)."""
     import time
 
-    from spectracam.io.cache import cached_render
-    from spectracam.core.progress import bar
-    from spectracam.render import render
     from spectracam.experiments.architectures.spacetime import run_space, run_time, spacetime_winners
 
     exp = run.experiment
     level = calibrated_luminance(exp, exp.base.camera)
     seed0 = exp.base.render.seed
     seeds = [seed0 + i for i in range(run.seeds)]
-    rows = []
     t0 = time.perf_counter()
+    rows = _chart_rows(run, level, seeds, renderer, use_cache, step, log, progress)
+    t_chart = time.perf_counter() - t0
+    extra = {}
+    if run.natural_scenes:
+        t1 = time.perf_counter()
+        extra["natural"] = run_natural(run, level, renderer, seeds, log, progress, use_cache)
+        step(f"natural scenes: {', '.join(run.natural_scenes)} × {len(designs())} designs "
+             f"({time.perf_counter() - t1:.1f} s)")
+    if spacetime:
+        base = exp.base.replace(illuminant=IlluminantSpec("blackbody", exp.calibration_temperature_K, None, level))
+        extra["space"] = run_space(base, renderer, run.quick, log, progress=progress)
+        step(f"space: {len(extra['space']['rows'])} designs on the slanted edge and the Siemens star "
+             f"({extra['space']['wall_s']:.1f} s)")
+        extra["time"] = run_time(base, renderer, run.quick, log, progress=progress)
+        step(f"time: {len({r['design'] for r in extra['time']['rows']})} designs × "
+             f"{len({r['speed_px_per_ms'] for r in extra['time']['rows']})} speeds ({extra['time']['wall_s']:.1f} s)")
+        extra["spacetime_winners"] = spacetime_winners(extra["space"], extra["time"])
+    return {"parameters": _run_parameters(run, renderer, level, seeds),
+            "rows": rows, "winners": winners(rows), **extra,
+            "timings_s": {"chart": t_chart, "total": time.perf_counter() - t0}}
+
+
+def _chart_rows(run: ArchitecturesRun, level: float, seeds: list, renderer: str, use_cache: bool, step, log,
+                progress: bool) -> list[dict]:
+    """Every design under each light at each level on the chart (:func:`case`), judged: the results' rows."""
+    from spectracam.io.cache import cached_render
+    from spectracam.core.progress import bar
+    from spectracam.render import render
+
+    rows = []
     scenes = run.scenes(level)
     with bar(total=len(scenes) * len(run.light_factors) * len(designs()), desc="chart cases", unit="case",
              progress=progress) as cases:
@@ -236,48 +269,36 @@ def run_architectures(run: ArchitecturesRun, renderer: str = "mitsuba", use_cach
                                  "white_luminance_cd_m2": level * factor, **row, **judge(row, run.usability)})
                     cases.update(1)
                 step(f"{light} at {factor:g}× the paper's light: {len(designs())} designs × {len(seeds)} seeds")
-    t_chart = time.perf_counter() - t0
-    extra = {}
-    if run.natural_scenes:
-        t1 = time.perf_counter()
-        extra["natural"] = run_natural(run, level, renderer, seeds, log, progress, use_cache)
-        step(f"natural scenes: {', '.join(run.natural_scenes)} × {len(designs())} designs "
-             f"({time.perf_counter() - t1:.1f} s)")
-    if spacetime:
-        base = exp.base.replace(illuminant=IlluminantSpec("blackbody", exp.calibration_temperature_K, None, level))
-        extra["space"] = run_space(base, renderer, run.quick, log, progress=progress)
-        step(f"space: {len(extra['space']['rows'])} designs on the slanted edge and the Siemens star "
-             f"({extra['space']['wall_s']:.1f} s)")
-        extra["time"] = run_time(base, renderer, run.quick, log, progress=progress)
-        step(f"time: {len({r['design'] for r in extra['time']['rows']})} designs × "
-             f"{len({r['speed_px_per_ms'] for r in extra['time']['rows']})} speeds ({extra['time']['wall_s']:.1f} s)")
-        extra["spacetime_winners"] = spacetime_winners(extra["space"], extra["time"])
-    return {"parameters": {"renderer": renderer, "quick": run.quick, "seeds": seeds,
-                           "light_factors": list(run.light_factors), "paper_white_luminance_cd_m2": level,
-                           "designs": designs(), "scene": exp.base.to_dict(),
-                           "snr_db": "chart mean of each patch's combined raw-channel SNR "
-                                     "(processing.snr_combination), mean over seeds; _sd: its spread (sample std)",
-                           "snr_rendered_db": "chart mean of each patch's 20·log10(Y/σ_Y): the raw channels' "
-                                              "measured means and noise through the exposure normalisation and "
-                                              "the colour conversion to display luminance, channels independent "
-                                              "(docs/metrics.md), mean over seeds",
-                           "delta_e_mean": "chart mean of each patch's mean per-pixel ΔE against the scene "
-                                           "(processing.delta_e), mean over seeds",
-                           "delta_e_training": "the conversion's noise-free ΔE on the 24 patches it is fitted on",
-                           "held_out_delta_e": "the conversion's noise-free ΔE on processing.held_out's colours",
-                           "s_cielab_mean": "S-CIELAB (Zhang & Wandell 1997) on the same pixels as delta_e_mean: the "
-                                            "rendered image and the scene's truth through the eye's filters at "
-                                            f"{exp.base.processing.viewing_distance_m:g} m from a display of "
-                                            f"{exp.base.processing.display_pixel_pitch_mm:.4g}-mm pixels "
-                                            f"({exp.base.processing.samples_per_degree:.1f} samples per degree), "
-                                            "chart mean of each patch's mean, mean over seeds (docs/metrics.md)",
-                           "usable": "usable image: the white patch's rendered SNR ≥ "
-                                     f"{run.usability.min_white_snr_db:g} dB (ISO 12232's 'acceptable' SNR 10) and "
-                                     f"the mean S-CIELAB ≤ {run.usability.max_s_cielab_mean:g} (a flat grey image "
-                                     "scores ~41); an unusable case is never named a winner (docs/metrics.md)",
-                           "usability": run.usability.to_dict()},
-            "rows": rows, "winners": winners(rows), **extra,
-            "timings_s": {"chart": t_chart, "total": time.perf_counter() - t0}}
+    return rows
+
+
+def _run_parameters(run: ArchitecturesRun, renderer: str, level: float, seeds: list) -> dict:
+    """The results' ``parameters``: the run's settings and what each field of a row means."""
+    exp = run.experiment
+    return {"renderer": renderer, "quick": run.quick, "seeds": seeds,
+            "light_factors": list(run.light_factors), "paper_white_luminance_cd_m2": level,
+            "designs": designs(), "scene": exp.base.to_dict(),
+            "snr_db": "chart mean of each patch's combined raw-channel SNR "
+                      "(processing.snr_combination), mean over seeds; _sd: its spread (sample std)",
+            "snr_rendered_db": "chart mean of each patch's 20·log10(Y/σ_Y): the raw channels' "
+                               "measured means and noise through the exposure normalisation and "
+                               "the colour conversion to display luminance, channels independent "
+                               "(docs/metrics.md), mean over seeds",
+            "delta_e_mean": "chart mean of each patch's mean per-pixel ΔE against the scene "
+                            "(processing.delta_e), mean over seeds",
+            "delta_e_training": "the conversion's noise-free ΔE on the 24 patches it is fitted on",
+            "held_out_delta_e": "the conversion's noise-free ΔE on processing.held_out's colours",
+            "s_cielab_mean": "S-CIELAB (Zhang & Wandell 1997) on the same pixels as delta_e_mean: the "
+                             "rendered image and the scene's truth through the eye's filters at "
+                             f"{exp.base.processing.viewing_distance_m:g} m from a display of "
+                             f"{exp.base.processing.display_pixel_pitch_mm:.4g}-mm pixels "
+                             f"({exp.base.processing.samples_per_degree:.1f} samples per degree), "
+                             "chart mean of each patch's mean, mean over seeds (docs/metrics.md)",
+            "usable": "usable image: the white patch's rendered SNR ≥ "
+                      f"{run.usability.min_white_snr_db:g} dB (ISO 12232's 'acceptable' SNR 10) and "
+                      f"the mean S-CIELAB ≤ {run.usability.max_s_cielab_mean:g} (a flat grey image "
+                      "scores ~41); an unusable case is never named a winner (docs/metrics.md)",
+            "usability": run.usability.to_dict()}
 
 
 def judge(row: dict, usability: UsabilitySpec) -> dict:

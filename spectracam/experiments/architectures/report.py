@@ -5,6 +5,8 @@ import numpy as np
 
 from spectracam.io.plots import pyplot
 
+__all__ = ["figure_comparison", "figure_responsivities", "figure_spacetime", "report_markdown"]
+
 
 def _rows(results, light, factor):
     return [r for r in results["rows"] if r["illuminant"] == light and r["light_factor"] == factor]
@@ -17,8 +19,6 @@ def figure_comparison(results: dict):
     plt = pyplot()
     lights = list(dict.fromkeys(r["illuminant"] for r in results["rows"]))
     designs = results["parameters"]["designs"]
-    factors = results["parameters"]["light_factors"]
-    level = results["parameters"]["paper_white_luminance_cd_m2"]
     fig, axes = plt.subplots(len(lights), 3, figsize=(16, 5.2 * len(lights)), squeeze=False)
     cmap = plt.get_cmap("tab20")
     styles = {d: dict(color=cmap(i % 20), marker="osD^v<>p*hX"[i % 11], ls="-" if d.endswith("single") else "--")
@@ -26,56 +26,68 @@ def figure_comparison(results: dict):
     for row_axes, light in zip(axes, lights):
         for ax, metric, label in ((row_axes[0], "snr_rendered_db", "rendered luminance SNR (dB)"),
                                   (row_axes[1], "delta_e_mean", "per-pixel ΔE*ab (lines) and S-CIELAB (dotted)")):
-            for d in designs:
-                for m, extra in ((metric, {}), *((("s_cielab_mean", {"ls": ":", "label": None}),)
-                                                 if metric == "delta_e_mean" else ())):
-                    pts = [(f * level, r[m], r[f"{m}_sd"], r.get("usable", True) is not False) for f in factors
-                           for r in _rows(results, light, f) if r["design"] == d and r.get(m) is not None]
-                    if pts:
-                        x, y, e, ok = map(np.array, zip(*pts))
-                        ax.errorbar(x, y, yerr=e, capsize=3, **{"label": d, **styles[d], **extra})
-                        if (~ok).any():   # no usable image: greyed, hatched markers over the design's own
-                            ax.scatter(x[~ok], y[~ok], s=90, facecolor="0.85", edgecolor="0.4", hatch="////",
-                                       zorder=4, label=None)
-            if any(r.get("usable") is False for r in results["rows"] if r["illuminant"] == light):
-                ax.text(0.01, 0.01, "grey hatched: no usable image (docs/metrics.md); never ranked",
-                        transform=ax.transAxes, fontsize=8, color="0.3", va="bottom")
-            ax.set_xscale("log")
-            ax.set_xlabel("white luminance (cd/m²); the paper's light is the rightmost")
-            ax.set_ylabel(label)
-            ax.set_title(f"{light}: {label}", fontsize=11)
-            ax.grid(True, which="both", alpha=0.3)
-            if metric == "delta_e_mean":
-                ax.set_yscale("log")
-        ax = row_axes[2]
-        points: dict = {}   # designs whose noise-free errors coincide (filter sums of the same three) share a label
-        for r in _rows(results, light, 1.0):
-            if r.get("held_out_delta_e") is not None:
-                ax.scatter(r["delta_e_training"], r["held_out_delta_e"], s=60, **{k: v for k, v in
-                           styles[r["design"]].items() if k in ("color", "marker")})
-                key = (round(r["delta_e_training"], 3), round(r["held_out_delta_e"], 3))
-                points.setdefault(key, []).append(r["architecture"])
-        for (x, y), names in points.items():
-            names = list(dict.fromkeys(names))
-            text = names[0] if len(names) == 1 else f"{len(names)} architectures:\n" + "\n".join(
-                ", ".join(names[i:i + 3]) for i in range(0, len(names), 3))
-            ax.annotate(text, (x, y), fontsize=8, xytext=(-10, -8) if len(names) > 1 else (5, 5),
-                        textcoords="offset points", ha="right" if len(names) > 1 else "left",
-                        va="top" if len(names) > 1 else "bottom")
-        lim = ax.get_xlim()[1], ax.get_ylim()[1]
-        top = max(lim)
-        ax.plot([0, top], [0, top], color="0.6", lw=0.8, ls=":")
-        ax.set_xlabel("training ΔE*ab (the 24 patches the conversion is fitted on)")
-        lib = next((r.get("held_out_library") for r in results["rows"] if r.get("held_out_library")), "held-out")
-        ax.set_ylabel(f"held-out ΔE*ab ({lib})")
-        ax.set_title(f"{light}: colour conversion, noise-free", fontsize=11)
-        ax.grid(True, alpha=0.3)
+            _draw_level_panel(ax, results, light, metric, label, styles)
+        _draw_conversion_panel(row_axes[2], results, light, styles)
     handles, labels = axes[0][0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 7), fontsize=9, frameon=False)
     fig.suptitle(f"Every architecture with the paper's camera and noise ({len(results['parameters']['seeds'])} "
                  "seeds; bars: ±1 sample std over seeds)", fontsize=13)
     fig.tight_layout(rect=(0, 0.06, 1, 0.97))
     return fig
+
+
+def _draw_level_panel(ax, results: dict, light: str, metric: str, label: str, styles: dict) -> None:
+    """One light's ``metric`` of every design against the light level (S-CIELAB dotted beside ΔE*ab)."""
+    designs = results["parameters"]["designs"]
+    factors = results["parameters"]["light_factors"]
+    level = results["parameters"]["paper_white_luminance_cd_m2"]
+    for d in designs:
+        for m, extra in ((metric, {}), *((("s_cielab_mean", {"ls": ":", "label": None}),)
+                                         if metric == "delta_e_mean" else ())):
+            pts = [(f * level, r[m], r[f"{m}_sd"], r.get("usable", True) is not False) for f in factors
+                   for r in _rows(results, light, f) if r["design"] == d and r.get(m) is not None]
+            if pts:
+                x, y, e, ok = map(np.array, zip(*pts))
+                ax.errorbar(x, y, yerr=e, capsize=3, **{"label": d, **styles[d], **extra})
+                if (~ok).any():   # no usable image: greyed, hatched markers over the design's own
+                    ax.scatter(x[~ok], y[~ok], s=90, facecolor="0.85", edgecolor="0.4", hatch="////",
+                               zorder=4, label=None)
+    if any(r.get("usable") is False for r in results["rows"] if r["illuminant"] == light):
+        ax.text(0.01, 0.01, "grey hatched: no usable image (docs/metrics.md); never ranked",
+                transform=ax.transAxes, fontsize=8, color="0.3", va="bottom")
+    ax.set_xscale("log")
+    ax.set_xlabel("white luminance (cd/m²); the paper's light is the rightmost")
+    ax.set_ylabel(label)
+    ax.set_title(f"{light}: {label}", fontsize=11)
+    ax.grid(True, which="both", alpha=0.3)
+    if metric == "delta_e_mean":
+        ax.set_yscale("log")
+
+
+def _draw_conversion_panel(ax, results: dict, light: str, styles: dict) -> None:
+    """One light's held-out against training conversion error at the paper's level, coinciding designs labelled once."""
+    points: dict = {}   # designs whose noise-free errors coincide (filter sums of the same three) share a label
+    for r in _rows(results, light, 1.0):
+        if r.get("held_out_delta_e") is not None:
+            ax.scatter(r["delta_e_training"], r["held_out_delta_e"], s=60, **{k: v for k, v in
+                       styles[r["design"]].items() if k in ("color", "marker")})
+            key = (round(r["delta_e_training"], 3), round(r["held_out_delta_e"], 3))
+            points.setdefault(key, []).append(r["architecture"])
+    for (x, y), names in points.items():
+        names = list(dict.fromkeys(names))
+        text = names[0] if len(names) == 1 else f"{len(names)} architectures:\n" + "\n".join(
+            ", ".join(names[i:i + 3]) for i in range(0, len(names), 3))
+        ax.annotate(text, (x, y), fontsize=8, xytext=(-10, -8) if len(names) > 1 else (5, 5),
+                    textcoords="offset points", ha="right" if len(names) > 1 else "left",
+                    va="top" if len(names) > 1 else "bottom")
+    lim = ax.get_xlim()[1], ax.get_ylim()[1]
+    top = max(lim)
+    ax.plot([0, top], [0, top], color="0.6", lw=0.8, ls=":")
+    ax.set_xlabel("training ΔE*ab (the 24 patches the conversion is fitted on)")
+    lib = next((r.get("held_out_library") for r in results["rows"] if r.get("held_out_library")), "held-out")
+    ax.set_ylabel(f"held-out ΔE*ab ({lib})")
+    ax.set_title(f"{light}: colour conversion, noise-free", fontsize=11)
+    ax.grid(True, alpha=0.3)
 
 
 def figure_responsivities(results: dict):

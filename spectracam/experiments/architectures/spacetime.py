@@ -20,6 +20,9 @@ from __future__ import annotations
 
 from spectracam.architecture.base import ARCHITECTURES
 
+__all__ = ["DEMOSAICS", "OLPF_PX", "SPEEDS_PX_PER_MS", "run_space", "run_time", "spacetime_designs",
+           "spacetime_winners"]
+
 #: The motion comparison's speeds, px/ms on the sensor (full run; --quick: the first, third and last).
 SPEEDS_PX_PER_MS = (0.0, 0.01, 0.02, 0.04, 0.08)
 #: Mosaics: bilinear (any periodic mosaic) and the best maintained Bayer method.

@@ -22,6 +22,9 @@ from spectracam.processing.color import ProcessingSpec
 from spectracam.experiments.paper.claims import evaluate
 from spectracam.experiments.paper.experiment import PaperExperiment, calibrated_luminance, comparison, scenes_for
 
+__all__ = ["FACTORS", "ONE_AT_A_TIME", "VERDICT_VALUE", "Reading", "consistency_figure",
+           "consistency_markdown", "readings", "run_consistency", "write_consistency_outputs"]
+
 #: The factorial: choice → ((label, tables over the base camera/processing), ...); the first value is
 #: the experiment's default reading.
 FACTORS: dict[str, tuple] = {
@@ -128,32 +131,24 @@ def run_consistency(exp: PaperExperiment, renderer: str = "analytic", quick: boo
 VERDICT_VALUE = {"reproduced": 2, "partly": 1, "not": 0}
 
 
-def consistency_figure(result: dict):
-    """A map: one row per reading, one column per claim, coloured by verdict.  Left of it a table of
-    the reading's choices under their names; the claim codes over and under the columns, explained
-    in a key below.  Every text is at least 8 pt."""
-    import textwrap
+#: Points, every text of the consistency map but its title.
+_FS = 8
 
-    from matplotlib import transforms
-    from matplotlib.colors import ListedColormap
+
+def _width_in(s: str, bold: bool = False) -> float:
+    """Width of a text's longest line at :data:`_FS` points, inches."""
     from matplotlib.font_manager import FontProperties
     from matplotlib.textpath import TextPath
 
-    from spectracam.io.plots import pyplot
+    prop = FontProperties(size=_FS, weight="bold" if bold else "normal")
+    return max(TextPath((0, 0), t, size=_FS, prop=prop).get_extents().width if t.strip() else 0.0
+               for t in s.split("\n")) / 72
 
-    plt = pyplot()
-    FS = 8  # points, every text but the title
-    rows, claims = result["rows"], result["claims"]
-    M = np.array([[VERDICT_VALUE[r["verdicts"][c]] for c in claims] for r in rows])
-    b = result["best"]
 
-    def width_in(s: str, bold: bool = False) -> float:
-        prop = FontProperties(size=FS, weight="bold" if bold else "normal")
-        return max(TextPath((0, 0), t, size=FS, prop=prop).get_extents().width if t.strip() else 0.0
-                   for t in s.split("\n")) / 72
-
-    # The claims' sentences, for the key, as run_consistency recorded them.
-    sentences = dict(result.get("claim_text") or {})
+def _label_columns(rows: list[dict]) -> tuple[list, list, list]:
+    """``(factors, extra, columns)``: the factorial's choices (the first row's), each row's choices
+    beyond them, and the row labels' columns ``(header, values)``."""
+    import textwrap
 
     # The row labels: a column per choice of the factorial (the first row's), then, for the readings
     # that vary one other choice from the experiment's reading, that choice (the rest greyed: defaults).
@@ -162,82 +157,153 @@ def consistency_figure(result: dict):
     columns = [(textwrap.fill(f, 13), [str(r["reading"].get(f, "")) for r in rows]) for f in factors]
     if any(extra):
         columns.append(("one choice\nchanged alone", ["; ".join(f"{k}: {v}" for k, v in e.items()) for e in extra]))
+    return factors, extra, columns
+
+
+@dataclass(frozen=True)
+class _MapLayout:
+    """Sizes of the consistency map's parts, in inches, and the key's wrapped lines."""
+
+    gap: float
+    col_w: list
+    table_w: float
+    map_w: float
+    map_h: float
+    code_band: float
+    key_lines: list
+    left: float
+    bottom: float
+    fig_w: float
+    fig_h: float
+
+
+def _map_layout(result: dict, columns: list) -> _MapLayout:
+    """Lay the map out: the label table, the map, the claim codes, the legend and the key."""
+    import textwrap
+
+    rows, claims = result["rows"], result["claims"]
+    # The claims' sentences, for the key, as run_consistency recorded them.
+    sentences = dict(result.get("claim_text") or {})
     gap, pad = 0.16, 0.12  # inches between label columns, and before the map
-    col_w = [max([width_in(h, bold=True)] + [width_in(v, bold=True) for v in vals]) for h, vals in columns]
+    col_w = [max([_width_in(h, bold=True)] + [_width_in(v, bold=True) for v in vals]) for h, vals in columns]
     table_w = sum(col_w) + gap * (len(col_w) - 1) + pad
 
     # Layout, in inches.
     row_h, cell_w = 0.19, 0.52
     map_w, map_h = cell_w * len(claims), row_h * len(rows)
-    code_band = max(width_in(c) for c in claims) * 0.71 + 0.18
-    header_h = max(h.count("\n") + 1 for h, _ in columns) * FS * 1.3 / 72 + 0.08
+    code_band = max(_width_in(c) for c in claims) * 0.71 + 0.18
+    header_h = max(h.count("\n") + 1 for h, _ in columns) * _FS * 1.3 / 72 + 0.08
     title_h = 0.55
     key_lines = [(c, textwrap.wrap(sentences.get(c, "(no description)"), 95)) for c in claims]
-    key_h = (sum(len(t) for _, t in key_lines) + 1.6) * FS * 1.35 / 72
+    key_h = (sum(len(t) for _, t in key_lines) + 1.6) * _FS * 1.35 / 72
     legend_w = 2.1
     left, top, bottom = 0.15 + table_w, title_h + max(code_band, header_h), code_band + 0.25 + key_h + 0.15
-    fig_w = max(left + map_w + legend_w, 0.3 + max(width_in(c, True) for c in claims) + 0.15
-                + max(width_in(line) for _, t in key_lines for line in t) + 0.3)
+    fig_w = max(left + map_w + legend_w, 0.3 + max(_width_in(c, True) for c in claims) + 0.15
+                + max(_width_in(line) for _, t in key_lines for line in t) + 0.3)
     fig_h = top + map_h + bottom
-    fig = plt.figure(figsize=(fig_w, fig_h))
-    ax = fig.add_axes((left / fig_w, bottom / fig_h, map_w / fig_w, map_h / fig_h))
+    return _MapLayout(gap, col_w, table_w, map_w, map_h, code_band, key_lines, left, bottom, fig_w, fig_h)
+
+
+def consistency_figure(result: dict):
+    """A map: one row per reading, one column per claim, coloured by verdict.  Left of it a table of
+    the reading's choices under their names; the claim codes over and under the columns, explained
+    in a key below.  Every text is at least 8 pt."""
+    from spectracam.io.plots import pyplot
+
+    plt = pyplot()
+    rows, claims = result["rows"], result["claims"]
+    M = np.array([[VERDICT_VALUE[r["verdicts"][c]] for c in claims] for r in rows])
+    b = result["best"]
+    factors, extra, columns = _label_columns(rows)
+    lay = _map_layout(result, columns)
+    fig = plt.figure(figsize=(lay.fig_w, lay.fig_h))
+    ax = fig.add_axes((lay.left / lay.fig_w, lay.bottom / lay.fig_h, lay.map_w / lay.fig_w, lay.map_h / lay.fig_h))
+    cmap = _draw_map(ax, M, claims)
+    _draw_choice_table(ax, lay, columns, extra, len(factors), b)
+    _draw_rules(ax, lay, rows, extra, factors)
+    _map_legend(ax, cmap, len(claims), b, lay.map_w)
+    fig.text(0.5, 1 - 0.12 / lay.fig_h, "The paper's claims (columns) under each reading of its open choices (rows)\n"
+             f"every combination of the {len(factors)} choices named over the rows"
+             + (", then one other choice at a time from the experiment's reading (the first row)" if any(extra)
+                else ""), ha="center", va="top", fontsize=10)
+    _draw_key(fig, lay, claims)
+    return fig
+
+
+def _draw_map(ax, M: np.ndarray, claims: list):
+    """The verdicts as coloured cells, the claim codes over and under the columns; returns the colormap."""
+    from matplotlib.colors import ListedColormap
 
     cmap = ListedColormap(["#d9d9d9", "#9ecae1", "#2171b5"])
     ax.imshow(M, cmap=cmap, vmin=0, vmax=2, aspect="auto", interpolation="nearest")
     ax.set_xticks(range(len(claims)), claims)
-    ax.tick_params(axis="x", labelsize=FS, top=True, labeltop=True)
+    ax.tick_params(axis="x", labelsize=_FS, top=True, labeltop=True)
     for t in ax.xaxis.get_major_ticks():
         t.label1.set(rotation=45, ha="right", rotation_mode="anchor")
         t.label2.set(rotation=45, ha="left", rotation_mode="anchor")
     ax.set_yticks([])
+    return cmap
 
-    # The table of choices, in inches left of the map, one text per row and choice.
+
+def _draw_choice_table(ax, lay: _MapLayout, columns: list, extra: list, n_factors: int, b: int) -> None:
+    """The table of choices, in inches left of the map, one text per row and choice."""
+    from matplotlib import transforms
+
+    fig = ax.figure
     row_of = transforms.blended_transform_factory(ax.transAxes, ax.transData)
-    x = -table_w
-    for j, ((header, vals), w) in enumerate(zip(columns, col_w)):
+    x = -lay.table_w
+    for j, ((header, vals), w) in enumerate(zip(columns, lay.col_w)):
         at = row_of + transforms.ScaledTranslation(x, 0, fig.dpi_scale_trans)
         ax.text(0, -0.5, header, transform=at + transforms.ScaledTranslation(0, 0.06, fig.dpi_scale_trans),
-                ha="left", va="bottom", fontsize=FS, fontweight="bold")
+                ha="left", va="bottom", fontsize=_FS, fontweight="bold")
         for i, v in enumerate(vals):
-            default = bool(extra[i]) and j < len(factors)  # a one-at-a-time reading's unchanged choice
-            ax.text(0, i, v, transform=at, ha="left", va="center", fontsize=FS,
+            default = bool(extra[i]) and j < n_factors  # a one-at-a-time reading's unchanged choice
+            ax.text(0, i, v, transform=at, ha="left", va="center", fontsize=_FS,
                     fontweight="bold" if i == 0 else "normal",
                     color="tab:red" if i == b else ("#8c8c8c" if default else "black"))
-        x += w + gap
-    # Rules: between the groups of the first choice, and before the one-at-a-time readings.
-    rule = dict(transform=row_of, clip_on=False)
+        x += w + lay.gap
+
+
+def _draw_rules(ax, lay: _MapLayout, rows: list, extra: list, factors: list) -> None:
+    """Rules: between the groups of the first choice, and before the one-at-a-time readings."""
+    from matplotlib import transforms
+
+    rule = dict(transform=transforms.blended_transform_factory(ax.transAxes, ax.transData), clip_on=False)
     for i in range(1, len(rows)):
         if extra[i] and not extra[i - 1]:
-            ax.plot([-table_w / map_w, 1], [i - 0.5] * 2, color="black", lw=1.2, **rule)
+            ax.plot([-lay.table_w / lay.map_w, 1], [i - 0.5] * 2, color="black", lw=1.2, **rule)
         elif not extra[i] and rows[i]["reading"][factors[0]] != rows[i - 1]["reading"][factors[0]]:
-            ax.plot([-table_w / map_w, 0], [i - 0.5] * 2, color="#b0b0b0", lw=0.6, **rule)
+            ax.plot([-lay.table_w / lay.map_w, 0], [i - 0.5] * 2, color="#b0b0b0", lw=0.6, **rule)
             ax.axhline(i - 0.5, color="white", lw=1.5)
 
-    ax.add_patch(plt.Rectangle((-0.5, -0.5), len(claims), 1, fill=False, ec="black", lw=1.8))
-    ax.add_patch(plt.Rectangle((-0.5, b - 0.5), len(claims), 1, fill=False, ec="tab:red", lw=1.8, ls="--"))
-    handles = [plt.Rectangle((0, 0), 1, 1, color=cmap(i)) for i in (2, 1, 0)]
-    handles += [plt.Rectangle((0, 0), 1, 1, fill=False, ec="black", lw=1.8),
-                plt.Rectangle((0, 0), 1, 1, fill=False, ec="tab:red", ls="--", lw=1.8)]
+
+def _map_legend(ax, cmap, n_claims: int, b: int, map_w: float) -> None:
+    """Frame the experiment's reading and the best one, and explain the colours and frames right of the map."""
+    from matplotlib.patches import Rectangle
+
+    ax.add_patch(Rectangle((-0.5, -0.5), n_claims, 1, fill=False, ec="black", lw=1.8))
+    ax.add_patch(Rectangle((-0.5, b - 0.5), n_claims, 1, fill=False, ec="tab:red", lw=1.8, ls="--"))
+    handles = [Rectangle((0, 0), 1, 1, color=cmap(i)) for i in (2, 1, 0)]
+    handles += [Rectangle((0, 0), 1, 1, fill=False, ec="black", lw=1.8),
+                Rectangle((0, 0), 1, 1, fill=False, ec="tab:red", ls="--", lw=1.8)]
     ax.legend(handles, ["reproduced", "partly (direction\nholds, size not)", "not",
                         "the experiment's\nreading (bold)", "most claims\nreproduced (red)"],
               loc="upper left", bbox_to_anchor=(1 + 0.1 / map_w, 1.0), borderaxespad=0.0,
-              fontsize=FS, title="verdict", title_fontsize=FS, frameon=False)
-    fig.text(0.5, 1 - 0.12 / fig_h, "The paper's claims (columns) under each reading of its open choices (rows)\n"
-             f"every combination of the {len(factors)} choices named over the rows"
-             + (", then one other choice at a time from the experiment's reading (the first row)" if any(extra)
-                else ""), ha="center", va="top", fontsize=10)
+              fontsize=_FS, title="verdict", title_fontsize=_FS, frameon=False)
 
-    # The key: each claim code and its claim.
-    y = bottom - code_band - 0.2
-    fig.text(0.2 / fig_w, y / fig_h, "Claims (the columns):", ha="left", va="top", fontsize=FS, fontweight="bold")
-    code_w = max(width_in(c, True) for c in claims) + 0.15
-    y -= 1.6 * FS * 1.35 / 72
-    for code, text in key_lines:
-        fig.text(0.3 / fig_w, y / fig_h, code, ha="left", va="top", fontsize=FS, fontweight="bold")
+
+def _draw_key(fig, lay: _MapLayout, claims: list) -> None:
+    """The key below the map: each claim code and its claim."""
+    fig_w, fig_h = lay.fig_w, lay.fig_h
+    y = lay.bottom - lay.code_band - 0.2
+    fig.text(0.2 / fig_w, y / fig_h, "Claims (the columns):", ha="left", va="top", fontsize=_FS, fontweight="bold")
+    code_w = max(_width_in(c, True) for c in claims) + 0.15
+    y -= 1.6 * _FS * 1.35 / 72
+    for code, text in lay.key_lines:
+        fig.text(0.3 / fig_w, y / fig_h, code, ha="left", va="top", fontsize=_FS, fontweight="bold")
         for line in text:
-            fig.text((0.3 + code_w) / fig_w, y / fig_h, line, ha="left", va="top", fontsize=FS)
-            y -= FS * 1.35 / 72
-    return fig
+            fig.text((0.3 + code_w) / fig_w, y / fig_h, line, ha="left", va="top", fontsize=_FS)
+            y -= _FS * 1.35 / 72
 
 
 def consistency_markdown(result: dict, command: str) -> str:

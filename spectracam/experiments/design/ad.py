@@ -14,6 +14,9 @@ import numpy as np
 
 from spectracam.core.errors import SpectracamError
 
+__all__ = ["LAB_EPSILON", "backend", "cholesky3", "fresh", "lab_f", "numpy", "solve_spd", "tensor",
+           "value_and_gradient", "xyz_to_lab"]
+
 #: CIE 1976 L*a*b*: the linear segment below (6/29)³ (CIE 015:2018, 8.2.1; colour-science's
 #: ``intermediate_lightness_function_CIE1976``).
 LAB_EPSILON = (6.0 / 29.0) ** 3

@@ -33,6 +33,13 @@ from spectracam.architecture.base import MosaicLayout
 from spectracam.core.errors import SpectracamError
 from spectracam.experiments.design.ad import backend, cholesky3, fresh, solve_spd, tensor, xyz_to_lab
 
+__all__ = ["DEFAULT_DISPLAY_PIXEL_PITCH_MM", "DEFAULT_VIEWING_DISTANCE_M", "QUADRATURE_POINTS",
+           "QUADRATURE_SEED", "SCORES", "CameraModel", "ColourSet", "LightModel", "LightResult",
+           "SensorModel", "WhiteModel", "capture_rule", "channel_covariances", "conversion",
+           "demosaic_factors", "evaluate", "expected_delta_e", "exposure_times", "normal_points",
+           "pixel_moments", "scielab_covariances", "scielab_mosaic_factors", "scielab_white_factors",
+           "viewing_samples_per_degree", "white_balance_penalty"]
+
 #: Normal points of the expected-ΔE quadrature (a power of two: Sobol's balance).  256 agree with 4096 within
 #: 0.3 % of the mean ΔE on the paper's designs (tests/test_design_model.py).
 QUADRATURE_POINTS = 256
@@ -463,53 +470,68 @@ def scielab_covariances(M: list, times: list, var: list, C_planes, cam: CameraMo
 
     P = XYZ_TO_OPPONENT @ cam.display_matrix
     Pi = np.linalg.inv(P)
-    n = len(M)
-    A = [[fresh(sum((float(P[i, d]) * M[k][d] for d in range(1, 3)), float(P[i, 0]) * M[k][0]) / times[k])
-          for k in range(n)] for i in range(3)]
-    pairs = [(i, j) for i in range(3) for j in range(i + 1)]
-
-    def to_rgb(Cf):
-        cov = [[0.0] * 3 for _ in range(3)]
-        for a in range(3):
-            for b in range(a + 1):
-                acc = 0.0
-                for i in range(3):
-                    for j in range(3):
-                        w = float(Pi[a, i] * Pi[b, j])
-                        if w != 0.0:
-                            acc = acc + w * Cf[max(i, j)][min(i, j)]
-                cov[a][b] = cov[b][a] = acc + (1e-14 if a == b else 0.0)
-        return cov
-
-    out = []
+    A = _camera_to_opponent(M, times, P)
     if cam.mosaic_factors is None:
-        rho = cam.scielab_factors
-        C = C_planes[0]
-        Cf = [[None] * 3 for _ in range(3)]
-        for i, j in pairs:
-            acc = 0.0
+        return [_opponent_to_rgb(_planes_opponent_covariance(A, cam.scielab_factors, C_planes[0]), Pi)]
+    return [_opponent_to_rgb(_mosaic_opponent_covariance(A, S, var), Pi) for S in cam.scielab_factors]
+
+
+#: The (i, j) of the lower triangle (j ≤ i) of a 3×3 opponent covariance, the entries computed.
+_LOWER_3X3 = tuple((i, j) for i in range(3) for j in range(i + 1))
+
+
+def _camera_to_opponent(M: list, times: list, P: np.ndarray) -> list:
+    """``A[i][k] = Σ_d P_id·M_kd / t_k``: camera channel k's electrons to opponent channel i (docs/metrics.md)."""
+    return [[fresh(sum((float(P[i, d]) * M[k][d] for d in range(1, 3)), float(P[i, 0]) * M[k][0]) / times[k])
+             for k in range(len(M))] for i in range(3)]
+
+
+def _planes_opponent_covariance(A: list, rho: np.ndarray, C: list) -> list:
+    """Full planes (spatially white): ``Cov_f[i, j] = ρ[i, j]·Σ_kl A_ik·A_jl·C[k, l]``, lower triangle."""
+    n = len(A[0])
+    Cf = [[None] * 3 for _ in range(3)]
+    for i, j in _LOWER_3X3:
+        acc = 0.0
+        for k in range(n):
+            for l in range(n):
+                if isinstance(C[k][l], float) and C[k][l] == 0.0:
+                    continue
+                acc = acc + fresh(A[i][k] * A[j][l] * float(rho[i, j])) * C[k][l]
+        Cf[i][j] = acc
+    return Cf
+
+
+def _mosaic_opponent_covariance(A: list, S: np.ndarray, var: list) -> list:
+    """A mosaic's output site: ``Cov_f[i, j] = Σ_c σ_c² Σ_kl A_ik·A_jl·S[c, i, j, k, l]``, lower triangle."""
+    n = len(A[0])
+    Cf = [[None] * 3 for _ in range(3)]
+    for i, j in _LOWER_3X3:
+        acc = 0.0
+        for c in range(n):
+            coef = 0.0
             for k in range(n):
                 for l in range(n):
-                    if isinstance(C[k][l], float) and C[k][l] == 0.0:
-                        continue
-                    acc = acc + fresh(A[i][k] * A[j][l] * float(rho[i, j])) * C[k][l]
-            Cf[i][j] = acc
-        return [to_rgb(Cf)]
-    for S in cam.scielab_factors:      # (c, i, j, k, l) at one output site
-        Cf = [[None] * 3 for _ in range(3)]
-        for i, j in pairs:
+                    if S[c, i, j, k, l] != 0.0:
+                        coef = coef + A[i][k] * A[j][l] * float(S[c, i, j, k, l])
+            if not isinstance(coef, float):
+                acc = acc + fresh(coef) * var[c]
+        Cf[i][j] = acc
+    return Cf
+
+
+def _opponent_to_rgb(Cf: list, Pi: np.ndarray) -> list:
+    """Back to display RGB: ``P⁻¹·Cov_f·P⁻ᵀ`` from the lower triangle of ``Cov_f`` (1e-14 added on the diagonal)."""
+    cov = [[0.0] * 3 for _ in range(3)]
+    for a in range(3):
+        for b in range(a + 1):
             acc = 0.0
-            for c in range(n):
-                coef = 0.0
-                for k in range(n):
-                    for l in range(n):
-                        if S[c, i, j, k, l] != 0.0:
-                            coef = coef + A[i][k] * A[j][l] * float(S[c, i, j, k, l])
-                if not isinstance(coef, float):
-                    acc = acc + fresh(coef) * var[c]
-            Cf[i][j] = acc
-        out.append(to_rgb(Cf))
-    return out
+            for i in range(3):
+                for j in range(3):
+                    w = float(Pi[a, i] * Pi[b, j])
+                    if w != 0.0:
+                        acc = acc + w * Cf[max(i, j)][min(i, j)]
+            cov[a][b] = cov[b][a] = acc + (1e-14 if a == b else 0.0)
+    return cov
 
 
 @dataclass

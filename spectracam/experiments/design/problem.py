@@ -19,6 +19,8 @@ from spectracam.processing.calibration import conversion_target_rgb
 from spectracam.experiments.design.ad import tensor
 from spectracam.experiments.design.model import ColourSet, LightModel
 
+__all__ = ["CHART", "DESIGN_MONDRIANS", "DesignProblem", "light_model", "photon_weights", "white_models"]
+
 #: The colour-set name that means the scene's own chart.
 CHART = "chart"
 
@@ -88,8 +90,8 @@ class DesignProblem:
 
         self.camera = camera.with_design(design.replace("/split", "/single") if design.endswith("/split") else design)
         self.design, self.settings, self.processing = design, settings, processing
-        arch = self.camera.capture.architecture
-        check_parametrisation(parametrisation, arch)
+        self.architecture = self.camera.architecture()
+        check_parametrisation(parametrisation, self.architecture)
         self.grid = scenes[0].grid
         self.param = PARAMETRISATIONS[parametrisation](settings, self.camera, self.grid)
         self.ir_cut = bool(settings.design_ir_cut)
@@ -136,10 +138,10 @@ class DesignProblem:
             cut = logistic((c - tensor(self.samples.lam)) / s)
         qe = tensor(self.samples.qe) if cut is None else tensor(self.samples.qe) * cut
         xp = x   # the parametrisation reads its own first n_param entries (no slices: see FreeForm._matrix)
-        if self.param.stacked:
+        if self.param.varies == "depths":
             return [band_average(v, self.samples) for v in self.param.layer_qe(xp, self.samples, cut)]
         R = [band_average(T * qe, self.samples) for T in self.param.transmittances(xp, self.samples)]
-        return channels_from_primaries(self.camera.capture.architecture, R, band_average(qe, self.samples))
+        return channels_from_primaries(self.architecture, R, band_average(qe, self.samples))
 
     def shares(self, x):
         """The exposure shares (tensors), normalised to sum 1 for frames in sequence."""

@@ -7,6 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
+__all__ = ["VARIANTS", "figure_comparison", "figure_convergence", "figure_curves", "report_markdown",
+           "responsivity_table", "table_rows", "write_design_outputs"]
+
 #: Rows of the comparison, in order: (key in a design's entry, label).
 VARIANTS = (("paper_filters", "paper's filters"), ("grid_best", "grid's best block pair"), ("optimised", "optimised"),
             ("luther", "Luther camera (no conversion error)"))

@@ -14,10 +14,14 @@ from pathlib import Path
 
 import numpy as np
 
+from spectracam.architecture import ARCHITECTURES
 from spectracam.core.errors import ConfigError, SpectracamError
 from spectracam.scene.illuminant import IlluminantSpec
 from spectracam.experiments.design.problem import CHART, DesignProblem
 from spectracam.experiments.design.spec import DesignSpec
+
+__all__ = ["GRID_CUTOFFS_NM", "Setup", "design_one", "experiment_path", "grid_best", "light_label",
+           "monte_carlo", "predicted", "render_cubes", "run_design", "setup"]
 
 #: The grid sweep's block cutoffs (spectracam/scenes/sweeps/cfa_cutoffs.toml): 450-530 × 570-650 nm in 10-nm steps.
 GRID_CUTOFFS_NM = (np.arange(450.0, 531.0, 10.0), np.arange(570.0, 651.0, 10.0))
@@ -257,8 +261,8 @@ def run_design(spec: DesignSpec, base_dir: Path, log=lambda m: None, st: Setup |
     cubes = render_cubes(st, log)
     designs = {}
     for d in bar(spec.designs, desc="designs", unit="design", progress=progress):
-        arch = d.partition("/")[0]
-        problem = DesignProblem(d, "depths" if arch == "stacked" else spec.filters, spec, st.camera, st.processing,
+        variables = ARCHITECTURES[d.partition("/")[0]].design_variables()   # the architecture says what it designs
+        problem = DesignProblem(d, "depths" if variables == "depths" else spec.filters, spec, st.camera, st.processing,
                                 list(st.scenes), spec.training, spec.held_out)
         designs[d] = design_one(problem, spec, cubes, log, progress=progress)
     spd = viewing_samples_per_degree(st.processing)

@@ -14,6 +14,8 @@ from spectracam.scene.reflectances import LIBRARIES, check_available
 from spectracam.core.spec import Spec
 from spectracam.experiments.design.variables import PARAMETRISATIONS
 
+__all__ = ["DESIGN_KEYS", "DESIGN_OBJECTIVES", "DESIGN_WHITE_BALANCES", "QUICK", "DesignSpec", "load_design"]
+
 #: Keys of a design file.
 DESIGN_KEYS = ("experiment", "lights", "training", "held_out", "designs", "filters", "start_cutoffs_nm",
                "edge_width_nm", "start_centres_nm", "start_fwhm_nm", "knot_step_nm", "min_transmittance",
@@ -88,40 +90,15 @@ class DesignSpec(Spec):
     luther: bool = True
 
     def validate(self) -> None:
-        from spectracam.architecture.base import ARCHITECTURES
-        from spectracam.sensor.exposure import EXPOSURE_SCHEMES
         from spectracam.render import RENDERERS
 
         self.string("experiment")
-        lights = self.lights
-        if not isinstance(lights, tuple) or not lights:
-            raise self.error("lights", "must be a non-empty list of blackbody temperatures (K) and CIE illuminant "
-                                       "names, e.g. [3000, 6500, 'D65']")
-        import colour
-
-        for v in lights:
-            ok = (isinstance(v, (int, float)) and not isinstance(v, bool) and 1000 <= v <= 40000) or \
-                 (isinstance(v, str) and v in colour.SDS_ILLUMINANTS)
-            if not ok:
-                raise self.error("lights", "each light must be a temperature 1000–40000 K or a CIE illuminant "
-                                           "colour-science ships (e.g. 'D65', 'A', 'FL2')", v)
+        self._check_lights()
         for k in ("training", "held_out"):
             v = getattr(self, k)
             if not isinstance(v, str) or not (v in LIBRARIES or (v.startswith("file:") and len(v) > 5)):
                 raise self.error(k, "must be one of " + ", ".join(LIBRARIES) + " or 'file:PATH'")
-        if not isinstance(self.designs, tuple) or not self.designs:
-            raise self.error("designs", "must be a non-empty list like ['cfa/single', 'fsc/split']")
-        for d in self.designs:
-            arch, _, scheme = d.partition("/") if isinstance(d, str) else ("", "", "")
-            if arch not in ARCHITECTURES or (scheme or "single") not in (*EXPOSURE_SCHEMES, "split"):
-                raise self.error("designs", "each design is 'architecture/exposure' with an architecture of "
-                                 + ", ".join(ARCHITECTURES) + " and an exposure of "
-                                 + ", ".join(EXPOSURE_SCHEMES), d)
-            if scheme in ("optimal", "balanced", "split") and not ARCHITECTURES[arch].independent_exposures:
-                raise self.error("designs", f"the {arch} architecture has one exposure for all channels; use "
-                                            f"'{arch}/single'", d)
-        if len(set(self.designs)) != len(self.designs):
-            raise self.error("designs", "lists a design twice")
+        self._check_designs()
         self.choice("filters", PARAMETRISATIONS)
         if self.filters == "depths":
             raise self.error("filters", "must be block, gaussian or freeform (stacked photodiodes are always "
@@ -148,6 +125,40 @@ class DesignSpec(Spec):
         if not (isinstance(px, tuple) and len(px) == 2 and all(isinstance(v, int) and not isinstance(v, bool)
                                                                  and 64 <= v <= 4096 for v in px)):
             raise self.error("image_px", "must be [width, height], whole pixels 64–4096 each")
+
+    def _check_lights(self) -> None:
+        """Refuse lights that are not blackbody temperatures (1000–40000 K) or CIE illuminants colour-science ships."""
+        lights = self.lights
+        if not isinstance(lights, tuple) or not lights:
+            raise self.error("lights", "must be a non-empty list of blackbody temperatures (K) and CIE illuminant "
+                                       "names, e.g. [3000, 6500, 'D65']")
+        import colour
+
+        for v in lights:
+            ok = (isinstance(v, (int, float)) and not isinstance(v, bool) and 1000 <= v <= 40000) or \
+                 (isinstance(v, str) and v in colour.SDS_ILLUMINANTS)
+            if not ok:
+                raise self.error("lights", "each light must be a temperature 1000–40000 K or a CIE illuminant "
+                                           "colour-science ships (e.g. 'D65', 'A', 'FL2')", v)
+
+    def _check_designs(self) -> None:
+        """Refuse designs that are not distinct 'architecture/exposure' pairs the architecture can expose."""
+        from spectracam.architecture.base import ARCHITECTURES
+        from spectracam.sensor.exposure import EXPOSURE_SCHEMES
+
+        if not isinstance(self.designs, tuple) or not self.designs:
+            raise self.error("designs", "must be a non-empty list like ['cfa/single', 'fsc/split']")
+        for d in self.designs:
+            arch, _, scheme = d.partition("/") if isinstance(d, str) else ("", "", "")
+            if arch not in ARCHITECTURES or (scheme or "single") not in (*EXPOSURE_SCHEMES, "split"):
+                raise self.error("designs", "each design is 'architecture/exposure' with an architecture of "
+                                 + ", ".join(ARCHITECTURES) + " and an exposure of "
+                                 + ", ".join(EXPOSURE_SCHEMES), d)
+            if scheme in ("optimal", "balanced", "split") and not ARCHITECTURES[arch].independent_exposures:
+                raise self.error("designs", f"the {arch} architecture has one exposure for all channels; use "
+                                            f"'{arch}/single'", d)
+        if len(set(self.designs)) != len(self.designs):
+            raise self.error("designs", "lists a design twice")
 
 
 #: ``--quick``: two lights, three designs, coarser free-form knots, fewer iterations and seeds, a small image.

@@ -4,9 +4,12 @@ A :class:`Parametrisation` maps a vector ``x`` (with box bounds) to the three pr
 (R, G, B) — or, for stacked photodiodes, to the depths of the collection windows — evaluated at the same
 sample points and trapezoid weights as :func:`spectracam.core.spectra.band_average` (400 a band), times QE × IR cut:
 the band-averaged responsivities are then those the pipeline computes for the camera :meth:`camera` returns
-(a test holds them together).  The architecture derives its channels from them as it does in the pipeline
-(:func:`channels_from_primaries`: W, Y, C, M capped at the unfiltered pixel).  Optional extra variables: the
-IR-cut edge (nm) and the exposure split of a field-sequential or prism camera.
+(a test holds them together).  The architecture says what the design varies for it and how its channels are made
+(:meth:`~spectracam.architecture.base.Architecture.design_variables`: ``"filters"`` or ``"depths"``; its
+:attr:`~spectracam.architecture.base.Architecture.primaries`), and :func:`channels_from_primaries` makes them as the
+pipeline does (W, Y, C, M capped at the unfiltered pixel); an architecture that computes its channels its own way is
+refused by name (:func:`design_architecture`), never designed as another.  Optional extra variables: the IR-cut edge
+(nm) and the exposure split of a field-sequential or prism camera.
 
 =============  =====================================================  =================================
 name           variables                                              pipeline camera
@@ -26,10 +29,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from spectracam.core.errors import SpectracamError
-from spectracam.architecture.filters import QE_MODELS, logistic_scale_nm, quantum_efficiency
+from spectracam.architecture import ARCHITECTURES, make_architecture
+from spectracam.architecture.filters import CHANNELS, QE_MODELS, logistic_scale_nm, quantum_efficiency
 from spectracam.core.registry import Registry
 from spectracam.core.spectra import band_sample_points
 from spectracam.experiments.design.ad import backend, fresh, tensor
+
+__all__ = ["DESIGN_VARIABLES", "PARAMETRISATIONS", "POINTS_PER_BAND", "Block", "Depths", "FreeForm", "Gaussian",
+           "Parametrisation", "Samples", "band_average", "channels_from_primaries", "check_parametrisation",
+           "design_architecture", "designable", "logistic"]
 
 #: Points per band of the responsivities' trapezoid rule: those of the pipeline's smooth filters
 #: (:func:`spectracam.architecture.filters._smooth`), so the two agree to rounding.
@@ -68,16 +76,51 @@ def logistic(x):
     return 1.0 / (1.0 + dr.exp(-x))
 
 
-def channels_from_primaries(name: str, R: list, clear) -> list:
-    """The architecture's channels from the primaries' responsivities R, G, B and the unfiltered pixel's ``clear``
-    (:func:`spectracam.architecture.base.complementary`: a pair's sum capped at ``clear``)."""
+#: What the parametrisations can vary (:meth:`~spectracam.architecture.base.Architecture.design_variables`).
+DESIGN_VARIABLES = ("filters", "depths")
+
+
+def designable() -> tuple[str, ...]:
+    """The registered architectures the design can model, in registry order."""
+    return tuple(n for n, cls in ARCHITECTURES.items() if cls.design_variables() in DESIGN_VARIABLES)
+
+
+def design_architecture(architecture):
+    """The architecture object the design models (``architecture``: one, or a registered name), or one line refusing
+    an architecture the design cannot model (unknown, or computing its channels its own way)."""
+    if isinstance(architecture, str):
+        if architecture not in ARCHITECTURES:
+            raise SpectracamError(f"design: architecture {architecture!r} is not registered; the design models "
+                                  + ", ".join(designable()))
+        architecture = make_architecture(architecture)
+    if architecture.design_variables() not in DESIGN_VARIABLES:
+        raise SpectracamError(f"design: the {architecture.name!r} architecture makes its channels its own way "
+                              "(not of the three filters of [filters], nor of stacked depths), so the design cannot "
+                              "model it; it models " + ", ".join(designable()))
+    return architecture
+
+
+def channels_from_primaries(architecture, R: list, clear) -> list:
+    """The architecture's channels (an architecture, or a registered name) from the primaries' responsivities R, G, B
+    and the unfiltered pixel's ``clear``, as its :attr:`~spectracam.architecture.base.Architecture.primaries` say
+    (:func:`spectracam.architecture.base.complementary`: a pair's sum capped at ``clear``; W: ``clear``)."""
     dr, _ = backend()
+    arch = design_architecture(architecture)
+    if arch.design_variables() != "filters":
+        raise SpectracamError(f"design: the {arch.name!r} architecture is designed by its "
+                              f"{arch.design_variables()}, not by filters")
 
-    def pair(a, b):
-        return dr.minimum(R[a] + R[b], clear)
+    def channel(p):
+        if p == "W":
+            return clear
+        if len(p) == 1:
+            return R[CHANNELS.index(p)]
+        total = R[CHANNELS.index(p[0])]
+        for c in p[1:]:
+            total = total + R[CHANNELS.index(c)]
+        return dr.minimum(total, clear)
 
-    return {"rgbw": lambda: [*R, clear], "ryyb": lambda: [R[0], pair(0, 1), R[2]],
-            "cmy": lambda: [pair(1, 2), pair(0, 1), pair(0, 2)]}.get(name, lambda: list(R))()
+    return [channel(p) for p in arch.primaries]
 
 
 class Parametrisation:
@@ -85,7 +128,10 @@ class Parametrisation:
     as a Dr.Jit tensor."""
 
     name = ""
-    #: Can this parametrisation design an architecture with these filters (``stacked`` has none)?
+    #: What it varies, of :data:`DESIGN_VARIABLES`: an architecture is designed by the parametrisations that vary
+    #: what its :meth:`~spectracam.architecture.base.Architecture.design_variables` says.
+    varies = "filters"
+    #: Does it design stacked photodiodes (by their depths) rather than filters?
     stacked = False
 
     def __init__(self, settings, camera, grid):
@@ -277,14 +323,20 @@ class Depths(Parametrisation):
     ordered); QE_k = (1 − R)(exp(−α·z_k) − exp(−α·z_{k+1})) (:mod:`spectracam.architecture.stacked`)."""
 
     name = "depths"
+    varies = "depths"
     stacked = True
 
+    @property
+    def depths_um(self) -> tuple:
+        """The camera's window boundaries, as its stacked architecture reads them."""
+        return self.camera.architecture().depths_um(self.camera.filters)
+
     def initial(self):
-        z = np.asarray(self.camera.filters.stacked_depths_um, float)
+        z = np.asarray(self.depths_um, float)
         return np.concatenate([[z[0]], np.diff(z)])
 
     def bounds(self):
-        n = len(self.camera.filters.stacked_depths_um)
+        n = len(self.depths_um)
         return [(0.01, 2.0)] + [(0.05, 20.0)] * (n - 1)
 
     def layer_qe(self, x, samples, ir_cut=None):
@@ -294,7 +346,7 @@ class Depths(Parametrisation):
 
         alpha = tensor(absorption_coefficient_per_um(samples.lam))
         front = tensor(1.0 - reflectance(samples.lam))
-        n = len(self.camera.filters.stacked_depths_um)
+        n = len(self.depths_um)
         z = [_t(x, 0)]
         for i in range(1, n):
             z.append(fresh(z[-1] + _t(x, i)))
@@ -312,16 +364,22 @@ class Depths(Parametrisation):
 
     def filters(self, x):
         z = np.cumsum(np.asarray(x, float))
-        return self.camera.filters.replace(stacked_depths_um=tuple(float(v) for v in z))
+        return self.camera.architecture().with_depths(self.camera.filters, z)
 
     def describe(self, x):
         return {"stacked_depths_um": [round(float(v), 4) for v in np.cumsum(x)]}
 
 
-def check_parametrisation(name: str, architecture: str) -> None:
-    """Stacked photodiodes are designed by their depths, every other architecture by its filters."""
+def check_parametrisation(name: str, architecture) -> None:
+    """The parametrisation ``name`` varies what the architecture (an architecture, or a registered name) is designed
+    by (:meth:`~spectracam.architecture.base.Architecture.design_variables`): stacked photodiodes their depths, every
+    other architecture the design models its filters; one line otherwise, or for an architecture it cannot model."""
     p = PARAMETRISATIONS[name]
-    if p.stacked != (architecture == "stacked"):
-        raise SpectracamError(f"design: filters = {name!r} cannot design a {architecture} camera; "
-                              + ("stacked photodiodes are designed by 'depths'" if architecture == "stacked"
-                                 else "'depths' designs stacked photodiodes only; use block, gaussian or freeform"))
+    arch = design_architecture(architecture)
+    varies = arch.design_variables()
+    if p.varies != varies:
+        fitting = [n for n, q in PARAMETRISATIONS.items() if q.varies == varies]
+        fitting = ", ".join(fitting[:-1]) + " or " + fitting[-1] if len(fitting) > 1 else fitting[0]
+        raise SpectracamError(f"design: filters = {name!r} cannot design a {arch.name} camera; "
+                              + ("stacked photodiodes are designed by 'depths'" if varies == "depths"
+                                 else f"'{p.name}' designs stacked photodiodes only; use {fitting}"))

@@ -21,6 +21,10 @@ from spectracam.architecture.filters import CHANNELS, responsivities
 from spectracam.sensor import expose, fixed_pattern, noise_stream
 from spectracam.core.spectra import WavelengthGrid
 
+__all__ = ["EMVA_STREAM", "KEYS", "LABELS", "LINEARITY_CLAUSE", "ROLES", "SATURATION_CLAUSE",
+           "SENSITIVITY_CLAUSE", "EmvaSetup", "channel_qe", "configured", "datasheet_markdown", "figures",
+           "point_roles", "run_emva", "simulate_series", "write_emva_outputs"]
+
 #: The quantities of the datasheet, in the order EMVA 1288 lists them.
 KEYS = ("system_gain_DN_per_e", "quantum_efficiency", "dark_noise_e", "saturation_capacity_e", "snr_max_db",
         "dynamic_range_db", "dark_current_e_per_s", "dsnu_e", "prnu_percent", "linearity_error_percent")
@@ -253,9 +257,15 @@ def figures(result: dict):
     K = result["measured"]["system_gain_DN_per_e"]
     sat = dict(color="0.35", ls=":", lw=1.0, label=_saturation_label(fit))
     out = {}
+    out["photon_transfer"] = _photon_transfer_figure(plt, fit, roles["photon_transfer"], signal, excess, K, sat)
+    out["snr"] = _snr_figure(plt, cv, fit, roles["snr"], mu_p, sat)
+    out["linearity"] = _linearity_figure(plt, cv, fit, roles["linearity"], mu_p, signal, sat)
+    return out
 
+
+def _photon_transfer_figure(plt, fit: dict, r: dict, signal, excess, K: float, sat: dict):
+    """The photon transfer curve: the variance's excess over dark against the signal, and its fit."""
     fig, ax = plt.subplots(figsize=(6, 4.3))
-    r = roles["photon_transfer"]
     _draw_steps(ax, signal, excess, r, f"fit range (0–{100 * SENSITIVITY_FIT_MAX:.0f} % of saturation)",
                 SENSITIVITY_CLAUSE)
     x = np.array([0, signal[r["fit"]].max()])
@@ -266,14 +276,17 @@ def figures(result: dict):
     ax.set_title("Photon transfer", fontsize=10)
     ax.legend(fontsize=7, loc="upper left")
     ax.grid(alpha=0.3)
-    out["photon_transfer"] = fig
+    return fig
 
+
+def _snr_figure(plt, cv: dict, fit: dict, r: dict, mu_p, sat: dict):
+    """The SNR against the photons per pixel: measured, the EMVA 1288 model and the ideal sensor."""
     fig, ax = plt.subplots(figsize=(6, 4.3))
     snr = np.asarray(cv["snr"], float)
     shown = (mu_p >= 0.5 * mu_p[mu_p > 0][1]) & np.isfinite(snr) & (snr > 0)  # the first step is dark
     ax.set_xscale("log")
     ax.set_yscale("log")
-    _draw_steps(ax, mu_p, snr, roles["snr"], "measured (the steps K and η are fitted on)", SENSITIVITY_CLAUSE,
+    _draw_steps(ax, mu_p, snr, r, "measured (the steps K and η are fitted on)", SENSITIVITY_CLAUSE,
                 shown=shown)
     ax.plot(mu_p[shown], np.asarray(cv["snr_model"])[shown], "-", color="tab:red", label="EMVA 1288 model")
     ax.plot(mu_p[shown], np.asarray(cv["snr_ideal"])[shown], "--", color="0.5", label="ideal sensor")
@@ -283,10 +296,12 @@ def figures(result: dict):
     ax.set_title("Signal-to-noise ratio", fontsize=10)
     ax.legend(fontsize=7, loc="upper left")
     ax.grid(alpha=0.3, which="both")
-    out["snr"] = fig
+    return fig
 
+
+def _linearity_figure(plt, cv: dict, fit: dict, r: dict, mu_p, signal, sat: dict):
+    """Linearity: the signal and its weighted fit above, the deviation from the fit below."""
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(6, 6.4), sharex=True, height_ratios=(1, 1))
-    r = roles["linearity"]
     a0, a1 = fit["linearity_fit_offset_DN"], fit["linearity_fit_slope_DN_per_photon"]
     fit_label = f"fit range ({100 * LINEARITY_FIT_RANGE[0]:.0f}–{100 * LINEARITY_FIT_RANGE[1]:.0f} % of saturation)"
     _draw_steps(top, mu_p, signal, r, fit_label, LINEARITY_CLAUSE)
@@ -296,19 +311,7 @@ def figures(result: dict):
     top.set_ylabel("μ_y − μ_y.dark (DN)")
     top.set_title("Linearity", fontsize=10)
     top.grid(alpha=0.3)
-    dev = np.asarray(cv["linearity_deviation_percent"], float)
-    ok = np.isfinite(dev)
-    lim = 3.0 * float(np.abs(dev[r["fit"] & ok]).max() or 1.0)  # the fit range's scale: LE is read here
-    off = np.where(ok & (dev > lim), 1, np.where(ok & (dev < -lim), -1, 0))
-    _draw_steps(bottom, mu_p, np.clip(dev, -lim, lim), r, fit_label, LINEARITY_CLAUSE, shown=ok, off_scale=off)
-    if off.any():
-        bottom.plot([], [], ls="none", marker="v", color="0.4", mfc="none",
-                    label=f"off scale (|δ| > {lim:.2g} %): drawn at the edge")
-    bottom.axhline(0, color="0.5", lw=0.8)
-    bottom.axvline(fit["mu_p_sat"], color="0.35", ls=":", lw=1.0)
-    bottom.set_ylim(-1.08 * lim, 1.08 * lim)
-    bottom.set_xlabel("μ_p (photons per pixel)")
-    bottom.set_ylabel("deviation from the linear fit δ_y (%)")
+    _draw_deviation(bottom, cv, fit, r, mu_p, fit_label)
     handles, labels = top.get_legend_handles_labels()
     for h, label in zip(*bottom.get_legend_handles_labels()):  # the off-scale entry; the roles are above
         if label not in labels:
@@ -317,8 +320,24 @@ def figures(result: dict):
     fig.legend(handles, labels, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, 0.02), ncol=1)
     bottom.grid(alpha=0.3)
     fig.tight_layout()
-    out["linearity"] = fig
-    return out
+    return fig
+
+
+def _draw_deviation(ax, cv: dict, fit: dict, r: dict, mu_p, fit_label: str) -> None:
+    """The deviation from the linear fit, on the fit range's scale; steps beyond it drawn at the edge."""
+    dev = np.asarray(cv["linearity_deviation_percent"], float)
+    ok = np.isfinite(dev)
+    lim = 3.0 * float(np.abs(dev[r["fit"] & ok]).max() or 1.0)  # the fit range's scale: LE is read here
+    off = np.where(ok & (dev > lim), 1, np.where(ok & (dev < -lim), -1, 0))
+    _draw_steps(ax, mu_p, np.clip(dev, -lim, lim), r, fit_label, LINEARITY_CLAUSE, shown=ok, off_scale=off)
+    if off.any():
+        ax.plot([], [], ls="none", marker="v", color="0.4", mfc="none",
+                label=f"off scale (|δ| > {lim:.2g} %): drawn at the edge")
+    ax.axhline(0, color="0.5", lw=0.8)
+    ax.axvline(fit["mu_p_sat"], color="0.35", ls=":", lw=1.0)
+    ax.set_ylim(-1.08 * lim, 1.08 * lim)
+    ax.set_xlabel("μ_p (photons per pixel)")
+    ax.set_ylabel("deviation from the linear fit δ_y (%)")
 
 
 def write_emva_outputs(out_dir, result: dict, command: str) -> list:

@@ -1,7 +1,5 @@
-"""``spectracam motion``: a moving edge captured by each architecture (a self-contained click command).
-
-Register it with ``main.add_command(motion_cmd)`` in :mod:`spectracam.cli`.
-"""
+"""``spectracam motion``: a moving edge captured by each architecture (a self-contained click command,
+registered lazily by :mod:`spectracam.cli`)."""
 from __future__ import annotations
 
 import time
@@ -9,8 +7,11 @@ from pathlib import Path
 
 import click
 
-from spectracam.experiments.options import (check_writable, output_option, progress_log, quiet_option, renderer_option, set_option,
-                           view_option)
+from spectracam.experiments.options import (check_target_renderer, check_writable, log_report, output_option,
+                                            progress_log, quiet_option, renderer_option, set_option, target_command,
+                                            view_option)
+
+__all__ = ["motion_cmd"]
 
 
 @click.command("motion", short_help="Colour breakup of a moving edge, per architecture.")
@@ -24,22 +25,16 @@ def motion_cmd(out_dir: Path, quick: bool, renderer: str, sets, quiet: bool):
     """Motion: a neutral slanted edge moving at a sweep of speeds, captured by cfa/single, prism/optimal,
     fsc/optimal and fsc/balanced with a global and a rolling shutter (time slices rendered by Mitsuba);
     colour-breakup width, S-CIELAB, MTF along the motion, SNR; results.json, figures, report.md."""
-    from spectracam.core.errors import ConfigError
     from spectracam.experiments.motion.experiment import check_motion_memory, load_motion, run_motion
     from spectracam.experiments.motion.report import answer, write_outputs
 
     spec, scene = load_motion(sets, quick=quick)   # validated before any work
-    if renderer not in ("mitsuba", "analytic"):
-        raise ConfigError("--renderer", renderer, "moving targets are rendered by 'mitsuba' or 'analytic'")
+    check_target_renderer(renderer, "moving targets")
     estimate = check_motion_memory(spec, scene)
     check_writable(out_dir)
     log = progress_log(quiet)
     log(estimate.line())
     t0 = time.perf_counter()
     result = run_motion(spec, scene, renderer=renderer, log=log, progress=not quiet)
-    command = "spectracam motion -o " + str(out_dir) + (" --quick" if quick else "") \
-        + (f" --renderer {renderer}" if renderer != "mitsuba" else "") + "".join(f" --set {s}" for s in sets)
-    paths = write_outputs(out_dir, result, command)
-    for line in answer(result):
-        log(line)
-    log(f"[{time.perf_counter() - t0:6.1f} s] wrote {len(paths)} files; report: {Path(out_dir) / 'report.md'}")
+    paths = write_outputs(out_dir, result, target_command("motion", out_dir, quick, renderer, sets))
+    log_report(log, t0, answer(result), paths, out_dir)

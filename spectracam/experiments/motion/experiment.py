@@ -70,6 +70,15 @@ from spectracam.experiments.motion.motion import Motion
 from spectracam.experiments.motion.render import RENDER_MODES, MovingScene, channel_rates, ideal_radiance, integrate
 from spectracam.experiments.motion.timing import TimingSpec, capture_timing
 
+__all__ = ["CAPTURE_OVER_CFA_EXPOSURE", "DESIGNS", "MEMORY_PER_SUBPIXEL_BYTES", "SCORE_BORDER_PX",
+           "SEED_METRICS", "Capture", "DesignModel", "MotionEstimate", "MotionRow", "MotionSetup",
+           "MotionSpec", "StillReference", "calibrated_scene", "capture", "capture_at_seed", "case_speeds",
+           "check_motion_memory", "crossing", "crossing_speeds", "design_model", "design_snr_db",
+           "edge_distance_moving", "finite_or_none", "load_motion", "mean_or_none", "motion_camera",
+           "motion_estimate", "prepare", "render_at_speed", "run_motion", "score_capture", "score_case",
+           "sd_or_none", "seed_crossings", "series", "speed_mm_per_s", "still_reference", "sweep_speeds",
+           "timed"]
+
 DESIGNS = ("cfa/single", "prism/optimal", "fsc/optimal", "fsc/balanced")
 SCORE_BORDER_PX = 4
 

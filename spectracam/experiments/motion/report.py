@@ -13,6 +13,9 @@ from spectracam.io.plots import pyplot, save_figure, srgb_image
 from spectracam.experiments.motion.cases import MAP_VMIN_TOP, case_stem, map_name, write_case_outputs
 from spectracam.experiments.motion.experiment import series
 
+__all__ = ["COLOURS", "REST_AT", "answer", "figure_crops", "figure_curves", "fsc_frames_gif",
+           "report_markdown", "write_outputs"]
+
 COLOURS = {"cfa/single": "#d62728", "prism/optimal": "#1f77b4", "fsc/optimal": "#2ca02c", "fsc/balanced": "#9467bd"}
 
 

@@ -26,6 +26,11 @@ from spectracam.pipeline.scene_file import Scene, experiment_base_scene, read_to
 from spectracam.evaluation.score import score
 from spectracam.core.spec import _is_number
 
+__all__ = ["BUDGET_STEPS", "EXPERIMENT_KEYS", "QUICK_IMAGE_PX", "Alternative", "BudgetStep",
+           "PaperExperiment", "both_ways", "calibrated_luminance", "comparison", "comparison_cases",
+           "design_case", "error_budget", "load_experiment", "quick_scene", "run_paper", "scaled",
+           "scenes_for"]
+
 
 @dataclass(frozen=True)
 class BudgetStep:
@@ -94,23 +99,12 @@ def _list(data: dict, key: str, default, ok, allowed: str, source: str) -> list:
 def load_experiment(path: str | Path, overrides=()) -> PaperExperiment:
     """Read and validate an experiment file (see scenes/paper.toml).  ``overrides`` (``--set``):
     a path whose table is an experiment key changes the experiment, any other the base scene."""
-    import colour
-
     p = Path(path)
     src = str(p)
     pairs = [parse_assignment(o) if isinstance(o, str) else o for o in overrides]
     mine = [(k, v) for k, v in pairs if k.split(".")[0].split("[")[0] in EXPERIMENT_KEYS]
     scene_overrides = [(k, v) for k, v in pairs if (k, v) not in mine]
-    t = read_toml(p, "experiment file")
-    light_sets = {k.split(".", 1)[1] for k, _ in mine if k.startswith("light.")}
-    if isinstance(t.get("light"), dict) and light_sets & {"white_luminance_cd_m2", "cfa_exposure_ms"}:
-        # --set of one way to give the light replaces the file's other way (the command line comes last)
-        t["light"] = {k: v for k, v in t["light"].items()
-                      if k not in {"white_luminance_cd_m2", "cfa_exposure_ms"} - light_sets}
-    t = apply_overrides(t, mine)
-    for k in t:
-        if k not in EXPERIMENT_KEYS:
-            raise ConfigError(k, t[k], "unknown key; an experiment file has " + ", ".join(EXPERIMENT_KEYS), src)
+    t = _experiment_table(p, mine)
     base = experiment_base_scene(t, p.parent, scene_overrides, src)
     t.pop("base_scene", None)
     t.pop("scene", None)
@@ -128,10 +122,45 @@ def load_experiment(path: str | Path, overrides=()) -> PaperExperiment:
         except ConfigError as e:
             raise e.with_source(src) from None
     budget_design = t.pop("budget_design", PaperExperiment.budget_design)
+    budget_illuminant = _budget_illuminant(t, src)
+    level, cfa_ms, cal_T = _light(t, src)
+    alternatives = [_sensitivity_alternative(i, alt, base, src) for i, alt in enumerate(t.pop("sensitivity", []))]
+    return PaperExperiment(base=base, temperatures_K=tuple(float(x) for x in temps), budget_illuminant=budget_illuminant,
+                           budget_design=budget_design, designs=tuple(designs), cfa_exposure_ms=cfa_ms,
+                           calibration_temperature_K=float(cal_T), white_luminance_cd_m2=level,
+                           alternatives=tuple(alternatives))
+
+
+def _experiment_table(p: Path, mine: list) -> dict:
+    """The experiment file's table with its ``--set`` overrides applied; an unknown key is refused."""
+    src = str(p)
+    t = read_toml(p, "experiment file")
+    light_sets = {k.split(".", 1)[1] for k, _ in mine if k.startswith("light.")}
+    if isinstance(t.get("light"), dict) and light_sets & {"white_luminance_cd_m2", "cfa_exposure_ms"}:
+        # --set of one way to give the light replaces the file's other way (the command line comes last)
+        t["light"] = {k: v for k, v in t["light"].items()
+                      if k not in {"white_luminance_cd_m2", "cfa_exposure_ms"} - light_sets}
+    t = apply_overrides(t, mine)
+    for k in t:
+        if k not in EXPERIMENT_KEYS:
+            raise ConfigError(k, t[k], "unknown key; an experiment file has " + ", ".join(EXPERIMENT_KEYS), src)
+    return t
+
+
+def _budget_illuminant(t: dict, src: str) -> str:
+    """The error budget's illuminant (taken from ``t``): a CIE illuminant colour-science ships."""
+    import colour
+
     budget_illuminant = t.pop("budget_illuminant", PaperExperiment.budget_illuminant)
     if budget_illuminant not in colour.SDS_ILLUMINANTS:
         raise ConfigError("budget_illuminant", budget_illuminant,
                           "must be a CIE illuminant colour-science ships, e.g. D65", src)
+    return budget_illuminant
+
+
+def _light(t: dict, src: str) -> tuple:
+    """``(white luminance or None, cfa/single's exposure in ms or None, calibration temperature)`` from the
+    ``[light]`` table (taken from ``t``)."""
     light = t.pop("light", {})
     if not isinstance(light, dict):
         raise ConfigError("light", light, "must be a table", src)
@@ -149,28 +178,27 @@ def load_experiment(path: str | Path, overrides=()) -> PaperExperiment:
                          ("at_temperature_K", cal_T, 1000, 40000)):
         if v is not None and not (_is_number(v) and v > lo and (hi is None or v <= hi)):
             raise ConfigError(f"light.{k}", v, f"must be a number > {lo}" + (f" and ≤ {hi}" if hi else ""), src)
-    alternatives = []
-    for i, alt in enumerate(t.pop("sensitivity", [])):
-        where = f"sensitivity[{i}]"
-        if not isinstance(alt, dict):
-            raise ConfigError(where, alt, "must be a table", src)
-        a = dict(alt)
-        name, reason = a.pop("name", f"alternative {i}"), a.pop("reason", "")
-        scale = a.pop("light_scale", 1.0)
-        if not (_is_number(scale) and scale > 0):
-            raise ConfigError(f"{where}.light_scale", scale, "must be a number > 0", src)
-        tables = {k: a.pop(k) for k in ("optics", "filters", "sensor", "processing") if k in a}
-        for k in a:
-            raise ConfigError(f"{where}.{k}", a[k], "unknown key; allowed: name, reason, light_scale, optics, "
-                              "filters, sensor, processing", src)
-        alternative = Alternative(str(name), str(reason), tables, float(scale))
-        alternative.camera(base.camera, f"{src}: {name}")  # validate now
-        alternative.processing(base.processing, f"{src}: {name}")
-        alternatives.append(alternative)
-    return PaperExperiment(base=base, temperatures_K=tuple(float(x) for x in temps), budget_illuminant=budget_illuminant,
-                           budget_design=budget_design, designs=tuple(designs), cfa_exposure_ms=cfa_ms,
-                           calibration_temperature_K=float(cal_T), white_luminance_cd_m2=level,
-                           alternatives=tuple(alternatives))
+    return level, cfa_ms, cal_T
+
+
+def _sensitivity_alternative(i: int, alt, base: Scene, src: str) -> Alternative:
+    """The ``i``-th ``[[sensitivity]]`` table as an :class:`Alternative`, its camera and processing validated."""
+    where = f"sensitivity[{i}]"
+    if not isinstance(alt, dict):
+        raise ConfigError(where, alt, "must be a table", src)
+    a = dict(alt)
+    name, reason = a.pop("name", f"alternative {i}"), a.pop("reason", "")
+    scale = a.pop("light_scale", 1.0)
+    if not (_is_number(scale) and scale > 0):
+        raise ConfigError(f"{where}.light_scale", scale, "must be a number > 0", src)
+    tables = {k: a.pop(k) for k in ("optics", "filters", "sensor", "processing") if k in a}
+    for k in a:
+        raise ConfigError(f"{where}.{k}", a[k], "unknown key; allowed: name, reason, light_scale, optics, "
+                          "filters, sensor, processing", src)
+    alternative = Alternative(str(name), str(reason), tables, float(scale))
+    alternative.camera(base.camera, f"{src}: {name}")  # validate now
+    alternative.processing(base.processing, f"{src}: {name}")
+    return alternative
 
 
 def calibrated_luminance(exp: PaperExperiment, camera: CameraSpec) -> float:
@@ -381,24 +409,12 @@ def run_paper(exp: PaperExperiment, renderer: str = "mitsuba", quick: bool = Fal
     ``progress``: bars over the lights rendered, the cases and the sensitivity alternatives on a terminal."""
     import time
 
-    from spectracam.io.cache import cached_render
     from spectracam.core.progress import bar
-    from spectracam.render import render
 
     timings = {}
     t0 = time.perf_counter()
     level = calibrated_luminance(exp, exp.base.camera)
-    cubes = {}
-    scenes = scenes_for(exp, level, quick)
-    for key, scene in bar(scenes.items(), total=len(scenes), desc="render lights", unit="light", progress=progress):
-        t = time.perf_counter()
-        if use_cache:
-            cube, hit = cached_render(scene, renderer, progress=progress, log=log)
-        else:
-            cube, hit = render(scene, renderer=renderer, progress=progress, log=log), False
-        cubes[key] = (scene, cube)
-        step(f"render {key}{' K' if key[0].isdigit() else ''}: {'cached' if hit else renderer} "
-             f"({time.perf_counter() - t:.1f} s)")
+    cubes = _render_lights(exp, level, quick, renderer, use_cache, step, log, progress)
     timings["render_s"] = time.perf_counter() - t0
     t = time.perf_counter()
     with bar(total=comparison_cases(exp), desc="paper cases", unit="case", progress=progress) as b:
@@ -416,38 +432,11 @@ def run_paper(exp: PaperExperiment, renderer: str = "mitsuba", quick: bool = Fal
 
     claims = evaluate(main)
     t = time.perf_counter()
-    alt_results, alt_claims = {}, {}
-    with bar(total=len(exp.alternatives), desc="sensitivity", unit="reading", progress=progress) as b:
-        alternatives = _alternatives(exp, cubes, tick=lambda: b.update(1))
-    for alt, r in zip(exp.alternatives, alternatives):
-        alt_results[alt.name] = {"reason": alt.reason, **r}
-        alt_claims[alt.name] = evaluate(r)
-        step(f"sensitivity: {alt.name}")
+    alt_results, alt_claims = _sensitivity(exp, cubes, step, progress)
     timings["sensitivity_s"] = time.perf_counter() - t
     base = exp.base.replace(illuminant=IlluminantSpec("blackbody", exp.calibration_temperature_K, None, level))
     results = {
-        "parameters": {
-            "renderer": renderer, "quick": quick, "seed": exp.base.render.seed,
-            "designs": list(exp.designs), "temperatures_K": [f"{T:g}" for T in exp.temperatures_K],
-            "budget_illuminant": exp.budget_illuminant, "budget_design": exp.budget_design,
-            "white_luminance_cd_m2": level, "illuminance_lux": base.illuminant.illuminance_lux,
-            "light_calibration": (f"cfa/single needs {exp.cfa_exposure_ms:g} ms at {exp.calibration_temperature_K:g} K"
-                                  if exp.white_luminance_cd_m2 is None else "fixed in the experiment file"),
-            "scene": base.to_dict(),
-            "fig6_method": "noise steps: per-pixel ΔE*ab against the noise-free rendering of the same camera (the "
-                           "conversion error removed), sources added in the order shown, so the perfect system's "
-                           "residual is the Monte Carlo noise of the render; last step: against the scene, adding "
-                           "the colour conversion error",
-            "snr": "chart average of each patch's combined SNR (see processing.snr_combination)",
-            "delta_e": "chart average of each patch's mean per-pixel ΔE (processing.delta_e)",
-            "s_cielab": "S-CIELAB (Zhang & Wandell 1997): the rendered image and the scene's truth image through the "
-                        "eye's filters, then the per-pixel ΔE (processing.delta_e) on the same patch pixels; chart "
-                        "average of each patch's mean (fig5b_s_cielab; fig5b_s_cielab_p95: the 95th percentile over "
-                        "every patch's pixels); always against the scene (the budget steps too); docs/metrics.md",
-            "s_cielab_viewing": {"viewing_distance_m": exp.base.processing.viewing_distance_m,
-                                 "display_pixel_pitch_mm": exp.base.processing.display_pixel_pitch_mm,
-                                 "samples_per_degree": exp.base.processing.samples_per_degree},
-        },
+        "parameters": _parameters(exp, renderer, quick, level, base),
         **main,
         "claims": claims,
         "both_ways": developed,
@@ -455,3 +444,68 @@ def run_paper(exp: PaperExperiment, renderer: str = "mitsuba", quick: bool = Fal
         "timings_s": timings,
     }
     return results, cases, cubes
+
+
+def _render_lights(exp: PaperExperiment, level: float, quick: bool, renderer: str, use_cache: bool, step, log,
+                   progress: bool) -> dict:
+    """Render the chart under every light of the experiment (through the render cache when ``use_cache``):
+    ``{label: (scene, cube)}``."""
+    import time
+
+    from spectracam.io.cache import cached_render
+    from spectracam.core.progress import bar
+    from spectracam.render import render
+
+    cubes = {}
+    scenes = scenes_for(exp, level, quick)
+    for key, scene in bar(scenes.items(), total=len(scenes), desc="render lights", unit="light", progress=progress):
+        t = time.perf_counter()
+        if use_cache:
+            cube, hit = cached_render(scene, renderer, progress=progress, log=log)
+        else:
+            cube, hit = render(scene, renderer=renderer, progress=progress, log=log), False
+        cubes[key] = (scene, cube)
+        step(f"render {key}{' K' if key[0].isdigit() else ''}: {'cached' if hit else renderer} "
+             f"({time.perf_counter() - t:.1f} s)")
+    return cubes
+
+
+def _sensitivity(exp: PaperExperiment, cubes: dict, step, progress: bool) -> tuple[dict, dict]:
+    """Every sensitivity alternative's results and claims, by name."""
+    from spectracam.core.progress import bar
+    from spectracam.experiments.paper.claims import evaluate
+
+    alt_results, alt_claims = {}, {}
+    with bar(total=len(exp.alternatives), desc="sensitivity", unit="reading", progress=progress) as b:
+        alternatives = _alternatives(exp, cubes, tick=lambda: b.update(1))
+    for alt, r in zip(exp.alternatives, alternatives):
+        alt_results[alt.name] = {"reason": alt.reason, **r}
+        alt_claims[alt.name] = evaluate(r)
+        step(f"sensitivity: {alt.name}")
+    return alt_results, alt_claims
+
+
+def _parameters(exp: PaperExperiment, renderer: str, quick: bool, level: float, base: Scene) -> dict:
+    """The results' ``parameters``: the experiment's settings, its light and how each figure is measured."""
+    return {
+        "renderer": renderer, "quick": quick, "seed": exp.base.render.seed,
+        "designs": list(exp.designs), "temperatures_K": [f"{T:g}" for T in exp.temperatures_K],
+        "budget_illuminant": exp.budget_illuminant, "budget_design": exp.budget_design,
+        "white_luminance_cd_m2": level, "illuminance_lux": base.illuminant.illuminance_lux,
+        "light_calibration": (f"cfa/single needs {exp.cfa_exposure_ms:g} ms at {exp.calibration_temperature_K:g} K"
+                              if exp.white_luminance_cd_m2 is None else "fixed in the experiment file"),
+        "scene": base.to_dict(),
+        "fig6_method": "noise steps: per-pixel ΔE*ab against the noise-free rendering of the same camera (the "
+                       "conversion error removed), sources added in the order shown, so the perfect system's "
+                       "residual is the Monte Carlo noise of the render; last step: against the scene, adding "
+                       "the colour conversion error",
+        "snr": "chart average of each patch's combined SNR (see processing.snr_combination)",
+        "delta_e": "chart average of each patch's mean per-pixel ΔE (processing.delta_e)",
+        "s_cielab": "S-CIELAB (Zhang & Wandell 1997): the rendered image and the scene's truth image through the "
+                    "eye's filters, then the per-pixel ΔE (processing.delta_e) on the same patch pixels; chart "
+                    "average of each patch's mean (fig5b_s_cielab; fig5b_s_cielab_p95: the 95th percentile over "
+                    "every patch's pixels); always against the scene (the budget steps too); docs/metrics.md",
+        "s_cielab_viewing": {"viewing_distance_m": exp.base.processing.viewing_distance_m,
+                             "display_pixel_pitch_mm": exp.base.processing.display_pixel_pitch_mm,
+                             "samples_per_degree": exp.base.processing.samples_per_degree},
+    }

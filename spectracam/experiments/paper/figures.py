@@ -5,6 +5,8 @@ import numpy as np
 
 from spectracam.io.plots import pyplot as _plt
 
+__all__ = ["CHANNEL_STYLE", "DESIGN_STYLE", "PAPER_DESIGNS", "fig4", "fig5", "fig6"]
+
 #: The paper's markers: Fig. 4 circles R, triangles G, squares B; Fig. 5 circles CFA, triangles FSC,
 #: squares FSC balanced (the prism, not in the paper's Fig. 5, gets diamonds).
 CHANNEL_STYLE = {"R": ("o", "tab:red"), "G": ("^", "tab:green"), "B": ("s", "tab:blue"), "C": ("v", "c"),

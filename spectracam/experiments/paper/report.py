@@ -9,6 +9,8 @@ from spectracam.io.plots import save_figure
 from spectracam.experiments.paper import figures
 from spectracam.experiments.paper.claims import derivations
 
+__all__ = ["PAPER_CLAIMS_NOTE", "both_ways_lines", "report_markdown", "write_paper_outputs"]
+
 PAPER_CLAIMS_NOTE = ("Verdicts: reproduced — direction and size as the paper states; partly — the direction "
                      "holds, the size does not; not — the direction does not hold.")
 
@@ -27,34 +29,56 @@ def _per_design(results: dict, key: str, fmt: str) -> str:
 
 
 def report_markdown(results: dict, command: str) -> str:
+    """report.md: the choices the paper leaves open, every figure's numbers, the claims and their sensitivity."""
+    lines = [*_header_lines(results, command), *_figure_lines(results), *_claims_lines(results)]
+    lines += _sensitivity_lines(results)
+    lines += ["## Files", "", "`results.json` holds every number above; `cases/` holds the raw (raw.exr) and rendered "
+              "(rendered.exr) images of every case — and the spectral radiance (radiance.exr) of every light with "
+              "`--save-cubes` — each carrying the parameters it came from.", ""]
+    return "\n".join(lines)
+
+
+def _header_lines(results: dict, command: str) -> list:
+    """The title, the command that made the report and the choices the paper does not give."""
     p = results["parameters"]
-    sc = p["scene"]
-    cam = {k: sc[k] for k in ("optics", "filters", "sensor", "capture")}
-    lines = [
+    return [
         "# spectracam: Catrysse, Wandell & El Gamal (1999), section 5, reproduced", "",
         f"Made by `{command}` (renderer: {p['renderer']}{', quick' if p['quick'] else ''}; seed {p['seed']}).", "",
         "## Parameters the paper does not give", "",
-        _table(["choice", "value here", "why"], [
-            ["light level", f"{p['white_luminance_cd_m2']:.1f} cd/m² white-diffuser luminance "
-                            f"({p['illuminance_lux']:.0f} lx), all illuminants",
-             p["light_calibration"] + " (Fig. 5 caption)"],
-            ["pixel", f"{cam['sensor']['pixel_pitch_um']:g} µm pitch, fill factor {cam['sensor']['fill_factor']:g}",
-             "a 131072 e⁻ well at ~1300 e⁻/µm² implies ~100 µm²"],
-            ["QE", f"{cam['filters']['qe']}"
-             + (f", collection depth {cam['filters']['collection_depth_um']:g} µm" if cam['filters']['qe'] == "photodiode"
-                else "") + f", peak {cam['filters']['qe_peak']:g}",
-             "a front-illuminated CMOS photodiode of 1999 collects from a shallow depth (silicon absorption, Green "
-             "2008); of the readings mapped by `spectracam consistency`, the physical one that reproduces most claims"],
-            ["FPN < 1 %", f"{cam['sensor']['fpn_reading']} reading of {cam['sensor']['fpn_fraction']:g} × full swing",
-             "'std': an rms of that fraction; 'bound': a uniform spread of that width (rms /√12)"],
-            ["black level", f"{cam['sensor']['black_level_DN'] if cam['sensor']['black_level_DN'] is not None else 'default (2ⁿ⁻⁵ DN)'}",
-             "a pedestal keeps the dark noise off code 0 (EMVA 1288); the paper's ADC is not described"],
-            ["display", sc["processing"]["display"], "the paper's 'simple CRT display' (Brainard 1997 phosphors)"],
-            ["adaptation", sc["processing"]["adaptation"], "preserves CIELAB against each white exactly"],
-            ["SNR of three channels", sc["processing"]["snr_combination"], p["snr"]],
-            ["ΔE", sc["processing"]["delta_e"], p["delta_e"]],
-            ["demosaicking", sc["processing"]["demosaic"], "colour-demosaicing; scored inside patch masks only"],
-        ]), "",
+        _open_choices(p), ""]
+
+
+def _open_choices(p: dict) -> str:
+    """The table of the choices the paper does not give: each one's value here and why."""
+    sc = p["scene"]
+    cam = {k: sc[k] for k in ("optics", "filters", "sensor", "capture")}
+    return _table(["choice", "value here", "why"], [
+        ["light level", f"{p['white_luminance_cd_m2']:.1f} cd/m² white-diffuser luminance "
+                        f"({p['illuminance_lux']:.0f} lx), all illuminants",
+         p["light_calibration"] + " (Fig. 5 caption)"],
+        ["pixel", f"{cam['sensor']['pixel_pitch_um']:g} µm pitch, fill factor {cam['sensor']['fill_factor']:g}",
+         "a 131072 e⁻ well at ~1300 e⁻/µm² implies ~100 µm²"],
+        ["QE", f"{cam['filters']['qe']}"
+         + (f", collection depth {cam['filters']['collection_depth_um']:g} µm" if cam['filters']['qe'] == "photodiode"
+            else "") + f", peak {cam['filters']['qe_peak']:g}",
+         "a front-illuminated CMOS photodiode of 1999 collects from a shallow depth (silicon absorption, Green "
+         "2008); of the readings mapped by `spectracam consistency`, the physical one that reproduces most claims"],
+        ["FPN < 1 %", f"{cam['sensor']['fpn_reading']} reading of {cam['sensor']['fpn_fraction']:g} × full swing",
+         "'std': an rms of that fraction; 'bound': a uniform spread of that width (rms /√12)"],
+        ["black level", f"{cam['sensor']['black_level_DN'] if cam['sensor']['black_level_DN'] is not None else 'default (2ⁿ⁻⁵ DN)'}",
+         "a pedestal keeps the dark noise off code 0 (EMVA 1288); the paper's ADC is not described"],
+        ["display", sc["processing"]["display"], "the paper's 'simple CRT display' (Brainard 1997 phosphors)"],
+        ["adaptation", sc["processing"]["adaptation"], "preserves CIELAB against each white exactly"],
+        ["SNR of three channels", sc["processing"]["snr_combination"], p["snr"]],
+        ["ΔE", sc["processing"]["delta_e"], p["delta_e"]],
+        ["demosaicking", sc["processing"]["demosaic"], "colour-demosaicing; scored inside patch masks only"],
+    ])
+
+
+def _figure_lines(results: dict) -> list:
+    """The exposures and Figures 4, 5 and 6 (with the held-out and both-ways tables between them)."""
+    p = results["parameters"]
+    return [
         "## Exposure (capture time, ms)", "", _per_design(results, "exposure_ms", "{:.1f}"), "",
         "## Figure 4: relative response to the white patch (R, G, B; 1 = full well)", "",
         _table(["design"] + [f"{t} K" for t in p["temperatures_K"]],
@@ -74,29 +98,34 @@ def report_markdown(results: dict, command: str) -> str:
                [[s["label"], f"{s['delta_e']:.2f}", "–" if s.get("s_cielab") is None else f"{s['s_cielab']:.2f}"]
                 for s in results["fig6_budget_delta_e"]]), "",
         f"Method: {p['fig6_method']}.", "",
-        "![Figure 6](fig6.png)", "",
+        "![Figure 6](fig6.png)", ""]
+
+
+def _claims_lines(results: dict) -> list:
+    """The paper's claims beside this run's numbers, and why a size cannot be met."""
+    return [
         "## The paper's claims beside this run", "", PAPER_CLAIMS_NOTE, "",
         _table(["claim", "paper", "this run", "verdict", "why it differs"],
                [[c["claim"], c["paper"], c["measured"], c["verdict"], c["why"]] for c in results["claims"]]), "",
-        *derivations(results),
-    ]
+        *derivations(results)]
+
+
+def _sensitivity_lines(results: dict) -> list:
+    """Which claims survive which alternative reading, and the key numbers under each."""
     sens = results["sensitivity"]
-    if sens["alternatives"]:
-        names = list(sens["alternatives"])
-        lines += ["## Sensitivity: which conclusions survive which choices", "",
-                  "Each column reruns the whole comparison with one choice changed (same renders, same seed).", "",
-                  _table(["alternative", "why"], [[n, sens["alternatives"][n]["reason"]] for n in names]), "",
-                  _table(["claim", "default"] + names,
-                         [[cid] + [v.get(n, "") for n in ["default"] + names] for cid, v in sens["claims"].items()]), "",
-                  "Key numbers under each alternative (5000 K where the grid has it):", "",
-                  _table(["alternative", "cfa ms", "fsc ms", "SNR cfa", "SNR fsc", "SNR fsc bal.", "ΔE cfa",
-                          "ΔE fsc", "ΔE fsc bal."],
-                         [[n] + _key_numbers(sens["alternatives"][n]) for n in names]
-                         + [["default"] + _key_numbers(results)]), ""]
-    lines += ["## Files", "", "`results.json` holds every number above; `cases/` holds the raw (raw.exr) and rendered "
-              "(rendered.exr) images of every case — and the spectral radiance (radiance.exr) of every light with "
-              "`--save-cubes` — each carrying the parameters it came from.", ""]
-    return "\n".join(lines)
+    if not sens["alternatives"]:
+        return []
+    names = list(sens["alternatives"])
+    return ["## Sensitivity: which conclusions survive which choices", "",
+            "Each column reruns the whole comparison with one choice changed (same renders, same seed).", "",
+            _table(["alternative", "why"], [[n, sens["alternatives"][n]["reason"]] for n in names]), "",
+            _table(["claim", "default"] + names,
+                   [[cid] + [v.get(n, "") for n in ["default"] + names] for cid, v in sens["claims"].items()]), "",
+            "Key numbers under each alternative (5000 K where the grid has it):", "",
+            _table(["alternative", "cfa ms", "fsc ms", "SNR cfa", "SNR fsc", "SNR fsc bal.", "ΔE cfa",
+                    "ΔE fsc", "ΔE fsc bal."],
+                   [[n] + _key_numbers(sens["alternatives"][n]) for n in names]
+                   + [["default"] + _key_numbers(results)]), ""]
 
 
 def _s_cielab_lines(results: dict) -> list:

@@ -30,6 +30,9 @@ from spectracam.scene.reference import ChartReference
 from spectracam.evaluation.score import camera_rates
 from spectracam.core.spectra import K_M_LM_PER_W, cmf_band_weights
 
+__all__ = ["Conversion", "SpatialDesign", "misregistration_shifts", "process", "radiance_to_display_xyz",
+           "record", "white_rate"]
+
 
 @dataclass(frozen=True)
 class SpatialDesign:

@@ -1,7 +1,5 @@
-"""``spectracam spatial``: the spatial comparison of the architectures (a self-contained click command).
-
-Register it with ``main.add_command(spatial_cmd)`` in :mod:`spectracam.cli`.
-"""
+"""``spectracam spatial``: the spatial comparison of the architectures (a self-contained click command,
+registered lazily by :mod:`spectracam.cli`)."""
 from __future__ import annotations
 
 import time
@@ -9,8 +7,11 @@ from pathlib import Path
 
 import click
 
-from spectracam.experiments.options import (check_writable, output_option, progress_log, quiet_option, renderer_option, set_option,
-                           view_option)
+from spectracam.experiments.options import (check_target_renderer, check_writable, log_report, output_option,
+                                            progress_log, quiet_option, renderer_option, set_option, target_command,
+                                            view_option)
+
+__all__ = ["spatial_cmd"]
 
 
 @click.command("spatial", short_help="Compare the architectures' spatial fidelity: MTF, colour.")
@@ -26,22 +27,13 @@ def spatial_cmd(out_dir: Path, quick: bool, renderer: str, no_maps: bool, sets, 
     aperture and each design (CFA + demosaicking, prism aligned/misaligned, FSC); e-SFR MTF50, false
     colour, S-CIELAB; results.json, figures, report.md."""
     from spectracam.experiments.spatial.experiment import load_spatial, run_spatial
-    from spectracam.experiments.spatial.report import write_outputs
+    from spectracam.experiments.spatial.report import answer, write_outputs
 
     spec, scene = load_spatial(sets, quick=quick)   # validated before any work
-    if renderer not in ("mitsuba", "analytic"):
-        from spectracam.core.errors import ConfigError
-
-        raise ConfigError("--renderer", renderer, "spatial targets are rendered by 'mitsuba' or 'analytic'")
+    check_target_renderer(renderer, "spatial targets")
     check_writable(out_dir)
     log = progress_log(quiet)
     t0 = time.perf_counter()
     result = run_spatial(spec, scene, renderer=renderer, log=log, progress=not quiet)
-    command = "spectracam spatial -o " + str(out_dir) + (" --quick" if quick else "") \
-        + (f" --renderer {renderer}" if renderer != "mitsuba" else "") + "".join(f" --set {s}" for s in sets)
-    paths = write_outputs(out_dir, result, command, maps=not no_maps)
-    from spectracam.experiments.spatial.report import answer
-
-    for line in answer(result):
-        log(line)
-    log(f"[{time.perf_counter() - t0:6.1f} s] wrote {len(paths)} files; report: {Path(out_dir) / 'report.md'}")
+    paths = write_outputs(out_dir, result, target_command("spatial", out_dir, quick, renderer, sets), maps=not no_maps)
+    log_report(log, t0, answer(result), paths, out_dir)

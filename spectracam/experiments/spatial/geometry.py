@@ -25,6 +25,8 @@ import numpy as np
 
 from spectracam.core.errors import ConfigError
 
+__all__ = ["CameraGeometry"]
+
 
 @dataclass(frozen=True)
 class CameraGeometry:

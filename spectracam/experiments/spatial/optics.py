@@ -38,6 +38,10 @@ from scipy.special import j1
 from spectracam.camera import CameraSpec, band_weights
 from spectracam.experiments.spatial.geometry import CameraGeometry
 
+__all__ = ["MARGIN_PX", "WRAP_TOLERANCE", "OpticsSettings", "aperture_mtf", "channel_mtf_closed_form",
+           "channel_spectra", "defocus_otf", "diffraction_otf", "margin_px", "olpf_otf", "pixel_rates",
+           "sample_channels"]
+
 #: The fewest pixels rendered around the image on each side (room for a misregistration of up to 4 px).
 MARGIN_PX = 8
 

@@ -9,6 +9,10 @@ import numpy as np
 from spectracam.core.files import atomic_write, json_default
 from spectracam.io.plots import pyplot, save_figure, srgb_image
 
+__all__ = ["ARCH_COLOURS", "COLOURS", "MAP_PERCENTILE", "REPORT_TABLES", "SUMMARY_PANELS", "answer",
+           "figure_crops", "figure_mtf", "figure_scielab_maps", "figure_summary", "report_markdown",
+           "write_case_images", "write_outputs"]
+
 
 def _cases(rows):
     return list(dict.fromkeys((r.pixel_pitch_um, r.f_number) for r in rows))
@@ -410,28 +414,49 @@ REPORT_TABLES = {
 
 
 def report_markdown(result, command: str) -> str:
+    """report.md: the answer, a table per target and metric, the figures, the set-up and the time per stage."""
     rows = result["rows"]
     spec = result["parameters"]["spatial"]
-    cases, labels, index = _cases(rows), _labels(rows), _by_key(rows)
     noise = (f"noise on (the paper's camera, `scenes/paper.toml`): every number is the mean over {spec['seeds']} seeds "
              "with its 95 % Student-t interval in brackets" if spec["noise"] else
              "noise off: the spatial artefacts alone, one deterministic capture (`--set noise=true` adds the paper's "
              "camera noise and seeds)")
-    out = ["# spectracam spatial: does removing demosaicking give the prism and field-sequential cameras a spatial "
-           "advantage?", "",
-           f"Made by `{command}` (renderer {result['renderer']}, {result['wall_s']:.1f} s; {noise}).", "",
-           "Catrysse, Wandell & El Gamal (1999) scored uniform patches only and named the next step: \"incorporate "
-           "spatial factors to understand how the elimination of demosaicing provides a spatial advantage for FSC\". "
-           "Here each design photographs slanted edges (neutral and coloured), zone plates (luminance and chroma), a "
-           "Siemens star and a ColorChecker tilted in depth through a diffraction-limited lens and the pixel's "
-           "aperture; the displayed image is scored by the e-SFR (MTF50), false colour, colour error at edges, "
-           "aliasing and S-CIELAB (definitions and formulas: docs/metrics.md, \"Spatial\").", "",
-           "## Answer", "", *answer(result), "",
-           f"Reference: {result['parameters']['reference']} (aliasing counts as error). Spatial error = against the "
-           "same camera's rendering of that reference (its colour-conversion error removed); `scielab_delta_e` / "
-           "`cielab_delta_e` are against the reference itself and add the conversion error, which is the same for "
-           "every design.", "",
-           "![summary](summary.png)", "", "![MTF](mtf.png)", ""]
+    out = _intro_lines(result, command, noise)
+    out += _metric_tables(rows)
+    out += ["## Figures", ""]
+    for f in result.get("figures", []):
+        out.append(f"![{f}]({f})")
+    out += _setup_lines(result, spec, noise)
+    out += ["## Time per stage (s)", "", "| target | " + " | ".join(result["timings"][next(iter(result["timings"]))])
+            + " |", "|---|" + "---|" * 5]
+    for t, st in result["timings"].items():
+        out.append(f"| {t} | " + " | ".join(f"{v:.2f}" for v in st.values()) + " |")
+    return "\n".join(out) + "\n"
+
+
+def _intro_lines(result, command: str, noise: str) -> list[str]:
+    """The title, how the report was made, the question, its answer and the summary figures."""
+    return ["# spectracam spatial: does removing demosaicking give the prism and field-sequential cameras a spatial "
+            "advantage?", "",
+            f"Made by `{command}` (renderer {result['renderer']}, {result['wall_s']:.1f} s; {noise}).", "",
+            "Catrysse, Wandell & El Gamal (1999) scored uniform patches only and named the next step: \"incorporate "
+            "spatial factors to understand how the elimination of demosaicing provides a spatial advantage for FSC\". "
+            "Here each design photographs slanted edges (neutral and coloured), zone plates (luminance and chroma), a "
+            "Siemens star and a ColorChecker tilted in depth through a diffraction-limited lens and the pixel's "
+            "aperture; the displayed image is scored by the e-SFR (MTF50), false colour, colour error at edges, "
+            "aliasing and S-CIELAB (definitions and formulas: docs/metrics.md, \"Spatial\").", "",
+            "## Answer", "", *answer(result), "",
+            f"Reference: {result['parameters']['reference']} (aliasing counts as error). Spatial error = against the "
+            "same camera's rendering of that reference (its colour-conversion error removed); `scielab_delta_e` / "
+            "`cielab_delta_e` are against the reference itself and add the conversion error, which is the same for "
+            "every design.", "",
+            "![summary](summary.png)", "", "![MTF](mtf.png)", ""]
+
+
+def _metric_tables(rows) -> list[str]:
+    """One table per target and metric of :data:`REPORT_TABLES`: a row per design, a column per case."""
+    cases, labels, index = _cases(rows), _labels(rows), _by_key(rows)
+    out = []
     for t, keys in REPORT_TABLES.items():
         if not any(r.target == t for r in rows):
             continue
@@ -444,12 +469,14 @@ def report_markdown(result, command: str) -> str:
                                                                "{:.3f}" if "mtf" in key else "{:.2f}")
                                                       for p, N in cases) + " |")
             out.append("")
-    out += ["## Figures", ""]
-    for f in result.get("figures", []):
-        out.append(f"![{f}]({f})")
+    return out
+
+
+def _setup_lines(result, spec: dict, noise: str) -> list[str]:
+    """The set-up and the choices made: cases, optics, targets, designs, sensor, S-CIELAB and e-SFR."""
     esfr = ("ISO 12233:2017 as the standard states it" if not spec["esfr_correct_binning"] else
             "ISO 12233:2017 with the binning correction of `spectracam.evaluation.esfr` (not in the standard)")
-    out += ["", "## Set-up and choices", "",
+    return ["", "## Set-up and choices", "",
             f"* Cases: pixel pitch {', '.join(f'{p:g}' for p in spec['pixel_pitches_um'])} µm × f/"
             f"{', f/'.join(f'{n:g}' for n in spec['f_numbers'])}; a {spec['focal_length_mm']:g} mm thin lens, each target "
             "framed to the same pixels at every pitch (object distance from the magnification).",
@@ -471,12 +498,7 @@ def report_markdown(result, command: str) -> str:
             f"* e-SFR: {esfr}; MTF50 of the displayed luminance Y; per-channel MTF50 in results.json (None where a "
             "channel sees no usable step).",
             "* Every design's image of every case: `cases/<pitch>um_f<N>/<target>/` (linear EXR, sRGB PNG, error map "
-            "with its scale).", "",
-            "## Time per stage (s)", "", "| target | " + " | ".join(result["timings"][next(iter(result["timings"]))]) + " |",
-            "|---|" + "---|" * 5]
-    for t, st in result["timings"].items():
-        out.append(f"| {t} | " + " | ".join(f"{v:.2f}" for v in st.values()) + " |")
-    return "\n".join(out) + "\n"
+            "with its scale).", ""]
 
 
 def write_outputs(out_dir: Path, result: dict, command: str, maps: bool = True) -> list[Path]:

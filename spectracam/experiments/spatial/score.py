@@ -30,6 +30,9 @@ from spectracam.experiments.spatial.geometry import CameraGeometry
 from spectracam.evaluation.scielab import scielab
 from spectracam.experiments.spatial.targets import SlantedEdge, Target, TiltedChart, ZonePlate
 
+__all__ = ["EDGE_ZONE_PX", "SCALAR_METRICS", "SCORE_BORDER_PX", "SPATIAL_METRICS", "Metric",
+           "ScoringContext", "SpatialRow", "mtf_curves", "score_image", "seed_summary"]
+
 #: Pixels cut from every side before scoring: demosaicking's border rows and columns.
 SCORE_BORDER_PX = 4
 #: Half-width of the edge zone, px: pixels this close to a change of the reference's L* (> 1 per pixel).

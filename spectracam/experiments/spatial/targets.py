@@ -36,6 +36,9 @@ from spectracam.scene.chart import ChartSpec, patch_names_and_data, patch_rectan
 from spectracam.core.spectra import tabulated
 from spectracam.experiments.spatial.geometry import CameraGeometry
 
+__all__ = ["LIFT_MM", "ColouredEdge", "SiemensStar", "SlantedEdge", "Target", "TiltedChart", "ZonePlate",
+           "neutral_materials", "object_points", "oversampled_mean", "patch_materials"]
+
 #: The ColorChecker patches of the edge and the star: 0.352 / 0.088 mean reflectance, 4.0:1 (ISO 12233:2017).
 BRIGHT_NEUTRAL, DARK_NEUTRAL = "neutral 6.5 (.44 D)", "neutral 3.5 (1.05 D)"
 #: Height of a patch above its board along the normal, mm (as the flat chart's renderer).
@@ -64,6 +67,17 @@ def object_points(geometry: CameraGeometry, supersampling: int, oversampling: in
     u, w = geometry.pixel_centres_mm(supersampling)
     off = ((np.arange(oversampling) + 0.5) / oversampling - 0.5) * s
     return (u[:, None] + off[None, :]) * k, (w[:, None] - off[None, :]) * k  # (Ws, os), (Hs, os)
+
+
+def oversampled_mean(fn, X, Y, oversampling: int) -> np.ndarray:
+    """``(Hs, Ws)`` float64 mean of ``fn(x, y)`` over the ``oversampling²`` points of every sub-pixel
+    (:func:`object_points`' X and Y, in the units ``fn`` takes)."""
+    acc = np.zeros((Y.shape[0], X.shape[0]), np.float64)
+    for i in range(oversampling):
+        for j in range(oversampling):
+            acc += fn(X[None, :, j], Y[:, i, None])
+    acc /= oversampling**2
+    return acc
 
 
 class Target:
@@ -192,12 +206,7 @@ class ZonePlate(Target):
 
     def coverage(self, geometry, supersampling):
         X, Y = object_points(geometry, supersampling, self.oversampling)
-        X, Y = X / geometry.object_pixel_mm, Y / geometry.object_pixel_mm
-        w = np.zeros((Y.shape[0], X.shape[0]), np.float64)
-        for i in range(self.oversampling):
-            for j in range(self.oversampling):
-                w += self.weight(X[None, :, j], Y[:, i, None])
-        w /= self.oversampling**2
+        w = oversampled_mean(self.weight, X / geometry.object_pixel_mm, Y / geometry.object_pixel_mm, self.oversampling)
         return np.stack([1.0 - w, w])
 
     def weight_bitmap(self, geometry):
@@ -247,12 +256,7 @@ class SiemensStar(Target):
     def coverage(self, geometry, supersampling):
         X, Y = object_points(geometry, supersampling, self.oversampling)
         R = self.radius_px * geometry.object_pixel_mm
-        Hs, Ws = Y.shape[0], X.shape[0]
-        dark = np.zeros((Hs, Ws), np.float64)
-        for i in range(self.oversampling):
-            for j in range(self.oversampling):
-                dark += self._dark(X[None, :, j], Y[:, i, None], R)
-        dark /= self.oversampling**2
+        dark = oversampled_mean(lambda x, y: self._dark(x, y, R), X, Y, self.oversampling)
         return np.stack([dark, 1.0 - dark])
 
     def mitsuba_shapes(self, mi, geometry):

@@ -5,11 +5,15 @@ from __future__ import annotations
 import json
 import re
 import textwrap
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from spectracam.core.errors import SpectracamError
+
+__all__ = ["AXIS_LABELS", "LARGER_IS_BETTER", "LEGEND_ROWS", "METRIC_LABELS", "axis_label", "load_results",
+           "metric_label", "natural_key", "plot_sweep", "resolve_axes", "sweep_figure", "with_value"]
 
 #: Human labels of the metrics a sweep records (and whether they carry noise, so get error bars).
 METRIC_LABELS = {
@@ -179,15 +183,28 @@ def resolve_axes(meta: dict, x: str | None = None, line: str | None = None,
 LEGEND_ROWS = 13
 
 
+@dataclass(frozen=True)
+class _Layout:
+    """What every panel of a sweep figure shares: its axes, their values and x positions, the line colours."""
+    metric: str
+    x: str
+    line: str | None
+    panel: str | None
+    base: dict
+    noisy: bool
+    lines: list
+    xs_all: list
+    numeric_x: bool
+    pos: dict
+    colors: list
+
+
 def sweep_figure(meta: dict, rows: list[dict], metric: str, x: str, line: str | None = None,
                  panel: str | None = None, base: dict | None = None):
     """The figure of one metric: x = ``x`` axis, one line per value of ``line`` (in the variable's order,
     coloured along a sequential colormap when it is numeric), one panel per value of ``panel``; other
     axes averaged over.  In each panel the best cell is circled and annotated with its value and line,
     and its line drawn thick; the base scene's cell is starred."""
-    from matplotlib.lines import Line2D
-    from matplotlib.ticker import MaxNLocator
-
     from spectracam.io.plots import pyplot
 
     plt = pyplot()
@@ -200,77 +217,132 @@ def sweep_figure(meta: dict, rows: list[dict], metric: str, x: str, line: str | 
     xs_all = sorted({r[f"axis:{x}"] for r in rows}, key=natural_key)
     numeric_x = all(_is_number(v) for v in xs_all)
     pos = {v: (float(v) if numeric_x else float(i)) for i, v in enumerate(xs_all)}
-    if line and all(_is_number(v) for v in lines):
-        cmap = plt.get_cmap("viridis")
-        colors = [cmap(t) for t in np.linspace(0.0, 0.85, len(lines))] if len(lines) > 1 else [cmap(0.0)]
-    else:
-        cmap = plt.get_cmap("tab10" if len(lines) <= 10 else "tab20")
-        colors = [cmap(i % cmap.N) for i in range(len(lines))]
+    lay = _Layout(metric, x, line, panel, base, noisy, lines, xs_all, numeric_x, pos, _line_colors(plt, line, lines))
     line_name = axis_label(line) if line else ""
     axes_width = 4.6 * len(panels) + 0.9
     fig, axs = plt.subplots(1, len(panels), figsize=(axes_width, 4.0), squeeze=False, sharey=True)
     starred, notes = False, []
     for ax, pv in zip(axs[0], panels):
-        series = []
-        for lv in lines:
-            sel = [r for r in rows if (pv is None or r[f"axis:{panel}"] == pv)
-                   and (lv is None or r[f"axis:{line}"] == lv)]
-            xs = sorted({r[f"axis:{x}"] for r in sel}, key=natural_key)
-            vals = [[r[metric] for r in sel if r[f"axis:{x}"] == xv and r[metric] is not None] for xv in xs]
-            series.append((lv, xs, np.array([np.mean(v) if v else np.nan for v in vals]),
-                           np.array([np.std(v) if v else np.nan for v in vals]),
-                           [all(r.get("usable", True) is not False for r in sel if r[f"axis:{x}"] == xv) for xv in xs]))
-        best = None  # (line index, x value, mean): never a cell with a trial that is no usable image (.usability)
-        for li, (lv, xs, mean, _, usable) in enumerate(series):
-            for xv, mv, ok in zip(xs, mean, usable):
-                if ok and np.isfinite(mv) and (best is None or (mv > best[2] if larger else mv < best[2])):
-                    best = (li, xv, mv)
-        for li, (lv, xs, mean, std, _) in enumerate(series):
-            thick = best is not None and best[0] == li and len(lines) > 1
-            style = dict(marker="o", ms=4 if thick else 3, lw=2.8 if thick else 1.2, color=colors[li],
-                         zorder=3 if thick else 2, label=None if lv is None else str(lv))
-            xp = [pos[v] for v in xs]
-            if noisy:
-                ax.errorbar(xp, mean, yerr=std, capsize=2, elinewidth=1.4 if thick else 0.8, **style)
-            else:
-                ax.plot(xp, mean, **style)
-            for xv, mv in zip(xs, mean):
-                if base.get(x) == xv and (line is None or base.get(line) == lv) and np.isfinite(mv):
-                    ax.plot([pos[xv]], [mv], marker="*", ms=13, mfc="none", mec="black", ls="none", zorder=4)
-                    starred = True
-        if best:
-            li, bx, bv = best
-            ax.plot([pos[bx]], [bv], marker="o", ms=12, mfc="none", mec="tab:red", mew=1.6, ls="none", zorder=5)
-            text = f"best: {_fmt(bv)}\nat {with_value(x, bx)}" + (f"\non {with_value(line, lines[li])}" if line else "")
-            notes.append((ax, (pos[bx], bv), text, [(pos[v], m) for _, xs, mean, _, _ in series
-                                                     for v, m in zip(xs, mean)]))
-        elif any(np.isfinite(m).any() for _, _, m, _, _ in series):
-            ax.text(0.5, 0.97, "no usable image: no best cell (docs/metrics.md)", transform=ax.transAxes,
-                    ha="center", va="top", fontsize=8, color="0.3")
-        if not numeric_x or len(xs_all) <= 9:
-            ax.set_xticks([pos[v] for v in xs_all], [str(v) for v in xs_all])
-        elif all(float(v).is_integer() for v in xs_all):
-            ax.xaxis.set_major_locator(MaxNLocator(integer=True))
-        ax.set_xlabel(axis_label(x))
-        ax.grid(alpha=0.3)
-        if pv is not None:
-            ax.set_title(with_value(panel, pv), fontsize=10)
+        series = _panel_series(rows, lay, pv)
+        best = _best_cell(series, larger)
+        starred = _draw_series(ax, lay, series, best) or starred
+        note = _mark_best(ax, lay, series, best)
+        if note is not None:
+            notes.append(note)
+        _finish_panel(ax, lay, pv)
     axs[0][0].set_ylabel(metric_label(metric))
     for note in notes:  # once every panel is drawn: the panels share their y range
         _annotate_best(*note)
-    handles = [Line2D([], [], color=c, marker="o", ms=3, lw=1.2) for c in colors] if line else []
-    labels = [str(v) for v in lines] if line else []
+    leg = _sweep_legend(fig, lay, starred, line_name)
+    others = [a for a in varying if a not in (x, line, panel)]
+    title = (metric_label(metric) + (f": mean ± std over {meta['trials']} trials" if noisy else "")
+             + (f", averaged over {', '.join(axis_label(a) for a in others)}" if others else ""))
+    _fit_legend(fig, leg, axes_width, title)
+    return fig
+
+
+def _line_colors(plt, line: str | None, lines: list) -> list:
+    """One colour per line: along viridis when the line values are numbers, else from tab10 (tab20)."""
+    if line and all(_is_number(v) for v in lines):
+        cmap = plt.get_cmap("viridis")
+        return [cmap(t) for t in np.linspace(0.0, 0.85, len(lines))] if len(lines) > 1 else [cmap(0.0)]
+    cmap = plt.get_cmap("tab10" if len(lines) <= 10 else "tab20")
+    return [cmap(i % cmap.N) for i in range(len(lines))]
+
+
+def _panel_series(rows: list[dict], lay: _Layout, pv) -> list:
+    """One panel's lines: ``(line value, x values, mean, std, usable)`` each, over the trials and other axes."""
+    x, line, panel, metric = lay.x, lay.line, lay.panel, lay.metric
+    series = []
+    for lv in lay.lines:
+        sel = [r for r in rows if (pv is None or r[f"axis:{panel}"] == pv)
+               and (lv is None or r[f"axis:{line}"] == lv)]
+        xs = sorted({r[f"axis:{x}"] for r in sel}, key=natural_key)
+        vals = [[r[metric] for r in sel if r[f"axis:{x}"] == xv and r[metric] is not None] for xv in xs]
+        series.append((lv, xs, np.array([np.mean(v) if v else np.nan for v in vals]),
+                       np.array([np.std(v) if v else np.nan for v in vals]),
+                       [all(r.get("usable", True) is not False for r in sel if r[f"axis:{x}"] == xv) for xv in xs]))
+    return series
+
+
+def _best_cell(series: list, larger: bool):
+    """``(line index, x value, mean)`` of the best cell, never one with a trial that is no usable image."""
+    best = None  # (line index, x value, mean): never a cell with a trial that is no usable image (.usability)
+    for li, (lv, xs, mean, _, usable) in enumerate(series):
+        for xv, mv, ok in zip(xs, mean, usable):
+            if ok and np.isfinite(mv) and (best is None or (mv > best[2] if larger else mv < best[2])):
+                best = (li, xv, mv)
+    return best
+
+
+def _draw_series(ax, lay: _Layout, series: list, best) -> bool:
+    """Draw a panel's lines (the best one thick) and star the base scene's cell; returns whether it did."""
+    x, line, base, pos = lay.x, lay.line, lay.base, lay.pos
+    starred = False
+    for li, (lv, xs, mean, std, _) in enumerate(series):
+        thick = best is not None and best[0] == li and len(lay.lines) > 1
+        style = dict(marker="o", ms=4 if thick else 3, lw=2.8 if thick else 1.2, color=lay.colors[li],
+                     zorder=3 if thick else 2, label=None if lv is None else str(lv))
+        xp = [pos[v] for v in xs]
+        if lay.noisy:
+            ax.errorbar(xp, mean, yerr=std, capsize=2, elinewidth=1.4 if thick else 0.8, **style)
+        else:
+            ax.plot(xp, mean, **style)
+        for xv, mv in zip(xs, mean):
+            if base.get(x) == xv and (line is None or base.get(line) == lv) and np.isfinite(mv):
+                ax.plot([pos[xv]], [mv], marker="*", ms=13, mfc="none", mec="black", ls="none", zorder=4)
+                starred = True
+    return starred
+
+
+def _mark_best(ax, lay: _Layout, series: list, best):
+    """Circle the best cell and return its note for :func:`_annotate_best` (None if there is none)."""
+    if best:
+        li, bx, bv = best
+        pos, x, line = lay.pos, lay.x, lay.line
+        ax.plot([pos[bx]], [bv], marker="o", ms=12, mfc="none", mec="tab:red", mew=1.6, ls="none", zorder=5)
+        text = f"best: {_fmt(bv)}\nat {with_value(x, bx)}" + (f"\non {with_value(line, lay.lines[li])}" if line else "")
+        return (ax, (pos[bx], bv), text, [(pos[v], m) for _, xs, mean, _, _ in series for v, m in zip(xs, mean)])
+    if any(np.isfinite(m).any() for _, _, m, _, _ in series):
+        ax.text(0.5, 0.97, "no usable image: no best cell (docs/metrics.md)", transform=ax.transAxes,
+                ha="center", va="top", fontsize=8, color="0.3")
+    return None
+
+
+def _finish_panel(ax, lay: _Layout, pv) -> None:
+    """A panel's x ticks, x label, grid and title."""
+    from matplotlib.ticker import MaxNLocator
+
+    xs_all, pos = lay.xs_all, lay.pos
+    if not lay.numeric_x or len(xs_all) <= 9:
+        ax.set_xticks([pos[v] for v in xs_all], [str(v) for v in xs_all])
+    elif all(float(v).is_integer() for v in xs_all):
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    ax.set_xlabel(axis_label(lay.x))
+    ax.grid(alpha=0.3)
+    if pv is not None:
+        ax.set_title(with_value(lay.panel, pv), fontsize=10)
+
+
+def _sweep_legend(fig, lay: _Layout, starred: bool, line_name: str):
+    """The figure's legend, right of the panels: the lines, the base scene's star, the best cell's circle."""
+    from matplotlib.lines import Line2D
+
+    line = lay.line
+    handles = [Line2D([], [], color=c, marker="o", ms=3, lw=1.2) for c in lay.colors] if line else []
+    labels = [str(v) for v in lay.lines] if line else []
     if starred:
         handles.append(Line2D([], [], marker="*", ms=11, mfc="none", mec="black", ls="none"))
         labels.append("the base scene")
     handles.append(Line2D([], [], marker="o", ms=10, mfc="none", mec="tab:red", mew=1.6, ls="none"))
     labels.append("best (annotated;\nits line thick)" if line else "best (annotated)")
     ncol = -(-len(handles) // LEGEND_ROWS)
-    leg = fig.legend(handles, labels, loc="center left", bbox_to_anchor=(1.0, 0.5), fontsize=8, frameon=False,
-                     ncol=ncol, columnspacing=1.0, handlelength=1.6, title=line_name or None, title_fontsize=8)
-    others = [a for a in varying if a not in (x, line, panel)]
-    title = (metric_label(metric) + (f": mean ± std over {meta['trials']} trials" if noisy else "")
-             + (f", averaged over {', '.join(axis_label(a) for a in others)}" if others else ""))
+    return fig.legend(handles, labels, loc="center left", bbox_to_anchor=(1.0, 0.5), fontsize=8, frameon=False,
+                      ncol=ncol, columnspacing=1.0, handlelength=1.6, title=line_name or None, title_fontsize=8)
+
+
+def _fit_legend(fig, leg, axes_width: float, title: str) -> None:
+    """Widen the figure by the legend's width, set the wrapped title and lay the panels out beside the legend."""
     fig.canvas.draw()  # the legend's size, to widen the figure by
     legend_width = leg.get_window_extent().width / fig.dpi + 0.25
     width = axes_width + legend_width
@@ -278,7 +350,6 @@ def sweep_figure(meta: dict, rows: list[dict], metric: str, x: str, line: str | 
     fig.suptitle(textwrap.fill(title, max(40, int(width * 13))), fontsize=10)
     fig.tight_layout(rect=(0, 0, 1 - legend_width / width, 1))
     leg.set_bbox_to_anchor((1 - legend_width / width + 0.1 / width, 0.5), transform=fig.transFigure)
-    return fig
 
 
 def plot_sweep(out_dir: str | Path, x: str | None = None, line: str | None = None, panel: str | None = None,

@@ -32,6 +32,9 @@ from spectracam.core.errors import ConfigError
 from spectracam.core.cielab import delta_e, xyz_to_lab
 from spectracam.experiments.validate.scene import SCENE_OVERRIDES, validation_scene  # noqa: F401
 
+__all__ = ["camera_row", "parse_matrix", "raw_patch_rates", "run_validate", "user_camera", "validate_camera",
+           "validate_figure", "validate_markdown", "write_validate_outputs"]
+
 
 
 def user_camera(camera_file, matrix, unit: str = "relative", gains=None, gains_kept: bool = False):

@@ -41,6 +41,14 @@ import numpy as np
 
 from spectracam.core.errors import SpectracamError
 
+__all__ = ["CACHE_SUBDIR", "CALIBRATION_CCT_K", "CALIBRATION_LIGHTS", "DCP_DIR", "DCP_MAGIC", "DCP_TAGS",
+           "DEFINITIONS", "EFFECTIVE_RANGE_K", "PRESET_LIGHTS", "PRESET_SOURCES", "TARGET_CATEGORIES",
+           "WB_PRESETS_PATH", "DataFileError", "DcpProfile", "PresetLight", "data_prefixes", "daylight_spec",
+           "dcp_rows", "effective_cct", "find_dcp_dir", "find_wb_presets", "light_cct", "light_spec",
+           "load_wb_presets", "maker_model", "preset_neutral", "presets_at_zero_tuning", "read_dcp",
+           "read_tiff_ifd0", "run_validate_wb", "simulated_neutral", "wb_markdown", "wb_preset_rows",
+           "white_xyz"]
+
 # ------------------------------------------------------------------------------------------ where the files are
 #: The files' paths under an install prefix (Debian's is /usr).
 WB_PRESETS_PATH = Path("share/darktable/wb_presets.json")
@@ -551,12 +559,7 @@ def _xyz_scaled(cam: np.ndarray, camera_to_xyz: np.ndarray, y_white: float) -> n
 
 def dcp_rows(camera_name: str, dcp: DcpProfile) -> dict:
     """One camera's DCP table (:func:`run_validate_wb`)."""
-    import colour
-
     from spectracam.architecture.cameras import PUBLISHED_MATRICES, library_curves
-    from spectracam.scene.chart import WHITE_PATCH
-    from spectracam.io.dng import D50_XYZ, normalise_color_matrix, xyz_to_camera_matrix
-    from spectracam.core.cielab import delta_e, xyz_to_lab
     from spectracam.scene.reference import ChartReference
     from spectracam.experiments.validate.scene import validation_scene
 
@@ -578,44 +581,63 @@ def dcp_rows(camera_name: str, dcp: DcpProfile) -> dict:
         if code not in CALIBRATION_LIGHTS:
             out["not_compared"].append(f"calibration illuminant {code} (no standard spectrum)")
             continue
-        ill = _calibration_spec(code)
-        ref = chart.lit_by(ill)
-        cm_sc = xyz_to_camera_matrix(raw, ref)
-        cam = ref.patch_rates(scene.camera)  # (24, 3) noise-free raw of the chart under the calibration light
-        y = float(ref.patch_xyz[WHITE_PATCH, 1])
-        lab_true = xyz_to_lab(ref.patch_xyz, ref.white_xyz)
-        xyz_dcp = _xyz_scaled(cam, np.linalg.inv(cm_dcp), y)
-        xyz_sc = _xyz_scaled(cam, np.linalg.inv(cm_sc), y)
-        lab_dcp, lab_sc = xyz_to_lab(xyz_dcp, ref.white_xyz), xyz_to_lab(xyz_sc, ref.white_xyz)
-        de_between = delta_e(lab_dcp, lab_sc, "cie1976")
-        de_dcp, de_sc = delta_e(lab_dcp, lab_true, "cie1976"), delta_e(lab_sc, lab_true, "cie1976")
-        w_std = white_xyz(ill)  # the light's white as the profile's maker means it (360–830 nm)
-        n_dcp = cm_dcp @ w_std
-        n_dcp = n_dcp / n_dcp[1]
-        n_sim = simulated_neutral(scene, ill)
-        n_pub = pm.neutral(w_std)
-        row = {"calibration_illuminant": code, "illuminant": CALIBRATION_LIGHTS[code][0],
-               "color_matrix_dcp": normalise_color_matrix(cm_dcp).round(6).tolist(),
-               "color_matrix_spectracam": cm_sc.round(6).tolist(),
-               "delta_e_between_mean": float(de_between.mean()), "delta_e_between_max": float(de_between.max()),
-               "delta_e_dcp_mean": float(de_dcp.mean()), "delta_e_dcp_max": float(de_dcp.max()),
-               "delta_e_spectracam_mean": float(de_sc.mean()), "delta_e_spectracam_max": float(de_sc.max()),
-               "neutral_dcp": n_dcp.tolist(), "neutral_simulated": n_sim.tolist(),
-               "neutral_ratio_dcp_over_simulated": (n_dcp / n_sim).tolist(),
-               "neutral_published_matrix": n_pub.tolist(),
-               "neutral_ratio_dcp_over_published_matrix": (n_dcp / n_pub).tolist()}
-        if fm is not None:  # white-balanced camera → XYZ D50: FM·diag(1/neutral)·camera (DNG 1.4, chapter 6)
-            bradford = colour.adaptation.matrix_chromatic_adaptation_VonKries(ref.white_xyz, D50_XYZ, "Bradford")
-            lab_true50 = xyz_to_lab(ref.patch_xyz @ bradford.T, D50_XYZ)
-            lab_fm = xyz_to_lab(_xyz_scaled(cam, fm @ np.diag(1.0 / n_sim), y), D50_XYZ)
-            lab_sc50 = xyz_to_lab(_xyz_scaled(cam, bradford @ np.linalg.inv(cm_sc), y), D50_XYZ)
-            de_fm, de_fm_between = delta_e(lab_fm, lab_true50, "cie1976"), delta_e(lab_fm, lab_sc50, "cie1976")
-            row.update({"forward_matrix_dcp": fm.round(6).tolist(),
-                        "forward_delta_e_dcp_mean": float(de_fm.mean()), "forward_delta_e_dcp_max": float(de_fm.max()),
-                        "forward_delta_e_between_mean": float(de_fm_between.mean()),
-                        "forward_delta_e_between_max": float(de_fm_between.max())})
-        out["calibrations"].append(row)
+        out["calibrations"].append(_calibration_row(code, cm_dcp, fm, scene, chart, raw, pm))
     return out
+
+
+def _calibration_row(code: int, cm_dcp: np.ndarray, fm, scene, chart, raw, pm) -> dict:
+    """One calibration of a DCP beside spectracam's fit under the same light: matrices, ΔE*ab and neutrals."""
+    from spectracam.scene.chart import WHITE_PATCH
+    from spectracam.io.dng import normalise_color_matrix, xyz_to_camera_matrix
+    from spectracam.core.cielab import delta_e, xyz_to_lab
+
+    ill = _calibration_spec(code)
+    ref = chart.lit_by(ill)
+    cm_sc = xyz_to_camera_matrix(raw, ref)
+    cam = ref.patch_rates(scene.camera)  # (24, 3) noise-free raw of the chart under the calibration light
+    y = float(ref.patch_xyz[WHITE_PATCH, 1])
+    lab_true = xyz_to_lab(ref.patch_xyz, ref.white_xyz)
+    xyz_dcp = _xyz_scaled(cam, np.linalg.inv(cm_dcp), y)
+    xyz_sc = _xyz_scaled(cam, np.linalg.inv(cm_sc), y)
+    lab_dcp, lab_sc = xyz_to_lab(xyz_dcp, ref.white_xyz), xyz_to_lab(xyz_sc, ref.white_xyz)
+    de_between = delta_e(lab_dcp, lab_sc, "cie1976")
+    de_dcp, de_sc = delta_e(lab_dcp, lab_true, "cie1976"), delta_e(lab_sc, lab_true, "cie1976")
+    w_std = white_xyz(ill)  # the light's white as the profile's maker means it (360–830 nm)
+    n_dcp = cm_dcp @ w_std
+    n_dcp = n_dcp / n_dcp[1]
+    n_sim = simulated_neutral(scene, ill)
+    n_pub = pm.neutral(w_std)
+    row = {"calibration_illuminant": code, "illuminant": CALIBRATION_LIGHTS[code][0],
+           "color_matrix_dcp": normalise_color_matrix(cm_dcp).round(6).tolist(),
+           "color_matrix_spectracam": cm_sc.round(6).tolist(),
+           "delta_e_between_mean": float(de_between.mean()), "delta_e_between_max": float(de_between.max()),
+           "delta_e_dcp_mean": float(de_dcp.mean()), "delta_e_dcp_max": float(de_dcp.max()),
+           "delta_e_spectracam_mean": float(de_sc.mean()), "delta_e_spectracam_max": float(de_sc.max()),
+           "neutral_dcp": n_dcp.tolist(), "neutral_simulated": n_sim.tolist(),
+           "neutral_ratio_dcp_over_simulated": (n_dcp / n_sim).tolist(),
+           "neutral_published_matrix": n_pub.tolist(),
+           "neutral_ratio_dcp_over_published_matrix": (n_dcp / n_pub).tolist()}
+    if fm is not None:  # white-balanced camera → XYZ D50: FM·diag(1/neutral)·camera (DNG 1.4, chapter 6)
+        row.update(_forward_row(fm, ref, cam, n_sim, cm_sc, y))
+    return row
+
+
+def _forward_row(fm: np.ndarray, ref, cam: np.ndarray, n_sim: np.ndarray, cm_sc: np.ndarray, y: float) -> dict:
+    """A DCP's ForwardMatrix alone against the chart's truth adapted to D50, and against spectracam's matrix."""
+    import colour
+
+    from spectracam.io.dng import D50_XYZ
+    from spectracam.core.cielab import delta_e, xyz_to_lab
+
+    bradford = colour.adaptation.matrix_chromatic_adaptation_VonKries(ref.white_xyz, D50_XYZ, "Bradford")
+    lab_true50 = xyz_to_lab(ref.patch_xyz @ bradford.T, D50_XYZ)
+    lab_fm = xyz_to_lab(_xyz_scaled(cam, fm @ np.diag(1.0 / n_sim), y), D50_XYZ)
+    lab_sc50 = xyz_to_lab(_xyz_scaled(cam, bradford @ np.linalg.inv(cm_sc), y), D50_XYZ)
+    de_fm, de_fm_between = delta_e(lab_fm, lab_true50, "cie1976"), delta_e(lab_fm, lab_sc50, "cie1976")
+    return {"forward_matrix_dcp": fm.round(6).tolist(),
+            "forward_delta_e_dcp_mean": float(de_fm.mean()), "forward_delta_e_dcp_max": float(de_fm.max()),
+            "forward_delta_e_between_mean": float(de_fm_between.mean()),
+            "forward_delta_e_between_max": float(de_fm_between.max())}
 
 
 # ------------------------------------------------------------------------------------------ both tables
@@ -685,45 +707,69 @@ def run_validate_wb(cameras: list[str]) -> dict:
 
 def wb_markdown(part: dict) -> list[str]:
     """The markdown lines of both tables (part = :func:`run_validate_wb`'s result)."""
-    lines = ["## White-balance presets (darktable's wb_presets.json)", ""]
-    wb = part["wb_presets"]
-    if wb["status"] != "ok":
-        lines += [f"Skipped: {wb['reason']}.", ""]
-    else:
-        lines += [f"From `{wb['file']}` (Debian package {wb['package']}), fine-tuning 0.", ""]
-        for cam in wb["cameras"]:
-            lines += [f"### {cam['camera']} ({cam['darktable_maker']} {cam['darktable_model']})", ""]
-            if "skipped" in cam:
-                lines += [f"Skipped: {cam['skipped']}.", ""]
-                continue
-            lines += [f"Gains: {cam['gains']}. Which check is independent: {cam['independence']}.", "",
-                      f"Lights from the {cam['lights_source']}.", "",
-                      "| preset | light | R/G sim / preset (%) | B/G sim / preset (%) | ≤ 3 % | DCP R/G, B/G / "
-                      "preset (%) | shape R/G, B/G % | effective K, sim (rms %) | effective K, published M (rms %) |",
-                      "|---|---|---|---|---|---|---|---|---|"]
-            for r in cam["presets"]:
-                ok = ("yes" if r["within_3_percent"] else "**no**") if r["target"] else "(not in target)"
-                shape = (f"{r['RG_shape_error_percent']:+.1f}, {r['BG_shape_error_percent']:+.1f}"
-                         if "RG_shape_error_percent" in r else "–")
-                eff = [f"{r[f'effective_K_{k}']:.0f} ({r[f'effective_rms_percent_{k}']:.1f})"
-                       if r[f"effective_K_{k}"] is not None else "–" for k in ("simulated", "published_matrix")]
-                dcp = (f"{r['RG_dcp']:.4f} ({r['RG_dcp_error_percent']:+.1f}), {r['BG_dcp']:.4f} "
-                       f"({r['BG_dcp_error_percent']:+.1f})" if "RG_dcp" in r else "–")
-                lines.append(f"| {r['preset']} | {r['light']} | {r['RG_simulated']:.4f} / {r['RG_preset']:.4f} "
-                             f"({r['RG_error_percent']:+.1f}) | {r['BG_simulated']:.4f} / {r['BG_preset']:.4f} "
-                             f"({r['BG_error_percent']:+.1f}) | {ok} | {dcp} | {shape} | {eff[0]} | {eff[1]} |")
-            if cam["not_compared"]:
-                lines += ["", "Not compared (no standard light of that name): " + ", ".join(cam["not_compared"]) + "."]
-            lines.append("")
+    lines = _wb_preset_lines(part["wb_presets"])
     lines += ["## DCP profiles (RawTherapee)", ""]
     dc = part["dcp_profiles"]
     if dc["status"] != "ok":
         lines += [f"Skipped: {dc['reason']}.", ""]
         return lines
-    lines += [f"From `{dc['directory']}` (Debian package {dc['package']}).", "",
-              "| camera | calibration | ΔE*ab DCP CM vs spectracam CM (mean / max) | ΔE*ab DCP CM / spectracam CM vs "
-              "truth (mean) | neutral DCP / simulated (R, B) | neutral DCP / published M (R, B) | ΔE*ab DCP FM alone "
-              "vs truth, D50 (mean / max) |", "|---|---|---|---|---|---|---|"]
+    lines += _dcp_table_lines(dc)
+    lines += ["", "### Definitions (white balance and DCP)", ""]
+    lines += [f"* **{k}**: {v}" for k, v in part["definitions"].items()]
+    return lines + [""]
+
+
+def _wb_preset_lines(wb: dict) -> list[str]:
+    """The white-balance presets' section: each camera's table, or why the part was skipped."""
+    lines = ["## White-balance presets (darktable's wb_presets.json)", ""]
+    if wb["status"] != "ok":
+        lines += [f"Skipped: {wb['reason']}.", ""]
+    else:
+        lines += [f"From `{wb['file']}` (Debian package {wb['package']}), fine-tuning 0.", ""]
+        for cam in wb["cameras"]:
+            lines += _wb_camera_lines(cam)
+    return lines
+
+
+def _wb_camera_lines(cam: dict) -> list[str]:
+    """One camera's presets table (or why it was skipped)."""
+    lines = [f"### {cam['camera']} ({cam['darktable_maker']} {cam['darktable_model']})", ""]
+    if "skipped" in cam:
+        lines += [f"Skipped: {cam['skipped']}.", ""]
+        return lines
+    lines += [f"Gains: {cam['gains']}. Which check is independent: {cam['independence']}.", "",
+              f"Lights from the {cam['lights_source']}.", "",
+              "| preset | light | R/G sim / preset (%) | B/G sim / preset (%) | ≤ 3 % | DCP R/G, B/G / "
+              "preset (%) | shape R/G, B/G % | effective K, sim (rms %) | effective K, published M (rms %) |",
+              "|---|---|---|---|---|---|---|---|---|"]
+    for r in cam["presets"]:
+        lines.append(_wb_preset_row(r))
+    if cam["not_compared"]:
+        lines += ["", "Not compared (no standard light of that name): " + ", ".join(cam["not_compared"]) + "."]
+    lines.append("")
+    return lines
+
+
+def _wb_preset_row(r: dict) -> str:
+    """One preset's row of a camera's presets table."""
+    ok = ("yes" if r["within_3_percent"] else "**no**") if r["target"] else "(not in target)"
+    shape = (f"{r['RG_shape_error_percent']:+.1f}, {r['BG_shape_error_percent']:+.1f}"
+             if "RG_shape_error_percent" in r else "–")
+    eff = [f"{r[f'effective_K_{k}']:.0f} ({r[f'effective_rms_percent_{k}']:.1f})"
+           if r[f"effective_K_{k}"] is not None else "–" for k in ("simulated", "published_matrix")]
+    dcp = (f"{r['RG_dcp']:.4f} ({r['RG_dcp_error_percent']:+.1f}), {r['BG_dcp']:.4f} "
+           f"({r['BG_dcp_error_percent']:+.1f})" if "RG_dcp" in r else "–")
+    return (f"| {r['preset']} | {r['light']} | {r['RG_simulated']:.4f} / {r['RG_preset']:.4f} "
+            f"({r['RG_error_percent']:+.1f}) | {r['BG_simulated']:.4f} / {r['BG_preset']:.4f} "
+            f"({r['BG_error_percent']:+.1f}) | {ok} | {dcp} | {shape} | {eff[0]} | {eff[1]} |")
+
+
+def _dcp_table_lines(dc: dict) -> list[str]:
+    """The DCP profiles' table, each camera's independence note and the HueSatMap caveat."""
+    lines = [f"From `{dc['directory']}` (Debian package {dc['package']}).", "",
+             "| camera | calibration | ΔE*ab DCP CM vs spectracam CM (mean / max) | ΔE*ab DCP CM / spectracam CM vs "
+             "truth (mean) | neutral DCP / simulated (R, B) | neutral DCP / published M (R, B) | ΔE*ab DCP FM alone "
+             "vs truth, D50 (mean / max) |", "|---|---|---|---|---|---|---|"]
     notes = []
     for cam in dc["cameras"]:
         if "skipped" in cam:
@@ -744,6 +790,4 @@ def wb_markdown(part: dict) -> list[str]:
         lines += ["", "The ForwardMatrix is checked alone: these profiles apply a HueSatMap after it (mean saturation "
                       f"scale {', '.join(sat)}), so a ForwardMatrix alone renders colours desaturated by design and "
                       "its ΔE is no measure of the simulation."]
-    lines += ["", "### Definitions (white balance and DCP)", ""]
-    lines += [f"* **{k}**: {v}" for k, v in part["definitions"].items()]
-    return lines + [""]
+    return lines

@@ -30,6 +30,12 @@ import numpy as np
 
 from spectracam.core.errors import SpectracamError
 
+__all__ = ["DEFINITIONS", "FAMILIES", "FAMILY_COLOURS", "LIGHTS", "LUTHER", "PAPER_DESIGN", "SCENES",
+           "WAVELENGTHS", "Sensor", "WhiteBalanceRun", "case_scene", "error_statistics", "estimators",
+           "light_family", "light_label", "light_spec", "measure", "parameters", "plan", "run_job",
+           "run_white_balance", "sensor_statistics", "sensors", "summary_line", "training_block",
+           "white_balance_figure", "white_balance_markdown", "write_white_balance_outputs"]
+
 #: The scenes: shipped scene file → its name in the results.
 SCENES = {"d65": "chart", "mondrian": "mondrian", "dead_leaves": "dead_leaves", "photo": "photo"}
 #: The lights: ``(type, temperature_K or colour-science name)``.
