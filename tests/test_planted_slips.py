@@ -3,7 +3,8 @@ suite let through.  Each asserts a closed form, a published value or a physical 
 implementation's own expression), is fast, and fails with the slip planted.
 
 Slips, in the issue's order: the held-out 95th percentile; the design model's dark shot noise and PRNU term;
-the Quad Bayer and RGBW tiles; texel centres; the interior guard band; the motion still reference and crossing
+the Quad Bayer and RGBW tiles; the stacked sensor's capture time; texel centres; the interior guard band (the
+function and the margin its caller asks for); the motion still reference and crossing
 speed; the rolling shutter's shift; the view's scene preview matrix and raw preview scale; the posed edge's
 sign; the misregistration axis; a ``--set`` list index; a false CLI flag; the random generator's known answer.
 """
@@ -182,6 +183,16 @@ def test_painted_shapes_cover_texels_by_their_centres():
     np.testing.assert_array_equal(rect, want)
 
 
+def test_stacked_layers_integrate_together_so_the_capture_takes_one_exposure():
+    """Every layer of a stacked pixel integrates at once (one exposure for all): the capture lasts the exposure,
+    not the sum of the layers' times — against the field-sequential camera, whose frames follow one another."""
+    from spectracam.architecture import make_architecture
+
+    times = [0.010, 0.010, 0.010]                      # the one exposure, as each layer records it
+    assert make_architecture("stacked").capture_time_s(times) == pytest.approx(0.010)
+    assert make_architecture("fsc").capture_time_s(times) == pytest.approx(0.030)
+
+
 # -- 7. the interior guard band ---------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("margin", [1, 2, 3])
@@ -201,6 +212,20 @@ def test_interior_excludes_pixels_within_the_margin_of_another_label(margin):
     np.testing.assert_array_equal(got, inside & away_from_boundary & away_from_mixed)
     assert got[10, 9 - margin] and not got[10, 10 - margin]       # the guard band is margin pixels wide
     assert got[10, 10 + margin] and not got[10, 9 + margin]
+
+
+def test_textured_score_asks_for_the_targets_own_margin(monkeypatch):
+    """The guard band the score uses is ``target.interior_margin_px`` as stated, neither one less nor one more."""
+    import spectracam.evaluation.target_score as ts
+    from spectracam.pipeline import capture, render, score
+
+    asked = []
+    real = ts._interior
+    monkeypatch.setattr(ts, "_interior", lambda labels, margin: asked.append(margin) or real(labels, margin))
+    for margin in (1, 3):
+        scene = parse_scene({"target": {"kind": "samples", "interior_margin_px": margin}, **SMALL})
+        score(capture(render(scene, "analytic"), scene=scene), scene)
+        assert asked[-1] == margin
 
 
 # -- 8. the motion still reference is noise-free ---------------------------------------------------------------

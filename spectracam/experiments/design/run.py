@@ -11,16 +11,18 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TypedDict
 
 import numpy as np
 
 from spectracam.architecture import ARCHITECTURES
 from spectracam.core.errors import ConfigError, SpectracamError
+from spectracam.core.spectra import WavelengthGrid
 from spectracam.scene.illuminant import IlluminantSpec
 from spectracam.experiments.design.problem import CHART, DesignProblem
 from spectracam.experiments.design.spec import DesignSpec
 
-__all__ = ["GRID_CUTOFFS_NM", "Setup", "design_one", "experiment_path", "grid_best", "light_label",
+__all__ = ["GRID_CUTOFFS_NM", "DesignResult", "Setup", "design_one", "experiment_path", "grid_best", "light_label",
            "monte_carlo", "predicted", "render_cubes", "run_design", "setup"]
 
 #: The grid sweep's block cutoffs (spectracam/scenes/sweeps/cfa_cutoffs.toml): 450-530 × 570-650 nm in 10-nm steps.
@@ -249,8 +251,19 @@ def render_cubes(st: Setup, log=lambda m: None) -> dict:
     return cubes
 
 
+class DesignResult(TypedDict):
+    """What :func:`run_design` returns: each design's entry by name (its cameras under ``_cameras``), the time and
+    the bands' grid (``_grid``).  The writer drops ``_grid`` and ``_cameras`` and adds ``command`` and
+    ``comparison`` (:func:`spectracam.experiments.design.report.table_rows`) to make results.json."""
+
+    parameters: dict
+    designs: dict[str, dict]
+    time_s: float
+    _grid: WavelengthGrid
+
+
 def run_design(spec: DesignSpec, base_dir: Path, log=lambda m: None, st: Setup | None = None,
-               progress: bool = False) -> dict:
+               progress: bool = False) -> DesignResult:
     """Every design of ``spec``: the results.json dict, with each design's cameras under ``_cameras`` (``st``:
     its :func:`setup`, if made already); ``progress``: bars over the designs and each one's iterations."""
     from spectracam.core.progress import bar
