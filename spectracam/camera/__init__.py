@@ -164,9 +164,27 @@ def camera_responsivities(camera: CameraSpec, grid: WavelengthGrid) -> np.ndarra
 
 
 def band_weights(camera: CameraSpec, grid: WavelengthGrid) -> np.ndarray:
-    """``(n_bands, N)`` float32 weights turning band-averaged radiance into photo-electrons per
-    second per pixel: ``π/(4N²)·T·λ/(hc)·R_k(λ)·Δλ·A`` (paper 3.2–3.3), one column per channel.
+    """Weights turning band-averaged radiance into photo-electrons per second per pixel, one column per channel.
 
+    Parameters
+    ----------
+    camera : CameraSpec
+        The camera: its optics (f-number N, transmittance T), channels' responsivities R_k(λ) and pixel area A.
+    grid : WavelengthGrid
+        The bands (centres λ and widths Δλ, nm) of the radiance.
+
+    Returns
+    -------
+    ndarray
+        ``(n_bands, N)`` float32 weights ``π/(4N²)·T·λ/(hc)·R_k(λ)·Δλ·A`` (paper 3.2–3.3; the paraxial form, or
+        the optics' ``irradiance_form``), electrons per second per pixel per W·m⁻²·sr⁻¹·nm⁻¹.
+
+    References
+    ----------
+    .. [Catrysse1999] see docs/references.md; sections 3.2 and 3.3.
+
+    Examples
+    --------
     >>> grid = WavelengthGrid(np.arange(400.0, 701.0, 10.0))
     >>> band_weights(CameraSpec(), grid).shape
     (31, 3)
@@ -178,8 +196,28 @@ def band_weights(camera: CameraSpec, grid: WavelengthGrid) -> np.ndarray:
 
 
 def photo_electron_rates(radiance: np.ndarray, grid: WavelengthGrid, camera: CameraSpec) -> np.ndarray:
-    """``(..., N)`` photo-electrons per second per pixel for each channel of band-averaged radiance
-    ``(..., n_bands)``, float32; the cube is read once and never copied."""
+    """Photo-electrons per second per pixel for each channel of band-averaged radiance.
+
+    The cube is read once and never copied.
+
+    Parameters
+    ----------
+    radiance : ndarray
+        ``(..., n_bands)`` band-averaged radiance, W·m⁻²·sr⁻¹·nm⁻¹.
+    grid : WavelengthGrid
+        Its bands, nm.
+    camera : CameraSpec
+        The camera (:func:`band_weights`).
+
+    Returns
+    -------
+    ndarray
+        ``(..., N)`` float32 photo-electrons per second per pixel, one per channel.
+
+    References
+    ----------
+    .. [Catrysse1999] see docs/references.md; sections 3.2 and 3.3.
+    """
     weights = band_weights(camera, grid)
     shape = radiance.shape
     return (radiance.reshape(-1, shape[-1]) @ weights).reshape(*shape[:-1], weights.shape[1])

@@ -68,7 +68,24 @@ class WavelengthGrid:
 
 
 def planck_radiance(wavelength_nm: np.ndarray, temperature_K: float) -> np.ndarray:
-    """Blackbody spectral radiance in W·m⁻²·sr⁻¹·nm⁻¹ (Planck's law)."""
+    """Blackbody spectral radiance in W·m⁻²·sr⁻¹·nm⁻¹ (Planck's law).
+
+    Parameters
+    ----------
+    wavelength_nm : array_like
+        Wavelengths, nm.
+    temperature_K : float
+        Temperature, K.
+
+    Returns
+    -------
+    ndarray
+        ``2hc²/λ⁵ / (exp(hc/(λkT)) − 1)`` per nm, W·m⁻²·sr⁻¹·nm⁻¹, the shape of ``wavelength_nm``.
+
+    References
+    ----------
+    .. [CODATA2018] see docs/references.md; h, c and k.
+    """
     lam_m = np.asarray(wavelength_nm, dtype=float) * 1e-9
     x = PLANCK_H_J_S * SPEED_OF_LIGHT_M_S / (lam_m * BOLTZMANN_K_J_PER_K * temperature_K)
     per_m = 2.0 * PLANCK_H_J_S * SPEED_OF_LIGHT_M_S**2 / lam_m**5 / np.expm1(x)
@@ -80,6 +97,18 @@ def tabulated(wavelengths_nm, values) -> Spectrum:
 
     Linear interpolation is what Mitsuba's ``regular``/``irregular`` spectra do, so both renderers
     see the same continuous spectrum.
+
+    Parameters
+    ----------
+    wavelengths_nm : array_like
+        Increasing wavelengths of the table, nm.
+    values : array_like
+        The values at those wavelengths.
+
+    Returns
+    -------
+    Spectrum
+        A vectorised function of wavelength in nm.
     """
     wl = np.asarray(wavelengths_nm, dtype=float)
     v = np.asarray(values, dtype=float)
@@ -91,14 +120,42 @@ def tabulated(wavelengths_nm, values) -> Spectrum:
 
 
 def band_sample_points(grid: WavelengthGrid, points_per_band: int) -> np.ndarray:
-    """``(n_bands, points_per_band + 1)`` equally spaced wavelengths spanning each band, edges included."""
+    """Equally spaced wavelengths spanning each band, edges included.
+
+    Parameters
+    ----------
+    grid : WavelengthGrid
+        The bands.
+    points_per_band : int
+        Intervals per band.
+
+    Returns
+    -------
+    ndarray
+        ``(n_bands, points_per_band + 1)`` wavelengths, nm.
+    """
     e = grid.edges_nm
     t = np.linspace(0.0, 1.0, points_per_band + 1)
     return e[:-1, None] + (e[1:] - e[:-1])[:, None] * t[None, :]
 
 
 def band_average(f: Spectrum, grid: WavelengthGrid, points_per_band: int = 200) -> np.ndarray:
-    """Band averages ``(1/Δλ)∫_band f dλ`` by the trapezoid rule on ``points_per_band`` intervals."""
+    """Band averages ``(1/Δλ)∫_band f dλ`` by the trapezoid rule on ``points_per_band`` intervals.
+
+    Parameters
+    ----------
+    f : Spectrum
+        A vectorised function of wavelength in nm (its values may have leading axes).
+    grid : WavelengthGrid
+        The bands.
+    points_per_band : int
+        Trapezoid intervals per band.
+
+    Returns
+    -------
+    ndarray
+        One average per band (last axis), in the unit of ``f``.
+    """
     lam = band_sample_points(grid, points_per_band)
     y = f(lam)
     return 0.5 * (y[..., 1:] + y[..., :-1]).mean(axis=-1)
@@ -108,13 +165,42 @@ def energy_to_photons(values_per_nm: np.ndarray, wavelength_nm: np.ndarray) -> n
     """Convert spectral energy quantities (W/…) to photon rates (photons·s⁻¹/…): multiply by λ/(hc).
 
     The paper, section 3.1: the photon description is obtained by dividing energy by hc/λ.
+
+    Parameters
+    ----------
+    values_per_nm : array_like
+        Spectral energy quantities, W/… (e.g. W·m⁻²·sr⁻¹·nm⁻¹).
+    wavelength_nm : array_like
+        Their wavelengths, nm (broadcasting with ``values_per_nm``).
+
+    Returns
+    -------
+    ndarray
+        Photon rates, photons·s⁻¹/… (e.g. photons·s⁻¹·m⁻²·sr⁻¹·nm⁻¹).
+
+    References
+    ----------
+    .. [Catrysse1999] see docs/references.md; section 3.1.
+    .. [CODATA2018] see docs/references.md; h and c.
     """
     lam_m = np.asarray(wavelength_nm, dtype=float) * 1e-9
     return np.asarray(values_per_nm) * lam_m / (PLANCK_H_J_S * SPEED_OF_LIGHT_M_S)
 
 
 def cie_1931_cmfs() -> tuple[np.ndarray, np.ndarray]:
-    """The CIE 1931 2° colour-matching functions (wavelengths in nm, ``(n, 3)`` x̄ȳz̄) from colour-science."""
+    """The CIE 1931 2° colour-matching functions from colour-science.
+
+    Returns
+    -------
+    wavelengths : ndarray
+        ``(n,)`` wavelengths, nm (:data:`CIE_RANGE_NM`).
+    cmfs : ndarray
+        ``(n, 3)`` x̄ȳz̄.
+
+    References
+    ----------
+    .. [CIE015] see docs/references.md; the CIE 1931 standard colorimetric observer.
+    """
     import colour
 
     cmfs = colour.MSDS_CMFS[CMFS_NAME]
@@ -128,6 +214,20 @@ def cmf_band_weights(grid: WavelengthGrid) -> np.ndarray:
     band-averaged radiance integrates exactly when L is constant within each band.  A plain
     tensordot with these weights replaces colour-science's per-spectrum path: a whole cube integrates in
     one matrix product.
+
+    Parameters
+    ----------
+    grid : WavelengthGrid
+        The bands, nm.
+
+    Returns
+    -------
+    ndarray
+        ``(n_bands, 3)`` weights W, nm (the CIE 1931 x̄ȳz̄ averaged over each band, times its width).
+
+    References
+    ----------
+    .. [CIE015] see docs/references.md
     """
     wl, xyz = cie_1931_cmfs()
     avg = np.stack([band_average(tabulated(wl, xyz[:, k]), grid) for k in range(3)], axis=-1)
@@ -135,17 +235,57 @@ def cmf_band_weights(grid: WavelengthGrid) -> np.ndarray:
 
 
 def luminance_cd_m2(radiance_bands: np.ndarray, grid: WavelengthGrid) -> np.ndarray:
-    """Luminance 683·∫L(λ)ȳ(λ)dλ of band-averaged radiance (last axis = bands), cd/m²."""
+    """Luminance 683·∫L(λ)ȳ(λ)dλ of band-averaged radiance (last axis = bands), cd/m².
+
+    Parameters
+    ----------
+    radiance_bands : array_like
+        Band-averaged radiance, W·m⁻²·sr⁻¹·nm⁻¹, last axis = bands.
+    grid : WavelengthGrid
+        The bands.
+
+    Returns
+    -------
+    ndarray
+        Luminance, cd/m² (the shape of ``radiance_bands`` without its last axis).
+
+    References
+    ----------
+    .. [CIE015] see docs/references.md; K_m = 683 lm/W and ȳ.
+    """
     return K_M_LM_PER_W * np.tensordot(radiance_bands, cmf_band_weights(grid)[:, 1], axes=([-1], [0]))
 
 
 def logistic_scale_nm(edge_width_nm: float) -> float:
-    """Scale s of a logistic edge 1/(1 + exp(−(λ − c)/s)) rising from 10 % to 90 % over ``edge_width_nm``."""
+    """Scale s of a logistic edge 1/(1 + exp(−(λ − c)/s)) rising from 10 % to 90 % over ``edge_width_nm``.
+
+    Parameters
+    ----------
+    edge_width_nm : float
+        Width of the 10 % → 90 % rise, nm.
+
+    Returns
+    -------
+    float
+        ``s = edge_width_nm / (2 ln 9)``, nm.
+    """
     return edge_width_nm / (2 * np.log(9.0))
 
 
 def logistic_cut(cut_nm: float, edge_width_nm: float):
-    """Transmittance ``λ → T`` of a short-pass (IR-cut) edge: 50 % at ``cut_nm``, 90 % → 10 % over
-    ``edge_width_nm``."""
+    """Transmittance ``λ → T`` of a short-pass (IR-cut) edge.
+
+    Parameters
+    ----------
+    cut_nm : float
+        Wavelength of 50 % transmittance, nm.
+    edge_width_nm : float
+        Width of the fall from 90 % to 10 %, nm.
+
+    Returns
+    -------
+    Spectrum
+        ``λ → 1/(1 + exp((λ − cut_nm)/s))`` with s from :func:`logistic_scale_nm`, λ in nm.
+    """
     s = logistic_scale_nm(edge_width_nm)
     return lambda lam: 1.0 / (1.0 + np.exp((np.asarray(lam, float) - cut_nm) / s))

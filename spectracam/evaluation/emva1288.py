@@ -32,6 +32,38 @@ saturation exposure as one that has); the temporal dark noise is the dark varian
 zero exposure time when the exposure time is varied (as the reference implementation does); the
 spatial variances are computed from the frames as given, without the high-pass filter of section
 8.1 that removes the light source's nonuniformity (pass frames of uniform illumination).
+
+The steps of :func:`analyse`, with the standard's sections (Release 4.0 Linear):
+
+1. Mean and temporal variance of every bright and dark pair (eqs. 16, 18; :func:`pair_statistics`).
+2. Saturation (sections 2.7, 6.5): ``saturation="pixel_fraction"`` (Release 4) — the exposure at
+   which 0.1-0.2 % of the pixels show ``max_dn`` (see ``_saturation_by_pixel_fraction``);
+   ``"variance_max"`` (Release 3.1, and the fallback when ``max_dn`` is None or never reached) —
+   the step where the temporal variance σ²_y peaks.  μ_y.sat is the dark-corrected mean there.
+3. Photon transfer (section 6.6, eq. 50): σ²_y − σ²_y.dark = K·(μ_y − μ_y.dark) + c, a linear
+   regression over the steps from 0 to 70 % of μ_y.sat − μ_y.dark; K is its slope.
+4. Responsivity (section 6.6, eq. 49): μ_y − μ_y.dark = R·μ_p, regression through the origin over
+   the same range; quantum efficiency η = R/K (eq. 52).
+5. Temporal dark noise (section 6.6, eqs. 53, 54): σ_d = √(σ²_y.dark − 1/12)/K, with the
+   0.24 DN² rule (:func:`temporal_dark_noise`).  With ≥ 3 distinct exposure times σ²_y.dark is
+   the dark variance extrapolated to zero exposure time (intercept of a line against t_exp),
+   so that the dark current's shot noise is not counted as dark noise; otherwise the mean of the
+   dark pairs' variances.
+6. Saturation capacity μ_e.sat = η·μ_p.sat, SNR_max = √μ_e.sat (section 2), in dB 20·log10.
+7. Absolute sensitivity threshold μ_p.min (eq. 26; :func:`sensitivity_threshold`) and dynamic
+   range DR = μ_p.sat/μ_p.min (eq. 28), in dB 20·log10.
+8. Dark current (section 7.1): slope of μ_y.dark against t_exp divided by K (e⁻/s); also, in
+   ``details``, from the slope of σ²_y.dark against t_exp divided by K².
+9. Linearity (section 6.9): the relative-weight regression of μ_y − μ_y.dark on μ_p over 5-95 %
+   of saturation (:func:`linearity_fit`); ``linearity="mean_abs"`` (Release 4): ``LE = mean |δ_y|``;
+   ``"half_range"`` (Release 3.1): LE = (max δ_y − min δ_y)/2.  Both are in ``details``.
+10. DSNU1288 = s_y.dark/K in e⁻ and PRNU1288 = √(s²_y.50 − s²_y.dark)/(μ_y.50 − μ_y.dark) in %
+    (section 8, eqs. 66, 67; :func:`spatial_statistics`), with the temporal-noise correction
+    s²_y = s²_y.measured − σ²_y.stack/L.  NaN without the spatial stacks.
+
+References
+----------
+.. [EMVA1288] see docs/references.md
 """
 from __future__ import annotations
 
@@ -363,40 +395,37 @@ def _saturation_by_pixel_fraction(mu_p, frac, n_samples):
 def analyse(series: EmvaSeries, *, saturation: str = "pixel_fraction", linearity: str = "mean_abs") -> dict:
     """Evaluate an EMVA 1288 Release 4.0 Linear measurement.
 
-    Steps, with the standard's sections (Release 4.0 Linear):
+    Steps 1-10, with the standard's sections (Release 4.0 Linear), are listed in the module docstring.
 
-    1. Mean and temporal variance of every bright and dark pair (eqs. 16, 18; :func:`pair_statistics`).
-    2. Saturation (sections 2.7, 6.5): ``saturation="pixel_fraction"`` (Release 4) — the exposure at
-       which 0.1-0.2 % of the pixels show ``max_dn`` (see ``_saturation_by_pixel_fraction``);
-       ``"variance_max"`` (Release 3.1, and the fallback when ``max_dn`` is None or never reached) —
-       the step where the temporal variance σ²_y peaks.  μ_y.sat is the dark-corrected mean there.
-    3. Photon transfer (section 6.6, eq. 50): σ²_y − σ²_y.dark = K·(μ_y − μ_y.dark) + c, a linear
-       regression over the steps from 0 to 70 % of μ_y.sat − μ_y.dark; K is its slope.
-    4. Responsivity (section 6.6, eq. 49): μ_y − μ_y.dark = R·μ_p, regression through the origin over
-       the same range; quantum efficiency η = R/K (eq. 52).
-    5. Temporal dark noise (section 6.6, eqs. 53, 54): σ_d = √(σ²_y.dark − 1/12)/K, with the
-       0.24 DN² rule (:func:`temporal_dark_noise`).  With ≥ 3 distinct exposure times σ²_y.dark is
-       the dark variance extrapolated to zero exposure time (intercept of a line against t_exp),
-       so that the dark current's shot noise is not counted as dark noise; otherwise the mean of the
-       dark pairs' variances.
-    6. Saturation capacity μ_e.sat = η·μ_p.sat, SNR_max = √μ_e.sat (section 2), in dB 20·log10.
-    7. Absolute sensitivity threshold μ_p.min (eq. 26; :func:`sensitivity_threshold`) and dynamic
-       range DR = μ_p.sat/μ_p.min (eq. 28), in dB 20·log10.
-    8. Dark current (section 7.1): slope of μ_y.dark against t_exp divided by K (e⁻/s); also, in
-       ``details``, from the slope of σ²_y.dark against t_exp divided by K².
-    9. Linearity (section 6.9): the relative-weight regression of μ_y − μ_y.dark on μ_p over 5-95 %
-       of saturation (:func:`linearity_fit`); ``linearity="mean_abs"`` (Release 4): LE = mean |δ_y|;
-       ``"half_range"`` (Release 3.1): LE = (max δ_y − min δ_y)/2.  Both are in ``details``.
-    10. DSNU1288 = s_y.dark/K in e⁻ and PRNU1288 = √(s²_y.50 − s²_y.dark)/(μ_y.50 − μ_y.dark) in %
-        (section 8, eqs. 66, 67; :func:`spatial_statistics`), with the temporal-noise correction
-        s²_y = s²_y.measured − σ²_y.stack/L.  NaN without the spatial stacks.
+    Parameters
+    ----------
+    series : EmvaSeries
+        The measurement: bright and dark frame pairs per step with their photons per pixel μ_p and exposure
+        times, and optionally the two stacks of the nonuniformity measurement.
+    saturation : {"pixel_fraction", "variance_max"}
+        The saturation point (step 2): 0.1-0.2 % of the pixels at ``max_dn`` (Release 4), or the step where the
+        temporal variance peaks (Release 3.1; also the fallback).
+    linearity : {"mean_abs", "half_range"}
+        The linearity error reported (step 9): ``mean |δ_y|`` (Release 4) or (max δ_y − min δ_y)/2 (Release 3.1).
 
-    Returns a dict with the keys of :data:`RESULT_KEYS` (floats; ``quantum_efficiency`` as a
-    fraction 0-1), plus ``"curves"`` (per-step arrays for plots: photon transfer, SNR, linearity
-    deviation, saturated fraction, and the masks of the steps each fit used — ``sensitivity_fit_mask``
-    (steps 3./4.), ``linearity_fit_mask`` (step 9.) — and of the steps beyond the saturation point,
-    ``beyond_saturation_mask``, which no fit uses) and ``"details"`` (intermediate scalars, the methods
-    used and the alternative definitions).
+    Returns
+    -------
+    dict
+        The keys of :data:`RESULT_KEYS` (floats; ``quantum_efficiency`` as a fraction 0-1), plus ``"curves"``
+        (per-step arrays for plots: photon transfer, SNR, linearity deviation, saturated fraction, and the masks
+        of the steps each fit used — ``sensitivity_fit_mask`` (steps 3./4.), ``linearity_fit_mask`` (step 9.) —
+        and of the steps beyond the saturation point, ``beyond_saturation_mask``, which no fit uses) and
+        ``"details"`` (intermediate scalars, the methods used and the alternative definitions).
+
+    Raises
+    ------
+    spectracam.core.errors.ConfigError
+        An unknown ``saturation`` or ``linearity``, or a series the fits cannot use (a first step already
+        saturated, fewer than 3 steps below 70 % of saturation, a variance that does not grow with the signal).
+
+    References
+    ----------
+    .. [EMVA1288] see docs/references.md; Release 4.0 Linear, and Release 3.1 for the alternative definitions.
     """
     _check_choice("saturation", saturation, SATURATION_METHODS)
     _check_choice("linearity", linearity, LINEARITY_METHODS)

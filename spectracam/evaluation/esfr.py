@@ -157,9 +157,9 @@ def esfr(image, *, fit_order: int = 1, oversampling: int = 4, derivative: str = 
 
     References
     ----------
-    ISO 12233:2017, Photography — Electronic still picture imaging — Resolution and spatial frequency
-    responses, clause 6 and annex D. P. D. Burns, "Slanted-edge MTF for digital camera and scanner
-    analysis", Proc. IS&T PICS 2000, 135-138; reference code ``sfrmat3``/``sfrmat4``/``sfrmat5``.
+    .. [ISO12233] see docs/references.md; clause 6 and annex D.
+    .. [ISO12233-2023] see docs/references.md; the polynomial edge fit, ``fit_order=2``.
+    .. [Burns2000] see docs/references.md; reference code ``sfrmat3``/``sfrmat4``/``sfrmat5``.
 
     Examples
     --------

@@ -28,6 +28,12 @@ that. Zhang's distribution lists larger numbers (0.05, 0.225, 7.0; 0.0685, 0.826
 its Gaussian routine treats as full widths at half maximum — the paper's ``s`` times 2√ln2 within a few per
 cent, so the same filters. ISETCam's current ``gauss2`` treats those same numbers as half widths at half
 maximum, which makes its Gaussians about 2.1× wider than the paper's; we do not follow it.
+
+References
+----------
+.. [Zhang1996] see docs/references.md
+.. [Zhang1997] see docs/references.md; the filters and the opponent matrix as printed.
+.. [Poirson1993] see docs/references.md; the opponent space.
 """
 from __future__ import annotations
 
@@ -110,6 +116,15 @@ def scielab_kernels(samples_per_degree: float, support_deg: float = 1.0) -> tupl
     tuple of three (n, n) ndarrays
         ``Σ w_i E_i / Σ w_i`` with ``E_i`` the unit-sum sampled Gaussian ``exp(-(x² + y²)/(s_i·spd)²)``.
 
+    Raises
+    ------
+    ValueError
+        ``samples_per_degree`` not a positive, finite number.
+
+    References
+    ----------
+    .. [Zhang1997] see docs/references.md; the published weights and spreads (:data:`SCIELAB_FILTERS`).
+
     Examples
     --------
     >>> k = scielab_kernels(41.0)
@@ -152,6 +167,12 @@ def scielab_filter(xyz, samples_per_degree: float, *, support_deg: float = 1.0, 
     ndarray, shape (rows, cols, 3)
         Filtered XYZ.
 
+    Raises
+    ------
+    ValueError
+        An image not of shape (rows, cols, 3), an unknown ``boundary``, ``samples_per_degree`` not a positive,
+        finite number, or an ``opponent_matrix`` not of shape (3, 3).
+
     Examples
     --------
     A uniform field is unchanged:
@@ -193,14 +214,33 @@ def _kernel_spectra(spd: float, shape: tuple[int, int], dtype: str) -> np.ndarra
 
 
 def scielab_filter_fft(xyz, samples_per_degree: float, dtype=np.float64) -> np.ndarray:
-    """:func:`scielab_filter` (reflecting boundary, 1° support, the reference opponent matrix) computed as one FFT
-    convolution per opponent channel with the full 2-D kernels of :func:`scielab_kernels`, in ``dtype``.
+    """:func:`scielab_filter` computed by FFT, in ``dtype``.
+
+    The filter of :func:`scielab_filter` with a reflecting boundary, 1° support and the reference opponent matrix,
+    computed as one FFT convolution per opponent channel with the full 2-D kernels of :func:`scielab_kernels`.
 
     The image is extended by the kernels' reach with ``numpy.pad(mode="symmetric")`` — scipy.ndimage's "reflect",
     so the result equals :func:`scielab_filter`'s to the rounding of ``dtype`` (float64: 1e-15 of the largest
     value; float32: about 1e-6, which moves a ΔE of 10 by up to 1e-4; ``tests/test_scielab_scores.py``).  On a
     640×480 image, with the kernels' spectra memoised, about 2× faster in float64 (3× in float32) than the 14
     row and column passes, which is why the chart scores use it (in float64).
+
+    Parameters
+    ----------
+    xyz, samples_per_degree
+        As :func:`scielab_filter`.
+    dtype : numpy dtype
+        Precision of the FFT convolution: float64 (the default) or float32.
+
+    Returns
+    -------
+    ndarray, shape (rows, cols, 3)
+        Filtered XYZ, float64.
+
+    Raises
+    ------
+    ValueError
+        An image not of shape (rows, cols, 3), or ``samples_per_degree`` not a positive, finite number.
 
     Examples
     --------
@@ -245,10 +285,18 @@ def scielab(xyz1, xyz2, white_xyz, samples_per_degree: float, delta_e: str = "ci
     ndarray, shape (rows, cols)
         ΔE per pixel.
 
+    Raises
+    ------
+    ValueError
+        Images of different shapes, a ``white_xyz`` that is not three positive values, or what
+        :func:`scielab_filter` refuses.
+    spectracam.core.errors.ConfigError
+        An unknown ``delta_e``.
+
     References
     ----------
-    X. Zhang, B. A. Wandell, "A spatial extension of CIELAB for digital color-image reproduction",
-    J. Soc. Inf. Display 5(1), 61-63 (1997); SID Symposium Digest 27, 731-734 (1996).
+    .. [Zhang1997] see docs/references.md
+    .. [Zhang1996] see docs/references.md
 
     Examples
     --------

@@ -415,10 +415,39 @@ def chart_scielab_map(rgb: np.ndarray, reference: ChartReference, processing: Pr
 
 def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec,
           delta_e_reference: str = "scene") -> ChartScore:
-    """Render a capture on the display and score it against the chart reference (see the module
-    docstring).  ``delta_e_reference="camera"`` scores per-pixel ΔE against the noise-free rendering
-    of the same camera instead (:data:`DELTA_E_REFERENCES`); ``delta_e_of_mean`` and
-    ``delta_e_conversion`` are always against the scene."""
+    """Render a capture on the display and score it against the chart reference (see the module docstring).
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture, of the chart ``reference`` describes (same image size, scene and metered exposure).
+    reference : ChartReference
+        The chart's truth: each patch's radiance and CIE 1931 XYZ, the light's white, the patches' scoring boxes.
+    processing : ProcessingSpec
+        How the capture is developed and displayed: demosaicking, white balance, conversion, display, ΔE formula.
+    delta_e_reference : {"scene", "camera"}
+        ``"camera"`` scores per-pixel ΔE against the noise-free rendering of the same camera instead
+        (:data:`DELTA_E_REFERENCES`); ``delta_e_of_mean`` and ``delta_e_conversion`` are always against the
+        scene.
+
+    Returns
+    -------
+    ChartScore
+        The summary, per-patch scores (CIELAB, ΔE, SNR), the rendered linear display RGB, the ΔE map and the
+        conversion's errors on the colours it was and was not fitted on.
+
+    Raises
+    ------
+    SpectracamError
+        An unknown ``delta_e_reference``, an impossible capture, another image size, another scene, or exposure
+        times the chart's white patch does not meter.
+
+    References
+    ----------
+    .. [Catrysse1999] see docs/references.md; sections 3.5, 3.6 and 5.
+    .. [CIE015] see docs/references.md; CIE 1976 L*a*b*.
+    .. [Zhang1997] see docs/references.md; the S-CIELAB map.
+    """
     _check_scorable(raw, reference, delta_e_reference)
     h, w = raw.digital.shape[-2:]
     chart_rates = reference.patch_rates(raw.camera)

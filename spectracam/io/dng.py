@@ -88,8 +88,20 @@ README ("Raw developers").
 (the DNG SDK, Adobe's converters, RawTherapee's DCP path): LibRaw parses them but does not use them, and darktable's
 matrix path does not read them.  ``AsShotNeutral`` is the oracle's (the true white) for the oracle camera and the
 camera's own estimate for a camera that finds its white (``processing.camera = "developed"``).  LibRaw reads ``BlackLevel`` as an integer (a fractional one is truncated); the pedestal
-is written as the integer the ADC adds (see ``mid_step`` in :func:`write_dng` for the half code a flooring ADC
-leaves).
+is written as the integer the ADC adds (see ``mid_step`` below for the half code a flooring ADC leaves).
+
+``mid_step`` (:func:`write_dng`): add a ``LinearizationTable`` mapping pixel value p to ``2·p + 1`` (BlackLevel
+``2·b``, WhiteLevel ``2ⁿ⁺¹ − 1``; LinearRaw: ``2·(b − ⌊b⌋)`` and ``2·(2ⁿ − 1 − ⌊b⌋) + 1``), so developers take each
+code at the centre of its quantisation step, as :func:`~spectracam.sensor.adc_inverse` does.  The ADC floors, so a
+code's mean signal is half a DN above its value; with few DN per channel (8 bits, dark patches, a channel that a
+white balance multiplies by 2) that half DN tints greys — about +0.2 b* on the chart's light greys of an 8-bit CFA
+at 5000 K.  Off by default: BlackLevel and WhiteLevel are then the ADC's own codes (LinearRaw: less the pedestal),
+and LibRaw's ``raw_image`` the digital numbers themselves (of a CFA).  Only for ADCs of up to 15 bits.
+
+References
+----------
+.. [DNG1.4] see docs/references.md; the file format, its camera-profile tags (chapter 6).
+.. [ISO12232] see docs/references.md; the saturation-based ISO speed.
 """
 from __future__ import annotations
 
@@ -445,19 +457,30 @@ DNG_MAX_BITS = 16
 
 def write_dng(path: str | Path, raw: RawCapture, reference=None, mid_step: bool = False,
               neutral_rates: np.ndarray | None = None) -> Path:
-    """Write a capture as DNG (temp file, then rename): a CFA mosaic, or LinearRaw for three or four planes
-    (pixels less the pedestal, :func:`dng_levels`); with the chart ``reference``, the two colour and forward
-    matrices (CIE A and D65), the as-shot neutral (the oracle's, or the camera's own estimate ``neutral_rates``)
-    and the ISO too.
+    """Write a capture as DNG (temp file, then rename): a CFA mosaic, or LinearRaw for three or four planes.
 
-    ``mid_step``: add a ``LinearizationTable`` mapping pixel value p to ``2·p + 1`` (BlackLevel ``2·b``,
-    WhiteLevel ``2ⁿ⁺¹ − 1``; LinearRaw: ``2·(b − ⌊b⌋)`` and ``2·(2ⁿ − 1 − ⌊b⌋) + 1``), so developers take each
-    code at the centre of its quantisation step, as :func:`~spectracam.sensor.adc_inverse` does.  The ADC
-    floors, so a code's mean signal is half a DN above its value; with few DN per channel (8 bits, dark
-    patches, a channel that a white balance multiplies by 2) that half DN tints greys — about +0.2 b* on the
-    chart's light greys of an 8-bit CFA at 5000 K.  Off by default: BlackLevel and WhiteLevel are then the ADC's
-    own codes (LinearRaw: less the pedestal), and LibRaw's ``raw_image`` the digital numbers themselves (of a
-    CFA).  Only for ADCs of up to 15 bits."""
+    Parameters
+    ----------
+    path : str or Path
+        The file to write.
+    raw : RawCapture
+        The capture; LinearRaw holds its pixels less the pedestal (:func:`dng_levels`).
+    reference : ChartReference, optional
+        With the chart: the two colour and forward matrices (CIE A and D65), the as-shot neutral and the ISO too.
+    mid_step : bool
+        Add a ``LinearizationTable`` (p → ``2·p + 1``) so developers take each code at the centre of its
+        quantisation step; only for ADCs of up to 15 bits.  Off by default (the module docstring's ``mid_step``).
+    neutral_rates : ndarray, optional
+        The as-shot neutral: the camera's own estimate (default: the oracle's).
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    SpectracamError
+        An ADC of more than 16 bits (15 with ``mid_step``), or a layout that has no DNG form."""
     import tifffile
 
     bits = raw.camera.sensor.adc_bits

@@ -191,8 +191,31 @@ def radiance_attributes(cube: RadianceCube) -> dict:
 
 
 def write_radiance_exr(path: str | Path, cube: RadianceCube) -> Path:
-    """Write a radiance cube as a spectral EXR with an RGB preview and the scene it came from
-    (``cube.metadata["scene"]``)."""
+    """Write a radiance cube as a spectral EXR with an RGB preview and the scene it came from.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file to write (it appears complete or not at all: temp file, then rename).
+    cube : RadianceCube
+        Band-averaged radiance, W·m⁻²·sr⁻¹·nm⁻¹, one ``S0.<λ>nm`` channel per band; it must record its scene
+        (``cube.metadata["scene"]``), whose white luminance scales the preview (:data:`PREVIEW_NOTE`).
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Raises
+    ------
+    OSError
+        The file cannot be written (naming the path).
+
+    References
+    ----------
+    .. [Fichet2021] see docs/references.md; the spectral layout.
+    .. [BT709] see docs/references.md; the preview's primaries.
+    """
     channels = {spectral_channel_name(w): cube.radiance[:, :, i] for i, w in enumerate(cube.wavelengths_nm)}
     level = cube.metadata["scene"]["illuminant"]["white_luminance_cd_m2"]
     rgb = preview_rgb(cube.radiance, cube.grid, level)
@@ -219,10 +242,37 @@ def emissive_scale(units, source: str) -> float:
 
 
 def read_radiance_exr(path: str | Path, units: str | None = None) -> tuple[RadianceCube, dict]:
-    """Read a spectral EXR (Fichet 2021 layout, from spectracam or any other tool) into a
-    :class:`RadianceCube` in W·m⁻²·sr⁻¹·nm⁻¹ (bands sorted by wavelength) and its attributes; the unit is
-    the file's ``emissiveUnits`` (``units`` stands in for a file without one); a file is input from
-    outside, so its radiance is checked (finite, ≥ 0) here."""
+    """Read a spectral EXR (Fichet 2021 layout, from spectracam or any other tool) into a :class:`RadianceCube`.
+
+    A file is input from outside, so its radiance is checked (finite, ≥ 0) here.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+    units : str, optional
+        Stands in for the ``emissiveUnits`` of a file without one (e.g. ``"W.m^-2.sr^-1"``; an SI prefix on the
+        watt is accepted); the file's own attribute wins.
+
+    Returns
+    -------
+    cube : RadianceCube
+        Radiance in W·m⁻²·sr⁻¹·nm⁻¹, bands sorted by wavelength; its metadata holds the recorded render
+        parameters and scene when the file has them.
+    attributes : dict
+        The file's header attributes.
+
+    Raises
+    ------
+    SpectracamError
+        Not a readable OpenEXR file or not a regular file (ConfigError), no spectral channels, a unit that is not
+        spectral radiance (photon units, a relative scale, none at all), a damaged ``spectracam*`` attribute, or
+        radiance that is not finite and ≥ 0.
+
+    References
+    ----------
+    .. [Fichet2021] see docs/references.md
+    """
     channels, attrs = read_exr(path)
     bands = sorted((w, n) for n in channels if (w := parse_spectral_channel(n)) is not None)
     if not bands:
@@ -366,10 +416,27 @@ def raw_attributes(raw: RawCapture) -> dict:
 
 
 def write_raw_exr(path: str | Path, raw: RawCapture) -> Path:
-    """Write what the sensor recorded with every parameter that produced it: digital numbers as
-    ``(DN − black level)/(2ⁿ − 1 − black level)`` (:func:`dn_scale_offset`), so a viewer at its default
-    exposure shows the mosaic or planes from black (0) to full scale (1); :func:`read_raw_exr` gives the
-    digital numbers back exactly."""
+    """Write what the sensor recorded with every parameter that produced it.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file to write (temp file, then rename).
+    raw : RawCapture
+        The capture.  Its digital numbers are stored as ``(DN − black level)/(2ⁿ − 1 − black level)``
+        (:func:`dn_scale_offset`), so a viewer at its default exposure shows the mosaic or planes from black (0)
+        to full scale (1); :func:`read_raw_exr` gives the digital numbers back exactly.
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Raises
+    ------
+    OSError
+        The file cannot be written (naming the path).
+    """
     scale, offset = dn_scale_offset(raw.camera.sensor)
     digital = (np.asarray(raw.digital, dtype=np.float64) - offset) / scale
     planes = [digital] if isinstance(raw.layout, MosaicLayout) else list(digital)
@@ -447,7 +514,26 @@ def check_raw_attributes(attrs: dict, camera: CameraSpec, layout, times: np.ndar
 
 
 def read_raw_exr(path: str | Path) -> RawCapture:
-    """Read a raw EXR back into a :class:`~spectracam.camera.capture.RawCapture` (without expected electrons)."""
+    """Read a raw EXR back into a :class:`~spectracam.camera.capture.RawCapture` (without expected electrons).
+
+    Parameters
+    ----------
+    path : str or Path
+        A raw capture spectracam wrote (:func:`write_raw_exr`).
+
+    Returns
+    -------
+    RawCapture
+        The digital numbers exactly as captured, with the camera, layout, exposure times, seed, scene and
+        metering the file records; ``expected_e`` is None.
+
+    Raises
+    ------
+    SpectracamError
+        Not a readable OpenEXR file, not a spectracam raw capture, missing channels, or an attribute that is
+        missing, damaged or contradicts the recorded camera (ConfigError for a layout other than the recorded
+        architecture's).
+    """
     src = str(path)
     channels, attrs = read_exr(path)
     if attrs.get("spectracamKind") != "raw":

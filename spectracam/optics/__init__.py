@@ -46,6 +46,22 @@ class OpticsSpec(Spec):
 def irradiance_factor(optics: OpticsSpec) -> float:
     """Image irradiance per unit scene radiance, sr (paper, section 3.2).
 
+    Parameters
+    ----------
+    optics : OpticsSpec
+        The lens: its f-number N and ``irradiance_form``.
+
+    Returns
+    -------
+    float
+        ``π/(4N²)`` (``"paraxial"``, the paper's) or ``π/(1 + 4N²)`` (``"exact"``), sr.
+
+    References
+    ----------
+    .. [Catrysse1999] see docs/references.md; section 3.2.
+
+    Examples
+    --------
     >>> round(irradiance_factor(OpticsSpec(f_number=2.0)), 6)  # π/16
     0.19635
     """
@@ -53,9 +69,25 @@ def irradiance_factor(optics: OpticsSpec) -> float:
 
 
 def radiance_to_photon_irradiance(grid, optics: OpticsSpec) -> np.ndarray:
-    """Per-band factor from spectral radiance (W·m⁻²·sr⁻¹·nm⁻¹) to photon irradiance at the sensor
-    (photons·s⁻¹·m⁻²·nm⁻¹): :func:`irradiance_factor` × T(λ) × λ/(hc).  ``grid``: a
-    :class:`WavelengthGrid` (a measured T is averaged over each band) or wavelengths, nm."""
+    """Per-band factor from spectral radiance to photon irradiance at the sensor.
+
+    Parameters
+    ----------
+    grid : WavelengthGrid or array_like
+        A :class:`WavelengthGrid` (a measured T is averaged over each band) or wavelengths, nm.
+    optics : OpticsSpec
+        The lens: f-number, transmittance T and a measured T(λ), if any.
+
+    Returns
+    -------
+    ndarray
+        One factor per band or wavelength, :func:`irradiance_factor` × T(λ) × λ/(hc): from spectral radiance
+        (W·m⁻²·sr⁻¹·nm⁻¹) to photon irradiance (photons·s⁻¹·m⁻²·nm⁻¹).
+
+    References
+    ----------
+    .. [Catrysse1999] see docs/references.md; sections 3.1 and 3.2.
+    """
     centres = np.asarray(grid.centres_nm if isinstance(grid, WavelengthGrid) else grid, float)
     k = irradiance_factor(optics) * optics.transmittance
     factor = energy_to_photons(1.0, centres) * k

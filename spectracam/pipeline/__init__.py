@@ -40,13 +40,26 @@ def scene_of(obj, what: str = "cube") -> Scene:
 def capture(cube: RadianceCube, camera: CameraSpec | None = None, seed: int | None = None, *,
             scene: Scene | None = None, sensor: SensorSpec | None = None, design: str | None = None,
             white=None) -> RawCapture:
-    """Capture a cube.  The camera, seed and chart default to those of ``scene`` (default: the scene
-    the cube records); ``sensor`` and ``design`` (``"arch/scheme"``) replace the camera's parts.
+    """Capture a cube: expose the camera's sensor to it and record digital numbers.
 
-    A spectral image from any other tool (no recorded scene, no ``scene=``) is captured too: the
-    camera is ``camera`` (default: spectracam's), the scene :func:`stand_in_scene`, and the exposure is
-    metered on ``white`` (:func:`spectracam.sensor.metering.parse_white`; default ``"brightest"``; for a
-    chart scene the white patch).  Such a capture records no scene: there is no chart truth to score."""
+    Parameters
+    ----------
+    cube : RadianceCube
+        A spectral image from any other tool (no recorded scene, no ``scene=``) is captured too: the camera is
+        ``camera`` (default: spectracam's), the scene :func:`stand_in_scene`; it records no scene (nothing to score).
+    camera, seed, scene, sensor, design, white : optional
+        The camera, seed and chart default to those of ``scene`` (default: the scene the cube records); ``sensor``
+        and ``design`` (``"arch/scheme"``) replace the camera's parts; the exposure is metered on ``white``
+        (:func:`spectracam.sensor.metering.parse_white`; default ``"brightest"``; for a chart scene the white patch).
+
+    Returns
+    -------
+    RawCapture
+
+    Raises
+    ------
+    SpectracamError
+        An argument of the wrong type (ArgumentTypeError), or a cube whose bands or pixels contradict its scene."""
     from spectracam.sensor.metering import metered_radiance, parse_white
 
     expect(cube, RadianceCube, "capture(cube)")
@@ -224,9 +237,37 @@ def check_memory(scene: Scene, copies: float = 1.0, what: str = "") -> None:
 
 def score(raw: RawCapture, scene: Scene | None = None, processing: ProcessingSpec | None = None,
           delta_e_reference: str = "scene"):
-    """Score a capture against its scene (default: the scene it records), with ``processing``
-    (default: the scene's): a :class:`ChartScore`, or for a textured target a
-    :class:`~spectracam.evaluation.target_score.TargetScore` (per pixel against its known spectra)."""
+    """Score a capture against its scene: render it on the display and measure its colour errors.
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture.
+    scene : Scene, optional
+        The scene it is scored against (default: the scene it records).
+    processing : ProcessingSpec, optional
+        The processing that renders it (default: the scene's).
+    delta_e_reference : {"scene", "camera"}
+        What per-pixel ΔE is measured against (:data:`spectracam.evaluation.score.DELTA_E_REFERENCES`); a
+        textured target is scored against its scene only.
+
+    Returns
+    -------
+    ChartScore or TargetScore
+        A :class:`ChartScore`, or for a textured target a :class:`~spectracam.evaluation.target_score.TargetScore`
+        (per pixel against its known spectra).
+
+    Raises
+    ------
+    SpectracamError
+        An argument of the wrong type (ArgumentTypeError), a capture that records no scene when none is given,
+        ``delta_e_reference="camera"`` for a textured target, or a capture that does not match the scene.
+
+    References
+    ----------
+    .. [Catrysse1999] see docs/references.md; sections 3.5, 3.6 and 5.
+    .. [Zhang1997] see docs/references.md; S-CIELAB.
+    """
     expect(raw, RawCapture, "score(raw)")
     expect(scene, Scene, "score(scene)", optional=True)
     expect(processing, ProcessingSpec, "score(processing)", optional=True)
@@ -245,8 +286,39 @@ def score(raw: RawCapture, scene: Scene | None = None, processing: ProcessingSpe
 
 
 def render(scene: Scene, renderer: str = "mitsuba", progress: bool = False, log=None) -> RadianceCube:
-    """Render ``scene`` with a registered renderer (:func:`spectracam.render.render`), its arguments
-    checked here, at the API's boundary."""
+    """Render ``scene`` into a radiance cube with a registered renderer (:func:`spectracam.render.render`).
+
+    Its arguments are checked here, at the API's boundary.
+
+    Parameters
+    ----------
+    scene : Scene
+        What to render: chart or textured target, light, wavelength grid, image size.
+    renderer : str
+        A registered renderer's name (:data:`spectracam.render.RENDERERS`): ``"mitsuba"`` (Mitsuba 3, spectral
+        variant, Monte Carlo) or ``"analytic"`` (closed form).
+    progress : bool
+        Show a progress bar (Mitsuba: over the bands).
+    log : callable, optional
+        A function of one string that receives one-line notices.
+
+    Returns
+    -------
+    RadianceCube
+        Band-averaged spectral radiance ``(H, W, n_bands)``, W·m⁻²·sr⁻¹·nm⁻¹, recording the scene in
+        ``metadata["scene"]``.
+
+    Raises
+    ------
+    SpectracamError
+        An argument of the wrong type (ArgumentTypeError), an unknown renderer (ConfigError), or a scene the
+        renderer cannot render on this machine.
+
+    References
+    ----------
+    .. [Catrysse1999] see docs/references.md; section 3.1 (the scene's radiance).
+    .. [Mitsuba3] see docs/references.md
+    """
     expect(scene, Scene, "render(scene)")
     expect(renderer, str, "render(renderer)", "a renderer's name: " + ", ".join(map(repr, RENDERERS.names)))
     if log is not None and not callable(log):
@@ -255,7 +327,31 @@ def render(scene: Scene, renderer: str = "mitsuba", progress: bool = False, log=
 
 
 def simulate(scene: Scene, renderer: str = "mitsuba", seed: int | None = None):
-    """render → capture → score: ``(cube, raw, score)``."""
+    """render → capture → score: ``(cube, raw, score)``.
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene; its camera, processing and seed are used.
+    renderer : str
+        A registered renderer's name, as for :func:`render`.
+    seed : int, optional
+        The capture's noise seed (default: the scene's).
+
+    Returns
+    -------
+    tuple of (RadianceCube, RawCapture, ChartScore or TargetScore)
+        What :func:`render`, :func:`capture` and :func:`score` return.
+
+    Raises
+    ------
+    SpectracamError
+        An argument of the wrong type (ArgumentTypeError), or what the three stages raise.
+
+    References
+    ----------
+    .. [Catrysse1999] see docs/references.md
+    """
     expect(scene, Scene, "simulate(scene)")
     expect_integer(seed, "simulate(seed)", optional=True)
     cube = render(scene, renderer)

@@ -11,9 +11,30 @@ __all__ = ["camera_sensitivities", "patch_spectra"]
 
 
 def patch_spectra(scene):
-    """The chart's 24 patch radiances (band averages on the scene's grid, W·m⁻²·sr⁻¹·nm⁻¹) as a
-    ``colour.MultiSpectralDistributions`` labelled with the patch names.
+    """The chart's 24 patch radiances as a ``colour.MultiSpectralDistributions``.
 
+    Parameters
+    ----------
+    scene : Scene
+        The scene whose chart, light and wavelength grid give the radiances.
+
+    Returns
+    -------
+    colour.MultiSpectralDistributions
+        The 24 patch radiances (band averages on the scene's grid, W·m⁻²·sr⁻¹·nm⁻¹, ``L = E·S/π``), labelled with
+        the patch names.
+
+    Raises
+    ------
+    SpectracamError
+        ``scene`` is not a :class:`~spectracam.pipeline.scene_file.Scene` (ArgumentTypeError).
+
+    References
+    ----------
+    .. [Catrysse1999] see docs/references.md; section 3.1.
+
+    Examples
+    --------
     >>> from spectracam import parse_scene
     >>> patch_spectra(parse_scene({})).shape.interval
     10.0
@@ -31,9 +52,32 @@ def patch_spectra(scene):
 
 
 def camera_sensitivities(camera: CameraSpec, grid: WavelengthGrid):
-    """The camera's responsivities R_k(λ) (filter × QE, electrons per photon; paper 3.3) on ``grid`` as
-    ``colour.characterisation.RGB_CameraSensitivities``.
+    """The camera's responsivities R_k(λ) on ``grid`` as ``colour.characterisation.RGB_CameraSensitivities``.
 
+    Parameters
+    ----------
+    camera : CameraSpec
+        The camera: its architecture's channels, filters and QE.
+    grid : WavelengthGrid
+        The bands, nm.
+
+    Returns
+    -------
+    colour.characterisation.RGB_CameraSensitivities or colour.MultiSpectralDistributions
+        R_k(λ) (filter × QE, electrons per photon; paper 3.3), band-averaged; a camera whose channels are not
+        R, G, B (R Y B, C Y M, R G B W, …) gives a ``MultiSpectralDistributions`` labelled with their letters.
+
+    Raises
+    ------
+    SpectracamError
+        An argument of the wrong type (ArgumentTypeError).
+
+    References
+    ----------
+    .. [Catrysse1999] see docs/references.md; section 3.3.
+
+    Examples
+    --------
     >>> from spectracam.camera import CameraSpec
     >>> s = camera_sensitivities(CameraSpec(), WavelengthGrid(np.arange(405.0, 700.0, 10.0)))
     >>> s.labels

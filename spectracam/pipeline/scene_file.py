@@ -196,7 +196,25 @@ class Scene(Spec):
 
 
 def parse_scene(data: dict, source: str | None = None) -> Scene:
-    """Validate a parsed TOML/JSON dict and build a :class:`Scene`."""
+    """Validate a parsed TOML/JSON dict and build a :class:`Scene`.
+
+    Parameters
+    ----------
+    data : dict
+        The scene tables, e.g. ``{"image": {"width": 320}}``; a missing table or key takes its default.
+    source : str, optional
+        Where the dict came from, named in error messages.
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    SpectracamError
+        ``data`` not a mapping (ArgumentTypeError), or a field with a value that is not allowed (ConfigError,
+        naming the field, the value and what is allowed).
+    """
     from collections.abc import Mapping
 
     from spectracam.core.errors import expect
@@ -271,7 +289,25 @@ def resolve_curve_files(data: dict, base_dir: Path) -> dict:
 
 
 def load_scene(path: str | Path, overrides=()) -> Scene:
-    """Read and validate a TOML scene file, with ``--set``-style overrides applied first."""
+    """Read and validate a TOML scene file, with ``--set``-style overrides applied first.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The scene file; curve files it names (``illuminant.file``, ``filters.qe_file``, …) are relative to it.
+    overrides : iterable
+        ``"PATH=VALUE"`` strings or ``(path, value)`` pairs, e.g. ``["image.width=320"]``, applied in order.
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    SpectracamError
+        An argument of the wrong type (ArgumentTypeError), or a file that cannot be read, is not valid TOML or
+        holds a value that is not allowed (ConfigError).
+    """
     import os
 
     from spectracam.core.errors import ArgumentTypeError, expect

@@ -338,9 +338,40 @@ DEMOSAIC_MARGIN = 8
 
 
 def demosaic(mosaic: np.ndarray, layout: MosaicLayout, method: str) -> np.ndarray:
-    """``(H, W, N)`` full-colour image from a mosaic of the given layout with a registered method,
-    band by band (band edges on whole tiles): every output pixel sees exactly the neighbours it
-    would in one pass over the whole image."""
+    """Full-colour image from a mosaic of the given layout with a registered demosaicking method.
+
+    Works band by band (band edges on whole tiles, :data:`DEMOSAIC_BAND_ROWS` rows with
+    :data:`DEMOSAIC_MARGIN` of context): every output pixel sees exactly the neighbours it would in one pass
+    over the whole image.
+
+    Parameters
+    ----------
+    mosaic : ndarray
+        ``(H, W)`` samples, one channel per site.
+    layout : MosaicLayout
+        The tile: which channel each site records.
+    method : str
+        A name in :data:`DEMOSAIC_METHODS`: ``"bilinear"`` (any periodic mosaic), ``"malvar2004"`` and
+        ``"menon2007"`` (three-channel mosaics, remosaicked to Bayer first when not Bayer), or ``"patch"`` (the
+        paper's reading: each tile's mean per channel).
+
+    Returns
+    -------
+    ndarray
+        ``(H, W, N)`` full-colour image, one plane per channel of ``layout``.
+
+    Raises
+    ------
+    ConfigError
+        An unknown ``method``, or a Bayer method on a mosaic of four channels.
+
+    References
+    ----------
+    .. [Malvar2004] see docs/references.md
+    .. [Menon2007] see docs/references.md
+    .. [Knutsson1993] see docs/references.md; the periodic bilinear interpolation (normalised convolution).
+    .. [Catrysse1999] see docs/references.md; section 3.5.
+    """
     fn = DEMOSAIC_METHODS[method]
     h = mosaic.shape[0]
     step = DEMOSAIC_BAND_ROWS
@@ -356,14 +387,31 @@ def demosaic(mosaic: np.ndarray, layout: MosaicLayout, method: str) -> np.ndarra
 
 
 def fit_conversion(camera: np.ndarray, target_rgb: np.ndarray) -> np.ndarray:
-    """N×3 M minimising ‖camera·M − target‖² over the chart's patches (rows): camera ``(n, N)``,
-    target ``(n, 3)``.
+    """N×3 M minimising ‖camera·M − target‖² over the chart's patches (rows).
 
     More than three channels (R, G, B, W) are linearly dependent when W passes what R, G and B pass
     (the block filters: exactly), and plain least squares then spends huge opposite coefficients on
     the null direction, which noise multiplies: the channels are scaled to unit norm and singular
     values below :data:`CONVERSION_RCOND` of the largest are dropped — the minimum-norm matrix among
-    the best fits.  Three channels are fitted exactly as the paper's (no truncation)."""
+    the best fits.  Three channels are fitted exactly as the paper's (no truncation).
+
+    Parameters
+    ----------
+    camera : ndarray
+        ``(n, N)`` noise-free camera responses of the n patches, one column per channel.
+    target_rgb : ndarray
+        ``(n, 3)`` the display RGB each patch should be rendered as.
+
+    Returns
+    -------
+    ndarray
+        ``(N, 3)`` conversion matrix M: camera responses (rows) @ M gives display RGB.
+
+    References
+    ----------
+    .. [Catrysse1999] see docs/references.md; section 3.5 ("a linear transformation, found using conventional
+       methods").
+    """
     if camera.shape[1] <= 3:
         M, *_ = np.linalg.lstsq(camera, target_rgb, rcond=None)
         return M

@@ -197,6 +197,25 @@ def irradiance_scale(spec: IlluminantSpec) -> float:
 def spectral_irradiance(spec: IlluminantSpec) -> Spectrum:
     """Absolute spectral irradiance on the chart, W·m⁻²·nm⁻¹ (the chart faces the light).
 
+    Parameters
+    ----------
+    spec : IlluminantSpec
+        The light: its spectral shape (blackbody, a CIE or other named light, or measured) and the luminance
+        of a perfect white diffuser under it, ``white_luminance_cd_m2``, cd/m², which sets the scale.
+
+    Returns
+    -------
+    Spectrum
+        ``λ → E(λ) = k·S(λ)`` (λ in nm, E in W·m⁻²·nm⁻¹), scaled so that a perfect white diffuser,
+        radiance ``E/π``, has luminance ``683·∫(E/π)·ȳ dλ = white_luminance_cd_m2`` over 360–830 nm.
+
+    References
+    ----------
+    .. [Catrysse1999] see docs/references.md; section 3.1.
+    .. [CIE015] see docs/references.md; ȳ and K_m = 683 lm/W.
+
+    Examples
+    --------
     >>> E = spectral_irradiance(IlluminantSpec("blackbody", 5000.0, None, 100.0))
     >>> wl = np.arange(360.0, 831.0)
     >>> round(float(683 * np.trapezoid(E(wl) / np.pi * cie_1931_cmfs()[1][:, 1], wl)), 6)

@@ -424,13 +424,34 @@ def adc_inverse(digital, sensor: SensorSpec) -> np.ndarray:
 
 def expose(photo_rate_e_per_s: np.ndarray, time_s: float, sensor: SensorSpec, noise: np.random.SeedSequence,
            pattern: FixedPattern = FixedPattern()) -> tuple[np.ndarray, np.ndarray]:
-    """One exposure of one frame.  Returns (digital numbers, expected electrons without noise).
+    """One exposure of one frame: (digital numbers, expected electrons without noise).
 
-    ``photo_rate_e_per_s`` is ``A·∫E_q·R_k dλ`` per pixel (paper, 3.3); ``noise`` seeds this frame's
-    temporal noise; ``pattern`` is the sensor's :class:`FixedPattern`.  Digital numbers are
-    float32 integers in ``[0, 2ⁿ − 1]`` (or continuous in ``[0, 2ⁿ]`` when quantisation is off);
-    expected electrons are the noise-free charge, photo + dark.  Works in place, chunk by chunk, on
-    all cores.
+    Works in place, chunk by chunk, on all cores.
+
+    Parameters
+    ----------
+    photo_rate_e_per_s : ndarray
+        Photo-electrons per second, ``A·∫E_q·R_k dλ`` per pixel (paper, 3.3); any shape.
+    time_s : float
+        Exposure time, s.
+    sensor : SensorSpec
+        The sensor: dark current, well, noise sources and ADC.
+    noise : numpy.random.SeedSequence
+        Seeds this frame's temporal noise.
+    pattern : FixedPattern
+        The sensor's :class:`FixedPattern` (default: none).
+
+    Returns
+    -------
+    digital : ndarray
+        Digital numbers: float32 integers in ``[0, 2ⁿ − 1]`` (or continuous in ``[0, 2ⁿ]`` when quantisation is off).
+    expected_e : ndarray
+        Expected electrons: the noise-free charge, photo + dark, float32.  Both have the shape of the rates.
+
+    References
+    ----------
+    .. [Catrysse1999] see docs/references.md; sections 3.3 and 3.4.
+    .. [EMVA1288] see docs/references.md; the system gain K, DN per electron.
     """
     offset, gain, dark_gain = pattern
     shape = photo_rate_e_per_s.shape

@@ -41,6 +41,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TypedDict
 
 import numpy as np
 
@@ -54,8 +55,8 @@ from spectracam.evaluation.score import score
 from spectracam.experiments.paper.experiment import PaperExperiment, calibrated_luminance, quick_scene, scaled
 from spectracam.evaluation.usability import NO_USABLE_IMAGE, UsabilitySpec
 
-__all__ = ["LIGHT_FACTORS", "NATURAL_SCENES", "SEEDS", "WINNER_METRICS", "ArchitecturesRun", "case",
-           "designs", "developed_case", "judge", "natural_case", "run_architectures", "run_natural",
+__all__ = ["LIGHT_FACTORS", "NATURAL_SCENES", "SEEDS", "WINNER_METRICS", "ArchitecturesResult", "ArchitecturesRun",
+           "case", "designs", "developed_case", "judge", "natural_case", "run_architectures", "run_natural",
            "time_limit_s", "winners", "write_architectures_outputs"]
 
 #: Light levels, as fractions of the paper's (its calibrated white luminance).
@@ -208,8 +209,27 @@ def developed_case(scene, cube, design: str, seeds, limit_s: float | None = None
     return row
 
 
+class _ArchitecturesKeys(TypedDict):
+    parameters: dict
+    rows: list[dict]
+    winners: list[dict]
+    timings_s: dict[str, float]
+
+
+class ArchitecturesResult(_ArchitecturesKeys, total=False):
+    """What :func:`run_architectures` returns, results.json's keys but ``command``: a row per design × light ×
+    level on the chart and what wins (the base's keys, always there); ``natural`` with ``run.natural_scenes``;
+    ``space``, ``time`` and ``spacetime_winners`` with ``spacetime``."""
+
+    natural: dict
+    space: dict
+    time: dict
+    spacetime_winners: list[dict]
+
+
 def run_architectures(run: ArchitecturesRun, renderer: str = "mitsuba", use_cache: bool = True,
-                      step=lambda msg: None, log=None, progress: bool = False, spacetime: bool = True) -> dict:
+                      step=lambda msg: None, log=None, progress: bool = False,
+                      spacetime: bool = True) -> ArchitecturesResult:
     """Every design × light × level × seed (module docstring): ``results`` (rows and what wins); with
     ``spacetime`` the spatial and motion comparisons too (``space``, ``time``)."""
     import time

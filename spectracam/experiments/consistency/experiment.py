@@ -14,6 +14,7 @@ from __future__ import annotations
 import itertools
 import time
 from dataclasses import dataclass, field
+from typing import TypedDict
 
 import numpy as np
 
@@ -22,7 +23,7 @@ from spectracam.processing.color import ProcessingSpec
 from spectracam.experiments.paper.claims import evaluate
 from spectracam.experiments.paper.experiment import PaperExperiment, calibrated_luminance, comparison, scenes_for
 
-__all__ = ["FACTORS", "ONE_AT_A_TIME", "VERDICT_VALUE", "Reading", "consistency_figure",
+__all__ = ["FACTORS", "ONE_AT_A_TIME", "VERDICT_VALUE", "ConsistencyResult", "Reading", "consistency_figure",
            "consistency_markdown", "readings", "run_consistency", "write_consistency_outputs"]
 
 #: The factorial: choice → ((label, tables over the base camera/processing), ...); the first value is
@@ -84,8 +85,23 @@ def _camera_and_processing(exp: PaperExperiment, tables: dict) -> tuple[CameraSp
     return cam, ProcessingSpec.from_dict(tables.get("processing", {}), "consistency", exp.base.processing)
 
 
+class ConsistencyResult(TypedDict):
+    """What :func:`run_consistency` returns, consistency.json's keys but ``command``: the claims' ids and text,
+    a row per reading (its values, light, verdict and measurement per claim), how often each claim got each
+    verdict, the index of the reading that reproduces the most (``best``) and its score (reproduced, partly)."""
+
+    parameters: dict
+    claims: list[str]
+    claim_text: dict[str, str]
+    rows: list[dict]
+    summary: dict[str, dict[str, int]]
+    best: int
+    best_score: list[int]
+    seconds: float
+
+
 def run_consistency(exp: PaperExperiment, renderer: str = "analytic", quick: bool = True, log=lambda m: None,
-                    progress: bool = False) -> dict:
+                    progress: bool = False) -> ConsistencyResult:
     """Every reading's claims.  Radiance is rendered once per wavelength grid and scaled to each
     reading's calibrated light level (rendering is linear in the light).  ``progress``: a bar over the
     readings on a terminal."""

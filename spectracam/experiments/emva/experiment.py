@@ -11,6 +11,7 @@ quantity can be held against it.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TypedDict
 
 import numpy as np
 
@@ -22,7 +23,7 @@ from spectracam.sensor import expose, fixed_pattern, noise_stream
 from spectracam.core.spectra import WavelengthGrid
 
 __all__ = ["EMVA_STREAM", "KEYS", "LABELS", "LINEARITY_CLAUSE", "ROLES", "SATURATION_CLAUSE",
-           "SENSITIVITY_CLAUSE", "EmvaSetup", "channel_qe", "configured", "datasheet_markdown", "figures",
+           "SENSITIVITY_CLAUSE", "EmvaResult", "EmvaSetup", "channel_qe", "configured", "datasheet_markdown", "figures",
            "point_roles", "run_emva", "simulate_series", "write_emva_outputs"]
 
 #: The quantities of the datasheet, in the order EMVA 1288 lists them.
@@ -119,7 +120,21 @@ def _in_camera_terms(e) -> str:
     return "its frames do not give the photon-transfer series the standard analyses"
 
 
-def run_emva(camera: CameraSpec, setup: EmvaSetup = EmvaSetup()) -> dict:
+class EmvaResult(TypedDict):
+    """What :func:`run_emva` returns, emva.json's keys but ``command``: the datasheet's quantities (:data:`KEYS`)
+    configured and measured (None where undefined), notes on them, the fits the plots draw, the set-up, the
+    camera, and the measured curves (a step without temporal noise has a NaN SNR; the writer makes it null)."""
+
+    configured: dict[str, float | None]
+    measured: dict[str, float | None]
+    notes: dict[str, bool | str]
+    fit: dict[str, float | str]
+    setup: dict[str, str | int | float]
+    camera: dict
+    curves: dict[str, list[float]]
+
+
+def run_emva(camera: CameraSpec, setup: EmvaSetup = EmvaSetup()) -> EmvaResult:
     """Measure and analyse; ``{"configured", "measured", "setup", "camera", "curves"}``."""
     series, info = simulate_series(camera, setup)
     try:

@@ -50,6 +50,7 @@ import contextlib
 import math
 import time
 from dataclasses import dataclass, fields
+from typing import TypedDict
 
 import numpy as np
 
@@ -71,7 +72,7 @@ from spectracam.experiments.motion.render import RENDER_MODES, MovingScene, chan
 from spectracam.experiments.motion.timing import TimingSpec, capture_timing
 
 __all__ = ["CAPTURE_OVER_CFA_EXPOSURE", "DESIGNS", "MEMORY_PER_SUBPIXEL_BYTES", "SCORE_BORDER_PX",
-           "SEED_METRICS", "Capture", "DesignModel", "MotionEstimate", "MotionRow", "MotionSetup",
+           "SEED_METRICS", "Capture", "DesignModel", "MotionEstimate", "MotionResult", "MotionRow", "MotionSetup",
            "MotionSpec", "StillReference", "calibrated_scene", "capture", "capture_at_seed", "case_speeds",
            "check_motion_memory", "crossing", "crossing_speeds", "design_model", "design_snr_db",
            "edge_distance_moving", "finite_or_none", "load_motion", "mean_or_none", "motion_camera",
@@ -608,8 +609,30 @@ def sweep_speeds(setup: MotionSetup, dm: DesignModel, timing, rolling: bool, tim
         yield case
 
 
+class MotionResult(TypedDict):
+    """What :func:`run_motion` returns.  The writer (:func:`spectracam.experiments.motion.report.write_outputs`)
+    makes results.json of it without ``images`` and ``mtf_curves`` (those go to the case files and
+    mtf_curves.json), ``rows`` as dicts, ``display_white`` as a list, and ``figures``, ``case_files`` and
+    ``command`` added.  ``images``: (design, speed px/ms, rolling shutter) or (design, ``"ideal"``) → that case's
+    arrays; ``exposure_timing``: the design's name, ``" rolling"`` appended for the rolling shutter → its
+    :class:`~.timing.CaptureTiming` as a dict."""
+
+    rows: list[MotionRow]
+    mtf_curves: list[dict]
+    images: dict[tuple, dict]
+    timings: dict[str, float]
+    exposure_timing: dict[str, dict]
+    display_white: np.ndarray
+    renderer: str
+    render_metadata: dict
+    slice_renders: int
+    answer: dict
+    parameters: dict
+    wall_s: float
+
+
 def run_motion(spec: MotionSpec, scene, renderer: str = "mitsuba", log=None, keep_images: bool = True,
-               progress: bool = False) -> dict:
+               progress: bool = False) -> MotionResult:
     """Every design × speed × shutter. Returns ``{"rows": [MotionRow], "images", "timings", ...}``.
     ``progress``: a bar over the cases on a terminal (:mod:`spectracam.core.progress`)."""
     from spectracam.core.progress import bar

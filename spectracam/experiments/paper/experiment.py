@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TypedDict
 
 import numpy as np
 
@@ -27,7 +28,7 @@ from spectracam.evaluation.score import score
 from spectracam.core.spec import _is_number
 
 __all__ = ["BUDGET_STEPS", "EXPERIMENT_KEYS", "QUICK_IMAGE_PX", "Alternative", "BudgetStep",
-           "PaperExperiment", "both_ways", "calibrated_luminance", "comparison", "comparison_cases",
+           "PaperExperiment", "PaperResult", "both_ways", "calibrated_luminance", "comparison", "comparison_cases",
            "design_case", "error_budget", "load_experiment", "quick_scene", "run_paper", "scaled",
            "scenes_for"]
 
@@ -403,8 +404,38 @@ def _alternatives(exp: PaperExperiment, cubes: dict, tick=lambda: None) -> list[
         _SHARED.clear()
 
 
+class _PaperKeys(TypedDict):
+    parameters: dict
+    exposure_ms: dict[str, dict[str, float]]
+    channel_exposure_ms: dict[str, dict[str, list[float]]]
+    fig4_white_response: dict[str, dict[str, list[float]]]
+    fig5a_snr_db: dict[str, dict[str, float | None]]
+    fig5b_delta_e: dict[str, dict[str, float]]
+    fig5b_delta_e_of_mean: dict[str, dict[str, float]]
+    delta_e_conversion: dict[str, dict[str, float]]
+    delta_e_conversion_p95: dict[str, dict[str, float]]
+    held_out_delta_e: dict[str, dict[str, float]]
+    held_out_delta_e_p95: dict[str, dict[str, float]]
+    fig5b_s_cielab: dict[str, dict[str, float | None]]
+    fig5b_s_cielab_p95: dict[str, dict[str, float | None]]
+    fig6_budget_delta_e: list[dict]
+    claims: list[dict]
+    both_ways: dict
+    sensitivity: dict
+    timings_s: dict[str, float]
+
+
+class PaperResult(_PaperKeys, total=False):
+    """What :func:`run_paper` returns first, results.json's keys but ``command``.  The per-design fields map
+    design → blackbody (``"3000"``, …) → value; the held-out fields are filled, and ``held_out_library`` is
+    there, when the processing names a held-out library.  (The keys that may be missing are declared here, the
+    others in the base: ``NotRequired`` in a string annotation is not seen at run time on Python 3.11.)"""
+
+    held_out_library: dict
+
+
 def run_paper(exp: PaperExperiment, renderer: str = "mitsuba", quick: bool = False, use_cache: bool = True,
-              step=lambda msg: None, log=None, progress: bool = False) -> tuple[dict, dict, dict]:
+              step=lambda msg: None, log=None, progress: bool = False) -> tuple[PaperResult, dict, dict]:
     """Run the whole experiment; returns (results, cases, cubes).  ``step`` receives one line per step;
     ``progress``: bars over the lights rendered, the cases and the sensitivity alternatives on a terminal."""
     import time

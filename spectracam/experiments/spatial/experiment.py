@@ -20,6 +20,7 @@ from __future__ import annotations
 import dataclasses
 import time
 from dataclasses import dataclass
+from typing import TypedDict
 
 import numpy as np
 
@@ -42,7 +43,7 @@ STAGES = ("render", "optics", "capture", "processing", "metrics")
 #: The scene references a spatial image is scored against (docs/metrics.md): the scene band-limited to
 #: the Nyquist frequency (aliasing counts), or each pixel's box footprint (aliasing invisible).
 REFERENCES = ("nyquist", "footprint")
-__all__ = ["SCORE_BORDER_PX", "SPATIAL_TARGETS", "SpatialSpec", "load_spatial", "run_spatial"]
+__all__ = ["SCORE_BORDER_PX", "SPATIAL_TARGETS", "SpatialResult", "SpatialSpec", "load_spatial", "run_spatial"]
 
 
 @dataclass(frozen=True)
@@ -375,8 +376,28 @@ class Case:
         return {"pixel_pitch_um": float(self.pixel_pitch_um), "f_number": float(self.f_number)}
 
 
+class SpatialResult(TypedDict):
+    """What :func:`run_spatial` returns (:func:`_result`).  The writer
+    (:func:`spectracam.experiments.spatial.report.write_outputs`) makes results.json of it without ``images`` and
+    ``mtf_curves`` (those go to the case files and mtf_curves.json), ``rows`` as dicts, ``display_white`` as a
+    list, and ``figures`` and ``command`` added.  ``images``: (pitch µm, f-number, target, design label or
+    ``"reference"``) → that image's arrays."""
+
+    rows: list[SpatialRow]
+    mtf_curves: list[dict]
+    timings: dict[str, dict[str, float]]
+    images: dict[tuple, dict]
+    closed_form: dict[str, dict[str, list[float]]]
+    display_white: np.ndarray
+    samples_per_degree: float
+    renderer: str
+    render_metadata: dict[str, dict]
+    parameters: dict
+    wall_s: float
+
+
 def run_spatial(spec: SpatialSpec, scene, renderer: str = "mitsuba", log=None, keep_images: bool = True,
-                progress: bool = False) -> dict:
+                progress: bool = False) -> SpatialResult:
     """Run every case × target × design. Returns ``{"rows": [SpatialRow], "mtf_curves", "timings",
     "images", "closed_form", ...}``.  ``progress``: a bar over the cases' targets on a terminal."""
     from spectracam.core.progress import bar

@@ -21,6 +21,7 @@ import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TypedDict
 
 import numpy as np
 
@@ -32,7 +33,7 @@ from spectracam.evaluation.score import SUMMARY_METRICS
 from spectracam.evaluation.usability import UsabilitySpec
 
 __all__ = ["DESIGN_AXIS", "HANDSHAKE_TIMEOUT_S", "HELD_OUT_METRICS", "MAX_CELLS", "METRICS",
-           "SCHEDULER_TIMEOUT_S", "SWEEP_KEYS", "TASK_RETRIES", "Sweep", "base_value", "cell_scene",
+           "SCHEDULER_TIMEOUT_S", "SWEEP_KEYS", "TASK_RETRIES", "Sweep", "SweepResult", "base_value", "cell_scene",
            "cells_per_task", "check_meterable", "finished_cells", "load_sweep", "probe_scheduler",
            "run_cell", "run_cells", "run_sweep", "trial_seed"]
 
@@ -456,9 +457,21 @@ def _lock_journal(journal: Path):
     return f
 
 
+class SweepResult(TypedDict):
+    """What :func:`run_sweep` returns: its timing figures.  A sweep's results are its files, written as it runs
+    (``results.jsonl`` a cell at a time, then ``results.parquet``/``.csv``; ``sweep.json``), so it has no writer."""
+
+    cells: int
+    new_cells: int
+    render_s: float
+    wall_s: float
+    cluster_start_s: float
+    compute_s: float
+
+
 def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None, workers: int | None = None,
               serial: bool = False, resume: bool = False, progress: bool = True, log=lambda m: None,
-              stop_after: int | None = None) -> dict:
+              stop_after: int | None = None) -> SweepResult:
     """Run (or resume) a sweep; returns timing figures.  ``stop_after`` ends after that many new cells
     (for tests of interruption)."""
     from spectracam.core.progress import Counter

@@ -24,6 +24,8 @@ against spectracam's fits; skipped, with the reason, where the files are absent.
 """
 from __future__ import annotations
 
+from typing import TypedDict
+
 import numpy as np
 
 from spectracam.architecture.cameras import CAMERAS, PUBLISHED_MATRICES, d65_response, energy_sensitivities, library_curves, library_table
@@ -32,8 +34,8 @@ from spectracam.core.errors import ConfigError
 from spectracam.core.cielab import delta_e, xyz_to_lab
 from spectracam.experiments.validate.scene import SCENE_OVERRIDES, validation_scene  # noqa: F401
 
-__all__ = ["camera_row", "parse_matrix", "raw_patch_rates", "run_validate", "user_camera", "validate_camera",
-           "validate_figure", "validate_markdown", "write_validate_outputs"]
+__all__ = ["ValidateResult", "camera_row", "parse_matrix", "raw_patch_rates", "run_validate", "user_camera",
+           "validate_camera", "validate_figure", "validate_markdown", "write_validate_outputs"]
 
 
 
@@ -120,7 +122,25 @@ def camera_row(name: str, scene, matrix, gains_note: str, equal_gains, renderer:
     return row
 
 
-def run_validate(renderer: str = "analytic", user: dict | None = None) -> dict:
+class _ValidateKeys(TypedDict):
+    renderer: str
+    illuminant: str
+    chart: str
+    definitions: dict[str, str]
+    cameras: list[dict]
+    library: list[dict]
+
+
+class ValidateResult(_ValidateKeys, total=False):
+    """What :func:`run_validate` returns, validate.json's keys but ``command``: a row per camera
+    (:func:`camera_row`), the library as ``spectracam cameras`` lists it (the base's keys, always there), and,
+    for the shipped cameras (not a user's), ``real_camera_data``: the cameras' own measurements, or why they
+    were skipped."""
+
+    real_camera_data: dict
+
+
+def run_validate(renderer: str = "analytic", user: dict | None = None) -> ValidateResult:
     """Every shipped camera with a published matrix, and the library as ``spectracam cameras`` lists it; with
     ``user`` (the keyword arguments of :func:`user_camera`), that camera alone, checked the same way."""
     from spectracam.experiments.validate.white_balance import run_validate_wb

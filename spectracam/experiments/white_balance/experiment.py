@@ -25,14 +25,15 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from typing import TypedDict
 
 import numpy as np
 
 from spectracam.core.errors import SpectracamError
 
 __all__ = ["DEFINITIONS", "FAMILIES", "FAMILY_COLOURS", "LIGHTS", "LUTHER", "PAPER_DESIGN", "SCENES",
-           "WAVELENGTHS", "Sensor", "WhiteBalanceRun", "case_scene", "error_statistics", "estimators",
-           "light_family", "light_label", "light_spec", "measure", "parameters", "plan", "run_job",
+           "WAVELENGTHS", "Sensor", "WhiteBalanceResult", "WhiteBalanceRun", "case_scene", "error_statistics",
+           "estimators", "light_family", "light_label", "light_spec", "measure", "parameters", "plan", "run_job",
            "run_white_balance", "sensor_statistics", "sensors", "summary_line", "training_block",
            "white_balance_figure", "white_balance_markdown", "write_white_balance_outputs"]
 
@@ -282,8 +283,22 @@ def _one_thread():
     os.environ["SPECTRACAM_THREADS"] = "1"
 
 
+class WhiteBalanceResult(TypedDict):
+    """What :func:`run_white_balance` returns, results.json's keys but ``command``: the trained estimator's
+    training block by sensor and scene, a row per case and seed, the statistics by sensor and estimator
+    (:func:`sensor_statistics`) and :data:`DEFINITIONS`."""
+
+    experiment: str
+    parameters: dict
+    training: dict[str, dict[str, dict]]
+    cases: list[dict]
+    statistics: dict[str, dict]
+    definitions: dict[str, str]
+    seconds: float
+
+
 def run_white_balance(run: WhiteBalanceRun, log=lambda msg: None, progress: bool = False,
-                      workers: int | None = None) -> dict:
+                      workers: int | None = None) -> WhiteBalanceResult:
     """Every case's errors, the statistics and the parameters (results.json).  The jobs run in processes forked
     from this one, one per core (the analytic renderer; Mitsuba renders here on its own threads); the numbers do
     not depend on how many (each capture has its own seed)."""
