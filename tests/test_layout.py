@@ -21,7 +21,8 @@ def _tree(tmp_path, files: dict) -> Path:
     return tmp_path
 
 
-def test_no_import_runs_back_up_the_stages():
+def test_every_module_is_in_a_stage_and_no_import_runs_back_up():
+    assert layout.unplaced() == []
     assert layout.upward_imports() == []
 
 
@@ -35,6 +36,9 @@ def test_the_checker_finds_an_upward_import_and_a_loop_it_is_shown(tmp_path):
         "camera/__init__.py": "",
     })
     assert layout.upward_imports(root) == ["spectracam.scene.chart:2 -> spectracam.evaluation.score"]
+    assert layout.unplaced(root) == []
+    (root / "spectracam" / "helpers.py").write_text("")
+    assert layout.unplaced(root) == ["spectracam.helpers"]
     assert layout.loops(root) == [["spectracam.evaluation.score", "spectracam.scene.chart"]]
 
 
