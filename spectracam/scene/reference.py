@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 
@@ -19,12 +19,24 @@ from spectracam.scene.illuminant import IlluminantSpec, spectral_irradiance
 from spectracam.scene.reflectances import load as load_library
 from spectracam.core.spectra import WavelengthGrid, band_average, band_sample_points, cie_1931_cmfs
 
-if TYPE_CHECKING:  # the camera stage sits above the scene: a camera is only asked for its rates
-    from spectracam.camera import CameraSpec
-
 __all__ = ["LIBRARY_CHUNK", "LIBRARY_POINTS_PER_BAND", "TARGET_ROWS", "XYZ_STEP_NM", "ChartReference",
-           "LibraryColours", "TargetReference", "colorimetry", "library_colours", "material_radiance",
+           "LibraryColours", "RatedCamera", "TargetReference", "colorimetry", "library_colours", "material_radiance",
            "observer_grid"]
+
+
+class RatedCamera(Protocol):
+    """What the reference asks of a camera (:class:`spectracam.camera.CameraSpec` is one): its parts, which key the
+    memo, and its noise-free photo-electron rates.  The camera stage sits above the scene, so the reference names
+    the questions instead of importing the stage."""
+
+    optics: object
+    filters: object
+    sensor: object
+    capture: object
+
+    def photo_electron_rates(self, radiance: np.ndarray, grid: WavelengthGrid) -> np.ndarray:
+        """``(…, N)`` photo-electron rates, e⁻/s, of band-averaged radiance ``(…, B)`` on ``grid``."""
+
 
 #: Wavelength step of the reference colorimetry, nm: fine enough that the XYZ of every patch is
 #: converged (0.1 nm and 1 nm differ by < 1e-4 ΔE*ab), whatever the scene's band width.
@@ -76,7 +88,7 @@ class ChartReference:
         """The white patch's pixels: where exposure is metered (paper 4.5)."""
         return self.boxes[WHITE_PATCH]
 
-    def patch_rates(self, camera: "CameraSpec") -> np.ndarray:
+    def patch_rates(self, camera: RatedCamera) -> np.ndarray:
         """Noise-free photo-electron rates ``(24, N)`` (e⁻/s) of the patches for a camera: the input of
         the colour-conversion fit (paper 3.5) and of the DNG matrices."""
         key = (camera.optics, camera.filters, camera.sensor, camera.capture.architecture)
