@@ -39,7 +39,8 @@ CMD = [sys.executable, "-m", "spectracam"]
 #: Scene fields and the kinds of wrong values tried for them.
 FIELDS = ["illuminant.temperature_K", "illuminant.white_luminance_cd_m2", "image.width", "render.seed",
           "render.samples_per_pixel", "sensor.q_max_e", "sensor.adc_bits", "sensor.read_noise_e",
-          "sensor.black_level_DN", "sensor.adc_full_scale_V", "sensor.dsnu_fraction", "filters.cutoffs_nm",
+          "sensor.black_level_DN", "sensor.adc_full_scale_V", "sensor.dsnu_fraction", "sensor.temperature_C",
+          "sensor.dark_reference_C", "sensor.dark_current_law", "sensor.dark_doubling_K", "sensor.read_noise_uV", "filters.cutoffs_nm",
           "filters.qe", "filters.collection_depth_um", "filters.stacked_depths_um", "optics.f_number", "capture.architecture",
           "capture.exposure", "processing.demosaic", "wavelengths.step_nm", "chart.mask_margin", "sensor.nosuch",
           "filters.camera", "filters.camera_unit", "capture.white_fill", "capture.metering", "capture.metering_target",

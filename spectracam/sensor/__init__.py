@@ -25,6 +25,7 @@ from spectracam.core.errors import ConfigError
 from spectracam.sensor.kernels import CounterRNG
 from spectracam.core.registry import Registry
 from spectracam.core.spec import Spec
+from spectracam.sensor.temperature import DARK_CURRENT_LAWS, dark_current_factor
 
 __all__ = ["CHUNK_PX", "FPN_READINGS", "NOISE_SOURCES", "SHOT_NOISE_MODELS", "CounterRNG", "FixedPattern",
            "FpnReading", "PatternDraws", "PatternRef", "PixelDraw", "SensorSpec", "adc", "adc_full_scale_dn",
@@ -87,8 +88,25 @@ class SensorSpec(Spec):
     q_max_e: float = 131072.0
     #: Read noise σ_r, electrons rms (paper, 4.4).
     read_noise_e: float = 20.0
-    #: Dark current density, electrons per second per µm² of photodiode (paper, 4.4).
+    #: The read chain's noise referred to the pixel's output (source follower, column amplifier, ADC), µV rms
+    #: (issue 36).  When given, the read noise in electrons is ``read_noise_uV / conversion_gain_uV_per_e``: a higher
+    #: conversion gain lowers it, as a dual-conversion-gain pixel's high-gain read does.  None: ``read_noise_e`` as
+    #: stated (the paper's 20 e⁻, which is 100 µV at its 5 µV/e⁻).
+    read_noise_uV: float | None = None
+    #: Dark current density, electrons per second per µm² of photodiode (paper, 4.4), at ``dark_reference_C``.
     dark_current_e_per_s_um2: float = 10.0
+    #: The die's temperature, °C (issue 36): the dark current follows it by ``dark_current_law``
+    #: (:mod:`spectracam.sensor.temperature`).  25 °C: the reference, the paper's dark current unchanged.
+    temperature_C: float = 25.0
+    #: The temperature at which ``dark_current_e_per_s_um2`` holds, °C: the paper states none; 25 °C is where
+    #: sensor datasheets quote their dark current.
+    dark_reference_C: float = 25.0
+    #: How the dark current follows temperature: "generation" (depletion-region generation, ∝ T^1.5·exp(−E_g/2kT);
+    #: silicon near room temperature), "diffusion" (∝ T³·exp(−E_g/kT)), or "doubling" (2^(ΔT/T_d), a datasheet's rule).
+    dark_current_law: str = "generation"
+    #: The doubling temperature T_d of the "doubling" law, K.  None: the generation law's own at the reference
+    #: temperature (8.3 K at 25 °C).
+    dark_doubling_K: float | None = None
     #: ADC resolution, bits (paper, 4.4).
     adc_bits: int = 8
     #: Black level (pedestal) added before the ADC, DN.  The paper's ADC clips at code 0, which
@@ -134,7 +152,21 @@ class SensorSpec(Spec):
     def validate(self) -> None:
         self.number("q_max_e", 1, 1e9, unit="e-")
         self.number("read_noise_e", 0, 1e6, unit="e-")
+        if self.read_noise_uV is not None:
+            self.number("read_noise_uV", 0, 1e6, unit="µV")
         self.number("dark_current_e_per_s_um2", 0, 1e9)
+        # cooled scientific sensors run near −100 °C, automotive grade 0 up to 150 °C (AEC-Q100)
+        self.number("temperature_C", -100, 150, unit="°C")
+        self.number("dark_reference_C", -100, 150, unit="°C")
+        self.choice("dark_current_law", DARK_CURRENT_LAWS)
+        if self.dark_doubling_K is not None:
+            self.number("dark_doubling_K", 0, 100, lo_open=True, unit="K")
+        factor = self.dark_current_factor
+        if not np.isfinite(factor) or factor * self.dark_current_e_per_s_um2 > 1e9:
+            raise self.error("temperature_C", f"the {self.dark_current_law} law takes the dark current from "
+                             f"{self.dark_current_e_per_s_um2:g} e-/s/µm² at {self.dark_reference_C:g} °C to "
+                             f"{factor * self.dark_current_e_per_s_um2:.3g} there; allowed: at most 1e9 e-/s/µm² "
+                             "(the dark_current_e_per_s_um2 bound)")
         self.integer("adc_bits", 1, 24)
         if self.black_level_DN is not None:
             self.number("black_level_DN", 0, 2 ** (self.adc_bits - 1), unit="DN")
@@ -159,8 +191,27 @@ class SensorSpec(Spec):
         return self.pixel_pitch_um**2 * self.fill_factor
 
     @property
+    def read_noise_rms_e(self) -> float:
+        """The read noise in electrons rms: ``read_noise_uV / conversion_gain_uV_per_e`` when the read chain's noise
+        is given in volts, else ``read_noise_e``; 0 with the read noise switched off."""
+        if not self.read_noise:
+            return 0.0
+        return self.read_noise_e if self.read_noise_uV is None else self.read_noise_uV / self.conversion_gain_uV_per_e
+
+    @property
+    def dark_current_factor(self) -> float:
+        """``I(T)/I(T_ref)``: the dark current at ``temperature_C`` over that at ``dark_reference_C``, by
+        ``dark_current_law`` (exactly 1 at the reference)."""
+        return dark_current_factor(self.dark_current_law, self.temperature_C, self.dark_reference_C,
+                                   self.dark_doubling_K)
+
+    @property
     def dark_rate_e_per_s(self) -> float:
-        return self.dark_current_e_per_s_um2 * self.pixel_area_um2 if self.dark_current else 0.0
+        """Mean dark charge per second of one pixel, e⁻/s: density × photodiode area × the temperature's factor."""
+        if not self.dark_current:
+            return 0.0
+        rate = self.dark_current_e_per_s_um2 * self.pixel_area_um2
+        return rate if self.temperature_C == self.dark_reference_C else rate * self.dark_current_factor
 
     @property
     def black_level_dn(self) -> float:
@@ -474,8 +525,8 @@ def expose(photo_rate_e_per_s: np.ndarray, time_s: float, sensor: SensorSpec, no
             out[...] = m
         if sensor.clipping:
             clip_to_well(out, sensor.q_max_e)
-        if sensor.read_noise and sensor.read_noise_e > 0:
-            add_read_noise(out, rng, sensor.read_noise_e)
+        if sensor.read_noise_rms_e > 0:
+            add_read_noise(out, rng, sensor.read_noise_rms_e)
         if off is not None:
             add_offset_fpn(out, off[sl])
         adc(out, sensor)

@@ -343,7 +343,7 @@ def record(rates, channels: np.ndarray, times_s, sensor, noises, patterns):
     fs = 2**sensor.adc_bits - 1 if sensor.quantization else 2**sensor.adc_bits
     dn = np.empty((j, h, w), np.float32)
     mean = np.empty((j, h, w), np.float32)
-    sigma = sensor.read_noise_e if sensor.read_noise and sensor.read_noise_e > 0 else 0.0
+    sigma = sensor.read_noise_rms_e
     args = (cube, np.int64(nbands), wpad, np.int64(stride), channels, times.astype(np.float32), darks, offs, gains,
             dgains, keys, draw_mode, draw_keys, draw_scale, np.float32(sensor.q_max_e), np.float32(sigma),
             np.float32(sensor.system_gain_dn_per_e), np.float32(sensor.black_level_dn), np.float32(fs),

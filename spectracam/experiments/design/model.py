@@ -76,7 +76,7 @@ class SensorModel:
         # plain floats: a numpy scalar times a Dr.Jit tensor would let numpy try to broadcast the tensor
         return cls(q_max_e=float(s.q_max_e), white_fill=float(camera.capture.white_fill),
                    dark_rate_e_per_s=float(s.dark_rate_e_per_s), shot=bool(s.shot_noise),
-                   read_var_e2=float(s.read_noise_e**2 if s.read_noise else 0.0),
+                   read_var_e2=float(s.read_noise_rms_e**2),
                    fpn_var_e2=float(s.fpn_rms_e**2 + (s.column_fpn_fraction * s.q_max_e) ** 2 if fpn else 0.0),
                    quant_var_e2=float(s.quantization_step_e**2 / 12.0 if s.quantization else 0.0),
                    prnu=float(s.prnu_fraction if s.fpn else 0.0),

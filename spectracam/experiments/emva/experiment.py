@@ -105,7 +105,7 @@ def configured(camera: CameraSpec, setup: EmvaSetup, photons_per_s: float, eta: 
     dsnu = np.sqrt((s.fpn_rms_e if s.fpn else 0.0) ** 2 + (s.column_fpn_fraction * s.q_max_e if s.fpn else 0.0) ** 2
                    + (s.dsnu_fraction * dark * t50 if s.fpn else 0.0) ** 2)
     return expected(gain_DN_per_e=s.system_gain_dn_per_e, quantum_efficiency=eta,
-                    read_noise_e=s.read_noise_e if s.read_noise else 0.0, dark_current_e_per_s=dark,
+                    read_noise_e=s.read_noise_rms_e, dark_current_e_per_s=dark,
                     dsnu_e=float(dsnu), prnu_fraction=s.prnu_fraction if s.fpn else 0.0, full_well_e=s.q_max_e,
                     adc_bits=s.adc_bits, black_level_DN=s.black_level_dn - 0.5,  # the ADC floors: round(x − ½)
                     series_photon_rate_per_s=photons_per_s)
