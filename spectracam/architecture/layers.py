@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from spectracam.core.spectra import logistic_cut, logistic_scale_nm  # noqa: F401  (the stacked IR cut's edge)
+from spectracam.core.spectra import logistic_cut, logistic_scale_nm
 
 __all__ = ["LAYER_COUNTS", "MAX_CONDITION", "MIN_WHITE_FRACTION", "check_layers", "layer_diagnostics", "layer_names",
            "layer_qe", "stacked_cut"]

@@ -210,8 +210,7 @@ class SensorSpec(Spec):
         """Mean dark charge per second of one pixel, e⁻/s: density × photodiode area × the temperature's factor."""
         if not self.dark_current:
             return 0.0
-        rate = self.dark_current_e_per_s_um2 * self.pixel_area_um2
-        return rate if self.temperature_C == self.dark_reference_C else rate * self.dark_current_factor
+        return self.dark_current_e_per_s_um2 * self.pixel_area_um2 * self.dark_current_factor
 
     @property
     def black_level_dn(self) -> float:

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from spectracam.scene.chart import WHITE_PATCH
-from spectracam.architecture.filters import logistic_scale_nm
+from spectracam.core.spectra import logistic_scale_nm
 from spectracam.core.cielab import xyz_to_lab
 from spectracam.optics import radiance_to_photon_irradiance
 from spectracam.scene.reference import ChartReference, library_colours

@@ -30,9 +30,9 @@ import numpy as np
 
 from spectracam.core.errors import SpectracamError
 from spectracam.architecture import ARCHITECTURES, make_architecture
-from spectracam.architecture.filters import CHANNELS, QE_MODELS, logistic_scale_nm, quantum_efficiency
+from spectracam.architecture.filters import CHANNELS, QE_MODELS, quantum_efficiency
 from spectracam.core.registry import Registry
-from spectracam.core.spectra import band_sample_points
+from spectracam.core.spectra import band_sample_points, logistic_scale_nm
 from spectracam.experiments.design.ad import backend, fresh, tensor
 
 __all__ = ["DESIGN_VARIABLES", "PARAMETRISATIONS", "POINTS_PER_BAND", "Block", "Depths", "FreeForm", "Gaussian",
@@ -353,7 +353,7 @@ class Depths(Parametrisation):
         reach = [dr.exp(-alpha * fresh(zi)) for zi in z]
         # the filters in front of the layers: the stacked sensor's own IR cut (architectures.stacked.stacked_cut)
         # times the shared one, fixed — or, when the design varies the shared IR cut, the designed one instead
-        from spectracam.architecture.stacked import stacked_cut
+        from spectracam.architecture.layers import stacked_cut
 
         f = self.camera.filters if ir_cut is None else self.camera.filters.replace(ir_cut_nm=None)
         fixed = stacked_cut(f)
