@@ -128,3 +128,80 @@ def test_a_law_taken_past_any_sensor_is_one_line():
     with pytest.raises(ConfigError) as e:
         SensorSpec(temperature_C=150.0, dark_current_law="doubling", dark_doubling_K=0.001)
     assert str(e.value).startswith("sensor.temperature_C = 150.0: the doubling law") and "at most 1e9" in str(e.value)
+
+
+# ---- hot pixels: the dark-signal non-uniformity's tail (issue 36, item 3) ----
+
+def _dark_gain(sensor, shape=(512, 512), seed=3):
+    from spectracam.sensor import fixed_pattern
+
+    return fixed_pattern(sensor, shape, seed).dark_gain
+
+
+def test_hot_pixels_are_the_stated_share_with_an_exponential_excess_and_keep_the_mean():
+    import numpy as np
+
+    p, m = 0.01, 20.0
+    s = SensorSpec(hot_pixel_fraction=p, hot_pixel_mean_factor=m)
+    g = _dark_gain(s).astype(np.float64) * (1 + p * m)      # undo the normalisation: 1 + excess
+    excess = g - 1.0
+    hot = excess > 0
+    n = excess.size
+    assert abs(hot.mean() - p) < 4 * math.sqrt(p * (1 - p) / n)          # binomial, 4 σ
+    k = hot.sum()
+    assert excess[hot].mean() == pytest.approx(m, rel=4 / math.sqrt(k))  # exponential: σ of the mean m/√k
+    # exponential: the median of the excess is m·ln 2
+    assert np.median(excess[hot]) == pytest.approx(m * math.log(2), rel=0.1)
+    mean, var = _dark_gain(s).mean(), _dark_gain(s).var()
+    want_mean, want_var = __import__("spectracam.sensor", fromlist=["x"]).dark_gain_moments(s)
+    assert mean == pytest.approx(want_mean, rel=4 * math.sqrt(want_var / n))
+    assert var == pytest.approx(want_var, rel=0.1)
+
+
+def test_hot_pixels_with_dsnu_combine_as_their_moments_say():
+    import numpy as np
+
+    from spectracam.sensor import dark_gain_moments
+
+    s = SensorSpec(hot_pixel_fraction=0.002, hot_pixel_mean_factor=50.0, dsnu_fraction=0.3)
+    g = _dark_gain(s, (1024, 1024)).astype(np.float64)
+    mean, var = dark_gain_moments(s)
+    assert g.mean() == pytest.approx(mean, abs=4 * math.sqrt(var / g.size))
+    assert g.var() == pytest.approx(var, rel=0.1)
+    assert g.min() >= 0.0
+
+
+def test_hot_pixels_off_leave_the_pattern_as_it_was():
+    base = SensorSpec(dsnu_fraction=0.2)
+    assert (_dark_gain(base) == _dark_gain(base.replace(hot_pixel_mean_factor=3.0))).all()
+    assert _dark_gain(SensorSpec()) is None
+    assert _dark_gain(SensorSpec(hot_pixel_fraction=0.01, dark_current=False)) is None
+
+
+def test_the_fused_capture_records_the_same_hot_pixels_as_the_steps():
+    """The fused kernel takes the drawn plane as it is: its capture equals the NumPy steps' exactly with only the
+    fixed pattern on (no temporal noise to differ in)."""
+    import numpy as np
+
+    from spectracam.sensor import PatternRef, expose, kernels, noise_stream
+
+    if not kernels.available():
+        pytest.skip("the fused backend (numba) is not installed")
+    s = SensorSpec(hot_pixel_fraction=0.05, adc_bits=12, fpn_fraction=0.0).off("shot_noise", "read_noise")
+    rate = np.full((64, 48), 2000.0, np.float32)
+    ref = PatternRef(s, rate.shape, 5)
+    fused = kernels.record(rate, np.zeros((1, 1, 1), np.int64), [2.0], s, [noise_stream(5, 2, 0)], [ref])
+    steps = expose(rate, 2.0, s, noise_stream(5, 2, 0), ref.draw())
+    assert np.array_equal(fused[1][0], steps[1])
+    assert np.array_equal(fused[0][0], steps[0])
+    assert (steps[1] > 2.0 * (2000.0 * 2.0 + 2000.0)).any()          # some pixels are hot
+
+
+def test_emva_measures_the_hot_pixels_dsnu():
+    from spectracam.experiments.emva.experiment import EmvaSetup, run_emva
+
+    sensor = SensorSpec(adc_bits=12, hot_pixel_fraction=0.01, hot_pixel_mean_factor=10.0, fpn_fraction=0.0)
+    r = run_emva(CameraSpec(sensor=sensor), EmvaSetup(width=128, height=128))
+    got, want = r["measured"]["dsnu_e"], r["configured"]["dsnu_e"]
+    assert got == pytest.approx(want, rel=0.2)
+    assert want > 1000.0 * 2.5 * 0.3       # the tail: σ ≈ 0.37 of the mean dark at t50 = 2.5 s

@@ -48,11 +48,16 @@ FIELDS = ["illuminant.temperature_K", "illuminant.white_luminance_cd_m2", "image
           "processing.white_balance_sigma_px", "processing.white_balance_training", "processing.calibration",
           "processing.tone_curve", "processing.viewing_distance_m", "processing.display_pixel_pitch_mm",
           "filters.stacked_ir_cut_nm", "filters.stacked_ir_cut_width_nm", "filters.camera_gains",
-          "filters.camera_xyz_to_camera", "filters.camera_gains_kept"]
+          "filters.camera_xyz_to_camera", "filters.camera_gains_kept", "sensor.hot_pixel_fraction",
+          "sensor.hot_pixel_mean_factor", "sensor.readout", "sensor.readout_samples", "sensor.readout_estimator",
+          "sensor.motion_threshold_sigma", "sensor.dual_gain_ratio", "sensor.dual_gain_switch", "sensor.split_ratio",
+          "sensor.split_small_well_fraction", "sensor.bracketing_frames", "sensor.bracketing_ratio",
+          "sensor.companding_bits"]
 VALUES = ["0", "-1", "1e308", "nan", "inf", "-inf", "1.5", "true", '"text"', "[1, 2]", "[]", "{}", "3", "7",
           "2147483648", "0.001", "bilinear", "fsc", "optimal", "photodiode", "developed", "percentile", "grey_edge",
           "dual_illuminant", "corrected_moments", "colorchecker24", "filmic", '"none"', "[5.9, 5.95, 6.0, 6.05]",
-          "[1, 0, 1]", "[0.0001, 0.0002, 0.0003, 100]"]
+          "[1, 0, 1]", "[0.0001, 0.0002, 0.0003, 100]", '"multiple_capture"', '"dual_gain"', '"split_pixel"',
+          '"bracketing"', '"last_sample"', "12", "1024", "1025", "0.999"]
 
 
 #: A case that runs longer than this hangs (counted as such, then killed).
@@ -1103,11 +1108,70 @@ def impossible_outputs(out: Path) -> str:
     return ""
 
 
+LIGHT = '[[lights]]\nname = "{name}"\nilluminant = {{ type = "cie", name = "D65", white_luminance_cd_m2 = {L} }}\n'
+
+
+def _lights_scene(rng) -> tuple[str, bool]:
+    """A two-light chart scene, often damaged: ``(text, known bad)``."""
+    good = SCENE.replace("width = 64", "width = 256").replace("height = 48", "height = 96") \
+        + LIGHT.format(name="sun", L=1e4) + LIGHT.format(name="shade", L=1.0)
+    bad = [
+        good.replace("white_luminance_cd_m2 = 1.0", "white_luminance_cd_m2 = " + rng.choice(["0", "-1", "nan"])),
+        good.replace('"shade"', '"sun"'), good.replace('"shade"', '""'),
+        good.replace("[[lights]]\nname = \"sun\"", "[[lights]]\nname = \"sun\"\ntype = \"cie\""),
+        good + "[image]\nlights_columns = " + rng.choice(["-1", "65", "1.5"]) + "\n",
+        good + '[illuminant]\ntype = "cie"\nname = "A"\n',
+        SCENE + "".join(LIGHT.format(name=f"g{i}", L=10.0 ** (i % 5)) for i in range(rng.choice([8, 65]))),
+        SCENE + "lights = 3\n",
+        good.replace("white_luminance_cd_m2 = 1.0", "white_luminance_cd_m2 = 1.0, illuminance_lux = 3.0"),
+    ]
+    if rng.random() < 0.3:
+        return good, False
+    return rng.choice(bad), True
+
+
+READOUT_FIELDS = ["readout_samples", "dual_gain_ratio", "split_ratio", "bracketing_frames", "bracketing_ratio",
+                  "companding_bits", "motion_threshold_sigma", "dual_gain_switch", "split_small_well_fraction"]
+
+
+def case_dynamic_range(rng, d: Path):
+    """Issue 36: light-group scenes (damaged or not), the read-outs and hot pixels on a capture, the datasheet and
+    the dynamic-range commands with bad values, under a full disk or SIGTERM."""
+    text, bad_scene = _lights_scene(rng)
+    (d / "hdr.toml").write_text(text)
+    sim = ["simulate", "hdr.toml", "-o", "out", "--renderer", "analytic", "--quiet"]
+    readout = rng.choice(["multiple_capture", "dual_gain", "split_pixel", "bracketing"])
+    ds = ["datasheet", "-o", "out", "--quick"]
+    dr = ["dynamic-range", "-o", "out", "--quick", "--design", "cfa/single", "--readout", "single", "--temperature",
+          "25"]
+    cases = [
+        (sim, bad_scene),
+        (sim + ["--set", f"sensor.readout='{readout}'", "--set", f"sensor.companding_bits={rng.choice([12, 16])}"],
+         bad_scene),
+        (sim + ["--set", f"sensor.readout='{readout}'", "--set", "sensor." + rng.choice(READOUT_FIELDS) + "="
+                + rng.choice(["0", "-1", "nan", "1e9", "'x'"])], True),
+        (sim + ["--set", f"sensor.hot_pixel_fraction={rng.choice(['-0.1', '2', 'nan'])}"], True),
+        (sim + ["--set", "sensor.hot_pixel_fraction=0.01"], bad_scene),
+        (ds + ["--set", "sensor.readout=" + rng.choice(["'bogus'", "1", "[]"])], True),
+        (ds + ["--set", "sensor.temperature_C=400"], True), (ds + ["--seed", "-1"], True),
+        (ds + ["--set", "sensor.q_max_e=0"], True), (ds + ["--scene", "nosuch"], True),
+        (["datasheet", "-o", ""], True),
+        (ds + ["--set", f"sensor.readout='{readout}'"], False),
+        (dr[:4] + ["--readout", rng.choice(["nosuch", "", "single,dual_gain"])], True),
+        (dr[:4] + ["--design", rng.choice(["cfa/optimal", "nosuch/single", "cfa"])], True),
+        (dr[:4] + ["--temperature", rng.choice(["400", "nan", "-200", "x"])], True),
+        (dr + ["--set", "sensor.readout_samples=0"], True), (dr + ["--seeds", "0"], True),
+        (dr, False),
+    ]
+    cmd, bad = rng.choice(cases)
+    return _with_fault(rng, cmd, bad)
+
+
 CASES = [case_damaged_file, case_scene_value, case_environment, case_garbage_text, case_camera_file, case_foreign_exr,
          case_new_commands, case_signal, case_full_disk, case_memory_limit, case_raw_attributes, case_journal,
          case_experiment_values, case_group_signal, case_scheduler_peer, case_read_only, case_reflectances,
          case_target, case_architectures, case_spacetime, case_design, case_view, case_developed,
-         case_white_balance, case_user_faults, case_valid, case_physical, case_honest_scores]
+         case_white_balance, case_user_faults, case_valid, case_physical, case_honest_scores, case_dynamic_range]
 
 
 def one(i: int, seed: int, base: Path, cycle: bool = False, classes=None) -> tuple[str, dict]:

@@ -24,7 +24,7 @@ import numpy as np
 from spectracam.sensor import kernels
 from spectracam.architecture.filters import CHANNELS, responsivities
 from spectracam.core.registry import Registry
-from spectracam.sensor import TEMPORAL_STREAM, PatternRef, SensorSpec, expose, noise_stream
+from spectracam.sensor import TEMPORAL_STREAM, PatternRef, SensorSpec, noise_stream, read_frame
 
 __all__ = ["ARCHITECTURES", "CFA_PATTERNS", "FIXED_PATTERN_CHOICES", "PLANE_KINDS", "Architecture",
            "ColourFilterArray", "DichroicPrism", "FieldSequential", "MosaicArchitecture", "MosaicLayout",
@@ -205,12 +205,12 @@ class Architecture(ABC):
         cube the fused kernel reads once, weighting each pixel with its own channel only."""
         noise, pattern = noise_stream(seed, TEMPORAL_STREAM, 0), PatternRef(sensor, tuple(rates.shape[:2]), seed, 0)
         tile = getattr(self.layout, "tile", None)
-        if tile is not None:
+        if tile is not None and sensor.readout == "single":   # the fused pass reads once; other read-outs: their own
             out = kernels.record(rates, np.asarray(tile, np.int64)[None], times_s[:1], sensor, [noise], [pattern])
             if out is not None:
                 return out[0][0], out[1][0]
         mosaic = self.layout.sample(rates)
-        return expose(mosaic, times_s[0], sensor, noise, pattern.draw())
+        return read_frame(mosaic, times_s[0], sensor, noise, pattern.draw())
 
     @staticmethod
     def record_planes(rates, times_s, sensor, seed, patterns):
@@ -220,7 +220,8 @@ class Architecture(ABC):
         three in one pass over the cube."""
         n = len(patterns)
         noises = [noise_stream(seed, TEMPORAL_STREAM, k) for k in range(n)]
-        out = kernels.record(rates, np.arange(n, dtype=np.int64).reshape(n, 1, 1), times_s, sensor, noises, patterns)
+        out = None if sensor.readout != "single" else kernels.record(
+            rates, np.arange(n, dtype=np.int64).reshape(n, 1, 1), times_s, sensor, noises, patterns)
         if out is not None:
             return out
         drawn = {}  # a pattern shared by channels is drawn once
@@ -228,7 +229,7 @@ class Architecture(ABC):
             if id(p) not in drawn:
                 drawn[id(p)] = p.draw() if isinstance(p, PatternRef) else p
         rates = np.asarray(rates)
-        out = [expose(np.ascontiguousarray(rates[:, :, k]), times_s[k], sensor, noises[k], drawn[id(patterns[k])])
+        out = [read_frame(np.ascontiguousarray(rates[:, :, k]), times_s[k], sensor, noises[k], drawn[id(patterns[k])])
                for k in range(n)]
         return np.stack([o[0] for o in out]), np.stack([o[1] for o in out])
 

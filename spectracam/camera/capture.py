@@ -19,7 +19,7 @@ from spectracam.camera import CameraSpec, band_weights
 from spectracam.sensor.exposure import exposure_times_s
 from spectracam.sensor.kernels import SpectralRates
 
-__all__ = ["RawCapture", "capture"]
+__all__ = ["RawCapture", "capture", "capture_time_s"]
 
 
 @dataclass
@@ -50,6 +50,17 @@ class RawCapture:
         return self.camera.design
 
 
+def capture_time_s(arch, times_s: np.ndarray, sensor) -> float:
+    """How long the capture takes, s: the architecture's sum or maximum of its exposures (paper 2), each exposure
+    as long as the sensor's read-out takes for it (a bracketed exposure: its frames together)."""
+    if sensor.readout != "single":
+        from spectracam.sensor.readout import READOUTS
+
+        scheme = READOUTS[sensor.readout]
+        times_s = np.array([scheme.capture_time_s(sensor, float(t)) for t in times_s])
+    return arch.capture_time_s(times_s)
+
+
 def capture(cube, camera: CameraSpec, seed: int, metering_box: tuple[slice, slice] | None = None, *,
             white_radiance: np.ndarray | None = None, metering: dict | None = None,
             time_limit_s: float | None = None) -> RawCapture:
@@ -75,10 +86,11 @@ def capture(cube, camera: CameraSpec, seed: int, metering_box: tuple[slice, slic
     times = exposure_times_s(camera.capture.exposure, white_rate, camera.sensor, arch, camera.capture.white_fill,
                              camera.capture.exposure_split)
     if time_limit_s is not None and metering is not None and metering.get("kind") == "camera":
-        scale = min(1.0, time_limit_s / arch.capture_time_s(times))
+        scale = min(1.0, time_limit_s / capture_time_s(arch, times, camera.sensor))
         times = times * scale
         metering = {**metering, "time_limit_ms": 1e3 * time_limit_s, "shortened_by": scale}
     digital, expected = arch.record(rates, times, camera.sensor, seed)
     return RawCapture(digital=digital, expected_e=expected, exposure_times_s=times,
-                      capture_time_s=arch.capture_time_s(times), layout=arch.layout, camera=camera, seed=seed,
+                      capture_time_s=capture_time_s(arch, times, camera.sensor), layout=arch.layout, camera=camera,
+                      seed=seed,
                       metered_rate_e_per_s=white_rate, scene=cube.metadata.get("scene"), metering=metering)

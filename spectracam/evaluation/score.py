@@ -28,7 +28,7 @@ from spectracam.sensor import adc_full_scale_dn, adc_inverse
 __all__ = ["DELTA_E_REFERENCES", "EXPOSURE_MATCH_TOLERANCE", "LAB_CHUNK_PIXELS", "SCIELAB_CHUNK_PIXELS",
            "SUMMARY_METRICS", "ChartScore", "ChartSummary", "PatchScore", "camera_rates", "channel_stats",
            "chart_scielab_map", "chart_truth_xyz", "check_exposure_matches", "check_raw", "developed_rgb",
-           "display_rgb", "recorded_electrons", "score"]
+           "display_rgb", "recorded_electrons", "score", "score_region"]
 
 #: What a per-pixel ΔE is measured against: the scene (the default), or the noise-free rendering of
 #: the same camera (the conversion error removed; how the paper's Figure 6 isolates the noise steps).
@@ -462,6 +462,61 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
     return ChartScore(summary, tuple(patches), parameters, rgb.astype(np.float32), de_map, training, held_out, wb)
 
 
+def score_region(raw: RawCapture, rates: np.ndarray, reference: ChartReference, processing: ProcessingSpec,
+                 cell: tuple[slice, slice]) -> tuple[list, list, list]:
+    """The told-the-light score of one chart of a scene that holds several, each under its own light group
+    (issue 36): the conversion fitted on this chart's noise-free rates under its own light and level (paper 3.5),
+    so each chart is rendered against its own white, as an eye adapted to that part of the scene sees it.
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture of the whole scene.
+    rates : ndarray
+        ``(H, W, N)`` its exposure-normalised camera rates, e⁻/s (:func:`camera_rates`), shared by every chart.
+    reference : ChartReference
+        This chart's truth under its light; its boxes lie in the capture's pixel coordinates.
+    processing : ProcessingSpec
+        Display, ΔE formula, S-CIELAB viewing, SNR combination.
+    cell : (slice, slice)
+        The chart's cell of the image, rows and columns: its S-CIELAB is filtered on the cell alone, the chart laid
+        out in it as the renderer laid it (its surround keeps the neighbouring charts beyond the filters' reach
+        when the cell is at least a few degrees wide).
+
+    Returns
+    -------
+    patches : list of PatchScore
+        Per patch: ΔE (``processing.delta_e``), S-CIELAB, SNRs, as :func:`score` gives them.
+    delta_e_2000 : list of float
+        Each patch's mean CIEDE2000.
+    delta_e_camera : list of float
+        Each patch's mean per-pixel ΔE (``processing.delta_e``) against this camera's own noise-free rendering of it
+        (``delta_e_reference = "camera"``): what the capture loses, the conversion's own error aside.
+
+    References
+    ----------
+    .. [Catrysse1999] see docs/references.md; sections 3.5 and 3.6.
+    """
+    M = conversion_matrix(reference, raw.camera, processing)
+    rgb = np.concatenate([rates[i:i + 256] @ M for i in range(0, rates.shape[0], 256)]).astype(np.float32)
+    if processing.gamut_clip:
+        np.clip(rgb, 0.0, 1.0, out=rgb)
+    M_disp = display_rgb_to_xyz(processing.display)
+    colours = _chart_colours(reference, reference.patch_rates(raw.camera), M, M_disp, "scene")
+    de_map = np.full(rates.shape[:2], np.nan, np.float32)
+    rows, cols = cell
+    local = dataclasses.replace(reference, width_px=cols.stop - cols.start, height_px=rows.stop - rows.start,
+                                boxes=tuple((slice(r.start - rows.start, r.stop - rows.start),
+                                             slice(c.start - cols.start, c.stop - cols.start))
+                                            for r, c in reference.boxes))
+    sc_map = np.full(rates.shape[:2], np.nan, np.float32)
+    sc_map[rows, cols] = chart_scielab_map(np.ascontiguousarray(rgb[rows, cols]), local, processing)
+    patches, de2000, _ = _patch_scores(raw, reference, processing, rgb, M, colours, de_map, sc_map)
+    de_camera = [float(np.mean(delta_e(lab, colours.conversion_lab[p], processing.delta_e)))
+                 for p, lab in enumerate(_box_labs(rgb, reference.boxes, M_disp, colours.display_white))]
+    return patches, de2000, de_camera
+
+
 def _check_scorable(raw: RawCapture, reference: ChartReference, delta_e_reference: str) -> None:
     """Refuse a capture that cannot be scored against ``reference``: a bad ΔE reference, an impossible capture,
     another image size, another scene or exposure times its white patch does not meter."""
@@ -512,8 +567,10 @@ def _patch_snrs(means: np.ndarray, stds: np.ndarray, luminance: np.ndarray, time
 
 
 def _patch_scores(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec, rgb: np.ndarray,
-                  M: np.ndarray, colours: _ChartColours, de_map: np.ndarray) -> tuple[list, list, np.ndarray]:
-    """``(patch scores, each patch's mean CIEDE2000, S-CIELAB map)``, filling ``de_map`` with the per-pixel ΔE."""
+                  M: np.ndarray, colours: _ChartColours, de_map: np.ndarray,
+                  sc_map: np.ndarray | None = None) -> tuple[list, list, np.ndarray]:
+    """``(patch scores, each patch's mean CIEDE2000, S-CIELAB map)``, filling ``de_map`` with the per-pixel ΔE (the
+    S-CIELAB map computed on the whole image unless given)."""
     method, boxes, channels = processing.delta_e, reference.boxes, raw.layout.channels
     M_disp, display_white, scene_lab, against = colours.M_disp, colours.display_white, colours.scene_lab, \
         colours.against
@@ -523,7 +580,8 @@ def _patch_scores(raw: RawCapture, reference: ChartReference, processing: Proces
     times_s = np.asarray(raw.exposure_times_s, float)
     mean_labs = xyz_to_lab(np.stack([rgb[r, c].reshape(-1, 3).mean(axis=0) for r, c in boxes]) @ M_disp.T,
                            display_white)
-    sc_map = chart_scielab_map(rgb, reference, processing)
+    if sc_map is None:
+        sc_map = chart_scielab_map(rgb, reference, processing)
     patches, de2000 = [], []
     for p, (r, c), lab_box in zip(range(len(boxes)), boxes, _box_labs(rgb, boxes, M_disp, display_white)):
         de = delta_e(lab_box, against[p], method)

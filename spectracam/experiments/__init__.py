@@ -129,6 +129,14 @@ for _e in (
     Experiment("motion", spec=f"{_X}.motion.experiment:MotionSpec", load=f"{_X}.motion.experiment:load_motion",
                run=f"{_X}.motion.experiment:run_motion", result=f"{_X}.motion.experiment:MotionResult",
                writer=f"{_X}.motion.report:write_outputs", command=f"{_X}.motion.command:motion_cmd"),
+    Experiment("dynamic-range", spec=f"{_X}.dynamic_range.experiment:DynamicRangeRun",
+               load=f"{_X}.dynamic_range.experiment:plan", run=f"{_X}.dynamic_range.experiment:run_dynamic_range",
+               result=f"{_X}.dynamic_range.experiment:DynamicRangeResult",
+               writer=f"{_X}.dynamic_range.experiment:write_dynamic_range_outputs",
+               command=f"{_X}.dynamic_range.command:dynamic_range_cmd"),
+    Experiment("datasheet", spec=f"{_X}.datasheet.experiment:DatasheetSpec", load=None,
+               run=f"{_X}.datasheet.experiment:run_datasheet", result=f"{_X}.datasheet.experiment:DatasheetResult",
+               writer=f"{_X}.datasheet.report:write_datasheet_outputs", command=f"{_X}.datasheet.command:datasheet_cmd"),
 ):
     EXPERIMENTS.register(_e.name, _e)
 del _e

@@ -455,6 +455,25 @@ def exif_entries(raw: RawCapture, reference=None) -> list[tuple[int, str, tuple]
 DNG_MAX_BITS = 16
 
 
+def _check_dng_form(raw: RawCapture, mid_step: bool) -> None:
+    """Refuse, in one line, a capture that has no DNG form (see :func:`write_dng`'s Raises)."""
+    bits = raw.camera.sensor.adc_bits
+    if raw.camera.sensor.readout != "single":
+        raise SpectracamError(f"sensor.readout = {raw.camera.sensor.readout!r}: its merged high-dynamic-range word is "
+                              "not an ADC's codes, which a DNG describes; the capture is in raw.exr")
+    if bits > DNG_MAX_BITS:
+        raise SpectracamError(f"sensor.adc_bits = {bits}: a DNG holds at most {DNG_MAX_BITS} bits per sample for the "
+                              "raw developers that read it (LibRaw refuses more); the capture is in raw.exr")
+    if mid_step and bits > 15:
+        raise SpectracamError(f"sensor.adc_bits = {bits}: a mid-step LinearizationTable needs 15 bits or fewer")
+    if not isinstance(raw.layout, (MosaicLayout, PlanesLayout)):
+        raise SpectracamError(f"capture.architecture = {raw.camera.capture.architecture!r}: its layout "
+                              f"{type(raw.layout).__name__} has no DNG form")
+    if isinstance(raw.layout, PlanesLayout) and len(raw.layout.channels) not in (3, 4):
+        raise SpectracamError(f"capture: {len(raw.layout.channels)} full planes ({', '.join(raw.layout.channels)}) "
+                              "have no DNG form (a DNG has three or four colour planes); the capture is in raw.exr")
+
+
 def write_dng(path: str | Path, raw: RawCapture, reference=None, mid_step: bool = False,
               neutral_rates: np.ndarray | None = None) -> Path:
     """Write a capture as DNG (temp file, then rename): a CFA mosaic, or LinearRaw for three or four planes.
@@ -483,18 +502,8 @@ def write_dng(path: str | Path, raw: RawCapture, reference=None, mid_step: bool 
         An ADC of more than 16 bits (15 with ``mid_step``), or a layout that has no DNG form."""
     import tifffile
 
+    _check_dng_form(raw, mid_step)
     bits = raw.camera.sensor.adc_bits
-    if bits > DNG_MAX_BITS:
-        raise SpectracamError(f"sensor.adc_bits = {bits}: a DNG holds at most {DNG_MAX_BITS} bits per sample for the "
-                              "raw developers that read it (LibRaw refuses more); the capture is in raw.exr")
-    if mid_step and bits > 15:
-        raise SpectracamError(f"sensor.adc_bits = {bits}: a mid-step LinearizationTable needs 15 bits or fewer")
-    if not isinstance(raw.layout, (MosaicLayout, PlanesLayout)):
-        raise SpectracamError(f"capture.architecture = {raw.camera.capture.architecture!r}: its layout "
-                              f"{type(raw.layout).__name__} has no DNG form")
-    if isinstance(raw.layout, PlanesLayout) and len(raw.layout.channels) not in (3, 4):
-        raise SpectracamError(f"capture: {len(raw.layout.channels)} full planes ({', '.join(raw.layout.channels)}) "
-                              "have no DNG form (a DNG has three or four colour planes); the capture is in raw.exr")
     image, layout, note = dng_image(raw)
     if isinstance(layout, MosaicLayout):
         photometric = 32803

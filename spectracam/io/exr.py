@@ -23,7 +23,7 @@ import numpy as np
 from spectracam._version import __version__
 from spectracam.architecture.base import MosaicLayout, PlanesLayout
 from spectracam.camera import CameraSpec
-from spectracam.camera.capture import RawCapture
+from spectracam.camera.capture import RawCapture, capture_time_s
 from spectracam.core.errors import ConfigError, SpectracamError
 from spectracam.render import RadianceCube
 from spectracam.core.spectra import K_M_LM_PER_W, WavelengthGrid, cmf_band_weights
@@ -488,7 +488,7 @@ def check_raw_attributes(attrs: dict, camera: CameraSpec, layout, times: np.ndar
     if not (np.all(np.isfinite(times)) and np.all(times > 0)):
         refuse("spectracamExposureTimesS", times.tolist(), "must be finite times > 0 s, one per channel")
     arch = camera.architecture()
-    want_capture = float(arch.capture_time_s(times))
+    want_capture = float(capture_time_s(arch, times, camera.sensor))
     if not (np.isfinite(capture_time) and abs(capture_time - want_capture) <= 1e-9 * max(want_capture, 1e-300)):
         refuse("spectracamCaptureTimeS", capture_time, f"contradicts its exposure times ({want_capture:.9g} s for "
                f"{camera.capture.architecture})")

@@ -21,6 +21,7 @@ from spectracam.scene.chart import ChartSpec, dataset_range_nm, patch_boxes
 from spectracam.processing.color import ProcessingSpec
 from spectracam.core.errors import ConfigError
 from spectracam.scene.illuminant import IlluminantSpec
+from spectracam.scene.lights import LightGroup, brightest, parse_lights
 from spectracam.render import RenderSpec
 from spectracam.scene.target import TargetSpec, resolve_target_files
 from spectracam.core.spec import Spec, _is_number
@@ -33,21 +34,31 @@ __all__ = ["CURVE_FILES", "MIN_PATCH_PX", "SCENE_TABLES", "ImageSpec", "Scene", 
 #: Fewest pixels across a patch's mask: a 4×4 mask still holds 4 pixels of each Bayer colour.
 MIN_PATCH_PX = 4
 #: The tables of a scene file, in order.
-SCENE_TABLES = ("target", "chart", "illuminant", "wavelengths", "image", "render", *CAMERA_TABLES, "processing")
+SCENE_TABLES = ("target", "chart", "illuminant", "lights", "wavelengths", "image", "render", *CAMERA_TABLES,
+                "processing")
 
 
 @dataclass(frozen=True)
 class ImageSpec(Spec):
-    """The ``[image]`` table: pixels across and down."""
+    """The ``[image]`` table: pixels across and down, and the columns of a light-group chart scene's grid
+    of charts (:mod:`spectracam.scene.lights`; 0: the count that makes the charts largest)."""
 
     TABLE = "image"
 
     width: int = 640
     height: int = 480
+    lights_columns: int = 0
 
     def validate(self) -> None:
         self.integer("width", 8, 16384)
         self.integer("height", 8, 16384)
+        self.integer("lights_columns", 0, 64)
+
+    def to_dict(self) -> dict:
+        d = super().to_dict()
+        if not self.lights_columns:   # a scene without a chart grid records what it always did
+            d.pop("lights_columns")
+        return d
 
 
 def parse_grid(data: dict, source: str | None = None) -> WavelengthGrid:
@@ -120,6 +131,9 @@ class Scene(Spec):
     render: RenderSpec = field(default_factory=RenderSpec)
     camera: CameraSpec = field(default_factory=CameraSpec)
     processing: ProcessingSpec = field(default_factory=ProcessingSpec)
+    #: Light groups (``[[lights]]``, :mod:`spectracam.scene.lights`), each lighting its own region; empty: the
+    #: scene is lit by ``illuminant`` alone.  With groups, ``illuminant`` is the brightest group's (set here).
+    lights: tuple[LightGroup, ...] = ()
 
     def validate(self) -> None:
         self.string("name")
@@ -129,17 +143,19 @@ class Scene(Spec):
             from spectracam.scene.reflectances import check_available
 
             check_available(self.target.library, "target.library")
-        smallest = min(min(r.stop - r.start, c.stop - c.start) for r, c in patch_boxes(chart, image.width, image.height))
+        if self.lights:
+            object.__setattr__(self, "lights", parse_lights(self.lights))
+            object.__setattr__(self, "illuminant", self.lights[brightest(self.lights)].illuminant)
+        smallest, where = self._smallest_patch()
         if smallest < MIN_PATCH_PX and not self.target.textured:
-            raise ConfigError("image", f"{image.width}x{image.height}",
-                              f"too small: the smallest patch mask is {smallest} px across, at least {MIN_PATCH_PX} "
-                              "are needed to meter and score a patch")
-        light = self.illuminant
-        if light.kind == "measured" and (light.wavelengths_nm[0] > grid.edges_nm[0] + 1e-9
-                                         or light.wavelengths_nm[-1] < grid.edges_nm[-1] - 1e-9):
-            raise ConfigError("illuminant.wavelengths_nm", f"{light.wavelengths_nm[0]:g}–{light.wavelengths_nm[-1]:g} nm",
-                              f"the measured SPD must cover the scene's bands, {grid.edges_nm[0]:g}–"
-                              f"{grid.edges_nm[-1]:g} nm")
+            raise where
+        for name, light in [("illuminant", self.illuminant)] + [(f"lights[{i}].illuminant", g.illuminant)
+                                                                for i, g in enumerate(self.lights)]:
+            if light.kind == "measured" and (light.wavelengths_nm[0] > grid.edges_nm[0] + 1e-9
+                                             or light.wavelengths_nm[-1] < grid.edges_nm[-1] - 1e-9):
+                raise ConfigError(f"{name}.wavelengths_nm", f"{light.wavelengths_nm[0]:g}–"
+                                  f"{light.wavelengths_nm[-1]:g} nm", "the measured SPD must cover the scene's bands, "
+                                  f"{grid.edges_nm[0]:g}–{grid.edges_nm[-1]:g} nm")
         if self.target.textured:
             from spectracam.scene.reflectances import load
 
@@ -162,10 +178,34 @@ class Scene(Spec):
                               f"bands span {grid.edges_nm[0]:g}–{grid.edges_nm[-1]:g} nm, beyond the reflectance "
                               f"data of {chart.dataset!r} ({d_lo:g}–{d_hi:g} nm)")
 
+    def _smallest_patch(self) -> tuple[int, ConfigError]:
+        """The fewest pixels across a patch's scoring box (of any chart cell), and the error that names it."""
+        image = self.image
+        if len(self.lights) > 1 and not self.target.textured:
+            from spectracam.scene.lights import cell_columns, cell_slices
+
+            n = len(self.lights)
+            columns = cell_columns(n, image.width, image.height, self.chart.board_size_mm, image.lights_columns)
+            sizes = {(c.stop - c.start, r.stop - r.start) for r, c in cell_slices(n, image.width, image.height,
+                                                                                   columns)}
+            smallest, w, h = min((min(min(b.stop - b.start, a.stop - a.start) for b, a in
+                                      patch_boxes(self.chart, w, h)), w, h) for w, h in sizes)
+            return smallest, ConfigError("lights", f"{n} light groups", f"too many for image {image.width}x"
+                                         f"{image.height} ({columns} columns): a chart cell is {w}x{h} px, its "
+                                         f"smallest patch mask {smallest} px across, at least {MIN_PATCH_PX} are "
+                                         "needed to meter and score a patch; use fewer lights or a larger image")
+        smallest = min(min(r.stop - r.start, c.stop - c.start)
+                       for r, c in patch_boxes(self.chart, image.width, image.height))
+        return smallest, ConfigError("image", f"{image.width}x{image.height}",
+                                     f"too small: the smallest patch mask is {smallest} px across, at least "
+                                     f"{MIN_PATCH_PX} are needed to meter and score a patch")
+
     def to_dict(self) -> dict:
         """A plain, JSON-serialisable description that round-trips through :meth:`from_dict`."""
         target = {"target": self.target.to_dict()} if self.target.textured else {}
+        lights = {"lights": [g.to_dict() for g in self.lights]} if self.lights else {}
         return {"name": self.name, **target, "chart": self.chart.to_dict(), "illuminant": self.illuminant.to_dict(),
+                **lights,
                 "wavelengths": {"centres_nm": list(self.grid.centres_nm)}, "image": self.image.to_dict(),
                 "render": self.render.to_dict(), **self.camera.to_dict(), "processing": self.processing.to_dict()}
 
@@ -181,18 +221,32 @@ class Scene(Spec):
                 raise ConfigError(k, v, "unknown key", source)
         try:
             grid = parse_grid(data["wavelengths"], source) if "wavelengths" in data else base.grid
+            lights = parse_lights(data["lights"], source) if "lights" in data else base.lights
+            illuminant = IlluminantSpec.from_dict(data.get("illuminant", {}), source, base.illuminant)
+            if lights and "illuminant" in data:
+                _check_lit_by_lights(illuminant, lights, data["illuminant"])
             return cls(name=data.get("name", base.name),
                        target=TargetSpec.from_dict(data.get("target", {}), source, base.target),
                        chart=ChartSpec.from_dict(data.get("chart", {}), source, base.chart),
-                       illuminant=IlluminantSpec.from_dict(data.get("illuminant", {}), source, base.illuminant),
+                       illuminant=illuminant,
                        grid=grid,
                        image=ImageSpec.from_dict(data.get("image", {}), source, base.image),
                        render=RenderSpec.from_dict(data.get("render", {}), source, base.render),
                        camera=CameraSpec.from_dict({k: data[k] for k in CAMERA_TABLES if k in data}, source,
                                                    base.camera),
-                       processing=ProcessingSpec.from_dict(data.get("processing", {}), source, base.processing))
+                       processing=ProcessingSpec.from_dict(data.get("processing", {}), source, base.processing),
+                       lights=lights)
         except ConfigError as e:
             raise e.with_source(source) from None
+
+
+def _check_lit_by_lights(illuminant: IlluminantSpec, lights: tuple, table) -> None:
+    """Refuse an ``[illuminant]`` beside ``[[lights]]`` unless it is the brightest group's (as a scene records it)."""
+    top = lights[brightest(lights)]
+    if illuminant != top.illuminant:
+        raise ConfigError("illuminant", table, "a scene with [[lights]] is lit by its light groups and its "
+                          f"illuminant is the brightest group's ({top.name!r}: {top.illuminant.label}, "
+                          f"{top.white_luminance_cd_m2:g} cd/m²); leave [illuminant] out or change the lights")
 
 
 def parse_scene(data: dict, source: str | None = None) -> Scene:
@@ -257,6 +311,8 @@ def resolve_curve_files(data: dict, base_dir: Path) -> dict:
     data = dict(data)
     if isinstance(data.get("target"), dict):
         data["target"] = resolve_target_files(data["target"], base_dir)
+    if isinstance(data.get("lights"), list):
+        data["lights"] = [_resolve_light_file(t, i, base_dir) for i, t in enumerate(data["lights"])]
     for table, key, wl_field, value_field in CURVE_FILES:
         t = data.get(table)
         if isinstance(t, dict) and key in t:
@@ -286,6 +342,16 @@ def resolve_curve_files(data: dict, base_dir: Path) -> dict:
         t.setdefault("kind", "camera")
         data["filters"] = t
     return data
+
+
+def _resolve_light_file(table, i: int, base_dir: Path):
+    """A ``[[lights]]`` table whose ``illuminant.file`` is replaced by the SPD it holds (as ``[illuminant]``'s)."""
+    if not (isinstance(table, dict) and isinstance(table.get("illuminant"), dict) and "file" in table["illuminant"]):
+        return table
+    try:
+        return {**table, "illuminant": resolve_curve_files({"illuminant": table["illuminant"]}, base_dir)["illuminant"]}
+    except ConfigError as e:
+        raise ConfigError(f"lights[{i}].{e.field}", e.value, e.allowed, e.source) from None
 
 
 def load_scene(path: str | Path, overrides=()) -> Scene:

@@ -36,12 +36,14 @@ from spectracam.scene.chart import View, patch_rectangles_mm, patch_reflectances
 from spectracam.core.errors import SpectracamError
 from spectracam.scene.illuminant import spectral_irradiance
 from spectracam.core.spectra import band_average, band_sample_points
+from spectracam.render.analytic import lights_metadata
 from spectracam.render.cube import RadianceCube
 
 __all__ = ["CAMERA_DISTANCE_MM", "PATCH_LIFT_MM", "POINTS_PER_BAND", "REFERENCE_WINDOW_NM", "VARIANT_NAMES",
-           "WITHIN_BAND", "activate_variant", "band_scene", "band_seed", "build_scene", "even_band_width_nm",
-           "find_libllvm19", "load_scene", "open_variant", "probe_variant", "regular_spectrum",
-           "render_bands", "render_metadata", "render_mitsuba", "run_probe", "select_variant"]
+           "WITHIN_BAND", "activate_variant", "band_scene", "band_seed", "build_lights_scene", "build_scene",
+           "even_band_width_nm", "find_libllvm19", "load_scene", "open_variant", "probe_variant", "regular_spectrum",
+           "render_bands", "render_lights_mitsuba", "render_metadata", "render_mitsuba", "run_probe",
+           "select_variant"]
 
 #: Start of the reference wavelength window every band is mapped into (any visible value works).
 REFERENCE_WINDOW_NM = 500.0
@@ -260,8 +262,12 @@ def render_metadata(mi, variant: str, reason: str, samples_per_pixel: int, seed:
 
 
 def render_mitsuba(scene, progress: bool = False, log=None, within_band: str = "light-weighted") -> RadianceCube:
+    """The chart scene's radiance cube by Mitsuba (module docstring); a scene of several light groups by
+    :func:`render_lights_mitsuba`."""
     if within_band not in WITHIN_BAND:
         raise SpectracamError(f"within_band = {within_band!r}: must be one of " + ", ".join(map(repr, WITHIN_BAND)))
+    if len(scene.lights) > 1:
+        return render_lights_mitsuba(scene, progress, log, within_band)
     mi, variant, reason, ref_width = open_variant(scene, log)
     grid = scene.grid
     mi_scene, params = load_scene(mi, build_scene(mi, scene, ref_width))
@@ -289,5 +295,84 @@ def render_mitsuba(scene, progress: bool = False, log=None, within_band: str = "
                                                                                 np.float32))
 
     cube = render_bands(mi, mi_scene, params, scene, set_band, lambda b: band_seed(scene.render.seed, b), progress)
-    meta = render_metadata(mi, variant, reason, scene.render.samples_per_pixel, scene.render.seed, within_band)
+    meta = render_metadata(mi, variant, reason, scene.render.samples_per_pixel, scene.render.seed, within_band,
+                           **lights_metadata(scene))
     return RadianceCube(cube, np.asarray(grid.centres_nm, float), meta)
+
+
+def build_lights_scene(mi, scene, cells, width_nm: float) -> dict:
+    """The Mitsuba scene of a light-group chart scene: per cell (:func:`spectracam.scene.reference.chart_cells`) a
+    board covering the cell and 24 patches, the chart fitted and centred in the cell as the one-chart scene is in
+    the image; one directional light.  World units are pixels (the view is the image, W × H units), origin at
+    the image centre, y up."""
+    W, H = scene.image.width, scene.image.height
+    T = mi.ScalarTransform4f
+    d = band_scene(mi, scene, W, width_nm)
+    black = {"type": "diffuse", "reflectance": {"type": "uniform", "value": 0.0}}   # a regular spectrum may not be 0
+    for k, cell in enumerate(cells):
+        cw, ch = cell.cols.stop - cell.cols.start, cell.rows.stop - cell.rows.start
+        mm = View.fit(scene.chart, cw, ch).pixel_mm
+        cx, cy = (cell.cols.start + cell.cols.stop - W) / 2, (H - cell.rows.start - cell.rows.stop) / 2
+        d[f"board{k:02d}"] = {"type": "rectangle", "bsdf": dict(black),
+                              "to_world": T().translate([cx, cy, 0]) @ T().scale([cw / 2, ch / 2, 1])}
+        for p, (x0, x1, y0, y1) in enumerate(patch_rectangles_mm(scene.chart)):
+            d[f"g{k:02d}p{p:02d}"] = {
+                "type": "rectangle",
+                "to_world": T().translate([cx + (x0 + x1) / 2 / mm, cy + (y0 + y1) / 2 / mm, PATCH_LIFT_MM])
+                @ T().scale([(x1 - x0) / 2 / mm, (y1 - y0) / 2 / mm, 1]), "bsdf": dict(black)}
+    return d
+
+
+def _group_spectra(scene, illuminant) -> tuple[np.ndarray, np.ndarray]:
+    """``(⟨E⟩ (B,), ⟨E·S⟩/⟨E⟩ (24, B))``: the light's band averages and the patches' light-weighted band
+    reflectances under ``illuminant``, as :func:`render_mitsuba` sets them (0 where the light is 0)."""
+    E = spectral_irradiance(illuminant)
+    light_band = band_average(E, scene.grid)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rho = np.array([np.nan_to_num(band_average(lambda lam, rho=rho: E(lam) * rho(lam), scene.grid) / light_band)
+                        for _, rho in patch_reflectances(scene.chart)])
+    return light_band, rho
+
+
+def render_lights_mitsuba(scene, progress: bool = False, log=None, within_band: str = "light-weighted"
+                          ) -> RadianceCube:
+    """A light-group chart scene by Mitsuba: per band, one render per group — its light on, every surface of the
+    other groups black (reflectance 0) — summed (rendering is linear: the "light groups" of production
+    renderers); the same band seed for every group.  Surfaces are uniform spectra (a band's light-weighted
+    reflectance is constant over the band; a regular spectrum cannot be 0), so ``within_band`` is
+    "light-weighted" only."""
+    from spectracam.core.progress import bar
+    from spectracam.scene.reference import chart_cells
+
+    if within_band != "light-weighted":
+        raise SpectracamError(f"within_band = {within_band!r}: a scene of light groups renders 'light-weighted' only")
+    mi, variant, reason, width_nm = open_variant(scene, log)
+    cells = chart_cells(scene)
+    mi_scene, params = load_scene(mi, build_lights_scene(mi, scene, cells, width_nm))
+    Float = type(params["light.irradiance.values"])
+    spectra = [_group_spectra(scene, cell.illuminant) for cell in cells]
+    surround = scene.chart.surround_reflectance
+
+    def value(v: float):   # from a buffer, not a literal: a literal is compiled into the kernel (one kernel a value)
+        return Float(np.array([v], np.float32))
+
+    def light_group(b: int, k: int, on: bool) -> None:
+        params[f"board{k:02d}.bsdf.reflectance.value"] = value(surround if on else 0.0)
+        for p in range(24):
+            params[f"g{k:02d}p{p:02d}.bsdf.reflectance.value"] = value(spectra[k][1][p, b] if on else 0.0)
+        if on:
+            params["light.irradiance.values"] = Float(np.full(POINTS_PER_BAND + 1, spectra[k][0][b], np.float32))
+
+    H, W, B = scene.image.height, scene.image.width, len(scene.grid)
+    cube = np.zeros((H, W, B), dtype=np.float32)
+    for b in bar(range(B), desc="render bands", unit="band", progress=progress):
+        for k in range(len(cells)):
+            if spectra[k][0][b] <= 0:   # no light in this band: the group adds nothing
+                continue
+            light_group(b, k, True)
+            params.update()
+            cube[:, :, b] += np.asarray(mi.render(mi_scene, params, seed=band_seed(scene.render.seed, b)))[:, :, 0]
+            light_group(b, k, False)
+    meta = render_metadata(mi, variant, reason, scene.render.samples_per_pixel, scene.render.seed, within_band,
+                           light_groups="one render per group and band, summed", **lights_metadata(scene))
+    return RadianceCube(cube, np.asarray(scene.grid.centres_nm, float), meta)

@@ -35,6 +35,7 @@ from spectracam.core.errors import SpectracamError
 from spectracam.scene.illuminant import spectral_irradiance
 from spectracam.scene.reference import TargetReference
 from spectracam.core.spectra import band_average
+from spectracam.render.analytic import lights_metadata
 from spectracam.render.cube import RadianceCube
 
 __all__ = ["SAMPLERS", "TEXTURE_SEED_STREAM", "render_target_analytic", "render_target_mitsuba",
@@ -55,9 +56,12 @@ def texture_seed(seed: int) -> int:
 
 
 def render_target_analytic(scene) -> RadianceCube:
+    """A textured target's radiance cube in closed form: each pixel the mean of its texels' ``E·S/π`` (with light
+    groups, each label's ``E_g·S/π`` under its group's light)."""
     ref = TargetReference.of(scene)
     cube = ref.pixel_mean(ref.radiance, np.float32)
-    meta = {"renderer": "analytic", "variant": None, "samples_per_pixel": None, "seed": scene.render.seed}
+    meta = {"renderer": "analytic", "variant": None, "samples_per_pixel": None, "seed": scene.render.seed,
+            **lights_metadata(scene)}
     return RadianceCube(cube, np.asarray(scene.grid.centres_nm, float), meta)
 
 
@@ -71,10 +75,8 @@ def render_target_mitsuba(scene, progress: bool = False, log=None, sampler: str 
     grid = scene.grid
     ref = TargetReference.of(scene)
     W, H = scene.image.width, scene.image.height
-    E = spectral_irradiance(scene.illuminant)
-    light_band = band_average(E, grid)                                     # ⟨E⟩ per band
-    with np.errstate(invalid="ignore", divide="ignore"):                   # ⟨E·S⟩/⟨E⟩: 0 where there is no light
-        rho = np.nan_to_num(ref.radiance * np.pi / light_band[None]).astype(np.float32)   # (n + 1, B)
+    groups = _group_tables(scene, ref)
+    light_band, rho = groups[0]
     labels = ref.labels[::-1]          # a bitmap's first row is the top of the texture's v axis: the bottom row
     d = band_scene(mi, scene, W, width_nm)          # the view is W × H units: one unit per pixel
     spp = scene.render.samples_per_pixel
@@ -89,11 +91,34 @@ def render_target_mitsuba(scene, progress: bool = False, log=None, sampler: str 
     Float = type(params["light.irradiance.values"])
     seed = texture_seed(scene.render.seed)          # one seed for every band: the positions repeat (docstring)
 
-    def set_band(b):
+    def set_band(b, k=0):
+        light_band, rho = groups[k]
         params["light.irradiance.values"] = Float(np.full(POINTS_PER_BAND + 1, light_band[b], np.float32))
         params["target.bsdf.reflectance.data"] = mi.TensorXf(rho[labels, b][..., None])
 
-    cube = render_bands(mi, mi_scene, params, scene, set_band, lambda b: seed, progress)
+    if len(groups) == 1:
+        cube = render_bands(mi, mi_scene, params, scene, set_band, lambda b: seed, progress)
+        more = lights_metadata(scene)
+    else:   # one render per light group, the other groups' labels black, summed (light groups)
+        cube = sum(render_bands(mi, mi_scene, params, scene, lambda b, k=k: set_band(b, k), lambda b: seed, progress)
+                   for k in range(len(groups)))
+        more = {"light_groups": "one render per group and band, summed", **lights_metadata(scene)}
     meta = render_metadata(mi, variant, reason, spp, scene.render.seed, "light-weighted", sampler=sampler,
-                           sample_positions="the same in every band")
+                           sample_positions="the same in every band", **more)
     return RadianceCube(cube, np.asarray(grid.centres_nm, float), meta)
+
+
+def _group_tables(scene, ref: TargetReference) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Per light group (one without groups): ``(⟨E_g⟩ per band (B,), ρ̄ (n + 1, B) float32)``, the light's band
+    average and each label's light-weighted band reflectance ``⟨E_g·S⟩/⟨E_g⟩`` — 0 for the labels of the other
+    groups, so one render with group g's light shows only its labels."""
+    lights = [scene.illuminant] if not scene.lights else [g.illuminant for g in scene.lights]
+    out = []
+    for k, illuminant in enumerate(lights):
+        light_band = band_average(spectral_irradiance(illuminant), scene.grid)       # ⟨E⟩ per band
+        with np.errstate(invalid="ignore", divide="ignore"):                        # ⟨E·S⟩/⟨E⟩: 0 without light
+            rho = np.nan_to_num(ref.radiance * np.pi / light_band[None]).astype(np.float32)   # (n + 1, B)
+        if ref.groups is not None:
+            rho[ref.groups != k] = 0.0
+        out.append((light_band, rho))
+    return out

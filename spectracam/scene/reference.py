@@ -19,9 +19,9 @@ from spectracam.scene.illuminant import IlluminantSpec, spectral_irradiance
 from spectracam.scene.reflectances import load as load_library
 from spectracam.core.spectra import WavelengthGrid, band_average, band_sample_points, cie_1931_cmfs
 
-__all__ = ["LIBRARY_CHUNK", "LIBRARY_POINTS_PER_BAND", "TARGET_ROWS", "XYZ_STEP_NM", "ChartReference",
-           "LibraryColours", "RatedCamera", "TargetReference", "colorimetry", "library_colours", "material_radiance",
-           "observer_grid"]
+__all__ = ["LIBRARY_CHUNK", "LIBRARY_POINTS_PER_BAND", "TARGET_ROWS", "XYZ_STEP_NM", "ChartCell", "ChartReference",
+           "LibraryColours", "RatedCamera", "TargetReference", "chart_cells", "colorimetry", "library_colours",
+           "light_map", "material_radiance", "observer_grid"]
 
 
 class RatedCamera(Protocol):
@@ -75,7 +75,14 @@ class ChartReference:
     @classmethod
     def of(cls, scene) -> "ChartReference":
         """The reference of a scene (memoised on chart, light, grid and image: sweeps and noise
-        trials score the same scene many times)."""
+        trials score the same scene many times).  A chart scene of several light groups
+        (:mod:`spectracam.scene.lights`) has one chart per group: this is the brightest group's
+        (:func:`chart_cells`), boxes in image pixels — what the exposure is metered on and scored by default."""
+        lights = getattr(scene, "lights", ())
+        if len(lights) > 1 and not scene.target.textured:
+            from spectracam.scene.lights import brightest
+
+            return chart_cells(scene)[brightest(lights)].reference
         return _reference(scene.chart, scene.illuminant, scene.grid, scene.image.width, scene.image.height)
 
     def lit_by(self, illuminant: IlluminantSpec) -> "ChartReference":
@@ -139,6 +146,110 @@ def _reference(chart, illuminant, grid, width_px, height_px) -> ChartReference:
                           white_xyz, tuple(patch_boxes(chart, width_px, height_px)))
 
 
+@dataclass(frozen=True, eq=False)
+class ChartCell:
+    """One chart of a light-group scene (:mod:`spectracam.scene.lights`): the group's name, index and light, the
+    cell's pixels (``rows``, ``cols``) and the chart's truth under that light, ``reference``, whose ``boxes`` (the 24
+    patches' scoring boxes) are in image pixels."""
+
+    name: str
+    index: int
+    illuminant: IlluminantSpec
+    rows: slice
+    cols: slice
+    reference: ChartReference
+
+    @property
+    def boxes(self) -> tuple:
+        """``(rows, cols)`` slices of each patch's scoring pixels, in the image."""
+        return self.reference.boxes
+
+    @property
+    def white_box(self) -> tuple[slice, slice]:
+        """The cell's white patch, in the image."""
+        return self.reference.white_box
+
+    @property
+    def white_luminance_cd_m2(self) -> float:
+        """Luminance of a perfect white diffuser under the cell's light, cd/m²."""
+        return self.illuminant.white_luminance_cd_m2
+
+
+def chart_cells(scene) -> list[ChartCell]:
+    """The charts of a chart scene, one per light group, in the order of ``[[lights]]``.
+
+    Parameters
+    ----------
+    scene : Scene
+        A scene whose target is the chart; without light groups, its one chart (the whole image, named
+        ``"illuminant"``) under ``scene.illuminant``.
+
+    Returns
+    -------
+    list of ChartCell
+        Each group's cell of the image, its 24 patch boxes in image pixels and its :class:`ChartReference` (patch
+        radiance ``E_g·S/π``, XYZ with Y = 1 for a white diffuser under the group's light).
+
+    Raises
+    ------
+    ConfigError
+        A textured target (its light groups light labels, not cells: :func:`light_map`).
+    """
+    from spectracam.core.errors import ConfigError
+
+    if scene.target.textured:
+        raise ConfigError("target.kind", scene.target.kind, "has no chart cells: a textured target's light groups "
+                          "light its labels (spectracam.scene.reference.light_map)")
+    W, H = scene.image.width, scene.image.height
+    if not scene.lights:
+        return [ChartCell("illuminant", 0, scene.illuminant, slice(0, H), slice(0, W), ChartReference.of(scene))]
+    return list(_chart_cells(scene.chart, scene.lights, scene.grid, W, H, scene.image.lights_columns))
+
+
+def _offset(box: tuple[slice, slice], rows: slice, cols: slice) -> tuple[slice, slice]:
+    r, c = box
+    return slice(r.start + rows.start, r.stop + rows.start), slice(c.start + cols.start, c.stop + cols.start)
+
+
+@lru_cache(maxsize=16)
+def _chart_cells(chart, lights, grid, width_px, height_px, columns) -> tuple[ChartCell, ...]:
+    import dataclasses
+
+    from spectracam.scene.lights import cell_columns, cell_slices
+
+    columns = cell_columns(len(lights), width_px, height_px, chart.board_size_mm, columns)
+    cells = []
+    for k, (group, (rows, cols)) in enumerate(zip(lights, cell_slices(len(lights), width_px, height_px, columns))):
+        local = _reference(chart, group.illuminant, grid, cols.stop - cols.start, rows.stop - rows.start)
+        ref = dataclasses.replace(local, width_px=width_px, height_px=height_px,
+                                  boxes=tuple(_offset(b, rows, cols) for b in local.boxes))
+        cells.append(ChartCell(group.name, k, group.illuminant, rows, cols, ref))
+    return tuple(cells)
+
+
+def light_map(scene) -> np.ndarray:
+    """``(H, W)`` int32: the light group that lights each pixel (its index in ``scene.lights``).
+
+    A chart scene: the group of the pixel's cell (-1 in unlit cells left over in the grid's last row).  A
+    textured target: the group lighting most of the pixel's texels (the lowest index on ties).  Without light
+    groups: 0 everywhere.
+    """
+    W, H = scene.image.width, scene.image.height
+    K = len(scene.lights)
+    if K == 0:
+        return np.zeros((H, W), np.int32)
+    if not scene.target.textured:
+        out = np.full((H, W), -1, np.int32)
+        for cell in chart_cells(scene):
+            out[cell.rows, cell.cols] = cell.index
+        return out
+    ref = TargetReference.of(scene)
+    s = ref.supersampling
+    texel_groups = ref.groups[ref.labels]
+    counts = np.stack([(texel_groups == k).reshape(H, s, W, s).sum(axis=(1, 3)) for k in range(K)])
+    return counts.argmax(axis=0).astype(np.int32)
+
+
 #: Points per band of the band averages (0.5 nm in a 10-nm band): the chart's 200 give the same
 #: conversion error within 7e-5 ΔE*ab on the chart's own patches.
 LIBRARY_POINTS_PER_BAND = 20
@@ -192,7 +303,11 @@ TARGET_ROWS = 32
 class TargetReference:
     """The truth about a textured target (:mod:`spectracam.scene.target`): its label image and, per label,
     the band radiance ``E·S/π`` and CIE 1931 XYZ under the scene's light (the last label is the
-    surround, a flat ``chart.surround_reflectance``).  Build it with :meth:`of`."""
+    surround, a flat ``chart.surround_reflectance``).  Build it with :meth:`of`.
+
+    With light groups (:mod:`spectracam.scene.lights`) each label is lit by its group's light ``E_g``
+    (``groups[label]``, a seeded draw): its radiance is ``E_g·S/π`` and its XYZ is relative to the white of the
+    brightest group (a white diffuser under group g has Y = L_g / L_max), whose white is ``white_xyz``."""
 
     library: str
     names: tuple                 # (n,) sample names; label n is the surround
@@ -201,11 +316,12 @@ class TargetReference:
     radiance: np.ndarray         # (n + 1, B)
     xyz: np.ndarray              # (n + 1, 3), Y = 1 for a perfect white diffuser
     white_xyz: np.ndarray        # (3,)
+    groups: np.ndarray | None = None   # (n + 1,) int32, each label's light group; None without light groups
 
     @classmethod
     def of(cls, scene) -> "TargetReference":
         return _target_reference(scene.target, scene.illuminant, scene.grid, scene.image.width, scene.image.height,
-                                 scene.chart.surround_reflectance)
+                                 scene.chart.surround_reflectance, getattr(scene, "lights", ()))
 
     @property
     def surround(self) -> int:
@@ -243,8 +359,19 @@ class TargetReference:
         return counts @ self.radiance / counts.sum()
 
 
+def _label_table(colours: LibraryColours, illuminant: IlluminantSpec, grid: WavelengthGrid,
+                 surround_reflectance: float) -> tuple[np.ndarray, np.ndarray]:
+    """``(radiance (n + 1, B), xyz (n + 1, 3))`` of the library's samples and the surround under one light."""
+    E = spectral_irradiance(illuminant)
+    white_radiance = band_average(lambda lam: E(lam) / np.pi, grid, LIBRARY_POINTS_PER_BAND)
+    radiance = np.vstack([colours.radiance, surround_reflectance * white_radiance[None]])
+    xyz = np.vstack([colours.xyz, surround_reflectance * colours.white_xyz[None]])
+    return radiance, xyz
+
+
 @lru_cache(maxsize=4)
-def _target_reference(target, illuminant, grid, width_px, height_px, surround_reflectance) -> TargetReference:
+def _target_reference(target, illuminant, grid, width_px, height_px, surround_reflectance,
+                      lights=()) -> TargetReference:
     from spectracam.scene.illuminant import IlluminantSpec
     from spectracam.core.cielab import xyz_to_lab
     from spectracam.scene.target import texel_labels
@@ -256,9 +383,17 @@ def _target_reference(target, illuminant, grid, width_px, height_px, surround_re
         lab_d65 = xyz_to_lab(d65.xyz, d65.white_xyz)
     n = len(colours.names)
     labels = texel_labels(target, width_px, height_px, n, lab_d65)
-    E = spectral_irradiance(illuminant)
-    white_radiance = band_average(lambda lam: E(lam) / np.pi, grid, LIBRARY_POINTS_PER_BAND)
-    radiance = np.vstack([colours.radiance, surround_reflectance * white_radiance[None]])
-    xyz = np.vstack([colours.xyz, surround_reflectance * colours.white_xyz[None]])
+    radiance, xyz = _label_table(colours, illuminant, grid, surround_reflectance)
+    groups = None
+    if lights:   # each label under its group's light; XYZ relative to the brightest group's white
+        from spectracam.scene.lights import brightest, label_groups
+
+        groups = label_groups(target.seed, n + 1, len(lights))
+        top = lights[brightest(lights)].white_luminance_cd_m2
+        for k, group in enumerate(lights):
+            rad_k, xyz_k = _label_table(library_colours(target.library, group.illuminant, grid), group.illuminant,
+                                        grid, surround_reflectance)
+            mine = groups == k
+            radiance[mine], xyz[mine] = rad_k[mine], xyz_k[mine] * (group.white_luminance_cd_m2 / top)
     return TargetReference(target.library, colours.names, labels, target.supersampling, radiance, xyz,
-                           colours.white_xyz)
+                           colours.white_xyz, groups)

@@ -27,10 +27,11 @@ from spectracam.core.registry import Registry
 from spectracam.core.spec import Spec
 from spectracam.sensor.temperature import DARK_CURRENT_LAWS, dark_current_factor
 
-__all__ = ["CHUNK_PX", "FPN_READINGS", "NOISE_SOURCES", "SHOT_NOISE_MODELS", "CounterRNG", "FixedPattern",
-           "FpnReading", "PatternDraws", "PatternRef", "PixelDraw", "SensorSpec", "adc", "adc_full_scale_dn",
-           "adc_inverse", "add_offset_fpn", "add_read_noise", "add_shot_noise", "clip_to_well", "expose",
-           "fixed_pattern", "fixed_pattern_parts", "integrate_charge", "noise_stream"]
+__all__ = ["CHUNK_PX", "CounterRNG", "FPN_READINGS", "FixedPattern", "FpnReading", "NOISE_SOURCES", "PatternDraws",
+           "PatternRef", "PixelDraw", "READOUT_ESTIMATORS", "READOUT_NAMES", "SHOT_NOISE_MODELS", "SensorSpec", "adc",
+           "adc_full_scale_dn", "adc_inverse", "add_offset_fpn", "add_read_noise", "add_shot_noise", "clip_to_well",
+           "dark_gain_moments", "expose", "fixed_pattern", "fixed_pattern_parts", "hot_pixel_excess",
+           "integrate_charge", "noise_stream", "read_frame"]
 
 
 class FpnReading(NamedTuple):
@@ -75,6 +76,11 @@ def _poisson_shot(mean, out, rng):
 SHOT_NOISE_MODELS: Registry = Registry("sensor.shot_noise_model", "shot-noise model")
 SHOT_NOISE_MODELS.register("gaussian", _gaussian_shot)
 SHOT_NOISE_MODELS.register("poisson", _poisson_shot)
+
+#: Read-out schemes (:data:`spectracam.sensor.readout.READOUTS` holds their functions) and the estimators of
+#: ``multiple_capture``: names here, so the sensor's table validates without importing the schemes.
+READOUT_NAMES = ("single", "multiple_capture", "dual_gain", "split_pixel", "bracketing")
+READOUT_ESTIMATORS = ("wls", "last_sample")
 
 #: The switchable error sources, in the order the paper's Figure 6 adds them.
 NOISE_SOURCES = ("shot_noise", "dark_current", "read_noise", "fpn", "quantization")
@@ -142,6 +148,45 @@ class SensorSpec(Spec):
     conversion_gain_uV_per_e: float = 5.0
     #: "gaussian" (the paper's 3.4: variance = mean) or "poisson" (exact counting statistics).
     shot_noise_model: str = "gaussian"
+    #: Hot pixels (issue 36): the share of pixels in the dark-signal non-uniformity's tail.  Each hot pixel's dark
+    #: current is raised by ``X·i_d`` with X exponential of mean ``hot_pixel_mean_factor``: measured dark-current
+    #: histograms are positively skewed with a long tail (Baer 2006 [Baer2006]), and their hot pixels form a separate
+    #: latent class (Forcina & Carbone 2018 [Forcina2018]).  Every pixel's factor is then divided by the mean, so
+    #: ``dark_current_e_per_s_um2`` stays the mean over all pixels, as EMVA 1288 measures it
+    #: (:func:`dark_gain_moments`).  0: none (the paper).
+    hot_pixel_fraction: float = 0.0
+    #: The mean extra dark current of a hot pixel, in multiples of the mean dark current: 20, a stated choice (a hot
+    #: pixel an order of magnitude above its neighbours); a measured sensor's histogram sets it.
+    hot_pixel_mean_factor: float = 20.0
+    #: How each pixel is read (:mod:`spectracam.sensor.readout`, issue 36): "single" (one read at the end of the
+    #: exposure: the paper), "multiple_capture" (``readout_samples`` non-destructive reads, Liu & El Gamal 2001),
+    #: "dual_gain", "split_pixel" or "bracketing".
+    readout: str = "single"
+    #: Non-destructive samples per exposure of ``multiple_capture``, N (Liu & El Gamal simulate 32; 8 keeps the
+    #: frame rate of a 2000s column-parallel ADC).
+    readout_samples: int = 8
+    #: The photocurrent estimate of ``multiple_capture``: "wls" (the recursive weighted least-squares estimate with
+    #: saturation and motion detection, Liu & El Gamal 2001/2003) or "last_sample" (the last sample before saturation
+    #: divided by its time).
+    readout_estimator: str = "wls"
+    #: Motion detection of the "wls" estimate: a sample further than this many standard deviations from the
+    #: prediction ends the estimate at the previous sample (Liu & El Gamal 2003).  0: no motion detection.
+    motion_threshold_sigma: float = 4.0
+    #: ``dual_gain``: the high conversion gain over the low one (the floating diffusion's extra capacitance switched
+    #: out; 4 is typical of dual-conversion-gain pixels).  The low gain is ``conversion_gain_uV_per_e`` (full well).
+    dual_gain_ratio: float = 4.0
+    #: ``dual_gain``: the high-gain read is used while it is below this fraction of its own swing (``q_max/ratio``).
+    dual_gain_switch: float = 0.9
+    #: ``split_pixel``: the large photodiode's sensitivity over the small one's.
+    split_ratio: float = 16.0
+    #: ``split_pixel``: the small photodiode's full well as a fraction of ``q_max_e``.
+    split_small_well_fraction: float = 0.25
+    #: ``bracketing``: sequential exposures, each ``bracketing_ratio`` times shorter than the one before.
+    bracketing_frames: int = 3
+    bracketing_ratio: float = 8.0
+    #: The merged high-dynamic-range word companded (piecewise linear, as automotive sensors output it) into this
+    #: many bits, and expanded by the processing.  None: the merged word is written linear.
+    companding_bits: int | None = None
     shot_noise: bool = True
     dark_current: bool = True
     read_noise: bool = True
@@ -183,6 +228,20 @@ class SensorSpec(Spec):
         self.number("fill_factor", 0, 1, lo_open=True)
         self.number("conversion_gain_uV_per_e", 0, lo_open=True)
         self.choice("shot_noise_model", SHOT_NOISE_MODELS)
+        self.number("hot_pixel_fraction", 0, 1)
+        self.number("hot_pixel_mean_factor", 0, 1e6)
+        self.choice("readout", READOUT_NAMES)
+        self.integer("readout_samples", 1, 1024)
+        self.choice("readout_estimator", READOUT_ESTIMATORS)
+        self.number("motion_threshold_sigma", 0, 1e3)
+        self.number("dual_gain_ratio", 1, 1e3, lo_open=True)
+        self.number("dual_gain_switch", 0, 1, lo_open=True)
+        self.number("split_ratio", 1, 1e6, lo_open=True)
+        self.number("split_small_well_fraction", 0, 1, lo_open=True)
+        self.integer("bracketing_frames", 1, 16)
+        self.number("bracketing_ratio", 1, 1e4, lo_open=True)
+        if self.companding_bits is not None:
+            self.integer("companding_bits", 8, 24)
         self.boolean(*NOISE_SOURCES, "clipping")
 
     @property
@@ -374,14 +433,54 @@ def fixed_pattern_parts(sensor: SensorSpec, shape: tuple[int, int], seed: int, s
         else:
             offset = np.broadcast_to(cols, shape)
             offset = offset if draws.offset is not None else offset.copy()
+    hot = sensor.hot_pixel_fraction > 0 and sensor.dark_current
     if sensor.dsnu_fraction > 0 and sensor.dark_current:
         seq = noise_stream(seed, FPN_STREAM, sensor_index, 3)
-        if defer:
+        if defer and not hot:
             draws = draws._replace(dark_gain=PixelDraw(seq, "dark_gain", sensor.dsnu_fraction))
         else:
             dark_gain = _draw(seq, n, _normal_around_one(sensor.dsnu_fraction))
             dark_gain = np.maximum(dark_gain, 0.0, out=dark_gain).reshape(shape)  # a dark current is never negative
+    if hot:   # drawn here, beside the DSNU: the fused kernel takes the plane as it is
+        tail = hot_pixel_excess(sensor, n, noise_stream(seed, FPN_STREAM, sensor_index, 4)).reshape(shape)
+        dark_gain = tail + 1.0 if dark_gain is None else np.add(dark_gain, tail, out=dark_gain)
+        # the stated dark current stays the mean over all pixels (as EMVA 1288 measures it): the tail redistributes
+        dark_gain /= np.float32(1.0 + sensor.hot_pixel_fraction * sensor.hot_pixel_mean_factor)
     return FixedPattern(offset, gain, dark_gain), draws
+
+
+def hot_pixel_excess(sensor: SensorSpec, n: int, seq: np.random.SeedSequence) -> np.ndarray:
+    """The dark-signal non-uniformity's tail: each pixel's extra dark current in multiples of the mean, float32.
+
+    A pixel is hot with probability ``p = hot_pixel_fraction``; a hot pixel's excess is exponential with mean
+    ``m = hot_pixel_mean_factor``; one uniform draw ``u`` per pixel decides both (``u < p``: hot, with excess
+    ``−m·ln(u/p)``, since ``u/p`` is then uniform on (0, 1)).  The excess's mean is ``p·m`` and its variance
+    ``p·m²·(2 − p)``.
+
+    References
+    ----------
+    .. [EMVA1288] see docs/references.md; section 8.4, the logarithmic histogram of the dark signal.
+    """
+    p, m = np.float32(sensor.hot_pixel_fraction), np.float32(sensor.hot_pixel_mean_factor)
+
+    def fill(rng, out):
+        rng.random(out=out, dtype=np.float32)
+        hot = out < p
+        u = np.maximum(out, np.float32(1e-30))
+        out[...] = np.where(hot, -m * np.log(u / p), np.float32(0.0))
+
+    return _draw(seq, n, fill)
+
+
+def dark_gain_moments(sensor: SensorSpec) -> tuple[float, float]:
+    """Mean and variance across pixels of the dark-current factor: the DSNU's ``1`` and ``σ²`` (its clip at 0
+    ignored) with the hot-pixel tail's ``p·m`` and ``p·m²·(2 − p)`` (:func:`hot_pixel_excess`), divided by the
+    mean ``1 + p·m`` so that the stated dark current stays the mean of all pixels: ``(1, (σ² + p·m²·(2 − p)) /
+    (1 + p·m)²)``; ``(1, 0)`` without the fixed pattern or the dark current."""
+    if not (sensor.fpn and sensor.dark_current):
+        return 1.0, 0.0
+    p, m = sensor.hot_pixel_fraction, sensor.hot_pixel_mean_factor
+    return 1.0, (sensor.dsnu_fraction ** 2 + p * m * m * (2.0 - p)) / (1.0 + p * m) ** 2
 
 
 class PatternRef(NamedTuple):
@@ -439,7 +538,12 @@ def add_offset_fpn(charge_e, offset_e):
 
 
 def adc_full_scale_dn(sensor: SensorSpec) -> float:
-    """Largest output: code 2ⁿ − 1 when quantising, else the continuous full scale 2ⁿ."""
+    """Largest output: code 2ⁿ − 1 when quantising, else the continuous full scale 2ⁿ; for a high-dynamic-range
+    read-out, the top of its merged output word (:func:`spectracam.sensor.readout.output_top_dn`)."""
+    if sensor.readout != "single":
+        from spectracam.sensor.readout import output_top_dn
+
+        return float(output_top_dn(sensor))
     return float(2**sensor.adc_bits - 1 if sensor.quantization else 2**sensor.adc_bits)
 
 
@@ -469,7 +573,23 @@ def adc_inverse(digital, sensor: SensorSpec) -> np.ndarray:
     >>> adc_inverse(np.array([8.0, 18.0]), s).round(9).tolist()
     [0.5, 10.5]
     """
+    if sensor.readout != "single":   # a merged high-dynamic-range word: the read-out's own inverse
+        from spectracam.sensor.readout import decode
+
+        return decode(digital, sensor)
     return (digital - sensor.black_level_dn + (0.5 if sensor.quantization else 0.0)) * sensor.quantization_step_e
+
+
+def read_frame(photo_rate_e_per_s: np.ndarray, time_s: float, sensor: SensorSpec, noise: np.random.SeedSequence,
+               pattern: FixedPattern = FixedPattern()) -> tuple[np.ndarray, np.ndarray]:
+    """One frame read the way ``sensor.readout`` reads it: :func:`expose` for ``single`` (the paper), else the
+    read-out scheme of :mod:`spectracam.sensor.readout` (its merged output word, which :func:`adc_inverse` decodes).
+    Arguments and returns as :func:`expose`."""
+    if sensor.readout == "single":
+        return expose(photo_rate_e_per_s, time_s, sensor, noise, pattern)
+    from spectracam.sensor.readout import read
+
+    return read(np.ascontiguousarray(photo_rate_e_per_s, np.float32), time_s, sensor, noise, pattern)
 
 
 def expose(photo_rate_e_per_s: np.ndarray, time_s: float, sensor: SensorSpec, noise: np.random.SeedSequence,

@@ -83,7 +83,9 @@ def saturation_times_s(white_rate_e_per_s: np.ndarray, sensor: SensorSpec, white
 def exposure_times_s(scheme: str, white_rate_e_per_s: np.ndarray, sensor: SensorSpec, architecture,
                      white_fill: float = 1.0, split=()) -> np.ndarray:
     """Per-channel exposure times ``(N,)`` in seconds for the architecture under a scheme, metered so
-    that the white's mean charge reaches ``white_fill`` of the full well.
+    that the white's mean charge reaches ``white_fill`` of the full well — of the largest charge the sensor's
+    read-out encodes (``headroom`` × the well, :mod:`spectracam.sensor.readout`): a high-dynamic-range read-out
+    exposes longer, for the shadows, and keeps the white within its range.
 
     >>> from spectracam.architecture.base import make_architecture
     >>> s = SensorSpec(q_max_e=100.0, dark_current=False)
@@ -91,4 +93,8 @@ def exposure_times_s(scheme: str, white_rate_e_per_s: np.ndarray, sensor: Sensor
     [0.1429, 0.0714, 0.2857]
     """
     saturation = saturation_times_s(white_rate_e_per_s, sensor, white_fill, architecture.channels)
+    if sensor.readout != "single":   # a high-dynamic-range read-out encodes up to ``headroom`` × a single read's rate
+        from spectracam.sensor.readout import READOUTS
+
+        saturation = saturation * READOUTS[sensor.readout].headroom(sensor)
     return EXPOSURE_SCHEMES[scheme](saturation, architecture, tuple(split))

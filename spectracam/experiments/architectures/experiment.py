@@ -46,7 +46,7 @@ from typing import TypedDict
 import numpy as np
 
 from spectracam.architecture.base import ARCHITECTURES
-from spectracam.camera.capture import capture
+from spectracam.camera.capture import capture, capture_time_s
 from spectracam.core.errors import ConfigError
 from spectracam.sensor.exposure import EXPOSURE_SCHEMES, METERED_SCHEMES
 from spectracam.scene.illuminant import IlluminantSpec
@@ -163,7 +163,7 @@ def case(scene, cube, design: str, seeds, limit_s: float | None = None) -> dict:
         arch = camera.architecture()
         times = exposure_times_s(camera.capture.exposure, reference.patch_rates(camera)[WHITE_PATCH], camera.sensor,
                                  arch, camera.capture.white_fill, camera.capture.exposure_split)
-        scale = min(1.0, limit_s / arch.capture_time_s(times))
+        scale = min(1.0, limit_s / capture_time_s(arch, times, camera.sensor))
         # exposure times are inversely proportional to the metered white: metering on a brighter white
         # shortens them by ``scale`` (the dark charge aside; shorter, so it stays negligible)
         metering = {"kind": "time_limit", "limit_ms": 1e3 * limit_s,

@@ -32,6 +32,7 @@ import numpy as np
 from spectracam.architecture.base import MosaicLayout
 from spectracam.core.errors import SpectracamError
 from spectracam.experiments.design.ad import backend, cholesky3, fresh, solve_spd, tensor, xyz_to_lab
+from spectracam.sensor import dark_gain_moments
 
 __all__ = ["DEFAULT_DISPLAY_PIXEL_PITCH_MM", "DEFAULT_VIEWING_DISTANCE_M", "QUADRATURE_POINTS",
            "QUADRATURE_SEED", "SCORES", "CameraModel", "ColourSet", "LightModel", "LightResult",
@@ -80,7 +81,7 @@ class SensorModel:
                    fpn_var_e2=float(s.fpn_rms_e**2 + (s.column_fpn_fraction * s.q_max_e) ** 2 if fpn else 0.0),
                    quant_var_e2=float(s.quantization_step_e**2 / 12.0 if s.quantization else 0.0),
                    prnu=float(s.prnu_fraction if s.fpn else 0.0),
-                   dsnu=float(s.dsnu_fraction if s.fpn and s.dark_current else 0.0))
+                   dsnu=float(np.sqrt(dark_gain_moments(s)[1])))
 
 
 def demosaic_factors(layout: MosaicLayout, method: str) -> np.ndarray:

@@ -19,7 +19,7 @@ from spectracam.camera import CameraSpec
 from spectracam.core.errors import ConfigError, SpectracamError
 from spectracam.evaluation.emva1288 import LINEARITY_FIT_RANGE, SENSITIVITY_FIT_MAX, EmvaSeries, analyse, expected
 from spectracam.architecture.filters import CHANNELS, responsivities
-from spectracam.sensor import expose, fixed_pattern, noise_stream
+from spectracam.sensor import dark_gain_moments, fixed_pattern, noise_stream, read_frame
 from spectracam.core.spectra import WavelengthGrid
 
 __all__ = ["EMVA_STREAM", "KEYS", "LABELS", "LINEARITY_CLAUSE", "ROLES", "SATURATION_CLAUSE",
@@ -81,7 +81,7 @@ def simulate_series(camera: CameraSpec, setup: EmvaSetup = EmvaSetup()) -> tuple
     times[0] = 1e-6  # a dark-most step with a finite exposure
 
     def frame(r, t, *stream):
-        return expose(r, t, s, noise_stream(setup.seed, EMVA_STREAM, *stream), pattern)[0]
+        return read_frame(r, t, s, noise_stream(setup.seed, EMVA_STREAM, *stream), pattern)[0]
 
     bright = np.stack([[frame(rate, t, 0, i, j) for j in range(2)] for i, t in enumerate(times)])
     dark = np.stack([[frame(zero, t, 1, i, j) for j in range(2)] for i, t in enumerate(times)])
@@ -103,7 +103,7 @@ def configured(camera: CameraSpec, setup: EmvaSetup, photons_per_s: float, eta: 
     # DSNU1288: the spatial spread of the dark signal at the spatial stack's exposure, e⁻ —
     # offset FPN (pixel and column) and the dark current's non-uniformity
     dsnu = np.sqrt((s.fpn_rms_e if s.fpn else 0.0) ** 2 + (s.column_fpn_fraction * s.q_max_e if s.fpn else 0.0) ** 2
-                   + (s.dsnu_fraction * dark * t50 if s.fpn else 0.0) ** 2)
+                   + dark_gain_moments(s)[1] * (dark * t50) ** 2)
     return expected(gain_DN_per_e=s.system_gain_dn_per_e, quantum_efficiency=eta,
                     read_noise_e=s.read_noise_rms_e, dark_current_e_per_s=dark,
                     dsnu_e=float(dsnu), prnu_fraction=s.prnu_fraction if s.fpn else 0.0, full_well_e=s.q_max_e,

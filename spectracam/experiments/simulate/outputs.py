@@ -25,6 +25,10 @@ def write_capture(out_dir: Path, raw, scene) -> list[Path]:
         click.echo(f"raw.dng not written: a {raw.camera.sensor.adc_bits}-bit capture does not fit a DNG that raw "
                    f"developers read (at most {DNG_MAX_BITS} bits); it is in raw.exr", err=True)
         return paths
+    if raw.camera.sensor.readout != "single":
+        click.echo(f"raw.dng not written: the {raw.camera.sensor.readout} read-out's merged high-dynamic-range word is "
+                   "not an ADC's codes, which a DNG's white level and linearisation describe; it is in raw.exr", err=True)
+        return paths
     reference, neutral = ChartReference.of(scene), None
     if not scene.processing.told_the_light and raw.scene is not None:   # AsShotNeutral: the camera's own white
         from spectracam.processing import develop

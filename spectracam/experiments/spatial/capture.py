@@ -22,7 +22,7 @@ import numpy as np
 
 from spectracam.architecture.base import MosaicLayout
 from spectracam.camera import CameraSpec
-from spectracam.camera.capture import RawCapture
+from spectracam.camera.capture import RawCapture, capture_time_s
 from spectracam.scene.chart import WHITE_PATCH
 from spectracam.processing.color import ProcessingSpec, adaptation_matrix, display_rgb_to_xyz, fit_conversion
 from spectracam.sensor.exposure import exposure_times_s
@@ -97,7 +97,8 @@ def record(rates: np.ndarray, camera: CameraSpec, metered_rate: np.ndarray, seed
                                  camera.capture.exposure_split)
     digital, expected = arch.record(np.ascontiguousarray(rates, np.float32), times, camera.sensor, seed)
     return RawCapture(digital=digital, expected_e=expected, exposure_times_s=times,
-                      capture_time_s=arch.capture_time_s(times), layout=arch.layout, camera=camera, seed=seed,
+                      capture_time_s=capture_time_s(arch, times, camera.sensor), layout=arch.layout, camera=camera,
+                      seed=seed,
                       metered_rate_e_per_s=np.asarray(metered_rate, float))
 
 
