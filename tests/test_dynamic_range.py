@@ -108,3 +108,55 @@ def test_the_command_writes_its_files_and_refuses_bad_values_in_one_line(tmp_pat
         msg = r.output.strip().splitlines()
         assert len(msg) == 1 and "Traceback" not in r.output, r.output
     assert math.isfinite(res["seconds"])
+
+
+def test_a_chart_a_hot_die_cannot_expose_is_recorded_as_such_not_as_an_error():
+    """At 105 °C the paper's dark current (×205 by the generation law) outruns the light of a 0.01 cd/m² chart:
+    metered on its own white, that chart has no exposure; its row says so, and it counts as not kept."""
+    from spectracam.experiments.dynamic_range.experiment import plan, run_dynamic_range
+
+    run = plan(quick=True, seeds=1, renderer="analytic", designs=("cfa/single",), readouts=("single",),
+               temperatures_C=(105.0,))
+    res = run_dynamic_range(run, log=lambda *a: None)
+    dim = next(r for r in res["rows"] if r["scene"] == "ladder" and r["exposure"] == "chart"
+               and r["white_luminance_cd_m2"] == 0.01)
+    assert dim["delta_e_ab"] is None and dim["note"].startswith("not exposed: exposure: channel")
+    k = next(k for k in res["kept"] if k["exposure"] == "chart" and k["against"] == "capture")
+    assert k["lo_cd_m2"] is None or k["lo_cd_m2"] > 0.01
+
+
+def test_a_chart_of_a_light_group_scores_as_the_same_chart_alone():
+    """The sun chart of hdr_charts, noise-free, against the one-light scene of that chart at its cell's size: the
+    same scored pixels, so the same per-patch ΔE*ab, and the same S-CIELAB (filtered on its cell alone) but where the
+    demosaicker reads across the cell's edge."""
+    import numpy as np
+
+    from spectracam.evaluation.score import camera_rates, score_region
+    from spectracam.pipeline import capture, render, score
+    from spectracam.pipeline.scene_file import load_scene, parse_scene
+    from spectracam.scene.reference import chart_cells
+
+    off = ["sensor.shot_noise=false", "sensor.read_noise=false", "sensor.fpn=false", "sensor.dark_current=false",
+           "sensor.quantization=false"]
+    hdr = load_scene("scenes/hdr_charts.toml", ["image.width=320", "image.height=128", *off])
+    sun = chart_cells(hdr)[0]
+    assert sun.name == "sun" and (sun.cols.start, sun.cols.stop) == (0, 160)
+    data = hdr.to_dict()
+    data.pop("lights")
+    alone = parse_scene({**data, "illuminant": sun.illuminant.to_dict(), "image": {"width": 160, "height": 128}})
+    raw_hdr = capture(render(hdr, "analytic"), hdr.camera, seed=0)
+    raw_alone = capture(render(alone, "analytic"), alone.camera, seed=0)
+    np.testing.assert_allclose(raw_hdr.exposure_times_s, raw_alone.exposure_times_s, rtol=1e-9)
+    patches, _, de_capture = score_region(raw_hdr, camera_rates(raw_hdr, hdr.processing), sun.reference,
+                                          hdr.processing)
+    want = score(raw_alone, alone).patches
+    np.testing.assert_allclose([p.delta_e_mean for p in patches], [p.delta_e_mean for p in want], atol=1e-4)
+    got_sc = np.array([p.s_cielab_mean for p in patches])
+    want_sc = np.array([p.s_cielab_mean for p in want])
+    edge = np.arange(5, 24, 6)      # the chart's last column, next to the shade cell
+    inner = np.setdiff1d(np.arange(24), edge)
+    np.testing.assert_allclose(got_sc[inner], want_sc[inner], atol=1e-4)
+    # the demosaicker reads one pixel across the cell's edge (the shade chart's surround, not the image border the
+    # chart alone replicates); the eye's filters carry that into the last column's patches: a few hundredths
+    np.testing.assert_allclose(got_sc[edge], want_sc[edge], atol=0.1)
+    assert max(de_capture) < 1e-3                     # noise-free: the capture is its own noise-free rendering

@@ -24,7 +24,7 @@ import numpy as np
 from spectracam.sensor import kernels
 from spectracam.architecture.filters import CHANNELS, responsivities
 from spectracam.core.registry import Registry
-from spectracam.sensor import TEMPORAL_STREAM, PatternRef, SensorSpec, noise_stream, read_frame
+from spectracam.sensor import NOISE_SOURCES, TEMPORAL_STREAM, PatternRef, SensorSpec, noise_stream, read_frame
 
 __all__ = ["ARCHITECTURES", "CFA_PATTERNS", "FIXED_PATTERN_CHOICES", "PLANE_KINDS", "Architecture",
            "ColourFilterArray", "DichroicPrism", "FieldSequential", "MosaicArchitecture", "MosaicLayout",
@@ -209,8 +209,20 @@ class Architecture(ABC):
             out = kernels.record(rates, np.asarray(tile, np.int64)[None], times_s[:1], sensor, [noise], [pattern])
             if out is not None:
                 return out[0][0], out[1][0]
-        mosaic = self.layout.sample(rates)
+        mosaic = self._site_rates(rates, tile)
         return read_frame(mosaic, times_s[0], sensor, noise, pattern.draw())
+
+    def _site_rates(self, rates, tile) -> np.ndarray:
+        """``(H, W)`` the photo-electron rate of each pixel's own channel: the fused pass with every noise source,
+        the dark current and the clips off for one second (its expected charge is then the rate, exactly), so the
+        cube is read once and only each site's channel is weighted; else the layout's strided selection."""
+        if tile is not None:
+            quiet = SensorSpec().off(*NOISE_SOURCES, "clipping")
+            out = kernels.record(rates, np.asarray(tile, np.int64)[None], np.ones(1), quiet,
+                                 [noise_stream(0, TEMPORAL_STREAM, 0)], [PatternRef(quiet, tuple(rates.shape[:2]), 0)])
+            if out is not None:
+                return out[1][0]
+        return self.layout.sample(rates)
 
     @staticmethod
     def record_planes(rates, times_s, sensor, seed, patterns):

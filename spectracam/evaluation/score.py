@@ -395,6 +395,11 @@ def chart_scielab_map(rgb: np.ndarray, reference: ChartReference, processing: Pr
     On a uniform area (wider than the filters' 1° support) it equals the per-pixel ΔE (with the default XYZ-scaling
     adaptation, exactly); noise is averaged as the eye averages it.  Separable Gaussians on the scored pixels'
     bounding box and the filters' reach only, a band of rows at a time; no random numbers."""
+    if reference.cell is not None:   # one chart of several (a light group's): filtered on its own cell
+        rows, cols = reference.cell
+        out = np.full(rgb.shape[:2], np.nan, np.float32)
+        out[rows, cols] = chart_scielab_map(np.ascontiguousarray(rgb[rows, cols]), reference.local(), processing)
+        return out
     spd = processing.samples_per_degree
     M_disp = display_rgb_to_xyz(processing.display)
     white = M_disp.sum(axis=1)
@@ -462,8 +467,8 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
     return ChartScore(summary, tuple(patches), parameters, rgb.astype(np.float32), de_map, training, held_out, wb)
 
 
-def score_region(raw: RawCapture, rates: np.ndarray, reference: ChartReference, processing: ProcessingSpec,
-                 cell: tuple[slice, slice]) -> tuple[list, list, list]:
+def score_region(raw: RawCapture, rates: np.ndarray, reference: ChartReference,
+                 processing: ProcessingSpec) -> tuple[list, list, list]:
     """The told-the-light score of one chart of a scene that holds several, each under its own light group
     (issue 36): the conversion fitted on this chart's noise-free rates under its own light and level (paper 3.5),
     so each chart is rendered against its own white, as an eye adapted to that part of the scene sees it.
@@ -475,13 +480,10 @@ def score_region(raw: RawCapture, rates: np.ndarray, reference: ChartReference, 
     rates : ndarray
         ``(H, W, N)`` its exposure-normalised camera rates, e⁻/s (:func:`camera_rates`), shared by every chart.
     reference : ChartReference
-        This chart's truth under its light; its boxes lie in the capture's pixel coordinates.
+        This chart's truth under its light (:func:`spectracam.scene.reference.chart_cells`); its boxes lie in the
+        capture's pixel coordinates, and its S-CIELAB is filtered on its cell alone (:func:`chart_scielab_map`).
     processing : ProcessingSpec
         Display, ΔE formula, S-CIELAB viewing, SNR combination.
-    cell : (slice, slice)
-        The chart's cell of the image, rows and columns: its S-CIELAB is filtered on the cell alone, the chart laid
-        out in it as the renderer laid it (its surround keeps the neighbouring charts beyond the filters' reach
-        when the cell is at least a few degrees wide).
 
     Returns
     -------
@@ -504,14 +506,7 @@ def score_region(raw: RawCapture, rates: np.ndarray, reference: ChartReference, 
     M_disp = display_rgb_to_xyz(processing.display)
     colours = _chart_colours(reference, reference.patch_rates(raw.camera), M, M_disp, "scene")
     de_map = np.full(rates.shape[:2], np.nan, np.float32)
-    rows, cols = cell
-    local = dataclasses.replace(reference, width_px=cols.stop - cols.start, height_px=rows.stop - rows.start,
-                                boxes=tuple((slice(r.start - rows.start, r.stop - rows.start),
-                                             slice(c.start - cols.start, c.stop - cols.start))
-                                            for r, c in reference.boxes))
-    sc_map = np.full(rates.shape[:2], np.nan, np.float32)
-    sc_map[rows, cols] = chart_scielab_map(np.ascontiguousarray(rgb[rows, cols]), local, processing)
-    patches, de2000, _ = _patch_scores(raw, reference, processing, rgb, M, colours, de_map, sc_map)
+    patches, de2000, _ = _patch_scores(raw, reference, processing, rgb, M, colours, de_map)
     de_camera = [float(np.mean(delta_e(lab, colours.conversion_lab[p], processing.delta_e)))
                  for p, lab in enumerate(_box_labs(rgb, reference.boxes, M_disp, colours.display_white))]
     return patches, de2000, de_camera
@@ -567,10 +562,8 @@ def _patch_snrs(means: np.ndarray, stds: np.ndarray, luminance: np.ndarray, time
 
 
 def _patch_scores(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec, rgb: np.ndarray,
-                  M: np.ndarray, colours: _ChartColours, de_map: np.ndarray,
-                  sc_map: np.ndarray | None = None) -> tuple[list, list, np.ndarray]:
-    """``(patch scores, each patch's mean CIEDE2000, S-CIELAB map)``, filling ``de_map`` with the per-pixel ΔE (the
-    S-CIELAB map computed on the whole image unless given)."""
+                  M: np.ndarray, colours: _ChartColours, de_map: np.ndarray) -> tuple[list, list, np.ndarray]:
+    """``(patch scores, each patch's mean CIEDE2000, S-CIELAB map)``, filling ``de_map`` with the per-pixel ΔE."""
     method, boxes, channels = processing.delta_e, reference.boxes, raw.layout.channels
     M_disp, display_white, scene_lab, against = colours.M_disp, colours.display_white, colours.scene_lab, \
         colours.against
@@ -580,8 +573,7 @@ def _patch_scores(raw: RawCapture, reference: ChartReference, processing: Proces
     times_s = np.asarray(raw.exposure_times_s, float)
     mean_labs = xyz_to_lab(np.stack([rgb[r, c].reshape(-1, 3).mean(axis=0) for r, c in boxes]) @ M_disp.T,
                            display_white)
-    if sc_map is None:
-        sc_map = chart_scielab_map(rgb, reference, processing)
+    sc_map = chart_scielab_map(rgb, reference, processing)
     patches, de2000 = [], []
     for p, (r, c), lab_box in zip(range(len(boxes)), boxes, _box_labs(rgb, boxes, M_disp, display_white)):
         de = delta_e(lab_box, against[p], method)

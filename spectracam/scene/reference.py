@@ -71,6 +71,17 @@ class ChartReference:
     white_xyz: np.ndarray  # (3,), the illuminant's white, Y = 1
     boxes: tuple  # ((rows, cols) slices) of each patch's scoring mask
     _rates: dict = field(default_factory=dict, repr=False)
+    #: ``(rows, cols)``: the cell of the image the chart is laid out in (a light group's, :func:`chart_cells`); None:
+    #: the whole image.
+    cell: tuple | None = None
+
+    def local(self) -> "ChartReference":
+        """This chart as if its cell were the whole image (boxes in the cell's pixels): the chart's own layout, for a
+        computation on the cell's crop (the S-CIELAB truth)."""
+        if self.cell is None:
+            return self
+        rows, cols = self.cell
+        return _local_reference(self, rows.start, rows.stop, cols.start, cols.stop)
 
     @classmethod
     def of(cls, scene) -> "ChartReference":
@@ -206,6 +217,15 @@ def chart_cells(scene) -> list[ChartCell]:
     return list(_chart_cells(scene.chart, scene.lights, scene.grid, W, H, scene.image.lights_columns))
 
 
+@lru_cache(maxsize=64)
+def _local_reference(ref: ChartReference, r0: int, r1: int, c0: int, c1: int) -> ChartReference:
+    import dataclasses
+
+    return dataclasses.replace(ref, width_px=c1 - c0, height_px=r1 - r0, cell=None, _rates={},
+                               boxes=tuple((slice(r.start - r0, r.stop - r0), slice(c.start - c0, c.stop - c0))
+                                           for r, c in ref.boxes))
+
+
 def _offset(box: tuple[slice, slice], rows: slice, cols: slice) -> tuple[slice, slice]:
     r, c = box
     return slice(r.start + rows.start, r.stop + rows.start), slice(c.start + cols.start, c.stop + cols.start)
@@ -222,7 +242,8 @@ def _chart_cells(chart, lights, grid, width_px, height_px, columns) -> tuple[Cha
     for k, (group, (rows, cols)) in enumerate(zip(lights, cell_slices(len(lights), width_px, height_px, columns))):
         local = _reference(chart, group.illuminant, grid, cols.stop - cols.start, rows.stop - rows.start)
         ref = dataclasses.replace(local, width_px=width_px, height_px=height_px,
-                                  boxes=tuple(_offset(b, rows, cols) for b in local.boxes))
+                                  boxes=tuple(_offset(b, rows, cols) for b in local.boxes), cell=(rows, cols),
+                                  _rates={})
         cells.append(ChartCell(group.name, k, group.illuminant, rows, cols, ref))
     return tuple(cells)
 

@@ -16,6 +16,10 @@ Two exposures of each scene:
 * ``chart`` — each chart's own exposure (metered on its own white, shortened to the limit): the range of scene
   levels the camera works at, where the hand-held limit, not the well, sets the low end.
 
+Each chart's rendering is display-referred: clipped to the display's range (``processing.gamut_clip``, on here), as a
+screen shows it; a chart the exposure starves is then scored on what a screen would show, not on noise amplified
+past any display.
+
 Each chart is scored as the paper scores its one chart (:func:`spectracam.evaluation.score.score_region`): the
 conversion fitted under its own light and level (the camera told the light, as the paper's; each chart rendered
 against its own white, as an eye adapted to that part of the scene sees it), per-pixel ΔE*ab (CIE 1976) and CIEDE2000
@@ -83,6 +87,9 @@ def _scene(name: str, quick: bool, sets: tuple):
     from spectracam.pipeline.scene_file import parse_scene, read_toml, shipped_scene_file
 
     data = read_toml(shipped_scene_file(SCENES[name]), "scene file")
+    # display-referred: each chart is shown clipped to the display's range, as a screen shows it (a chart the exposure
+    # starves would otherwise be scored on noise amplified ~10⁷ past any display; --set processing.gamut_clip=false)
+    data = {**data, "processing": {**data.get("processing", {}), "gamut_clip": True}}
     if quick:
         w, h = QUICK_IMAGE_PX[name]
         data = {**data, "image": {**data.get("image", {}), "width": w, "height": h}}
@@ -137,10 +144,14 @@ def expose_hdr(cube, camera, seed: int, white_radiance: np.ndarray, limit_s: flo
                       seed=seed, metered_rate_e_per_s=white, scene=cube.metadata.get("scene"), metering=metering)
 
 
+#: What each chart's row holds (means over seeds, and their standard deviations).
+_METRICS = ("delta_e_ab", "delta_e_2000", "delta_e_capture", "s_cielab", "snr_white_db", "snr_grey_db")
+
+
 def _cell_score(raw, rates, cell, processing) -> dict:
     from spectracam.evaluation.score import score_region
 
-    patches, de2000, de_camera = score_region(raw, rates, cell.reference, processing, (cell.rows, cell.cols))
+    patches, de2000, de_camera = score_region(raw, rates, cell.reference, processing)
     return {"delta_e_ab": float(np.mean([p.delta_e_mean for p in patches])), "delta_e_2000": float(np.mean(de2000)),
             "delta_e_capture": float(np.mean(de_camera)),
             "s_cielab": float(np.mean([p.s_cielab_mean for p in patches])),
@@ -163,10 +174,17 @@ def chart_rows(cube, scene, cells, camera, run: DynamicRangeRun, exposure: str) 
     brightest = max(cells, key=lambda c: c.reference.illuminant.white_luminance_cd_m2)
     per_cell: dict = {c.name: [] for c in cells}
     times: dict = {c.name: None for c in cells}
+    notes: dict = {c.name: None for c in cells}
     for seed in range(run.seeds):
         groups = [(brightest, cells)] if exposure == "scene" else [(c, [c]) for c in cells]
         for metered, scored in groups:
-            raw = expose_hdr(cube, camera, seed, metered.reference.patch_radiance[WHITE], run.time_limit_s)
+            try:
+                raw = expose_hdr(cube, camera, seed, metered.reference.patch_radiance[WHITE], run.time_limit_s)
+            except SpectracamError as e:   # e.g. a hot die whose dark current outruns a dim chart's light
+                for c in scored:
+                    per_cell[c.name].append(dict.fromkeys(_METRICS))
+                    notes[c.name] = f"not exposed: {e}"
+                continue
             rates = camera_rates(raw, scene.processing)
             for c in scored:
                 per_cell[c.name].append(_cell_score(raw, rates, c, scene.processing))
@@ -174,8 +192,8 @@ def chart_rows(cube, scene, cells, camera, run: DynamicRangeRun, exposure: str) 
     rows = []
     for c in cells:
         row = {"chart": c.name, "white_luminance_cd_m2": float(c.reference.illuminant.white_luminance_cd_m2),
-               "exposure_times_ms": times[c.name]}
-        for k in per_cell[c.name][0]:
+               "exposure_times_ms": times[c.name], "note": notes[c.name]}
+        for k in _METRICS:
             row[k], row[k + "_sd"] = _mean_sd([s[k] for s in per_cell[c.name]])
         rows.append(row)
     return rows
