@@ -102,7 +102,7 @@ def test_the_command_writes_its_files_and_refuses_bad_values_in_one_line(tmp_pat
     assert res["parameters"]["readouts"] == ["dual_gain"] and res["parameters"]["temperatures_C"] == [65.0]
     assert "--readout dual_gain" in res["command"]
     for bad in (["--readout", "nosuch"], ["--design", "cfa/optimal"], ["--set", "sensor.readout_samples=0"],
-                ["--temperature", "400"]):
+                ["--temperature", "400"], ["--set", "sensor.readout=dual_gain"], ["--set", "sensor.temperature_C=60"]):
         r = CliRunner().invoke(main, ["dynamic-range", "-o", str(tmp_path / "x"), "--quick", "--quiet", *bad])
         assert r.exit_code != 0
         msg = r.output.strip().splitlines()

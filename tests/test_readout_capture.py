@@ -91,3 +91,18 @@ def test_a_merged_word_goes_through_the_raw_exr_and_not_into_a_dng(scene_cube, t
     with pytest.raises(SpectracamError, match="sensor.readout = 'multiple_capture': its merged"):
         write_dng(tmp_path / "raw.dng", raw)
     assert not (tmp_path / "raw.dng").exists()
+
+
+@pytest.mark.parametrize("readout", [r for r in READOUT_NAMES if r != "single"])
+def test_what_knows_one_read_only_says_so_in_one_line(readout):
+    from spectracam.camera import CameraSpec
+    from spectracam.experiments.design.model import SensorModel
+    from spectracam.experiments.emva.experiment import EmvaSetup, run_emva
+    from spectracam.sensor import SensorSpec
+
+    cam = CameraSpec(sensor=SensorSpec(readout=readout))
+    with pytest.raises(SpectracamError, match=f"sensor.readout = '{readout}': EMVA 1288 Linear") as e:
+        run_emva(cam, EmvaSetup(width=16, height=16))
+    assert "\n" not in str(e.value) and "spectracam datasheet" in str(e.value)
+    with pytest.raises(SpectracamError, match=f"sensor.readout = '{readout}': the design's expected-error model"):
+        SensorModel.of(cam)

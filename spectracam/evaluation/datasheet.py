@@ -112,7 +112,8 @@ def saturation_signal(signal, top_fraction, var) -> tuple[float, str]:
     """The saturation signal μ_sat: where 0.15 % of the pixels show the top output value (EMVA 1288 Release 4,
     sections 2.7 and 6.5; log-interpolated between the steps around it); else, when the mean signal has stopped
     rising (a read-out whose clipped pixels sit below its top output value: the last two steps within 1 %), the
-    plateau it reached; else where the temporal variance peaks (Release 3.1's definition).
+    onset of that plateau, where the temporal variance peaks; else where the temporal variance peaks (Release 3.1's
+    definition).
 
     Returns
     -------
@@ -128,7 +129,9 @@ def saturation_signal(signal, top_fraction, var) -> tuple[float, str]:
         t = (np.log(SATURATED_FRACTION_TARGET) - np.log(lo)) / (np.log(hi) - np.log(lo))
         return float(np.exp(np.log(x[i - 1]) + t * (np.log(x[i]) - np.log(x[i - 1])))), "pixel_fraction"
     if x.size >= 3 and x[-1] > 0 and abs(x[-1] / x[-2] - 1) < PLATEAU_TOLERANCE:
-        return float(np.max(x)), "plateau"
+        # clipped below the top value: the onset of clipping is where the temporal variance peaks (on the plateau the
+        # clipped pixels have no noise left, so an SNR measured there is no SNR of the sensor)
+        return float(x[int(np.nanargmax(v))]), "plateau"
     return float(x[int(np.nanargmax(v))]), "variance_max"
 
 

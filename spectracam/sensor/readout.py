@@ -37,11 +37,11 @@ from spectracam.core.errors import SpectracamError
 from spectracam.core.registry import Registry
 from spectracam.sensor import kernels
 
-__all__ = ["READOUTS", "SATURATION_MARGIN_SIGMA", "SWITCH_FRACTION", "AdcRead", "ReadoutScheme", "adc_read",
-           "compand", "companding_bound", "companding_curve", "decode", "estimate_current", "expand", "high_gain_read_noise_e",
-           "multiple_capture_samples", "output_black_dn",
-           "multiple_capture_variance", "output_dn_per_e", "output_top_dn", "read", "read_bracketing",
-           "read_dual_gain", "read_multiple_capture", "read_split_pixel", "snr_curve"]
+__all__ = ["AdcRead", "READOUTS", "ReadoutScheme", "SATURATION_MARGIN_SIGMA", "SWITCH_FRACTION", "adc_read",
+           "compand", "companding_bound", "companding_curve", "decode", "estimate_current", "expand",
+           "high_gain_read_noise_e", "multiple_capture_samples", "multiple_capture_variance", "output_black_dn",
+           "output_dn_per_e", "output_top_dn", "read", "read_bracketing", "read_dual_gain", "read_multiple_capture",
+           "read_split_pixel", "snr_curve"]
 
 #: A multiple-capture sample counts as saturated when its read, less the reset read, is within this many σ of the
 #: read difference (σ_V·√2, quantisation included) below the well or the ADC's top: a clipped sample reads the well
@@ -441,7 +441,7 @@ def multiple_capture_samples(current_e_per_s, time_s: float, sensor, noise, offs
 
     References
     ----------
-    .. [LiuElGamal2001] see /tmp/refs_readout.md.
+    .. [LiuElGamal2001] see docs/references.md.
     """
     n_s, adc, c = sensor.readout_samples, adc_read(sensor), _mc_constants(sensor)
     dt = time_s / n_s
@@ -500,8 +500,8 @@ def estimate_current(times_s, samples_e, sensor, at_top=None) -> np.ndarray:
 
     References
     ----------
-    .. [LiuElGamal2001] see /tmp/refs_readout.md.
-    .. [LiuElGamal2003] see /tmp/refs_readout.md.
+    .. [LiuElGamal2001] see docs/references.md.
+    .. [LiuElGamal2003] see docs/references.md.
     """
     y = np.asarray(samples_e, np.float64)
     t = np.asarray(times_s, np.float64)
@@ -625,7 +625,7 @@ def read_multiple_capture(rate_e_per_s, time_s: float, sensor, noise, pattern=No
 
     References
     ----------
-    .. [LiuElGamal2001] see /tmp/refs_readout.md.
+    .. [LiuElGamal2001] see docs/references.md.
     """
     shape = np.shape(rate_e_per_s)
     rate = np.ascontiguousarray(rate_e_per_s, np.float32).reshape(-1)
@@ -698,7 +698,7 @@ def read_dual_gain(rate_e_per_s, time_s: float, sensor, noise, pattern=None):
 
     References
     ----------
-    .. [Solhusvik2019] see /tmp/refs_readout.md.
+    .. [Solhusvik2019] see docs/references.md.
     """
     shape, rate, pat, mean, off = _prepare(rate_e_per_s, time_s, sensor, pattern)
     ratio = sensor.dual_gain_ratio
@@ -745,7 +745,7 @@ def read_split_pixel(rate_e_per_s, time_s: float, sensor, noise, pattern=None):
 
     References
     ----------
-    .. [Solhusvik2019] see /tmp/refs_readout.md.
+    .. [Solhusvik2019] see docs/references.md.
     """
     shape, rate, pat, mean, off = _prepare(rate_e_per_s, time_s, sensor, pattern)
     ratio, frac = sensor.split_ratio, sensor.split_small_well_fraction
@@ -802,7 +802,7 @@ def read_bracketing(rate_e_per_s, time_s: float, sensor, noise, pattern=None, fr
 
     References
     ----------
-    .. [Debevec1997] see /tmp/refs_readout.md.
+    .. [Debevec1997] see docs/references.md.
     """
     shape, rate, pat, mean, _ = _prepare(rate_e_per_s, time_s, sensor, pattern)
     n_f, r = sensor.bracketing_frames, sensor.bracketing_ratio
@@ -846,7 +846,7 @@ def multiple_capture_variance(current_e_per_s: float, time_s: float, sensor, est
 
     References
     ----------
-    .. [LiuElGamal2001] see /tmp/refs_readout.md.
+    .. [LiuElGamal2001] see docs/references.md.
     """
     c = _mc_constants(sensor)
     n_s = sensor.readout_samples
@@ -927,7 +927,7 @@ def snr_curve(signal_e, sensor) -> np.ndarray:
     References
     ----------
     .. [EMVA1288] see docs/references.md; the SNR of a linear camera.
-    .. [LiuElGamal2001] see /tmp/refs_readout.md.
+    .. [LiuElGamal2001] see docs/references.md.
     """
     s = np.asarray(signal_e, np.float64)
     var, top = _scheme_var(s, sensor)
@@ -984,8 +984,8 @@ def read(rate_e_per_s, time_s: float, sensor, noise, pattern=None):
 
     References
     ----------
-    .. [LiuElGamal2001] see /tmp/refs_readout.md.
-    .. [Solhusvik2019] see /tmp/refs_readout.md.
-    .. [Debevec1997] see /tmp/refs_readout.md.
+    .. [LiuElGamal2001] see docs/references.md.
+    .. [Solhusvik2019] see docs/references.md.
+    .. [Debevec1997] see docs/references.md.
     """
     return _scheme(sensor).read(rate_e_per_s, time_s, sensor, noise, pattern)

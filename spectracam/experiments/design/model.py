@@ -73,6 +73,10 @@ class SensorModel:
     @classmethod
     def of(cls, camera) -> "SensorModel":
         s = camera.sensor
+        if s.readout != "single":
+            raise SpectracamError(f"sensor.readout = {s.readout!r}: the design's expected-error model knows one read at "
+                                  "the end of the exposure (the paper's); design with 'single', then compare read-outs "
+                                  "with spectracam dynamic-range or spectracam datasheet")
         fpn = s.fpn and s.fpn_fraction > 0
         # plain floats: a numpy scalar times a Dr.Jit tensor would let numpy try to broadcast the tensor
         return cls(q_max_e=float(s.q_max_e), white_fill=float(camera.capture.white_fill),

@@ -111,6 +111,12 @@ def plan(quick: bool = False, seeds: int | None = None, renderer: str = "analyti
     for r in readouts:
         if r not in READOUT_NAMES:
             raise SpectracamError(f"--readout = {r!r}: not a read-out; one of {', '.join(READOUT_NAMES)}")
+    for s in sets:   # what the command varies per case is not also a --set (it would be silently overwritten)
+        for path, option in (("sensor.readout", "--readout"), ("sensor.temperature_C", "--temperature"),
+                             ("capture.architecture", "--design"), ("capture.exposure", "--design"),
+                             ("capture.design", "--design")):
+            if str(s).split("=", 1)[0].strip() == path:
+                raise SpectracamError(f"--set {s}: dynamic-range sets {path} for each case; use {option}")
     scenes = {name: _scene(name, quick, tuple(sets)) for name in SCENES}
     for d in designs:
         scenes["ladder"].camera.with_design(d, "--design")

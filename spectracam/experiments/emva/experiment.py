@@ -60,6 +60,10 @@ def channel_qe(camera: CameraSpec, channel: str, wavelength_nm: float) -> float:
 def simulate_series(camera: CameraSpec, setup: EmvaSetup = EmvaSetup()) -> tuple[EmvaSeries, dict]:
     """The frames of the measurement, taken with one physical sensor (one fixed pattern)."""
     s = camera.sensor
+    if s.readout != "single":
+        raise SpectracamError(f"sensor.readout = {s.readout!r}: EMVA 1288 Linear's photon transfer needs a read-out "
+                              "whose variance is linear in its signal (the 'single' read); spectracam datasheet measures "
+                              "every read-out by EMVA 1288 General")
     import math
 
     if not (isinstance(setup.wavelength_nm, (int, float)) and math.isfinite(setup.wavelength_nm)):
