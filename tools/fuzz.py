@@ -52,12 +52,16 @@ FIELDS = ["illuminant.temperature_K", "illuminant.white_luminance_cd_m2", "image
           "sensor.hot_pixel_mean_factor", "sensor.readout", "sensor.readout_samples", "sensor.readout_estimator",
           "sensor.motion_threshold_sigma", "sensor.dual_gain_ratio", "sensor.dual_gain_switch", "sensor.split_ratio",
           "sensor.split_small_well_fraction", "sensor.bracketing_frames", "sensor.bracketing_ratio",
-          "sensor.companding_bits"]
+          "sensor.companding_bits", "optics.relative_illumination", "optics.exit_pupil_mm", "optics.exit_pupil_form",
+          "optics.illumination_height_mm", "optics.illumination_curve", "optics.pa_k", "optics.pa_radius_mm",
+          "optics.chief_ray", "optics.cra_corner_deg", "optics.cra_corner_mm", "optics.cra_height_mm",
+          "optics.cra_table_deg", "optics.image_circle_diameter_mm", "optics.optical_centre_mm"]
 VALUES = ["0", "-1", "1e308", "nan", "inf", "-inf", "1.5", "true", '"text"', "[1, 2]", "[]", "{}", "3", "7",
           "2147483648", "0.001", "bilinear", "fsc", "optimal", "photodiode", "developed", "percentile", "grey_edge",
           "dual_illuminant", "corrected_moments", "colorchecker24", "filmic", '"none"', "[5.9, 5.95, 6.0, 6.05]",
           "[1, 0, 1]", "[0.0001, 0.0002, 0.0003, 100]", '"multiple_capture"', '"dual_gain"', '"split_pixel"',
-          '"bracketing"', '"last_sample"', "12", "1024", "1025", "0.999"]
+          '"bracketing"', '"last_sample"', "12", "1024", "1025", "0.999", '"cos4"', '"exit_pupil"', '"pa"', '"disk"',
+          "85", "[-0.3, 0.1, 0.0]", "[0, 0.5, 1]"]
 
 
 #: A case that runs longer than this hangs (counted as such, then killed).

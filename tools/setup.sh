@@ -68,6 +68,20 @@ if [ "$extras" = "exr,test" ] && { [ ! -x /usr/bin/chromium ] || [ ! -x /usr/bin
   fi
 fi
 
+# --test: the real cameras' measurements the off-axis tests read (issue 37): lensfun's lens database and libcamera's
+# tuning files (the Raspberry Pi HQ camera's lens-shading tables); those tests are skipped with their reason where
+# the packages cannot be installed.
+if [ "$extras" = "exr,test" ] && { [ ! -d /usr/share/lensfun/version_1 ] || [ ! -d /usr/share/libcamera/ipa ]; }; then
+  if can_apt; then
+    echo "setup: installing liblensfun-data-v1 and libcamera-ipa (measured lenses and lens-shading tables)"
+    apt_install liblensfun-data-v1 libcamera-ipa || echo "setup: warning: liblensfun-data-v1/libcamera-ipa could" \
+      "not be installed; the tests that read them will be skipped" >&2
+  else
+    echo "setup: warning: liblensfun-data-v1/libcamera-ipa missing and this user cannot install them; the tests" \
+         "that read them will be skipped" >&2
+  fi
+fi
+
 # The virtual environment: kept when its python runs and has pip, made anew otherwise.
 PY=.venv/bin/python
 venv_ok() {

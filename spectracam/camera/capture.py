@@ -19,7 +19,7 @@ from spectracam.camera import CameraSpec, band_weights
 from spectracam.sensor.exposure import exposure_times_s
 from spectracam.sensor.kernels import SpectralRates
 
-__all__ = ["RawCapture", "capture", "capture_time_s"]
+__all__ = ["RawCapture", "capture", "capture_time_s", "field_radiance"]
 
 
 @dataclass
@@ -50,6 +50,19 @@ class RawCapture:
         return self.camera.design
 
 
+def field_radiance(radiance: np.ndarray, camera: CameraSpec) -> np.ndarray:
+    """The radiance as the sensor receives it across the field (issue 37): each pixel's spectrum times the lens's
+    relative illumination there (:func:`spectracam.optics.field.field_maps`: cos⁴ of the chief ray's angle, the
+    exit-pupil form, a measured curve or lensfun's polynomial; 0 outside the image circle).  On the axis (the
+    default, the paper's camera) the cube itself, not a copy."""
+    if camera.optics.on_axis:
+        return radiance
+    from spectracam.optics.field import field_maps
+
+    maps = field_maps(radiance.shape[:2], camera.sensor.pixel_pitch_um, camera.optics, camera.optics.f_number)
+    return radiance * maps.illumination[..., None].astype(radiance.dtype)
+
+
 def capture_time_s(arch, times_s: np.ndarray, sensor) -> float:
     """How long the capture takes, s: the architecture's sum or maximum of its exposures (paper 2), each exposure
     as long as the sensor's read-out takes for it (a bracketed exposure: its frames together)."""
@@ -73,11 +86,12 @@ def capture(cube, camera: CameraSpec, seed: int, metering_box: tuple[slice, slic
     random draw (fixed pattern and temporal noise)."""
     arch = camera.architecture()
     weights = band_weights(camera, cube.grid)
-    rates = SpectralRates(cube.radiance, weights)  # computed in the sensor's pass
+    radiance = field_radiance(cube.radiance, camera)
+    rates = SpectralRates(radiance, weights)  # computed in the sensor's pass
     if camera.capture.metering not in ("auto", "white_patch"):   # the camera meters its own preview (issue 33)
         from spectracam.sensor.metering import metered_white_rates, metering_record
 
-        white_rate = metered_white_rates(cube.radiance, weights.astype(np.float64), camera.capture)
+        white_rate = metered_white_rates(radiance, weights.astype(np.float64), camera.capture)
         metering = metering_record(camera.capture)
     elif white_radiance is not None:
         white_rate = np.asarray(white_radiance, np.float64) @ weights.astype(np.float64)

@@ -10,10 +10,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from spectracam.core.registry import Registry
-from spectracam.core.spec import Spec, check_curve
+from spectracam.core.spec import check_curve
 from spectracam.core.spectra import WavelengthGrid, band_average, energy_to_photons, tabulated
+from spectracam.optics.field import FieldSpec
 
-__all__ = ["IRRADIANCE_FORMS", "OpticsSpec", "irradiance_factor", "radiance_to_photon_irradiance"]
+__all__ = ["IRRADIANCE_FORMS", "FieldSpec", "OpticsSpec", "irradiance_factor", "radiance_to_photon_irradiance"]
 
 #: Irradiance forms: name → image irradiance per unit scene radiance (sr) as a function of f-number.
 IRRADIANCE_FORMS: Registry = Registry("optics.irradiance_form", "irradiance form")
@@ -22,7 +23,11 @@ IRRADIANCE_FORMS.register("exact", lambda n: np.pi / (1 + 4 * n**2))  # π·sin�
 
 
 @dataclass(frozen=True)
-class OpticsSpec(Spec):
+class OpticsSpec(FieldSpec):
+    """The lens: f-number, transmittance, the irradiance form (paper 3.2) and, from :class:`FieldSpec`, how the
+    irradiance and the chief ray's angle vary across the field (issue 37; by default every pixel is the centre of the
+    field, as in the paper).  The field's keys sit flat in ``[optics]`` (``--set optics.cra_corner_deg=25``)."""
+
     TABLE = "optics"
 
     #: Effective f-number; the paper's section 4.2 uses 1.4.
@@ -41,6 +46,13 @@ class OpticsSpec(Spec):
         self.number("transmittance", 0, 1, lo_open=True)
         self.choice("irradiance_form", IRRADIANCE_FORMS)
         check_curve(self, "transmittance_curve_nm", "transmittance_curve", required=False)
+        self.validate_field()
+
+    def to_dict(self) -> dict:
+        """As :meth:`Spec.to_dict`, the field's keys left out where they hold their defaults: a camera on the axis
+        records exactly what it recorded before the field existed (its files and the render cache's keys)."""
+        out, base = super().to_dict(), FieldSpec().to_dict()
+        return {k: v for k, v in out.items() if k not in base or v != base[k]}
 
 
 def irradiance_factor(optics: OpticsSpec) -> float:

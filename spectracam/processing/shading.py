@@ -1,0 +1,461 @@
+"""Lens-shading correction as a camera does it (issue 37, item 4), and the Raspberry Pi HQ camera's tables (item 6).
+
+A camera flattens its lens's fall-off with **per-channel gain tables on a coarse grid** — libcamera's Raspberry Pi
+ALSC ("automatic lens shading correction") uses 16×12 cells on the VC4 ISP [libcamera] — interpolated bilinearly to
+every pixel.  The tables are calibrated on a flat field under one light (:func:`calibrate_gain_tables`) or under a
+few, and the camera picks the table of the light it estimates by linear interpolation in colour temperature, clamped
+at the calibrated ends, as libcamera's ALSC does (:func:`interpolate_tables_by_cct`).  Applied under another light
+(:func:`apply_gain_tables`), a table calibrated for one spectrum leaves a **residual colour shading** wherever the
+channels' fall-off depends on wavelength (crosstalk, microlens diffraction, an interference IR-cut filter's edge
+moving with angle): :func:`residual_colour_shading` reports it as per-channel ratio maps.
+
+Calibration, two ways (``method``):
+
+``fit``        the table's node values (at the grid's corners, bilinear in between) are fitted by linear least
+               squares so that gain × flat field is the channel's centre level at every pixel: the best a bilinear
+               table can flatten the calibration image (flat to 0.1 % for smooth fall-off on a 16×12 grid);
+``cell_mean``  libcamera's camera tuning tool's reading: each cell's gain is the centre level over the cell's mean,
+               placed at the cell's centre (extrapolated linearly beyond the outer centres).
+
+:func:`read_libcamera_alsc` reads a Raspberry Pi tuning file's ``rpi.alsc`` block (version 1 or 2 files): the
+``luminance_lut`` (the luminance fall-off correction, a 16×12 gain table), ``luminance_strength``, and the colour
+tables ``calibrations_Cr`` / ``calibrations_Cb`` at each calibrated colour temperature (the R and B gains relative to
+G, including the white balance's ratio at that light).  :func:`table_figures` gives their corner/centre figures.
+
+References: see ``/tmp/refs_angle.md`` ([libcamera], [RPiTuning]).
+"""
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from spectracam.core.errors import ConfigError, SpectracamError
+from spectracam.core.spec import Spec
+
+__all__ = ["ALSC_CELLS", "LIBCAMERA_TUNING_DIRS", "PLACEMENTS", "SHADING_CORRECTIONS", "SHADING_METHODS",
+           "AlscTuning", "ShadingSpec", "ShadingTables", "apply_gain_tables", "calibrate_gain_tables",
+           "find_libcamera_tuning", "interpolate_table", "interpolate_tables_by_cct", "interpolation_matrix",
+           "luminance_and_colour_tables", "read_libcamera_alsc", "residual_colour_shading", "table_figures"]
+
+#: libcamera's Raspberry Pi (VC4) ALSC grid: 12 rows × 16 columns of cells.
+ALSC_CELLS = (12, 16)
+#: Where a table's nodes lie: at the cells' centres (libcamera) or on a grid spanning the image's corner pixels.
+PLACEMENTS = ("centres", "corners")
+#: Calibration methods (module docstring).
+SHADING_METHODS = ("fit", "cell_mean")
+#: What the camera corrects with: nothing (today), one table (calibrated under one light), or tables at several
+#: colour temperatures interpolated by the estimated one.
+SHADING_CORRECTIONS = ("none", "single", "cct")
+#: Where Debian's ``libcamera-ipa`` puts the Raspberry Pi tuning files (newer: ``rpi/vc4``; 0.0.x: ``raspberrypi``).
+LIBCAMERA_TUNING_DIRS = ("/usr/share/libcamera/ipa/rpi/vc4", "/usr/share/libcamera/ipa/raspberrypi")
+
+
+@dataclass(frozen=True)
+class ShadingSpec(Spec):
+    """The camera's lens-shading correction; ``correction = "none"`` (today: no off-axis model, nothing to correct)."""
+
+    TABLE = "shading"
+
+    #: "none", "single" or "cct" (:data:`SHADING_CORRECTIONS`).
+    correction: str = "none"
+    #: Colour temperatures of the flat fields the tables are calibrated under, K: libcamera's IMX477 tuning
+    #: calibrates at 2960, 4850 and 5930 K [RPiTuning]; "single" uses the first.
+    calibration_temperatures_K: tuple = (2960.0, 4850.0, 5930.0)
+    #: The grid, rows × columns: libcamera's 12 × 16.
+    grid_rows: int = 12
+    grid_columns: int = 16
+    #: "fit" or "cell_mean" (:data:`SHADING_METHODS`).
+    method: str = "fit"
+
+    def validate(self) -> None:
+        self.choice("correction", SHADING_CORRECTIONS)
+        t = self.calibration_temperatures_K
+        ok = isinstance(t, tuple) and len(t) >= 1 and all(
+            isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) and 1000 <= x <= 25000
+            for x in t) and all(b > a for a, b in zip(t, t[1:]))
+        if not ok:
+            raise self.error("calibration_temperatures_K", "must be a list of increasing colour temperatures between "
+                             "1000 and 25000 K", list(t) if isinstance(t, tuple) else t)
+        object.__setattr__(self, "calibration_temperatures_K", tuple(float(x) for x in t))
+        self.integer("grid_rows", 2, 256)
+        self.integer("grid_columns", 2, 256)
+        self.choice("method", SHADING_METHODS)
+
+
+@dataclass(frozen=True, eq=False)
+class ShadingTables:
+    """Per-channel gain tables ``(N, rows, columns)`` and where their nodes lie (:data:`PLACEMENTS`)."""
+
+    gains: np.ndarray
+    placement: str = "corners"
+
+
+def _planes(planes, name: str = "planes") -> np.ndarray:
+    p = np.asarray(planes, dtype=float)
+    if p.ndim != 3 or min(p.shape[1:]) < 2:
+        raise ConfigError(name, f"shape {p.shape}", "must be (channels, H, W) planes of at least 2×2 pixels")
+    if not np.all(np.isfinite(p)) or np.any(p <= 0):
+        raise ConfigError(name, "values ≤ 0 or not finite", "a flat field must be finite and > 0 in every channel")
+    return p
+
+
+def interpolation_matrix(n_px: int, n_nodes: int, placement: str = "corners") -> np.ndarray:
+    """Linear interpolation weights from a row of table nodes to a row of pixels.
+
+    Parameters
+    ----------
+    n_px : int
+        Pixels along the axis.
+    n_nodes : int
+        Nodes along the axis (≥ 2).
+    placement : str
+        "corners": node k at pixel ``k·(n_px − 1)/(n_nodes − 1)``; "centres": node k at the centre of cell k of
+        ``n_nodes`` equal cells, extrapolated linearly beyond the first and last centres (libcamera's cells).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n_px, n_nodes)``, each row summing to 1 with at most two non-zero weights (negative where extrapolated).
+
+    References
+    ----------
+    .. [libcamera] see /tmp/refs_angle.md (ALSC cells).
+    """
+    if placement not in PLACEMENTS:
+        raise ConfigError("placement", placement, "must be one of " + ", ".join(map(repr, PLACEMENTS)))
+    x = np.arange(n_px, dtype=float)
+    if placement == "corners":
+        pos = x * (n_nodes - 1) / max(n_px - 1, 1)
+    else:
+        pos = (x + 0.5) * n_nodes / n_px - 0.5
+    k = np.clip(np.floor(pos).astype(int), 0, n_nodes - 2)
+    f = pos - k
+    m = np.zeros((n_px, n_nodes))
+    m[np.arange(n_px), k] = 1 - f
+    m[np.arange(n_px), k + 1] += f
+    return m
+
+
+def interpolate_table(table, shape: tuple[int, int], placement: str = "corners") -> np.ndarray:
+    """A coarse table ``(..., rows, columns)`` interpolated bilinearly to ``(..., H, W)``.
+
+    Parameters
+    ----------
+    table : array_like
+        ``(..., rows, columns)`` gains.
+    shape : tuple of int
+        The image's ``(H, W)``.
+    placement : str
+        :data:`PLACEMENTS`.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(..., H, W)``: ``Wy @ T @ Wxᵀ`` (bilinear interpolation is separable).
+
+    References
+    ----------
+    .. [libcamera] see /tmp/refs_angle.md.
+    """
+    t = np.asarray(table, dtype=float)
+    wy = interpolation_matrix(shape[0], t.shape[-2], placement)
+    wx = interpolation_matrix(shape[1], t.shape[-1], placement)
+    return wy @ t @ wx.T
+
+
+def _centre_level(plane: np.ndarray) -> float:
+    """Mean of the central box (1/8 of each side, at least one pixel) of one plane."""
+    h, w = plane.shape
+    bh, bw = max(1, h // 8), max(1, w // 8)
+    return float(plane[(h - bh) // 2:(h + bh) // 2, (w - bw) // 2:(w + bw) // 2].mean())
+
+
+def _fit_nodes(plane: np.ndarray, target: float, rows: int, cols: int) -> np.ndarray:
+    """Least-squares node values ``T`` minimising ``Σ (plane·(Wy T Wxᵀ) − target)²`` (normal equations)."""
+    wy = interpolation_matrix(plane.shape[0], rows)
+    wx = interpolation_matrix(plane.shape[1], cols)
+    m1 = np.einsum("ij,jb,jd->ibd", plane**2, wx, wx)  # (H, cols, cols)
+    ata = np.einsum("ia,ic,ibd->abcd", wy, wy, m1).reshape(rows * cols, rows * cols)
+    atb = (wy.T @ (plane * target) @ wx).reshape(-1)
+    return np.linalg.solve(ata, atb).reshape(rows, cols)
+
+
+def _cell_means(plane: np.ndarray, rows: int, cols: int) -> np.ndarray:
+    ey = np.linspace(0, plane.shape[0], rows + 1).round().astype(int)
+    ex = np.linspace(0, plane.shape[1], cols + 1).round().astype(int)
+    return np.array([[plane[ey[r]:ey[r + 1], ex[c]:ex[c + 1]].mean() for c in range(cols)] for r in range(rows)])
+
+
+def calibrate_gain_tables(flat, spec: ShadingSpec | None = None) -> ShadingTables:
+    """Per-channel gain tables from a flat field: gain × flat = the channel's centre level.
+
+    Parameters
+    ----------
+    flat : array_like
+        ``(N, H, W)`` the flat field's channel planes (demosaicked, or a mosaic's half-resolution planes), > 0.
+    spec : ShadingSpec, optional
+        Grid size and method (default :class:`ShadingSpec`'s 12 × 16, "fit").
+
+    Returns
+    -------
+    ShadingTables
+        ``(N, rows, columns)`` gains; "fit" at the grid's corners, "cell_mean" at the cells' centres.
+
+    References
+    ----------
+    .. [libcamera] see /tmp/refs_angle.md (the tuning tool's cell means).
+    """
+    spec = spec or ShadingSpec()
+    p = _planes(flat, "flat")
+    if min(p.shape[1:]) < max(spec.grid_rows, spec.grid_columns):
+        raise ConfigError("flat", f"shape {p.shape}", f"must have at least {max(spec.grid_rows, spec.grid_columns)} "
+                          "pixels on each side for a table of that many nodes")
+    targets = [_centre_level(c) for c in p]
+    if spec.method == "fit":
+        gains = np.stack([_fit_nodes(c, t, spec.grid_rows, spec.grid_columns) for c, t in zip(p, targets)])
+        return ShadingTables(gains, "corners")
+    gains = np.stack([t / _cell_means(c, spec.grid_rows, spec.grid_columns) for c, t in zip(p, targets)])
+    return ShadingTables(gains, "centres")
+
+
+def apply_gain_tables(planes, tables: ShadingTables) -> np.ndarray:
+    """The planes ``(N, H, W)`` times their channels' interpolated gains.
+
+    Parameters
+    ----------
+    planes : array_like
+        ``(N, H, W)`` channel planes.
+    tables : ShadingTables
+        ``(N, rows, columns)`` gains.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(N, H, W)`` corrected planes.
+
+    References
+    ----------
+    .. [libcamera] see /tmp/refs_angle.md.
+    """
+    p = np.asarray(planes, dtype=float)
+    if p.ndim != 3 or p.shape[0] != tables.gains.shape[0]:
+        raise ConfigError("planes", f"shape {p.shape}", f"must be ({tables.gains.shape[0]}, H, W) for these tables")
+    return p * interpolate_table(tables.gains, p.shape[1:], tables.placement)
+
+
+def interpolate_tables_by_cct(tables_by_cct: dict, cct_K: float) -> ShadingTables:
+    """The tables at a colour temperature: linear in CCT between the two calibrated neighbours, clamped at the ends
+    (libcamera's Raspberry Pi ALSC).
+
+    Parameters
+    ----------
+    tables_by_cct : dict
+        ``{CCT in K: ShadingTables}``, all with the same shape and placement.
+    cct_K : float
+        The estimated colour temperature, K.
+
+    Returns
+    -------
+    ShadingTables
+
+    References
+    ----------
+    .. [libcamera] see /tmp/refs_angle.md (ALSC's calibration tables by colour temperature).
+    """
+    if not tables_by_cct:
+        raise ConfigError("tables_by_cct", {}, "must hold tables at one colour temperature at least")
+    if not isinstance(cct_K, (int, float)) or isinstance(cct_K, bool) or not math.isfinite(cct_K) or cct_K <= 0:
+        raise ConfigError("cct_K", cct_K, "must be a colour temperature > 0 K")
+    cts = sorted(tables_by_cct)
+    if cct_K <= cts[0] or len(cts) == 1:
+        return tables_by_cct[cts[0]]
+    if cct_K >= cts[-1]:
+        return tables_by_cct[cts[-1]]
+    i = int(np.searchsorted(cts, cct_K)) - 1
+    a, b = tables_by_cct[cts[i]], tables_by_cct[cts[i + 1]]
+    p = (cct_K - cts[i]) / (cts[i + 1] - cts[i])
+    return ShadingTables(a.gains * (1 - p) + b.gains * p, a.placement)
+
+
+def residual_colour_shading(corrected, reference_channel: int = 1) -> dict:
+    """The shading a correction leaves: each channel and each colour ratio against its value at the centre.
+
+    Parameters
+    ----------
+    corrected : array_like
+        ``(N, H, W)`` corrected planes of a flat field.
+    reference_channel : int
+        The channel colour ratios are taken against (1: G of R, G, B).
+
+    Returns
+    -------
+    dict
+        ``channel_ratio`` ``(N, H, W)`` (each channel over its centre level), ``colour_ratio`` ``(N, H, W)``
+        ((channel / reference) over its centre value: R/G and B/G maps), ``max_channel_deviation`` and
+        ``max_colour_deviation`` (N lists of max |ratio − 1|), ``corner_colour_ratio`` (N lists of the mean of the
+        four corner pixels' colour ratios).
+
+    References
+    ----------
+    .. [libcamera] see /tmp/refs_angle.md (ALSC's Cr, Cb: R and B against G).
+    """
+    p = _planes(corrected, "corrected")
+    if not isinstance(reference_channel, int) or not 0 <= reference_channel < p.shape[0]:
+        raise ConfigError("reference_channel", reference_channel, f"must be a channel index 0…{p.shape[0] - 1}")
+    channel = p / np.array([_centre_level(c) for c in p])[:, None, None]
+    colour = channel / channel[reference_channel]
+    colour = colour / np.array([_centre_level(c) for c in colour])[:, None, None]
+    corners = colour[:, [0, 0, -1, -1], [0, -1, 0, -1]].mean(axis=1)
+    return {"channel_ratio": channel, "colour_ratio": colour,
+            "max_channel_deviation": np.abs(channel - 1).max(axis=(1, 2)).tolist(),
+            "max_colour_deviation": np.abs(colour - 1).max(axis=(1, 2)).tolist(),
+            "corner_colour_ratio": corners.tolist()}
+
+
+def luminance_and_colour_tables(tables: ShadingTables, reference_channel: int = 1) -> tuple:
+    """libcamera's split of per-channel tables: a luminance table (the reference channel's gains, minimum 1) and the
+    other channels' gains relative to it (Cr = R/G, Cb = B/G for R, G, B).
+
+    Parameters
+    ----------
+    tables : ShadingTables
+    reference_channel : int
+
+    Returns
+    -------
+    tuple
+        ``(luminance (rows, columns), colour (N, rows, columns))`` with colour[reference] ≡ 1.
+
+    References
+    ----------
+    .. [libcamera] see /tmp/refs_angle.md.
+    """
+    g = tables.gains
+    lum = g[reference_channel] / g[reference_channel].min()
+    return lum, g / g[reference_channel]
+
+
+@dataclass(frozen=True, eq=False)
+class AlscTuning:
+    """A Raspberry Pi tuning file's ``rpi.alsc`` block: tables ``(12, 16)``, colour tables by CCT (K)."""
+
+    path: str
+    luminance_lut: np.ndarray
+    luminance_strength: float
+    cr_by_cct: dict
+    cb_by_cct: dict
+
+
+def find_libcamera_tuning(sensor: str = "imx477") -> Path | None:
+    """The installed Raspberry Pi tuning file of ``sensor`` (Debian's ``libcamera-ipa``), or None.
+
+    Parameters
+    ----------
+    sensor : str
+        The sensor's name as the file names it ("imx477": the Raspberry Pi HQ camera).
+
+    Returns
+    -------
+    pathlib.Path or None
+
+    References
+    ----------
+    .. [RPiTuning] see /tmp/refs_angle.md.
+    """
+    for d in LIBCAMERA_TUNING_DIRS:
+        p = Path(d) / f"{sensor}.json"
+        if p.is_file():
+            return p
+    return None
+
+
+def _alsc_block(data, path) -> dict:
+    if isinstance(data, dict) and isinstance(data.get("algorithms"), list):  # version 2.0
+        for algo in data["algorithms"]:
+            if isinstance(algo, dict) and "rpi.alsc" in algo:
+                return algo["rpi.alsc"]
+    elif isinstance(data, dict) and "rpi.alsc" in data:  # version 1.0
+        return data["rpi.alsc"]
+    raise SpectracamError(f"{path}: no rpi.alsc block (not a Raspberry Pi tuning file?)")
+
+
+def _grid(values, path, what: str) -> np.ndarray:
+    a = np.asarray(values, dtype=float) if isinstance(values, list) else np.array([])
+    if a.size != ALSC_CELLS[0] * ALSC_CELLS[1] or not np.all(np.isfinite(a)) or np.any(a <= 0):
+        raise SpectracamError(f"{path}: {what} must be {ALSC_CELLS[0] * ALSC_CELLS[1]} positive numbers, got "
+                              f"{a.size}")
+    return a.reshape(ALSC_CELLS)
+
+
+def _by_cct(block: dict, key: str, path) -> dict:
+    out = {}
+    for entry in block.get(key, []):
+        if not isinstance(entry, dict) or not isinstance(entry.get("ct"), (int, float)):
+            raise SpectracamError(f"{path}: {key} entries must be {{\"ct\": K, \"table\": [...]}}")
+        out[float(entry["ct"])] = _grid(entry.get("table"), path, f"{key} at {entry['ct']} K")
+    return dict(sorted(out.items()))
+
+
+def read_libcamera_alsc(path) -> AlscTuning:
+    """Read the ``rpi.alsc`` block of a Raspberry Pi (libcamera) tuning file.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The JSON tuning file (e.g. :func:`find_libcamera_tuning`'s).
+
+    Returns
+    -------
+    AlscTuning
+        ``luminance_lut`` ``(12, 16)``, ``luminance_strength``, and ``cr_by_cct`` / ``cb_by_cct``: ``{K: (12, 16)}``.
+
+    Raises
+    ------
+    SpectracamError
+        One line, if the file is missing, not JSON, or its block is malformed.
+
+    References
+    ----------
+    .. [RPiTuning] see /tmp/refs_angle.md.
+    """
+    p = Path(path)
+    try:
+        data = json.loads(p.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise SpectracamError(f"{p}: cannot read a tuning file ({type(e).__name__}: {e})") from None
+    block = _alsc_block(data, p)
+    strength = block.get("luminance_strength", 1.0)
+    if not isinstance(strength, (int, float)) or not math.isfinite(strength):
+        raise SpectracamError(f"{p}: rpi.alsc.luminance_strength must be a number, got {strength!r}")
+    return AlscTuning(str(p), _grid(block.get("luminance_lut"), p, "rpi.alsc.luminance_lut"), float(strength),
+                      _by_cct(block, "calibrations_Cr", p), _by_cct(block, "calibrations_Cb", p))
+
+
+def table_figures(table) -> dict:
+    """Corner and centre figures of a 12 × 16 (or any) gain table.
+
+    Parameters
+    ----------
+    table : array_like
+        ``(rows, columns)`` gains.
+
+    Returns
+    -------
+    dict
+        ``centre`` (mean of the central 2×2 cells), ``corners`` (the four corner cells), ``corner_mean``,
+        ``corner_over_centre`` (mean corner / centre), ``min``, ``max``.
+
+    References
+    ----------
+    .. [RPiTuning] see /tmp/refs_angle.md.
+    """
+    t = np.asarray(table, dtype=float)
+    r, c = t.shape
+    centre = float(t[(r - 1) // 2:r // 2 + 1, (c - 1) // 2:c // 2 + 1].mean())
+    corners = [float(t[0, 0]), float(t[0, -1]), float(t[-1, 0]), float(t[-1, -1])]
+    return {"centre": centre, "corners": corners, "corner_mean": float(np.mean(corners)),
+            "corner_over_centre": float(np.mean(corners)) / centre, "min": float(t.min()), "max": float(t.max())}
