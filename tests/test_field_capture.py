@@ -66,3 +66,20 @@ def test_outside_the_image_circle_there_is_no_light():
     e = raw.expected_e[1]
     outside = _height_mm() > 0.3 + 1e-9
     assert outside.any() and np.all(e[outside] == 0.0) and np.all(e[~outside] > 0.0)
+
+
+def test_a_shaded_camera_simulates_and_its_raw_file_scores(tmp_path):
+    """The white patch is metered where it lies in the field, not at the chart reference's centre: the capture's
+    exposure is not refused as another scene's, through simulate and again from the written raw.exr."""
+    from click.testing import CliRunner
+
+    from spectracam.cli import main
+
+    sets = ["image.width=160", "image.height=120", "optics.cra_corner_deg=30", "optics.relative_illumination=cos4",
+            "pixel.microlens=true", "pixel.optical_crosstalk=true"]
+    r = CliRunner().invoke(main, ["simulate", "d65", "-o", str(tmp_path / "s"), "--renderer", "analytic", "--quiet",
+                                  *[x for s in sets for x in ("--set", s)]])
+    assert r.exit_code == 0, r.output
+    r = CliRunner().invoke(main, ["score", str(tmp_path / "s" / "raw.exr"), "-o", str(tmp_path / "t"), "--quiet"])
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "t" / "report.json").stat().st_size > 0

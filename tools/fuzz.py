@@ -55,13 +55,16 @@ FIELDS = ["illuminant.temperature_K", "illuminant.white_luminance_cd_m2", "image
           "sensor.companding_bits", "optics.relative_illumination", "optics.exit_pupil_mm", "optics.exit_pupil_form",
           "optics.illumination_height_mm", "optics.illumination_curve", "optics.pa_k", "optics.pa_radius_mm",
           "optics.chief_ray", "optics.cra_corner_deg", "optics.cra_corner_mm", "optics.cra_height_mm",
-          "optics.cra_table_deg", "optics.image_circle_diameter_mm", "optics.optical_centre_mm"]
+          "optics.cra_table_deg", "optics.image_circle_diameter_mm", "optics.optical_centre_mm", "pixel.microlens",
+          "pixel.stack_height_um", "pixel.stack_index", "pixel.aperture_fraction", "pixel.spot",
+          "pixel.microlens_shift_fraction", "pixel.optical_crosstalk", "pixel.electrical_crosstalk",
+          "pixel.field_free_depth_um", "pixel.diffusion_length_um", "pixel.filter_angle", "pixel.nosuch"]
 VALUES = ["0", "-1", "1e308", "nan", "inf", "-inf", "1.5", "true", '"text"', "[1, 2]", "[]", "{}", "3", "7",
           "2147483648", "0.001", "bilinear", "fsc", "optimal", "photodiode", "developed", "percentile", "grey_edge",
           "dual_illuminant", "corrected_moments", "colorchecker24", "filmic", '"none"', "[5.9, 5.95, 6.0, 6.05]",
           "[1, 0, 1]", "[0.0001, 0.0002, 0.0003, 100]", '"multiple_capture"', '"dual_gain"', '"split_pixel"',
           '"bracketing"', '"last_sample"', "12", "1024", "1025", "0.999", '"cos4"', '"exit_pupil"', '"pa"', '"disk"',
-          "85", "[-0.3, 0.1, 0.0]", "[0, 0.5, 1]"]
+          "85", "[-0.3, 0.1, 0.0]", "[0, 0.5, 1]", '"tophat"', '"gaussian"', "25"]
 
 
 #: A case that runs longer than this hangs (counted as such, then killed).

@@ -22,7 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["DATA_FILE", "absorption_coefficient_per_um", "photodiode_qe", "reflectance"]
+__all__ = ["DATA_FILE", "absorption_coefficient_per_um", "photodiode_qe", "reflectance", "refractive_index"]
 
 DATA_FILE = "silicon_green2008.csv"
 
@@ -106,6 +106,32 @@ def _n_k(wl: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     n = np.interp(wl, t.wavelength_nm, t.n)
     k = _alpha_per_um(wl) * (wl * 1e-3) / (4 * np.pi)
     return n, k
+
+
+def refractive_index(wavelength_nm):
+    """Real refractive index n of intrinsic silicon at 300 K (Green 2008), linearly interpolated.
+
+    Parameters
+    ----------
+    wavelength_nm : float or array_like
+        Wavelength(s) in nm, inside the table's range 250–1450 nm.
+
+    Returns
+    -------
+    numpy.ndarray
+        n, same shape as `wavelength_nm` (3.9–4.7 in the visible).
+
+    Raises
+    ------
+    ValueError
+        If any wavelength lies outside the table's range.
+
+    Examples
+    --------
+    >>> round(float(refractive_index(600.0)), 2)
+    3.94
+    """
+    return _n_k(_checked_wavelength(wavelength_nm))[0]
 
 
 def reflectance(wavelength_nm):

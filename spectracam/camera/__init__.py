@@ -16,14 +16,16 @@ from spectracam.sensor.exposure import EXPOSURE_SCHEMES
 from spectracam.architecture.filters import FilterSpec
 from spectracam.optics import OpticsSpec, radiance_to_photon_irradiance
 from spectracam.sensor import SensorSpec
+from spectracam.sensor.angle import PixelAngleSpec
 from spectracam.core.spec import Spec
 from spectracam.core.spectra import WavelengthGrid
 
 __all__ = ["CAMERA_TABLES", "CameraSpec", "CaptureSpec", "band_weights", "camera_responsivities",
            "photo_electron_rates", "split_design"]
 
-#: The tables of a scene or config file that describe the camera.
-CAMERA_TABLES = ("optics", "filters", "sensor", "capture")
+#: The tables of a scene or config file that describe the camera (``[pixel]``: the pixel's response to the angle of
+#: incidence, issue 37; recorded only when it differs from its defaults).
+CAMERA_TABLES = ("optics", "filters", "sensor", "capture", "pixel")
 
 
 def split_design(design: str, field: str = "design") -> tuple[str, str]:
@@ -110,16 +112,26 @@ class CameraSpec(Spec):
     filters: FilterSpec = field(default_factory=FilterSpec)
     sensor: SensorSpec = field(default_factory=SensorSpec)
     capture: CaptureSpec = field(default_factory=CaptureSpec)
+    #: The pixel's response to the angle of incidence (microlens, crosstalk, the filters' angle shifts; issue 37).
+    pixel: PixelAngleSpec = field(default_factory=PixelAngleSpec)
 
     def validate(self) -> None:
         for name, kind in (("optics", OpticsSpec), ("filters", FilterSpec), ("sensor", SensorSpec),
-                           ("capture", CaptureSpec)):
+                           ("capture", CaptureSpec), ("pixel", PixelAngleSpec)):
             if not isinstance(getattr(self, name), kind):
                 raise ConfigError(name, getattr(self, name), f"must be a {kind.__name__}")
 
+    def to_dict(self) -> dict:
+        """As :meth:`Spec.to_dict`, the ``pixel`` table left out while it holds its defaults: a camera without it
+        records exactly what it recorded before the table existed (its files and the render cache's keys)."""
+        out = super().to_dict()
+        if self.pixel == PixelAngleSpec():
+            del out["pixel"]
+        return out
+
     @classmethod
     def from_dict(cls, data, source: str | None = None, base: "CameraSpec | None" = None) -> "CameraSpec":
-        """A camera from ``[optics]``/``[filters]``/``[sensor]``/``[capture]`` tables; keys not given
+        """A camera from ``[optics]``/``[filters]``/``[sensor]``/``[capture]``/``[pixel]`` tables; keys not given
         keep the values of ``base`` (default: the paper's camera)."""
         base = base or cls()
         if not isinstance(data, dict):

@@ -63,6 +63,22 @@ def field_radiance(radiance: np.ndarray, camera: CameraSpec) -> np.ndarray:
     return radiance * maps.illumination[..., None].astype(radiance.dtype)
 
 
+def _rates(radiance: np.ndarray, grid, camera: CameraSpec, weights: np.ndarray):
+    """The photo-electron rates to record: on the axis (the default) a :class:`SpectralRates`, computed in the
+    sensor's fused pass; with the pixel's angle response on or an oblique chief ray, each pixel's rates at its place
+    in the field (:func:`spectracam.camera.field.field_rates`), ``(H, W, N)``."""
+    if not camera.pixel.any_on and camera.optics.on_axis:
+        return SpectralRates(radiance, weights)  # computed in the sensor's pass
+    from spectracam.camera.field import field_active, field_rates
+    from spectracam.optics.field import field_maps
+
+    maps = None if camera.optics.on_axis else field_maps(radiance.shape[:2], camera.sensor.pixel_pitch_um,
+                                                          camera.optics, camera.optics.f_number)
+    if not field_active(camera, None if maps is None else maps.cra_deg):
+        return SpectralRates(radiance, weights)
+    return field_rates(radiance, grid, camera, maps)
+
+
 def capture_time_s(arch, times_s: np.ndarray, sensor) -> float:
     """How long the capture takes, s: the architecture's sum or maximum of its exposures (paper 2), each exposure
     as long as the sensor's read-out takes for it (a bracketed exposure: its frames together)."""
@@ -87,7 +103,7 @@ def capture(cube, camera: CameraSpec, seed: int, metering_box: tuple[slice, slic
     arch = camera.architecture()
     weights = band_weights(camera, cube.grid)
     radiance = field_radiance(cube.radiance, camera)
-    rates = SpectralRates(radiance, weights)  # computed in the sensor's pass
+    rates = _rates(radiance, cube.grid, camera, weights)
     if camera.capture.metering not in ("auto", "white_patch"):   # the camera meters its own preview (issue 33)
         from spectracam.sensor.metering import metered_white_rates, metering_record
 
@@ -95,8 +111,12 @@ def capture(cube, camera: CameraSpec, seed: int, metering_box: tuple[slice, slic
         metering = metering_record(camera.capture)
     elif white_radiance is not None:
         white_rate = np.asarray(white_radiance, np.float64) @ weights.astype(np.float64)
-    else:
+    elif isinstance(rates, SpectralRates):
         white_rate = rates.mean(*metering_box)
+    else:                                                # each pixel's rate at its place in the field
+        from spectracam.camera.field import metered_field_rates
+
+        white_rate = metered_field_rates(rates, metering_box, arch.layout)
     times = exposure_times_s(camera.capture.exposure, white_rate, camera.sensor, arch, camera.capture.white_fill,
                              camera.capture.exposure_split)
     if time_limit_s is not None and metering is not None and metering.get("kind") == "camera":

@@ -89,9 +89,14 @@ class PixelAngleSpec(Spec):
     #: Minority-carrier (electron) diffusion length in it, µm: 100 µm, the order of √(D·τ) with D ≈ 35 cm²/s and
     #: τ ≈ 3 µs in lightly doped p-type silicon [Sze2007].
     diffusion_length_um: float = 100.0
+    #: The filters' response to the chief ray's angle across the field (spectracam.architecture.angle): the prism's
+    #: dichroic coatings and the field-sequential wheel's interference filters shift to shorter wavelengths, a CFA's
+    #: dyes absorb along a longer path.  Off by default (the filters as at normal incidence everywhere); it changes
+    #: nothing where the chief-ray angle is 0.
+    filter_angle: bool = False
 
     def validate(self) -> None:
-        self.boolean("microlens", "optical_crosstalk", "electrical_crosstalk")
+        self.boolean("microlens", "optical_crosstalk", "electrical_crosstalk", "filter_angle")
         self.number("stack_height_um", 0, 100, lo_open=True, unit="µm")
         self.number("stack_index", 1, 4)
         self.number("aperture_fraction", 0, 1, lo_open=True)

@@ -335,7 +335,9 @@ def dynamic_range_markdown(result: dict, command: str) -> str:
     p = result["parameters"]
     lines = ["# Dynamic range: which architecture and read-out keep colour", "", f"Command: `{command}`", "",
              f"Seeds: {p['seeds']}; renderer: {p['renderer']}; hand-held limit {p['time_limit_ms']:.1f} ms. "
-             f"Kept: mean ΔE*ab < {p['delta_e_kept']:g} (camera told each chart's light; see docs/metrics.md).", "",
+             f"Kept: mean per-pixel ΔE < {p['delta_e_kept']:g}, against the camera's own noise-free rendering "
+             "(`capture`: what the sensor and read-out lose) or against the scene (`scene`: the filters' conversion "
+             "error included); the camera is told each chart's light (docs/metrics.md, \"Dynamic range\").", "",
              "## Kept range on the ladder (0.01–100 000 cd/m²)", "",
              "| design | read-out | °C | exposure | against | from (cd/m²) | to (cd/m²) | kept (dB) |",
              "|---|---|---|---|---|---|---|---|"]
