@@ -23,16 +23,22 @@ def _interrupted(signum, frame):
     import os
     import signal
 
-    from spectracam.core.files import remove_unfinished
-    from spectracam.core.processes import is_main, terminate_children
+    from spectracam.core.processes import is_main, terminate_children   # imported by main() before the handler
 
     if not is_main():  # a forked worker: its parent cleans up and reports
         os._exit(128 + signum)
     signal.signal(signum, signal.SIG_IGN)  # a second signal must not interrupt the cleanup
     terminate_children()
-    remove_unfinished()
-    from spectracam.core.progress import on_terminal
-
+    try:   # the signal may come while one of these modules is being imported: then nothing of it has run yet
+        from spectracam.core.files import remove_unfinished
+    except ImportError:
+        remove_unfinished = None   # no file staged yet: the writer's module is not even loaded
+    if remove_unfinished is not None:
+        remove_unfinished()
+    try:
+        from spectracam.core.progress import on_terminal
+    except ImportError:
+        on_terminal = sys.stderr.isatty
     if on_terminal():  # a progress bar may be drawn on this line: clear it
         sys.stderr.write("\r\x1b[K")
     sys.stderr.write(f"spectracam: interrupted ({signal.Signals(signum).name}); nothing written\n")

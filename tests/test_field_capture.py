@@ -83,3 +83,14 @@ def test_a_shaded_camera_simulates_and_its_raw_file_scores(tmp_path):
     r = CliRunner().invoke(main, ["score", str(tmp_path / "s" / "raw.exr"), "-o", str(tmp_path / "t"), "--quiet"])
     assert r.exit_code == 0, r.output
     assert (tmp_path / "t" / "report.json").stat().st_size > 0
+
+
+def test_the_field_adds_no_slow_import_to_the_camera_stage():
+    """The pixel's angle response needs SciPy's erf only when it is on: importing the camera stage (every command's
+    start-up does) must not import SciPy, whose import costs as much as the rest of the start-up."""
+    import subprocess
+    import sys
+
+    code = "import sys, spectracam.camera, spectracam.camera.capture; print('scipy' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "False"

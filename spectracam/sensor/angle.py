@@ -42,7 +42,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import erf
 
 from spectracam.core.errors import ConfigError
 from spectracam.core.spec import Spec
@@ -209,10 +208,18 @@ def spot_sigma_um(wavelength_nm, spec: PixelAngleSpec, *, pixel_pitch_um: float,
     return np.sqrt(sigma_diff**2 + (r_cone / 2) ** 2)
 
 
+def _erf(x):
+    """The error function, from SciPy, imported on first use (the camera stage imports this module; SciPy's import
+    costs as much as the rest of a command's start-up)."""
+    from scipy.special import erf
+
+    return erf(x)
+
+
 def _cdf(x, mu, sigma, shape: str):
     """The spot's 1-D cumulative distribution at ``x`` (centre ``mu``, rms ``sigma``)."""
     if shape == "gaussian":
-        return 0.5 * (1 + erf((x - mu) / (np.sqrt(2) * sigma)))
+        return 0.5 * (1 + _erf((x - mu) / (np.sqrt(2) * sigma)))
     half = np.sqrt(3) * sigma  # a top-hat of rms σ spans ±√3·σ
     return np.clip((x - mu + half) / (2 * half), 0.0, 1.0)
 
@@ -291,7 +298,7 @@ def _cells_truncated(mu, entry_mu, sigma, half, pitch, shape: str):
 def _cells_gaussian(mu, mean, var, pitch):
     """As :func:`_cells_truncated` for a Gaussian position of ``mean + mu`` and variance ``var``."""
     s = np.sqrt(var)
-    c = [0.5 * (1 + erf((e - mu - mean) / (np.sqrt(2) * s))) for e in (-0.5 * pitch, 0.5 * pitch)]
+    c = [0.5 * (1 + _erf((e - mu - mean) / (np.sqrt(2) * s))) for e in (-0.5 * pitch, 0.5 * pitch)]
     return np.stack([c[0], c[1] - c[0], 1 - c[1]], axis=-1)
 
 
