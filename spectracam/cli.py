@@ -86,6 +86,7 @@ class _Group(click.Group):
         "datasheet": ("spectracam.experiments.datasheet.command", "datasheet_cmd"),
         "design": ("spectracam.experiments.design.command", "design_cmd"),
         "dynamic-range": ("spectracam.experiments.dynamic_range.command", "dynamic_range_cmd"),
+        "field": ("spectracam.experiments.field.command", "field_cmd"),
         "emva": ("spectracam.experiments.emva.command", "emva_cmd"),
         "inspect": ("spectracam.experiments.simulate.command", "inspect_cmd"),
         "motion": ("spectracam.experiments.motion.command", "motion_cmd"),

@@ -54,8 +54,12 @@ def test_the_default_camera_captures_bit_identically_to_band_weights_alone(desig
     assert "pixel" not in cam.to_dict()
 
 
-def test_a_centred_pixel_at_normal_incidence_is_todays_response():
-    pixel = PixelAngleSpec(microlens=True, optical_crosstalk=True, microlens_shift_fraction=0.5)
+@pytest.mark.parametrize("electrical", [False, True])
+def test_a_centred_pixel_at_normal_incidence_is_todays_response(electrical):
+    # electrical crosstalk mixes charge at every angle: the measured responsivities already hold its normal-incidence
+    # share, so only its change with the angle is added (camera.field._compute_weights)
+    pixel = PixelAngleSpec(microlens=True, optical_crosstalk=True, microlens_shift_fraction=0.5,
+                           electrical_crosstalk=electrical)
     for design in ("cfa/single", "prism/optimal"):
         cam = CameraSpec(optics=OpticsSpec(cra_corner_deg=25.0), sensor=SMALL, pixel=pixel).with_design(design)
         table = field_band_weights(cam, GRID, [0.0, 12.0, 25.0], [-180.0, -90.0, 0.0, 45.0])

@@ -58,7 +58,9 @@ FIELDS = ["illuminant.temperature_K", "illuminant.white_luminance_cd_m2", "image
           "optics.cra_table_deg", "optics.image_circle_diameter_mm", "optics.optical_centre_mm", "pixel.microlens",
           "pixel.stack_height_um", "pixel.stack_index", "pixel.aperture_fraction", "pixel.spot",
           "pixel.microlens_shift_fraction", "pixel.optical_crosstalk", "pixel.electrical_crosstalk",
-          "pixel.field_free_depth_um", "pixel.diffusion_length_um", "pixel.filter_angle", "pixel.nosuch"]
+          "pixel.field_free_depth_um", "pixel.diffusion_length_um", "pixel.filter_angle", "pixel.nosuch",
+          "processing.shading", "processing.shading_temperatures_K", "processing.shading_grid",
+          "processing.shading_method"]
 VALUES = ["0", "-1", "1e308", "nan", "inf", "-inf", "1.5", "true", '"text"', "[1, 2]", "[]", "{}", "3", "7",
           "2147483648", "0.001", "bilinear", "fsc", "optimal", "photodiode", "developed", "percentile", "grey_edge",
           "dual_illuminant", "corrected_moments", "colorchecker24", "filmic", '"none"', "[5.9, 5.95, 6.0, 6.05]",
@@ -1175,11 +1177,50 @@ def case_dynamic_range(rng, d: Path):
     return _with_fault(rng, cmd, bad)
 
 
+def case_field(rng, d: Path):
+    """Issue 37: the lens-shading correction on a shaded capture (good and bad values, damaged scene files) and the
+    field command with bad values, under a full disk or SIGTERM."""
+    text, bad_scene = _lights_scene(rng)
+    (d / "hdr.toml").write_text(text)
+    shaded = ["--set", "optics.relative_illumination='cos4'", "--set", "optics.cra_corner_deg=20",
+              "--set", "pixel.microlens=true", "--set", "sensor.pixel_pitch_um=1.4"]
+    sim = ["simulate", "d65", "-o", "out", "--renderer", "analytic", "--quiet", "--set", "image.width=64",
+           "--set", "image.height=48"] + shaded
+    fld = ["field", "-o", "out", "--quick", "--design", "cfa/single", "--shift", "1", "--correction", "single",
+           "--set", "image.width=64", "--set", "image.height=48"]
+    correction = rng.choice(["single", "cct"])
+    cases = [
+        (sim + ["--set", f"processing.shading='{correction}'"], False),
+        (sim + ["--set", f"processing.shading='{correction}'", "--set", "processing.shading_method='cell_mean'"],
+         False),
+        (sim + ["--set", "processing.shading=" + rng.choice(["'bogus'", "1", "[]", "true"])], True),
+        (sim + ["--set", "processing.shading_temperatures_K=" + rng.choice(["[5000, 3000]", "[]", "[500]", "['x']",
+                                                                           "[3000, 1e9]"])], True),
+        (sim + ["--set", "processing.shading_grid=" + rng.choice(["[1, 16]", "[12]", "[12, 1000]", "[12.5, 16]",
+                                                                  "'x'"])], True),
+        (["simulate", "hdr.toml", "-o", "out", "--renderer", "analytic", "--quiet", "--set",
+          "processing.shading='single'"] + shaded, bad_scene),
+        (fld, False),
+        (fld[:4] + ["--correction", rng.choice(["nosuch", "", "none,single"])], True),
+        (fld[:4] + ["--shift", rng.choice(["-1", "3", "nan", "x"])], True),
+        (fld[:4] + ["--cra", rng.choice(["0", "-5", "90", "nan", "x"])], True),
+        (fld[:4] + ["--pitch", rng.choice(["0", "-1", "nan", "x"])], True),
+        (fld[:4] + ["--design", rng.choice(["cfa/optimal", "nosuch/single", "/single"])], True),
+        (fld + ["--set", rng.choice(["processing.shading='cct'", "pixel.microlens_shift_fraction=0.5",
+                                     "optics.cra_corner_deg=10", "sensor.pixel_pitch_um=2"])], True),
+        (fld + ["--set", "optics.relative_illumination='none'", "--set", "optics.cra_corner_deg=0"], True),
+        (fld + ["--seeds", "0"], True), (["field", "-o", ""], True),
+    ]
+    cmd, bad = rng.choice(cases)
+    return _with_fault(rng, cmd, bad)
+
+
 CASES = [case_damaged_file, case_scene_value, case_environment, case_garbage_text, case_camera_file, case_foreign_exr,
          case_new_commands, case_signal, case_full_disk, case_memory_limit, case_raw_attributes, case_journal,
          case_experiment_values, case_group_signal, case_scheduler_peer, case_read_only, case_reflectances,
          case_target, case_architectures, case_spacetime, case_design, case_view, case_developed,
-         case_white_balance, case_user_faults, case_valid, case_physical, case_honest_scores, case_dynamic_range]
+         case_white_balance, case_user_faults, case_valid, case_physical, case_honest_scores, case_dynamic_range,
+         case_field]
 
 
 def one(i: int, seed: int, base: Path, cycle: bool = False, classes=None) -> tuple[str, dict]:

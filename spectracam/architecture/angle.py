@@ -68,7 +68,7 @@ def coating_shift_factor(aoi_deg, n_eff: float = N_EFF_COATING, n0: float = 1.0)
 
     References
     ----------
-    .. [Smith2008] see /tmp/refs_field.md; chapter 11, the wavelength shift with obliquity.
+    .. [Smith2008] see docs/references.md; chapter 11, the wavelength shift with obliquity.
     """
     theta = _angle(aoi_deg, "coating.aoi_deg")
     n_eff, n0 = _index(n_eff, "coating.n_eff"), _index(n0, "coating.n0")
@@ -97,7 +97,7 @@ def coating_cutoff_nm(cutoff_nm, aoi_deg, n_eff: float = N_EFF_COATING, n0: floa
 
     References
     ----------
-    .. [Smith2008] see /tmp/refs_field.md; chapter 11.
+    .. [Smith2008] see docs/references.md; chapter 11.
     """
     return np.asarray(cutoff_nm, dtype=np.float64) * coating_shift_factor(aoi_deg, n_eff, n0)
 
@@ -128,7 +128,7 @@ def shift_curve(wavelengths_nm, transmittance, aoi_deg, n_eff: float = N_EFF_COA
 
     References
     ----------
-    .. [Smith2008] see /tmp/refs_field.md; chapter 11 (the effective-index approximation shifts every
+    .. [Smith2008] see docs/references.md; chapter 11 (the effective-index approximation shifts every
        feature by the same factor).
     """
     wl = np.asarray(wavelengths_nm, dtype=np.float64)
@@ -162,7 +162,7 @@ def tilted_incidence_deg(tilt_deg, field_x_deg, field_y_deg=0.0) -> np.ndarray:
 
     References
     ----------
-    .. [Smith2008] see /tmp/refs_field.md; chapter 11 (a tilted interference filter).
+    .. [Smith2008] see docs/references.md; chapter 11 (a tilted interference filter).
     """
     t = np.radians(np.asarray(tilt_deg, dtype=np.float64))
     tx = np.tan(np.radians(np.asarray(field_x_deg, dtype=np.float64)))
@@ -193,7 +193,7 @@ def wheel_filter_curve(wavelengths_nm, transmittance, tilt_deg: float, field_x_d
 
     References
     ----------
-    .. [Smith2008] see /tmp/refs_field.md; chapter 11.
+    .. [Smith2008] see docs/references.md; chapter 11.
     """
     aoi = tilted_incidence_deg(tilt_deg, field_x_deg, field_y_deg)
     return shift_curve(wavelengths_nm, transmittance, aoi, n_eff)
@@ -220,7 +220,7 @@ def prism_incidence_deg(field_deg, coating_aoi_deg: float = 0.0, n_glass: float 
 
     References
     ----------
-    .. [Smith2008] see /tmp/refs_field.md; Snell's law and chapter 11.
+    .. [Smith2008] see docs/references.md; Snell's law and chapter 11.
     """
     phi = _angle(field_deg, "prism.field_deg")
     n_glass = _index(n_glass, "prism.n_glass")
@@ -246,7 +246,7 @@ def dye_internal_angle_deg(aoi_deg, n_dye: float = N_DYE, n0: float = 1.0) -> np
 
     References
     ----------
-    .. [COMPASS] see /tmp/refs_field.md; the colour-filter layer's index.
+    .. [COMPASS] see docs/references.md; the colour-filter layer's index.
     """
     theta = _angle(aoi_deg, "dye.aoi_deg")
     n_dye, n0 = _index(n_dye, "dye.n_dye"), _index(n0, "dye.n0")
@@ -273,7 +273,7 @@ def dye_path_factor(aoi_deg, n_dye: float = N_DYE, n0: float = 1.0) -> np.ndarra
 
     References
     ----------
-    .. [Macleod2010] see /tmp/refs_field.md; absorption along an oblique path.
+    .. [Macleod2010] see docs/references.md; absorption along an oblique path.
     """
     return 1.0 / np.cos(np.radians(dye_internal_angle_deg(aoi_deg, n_dye, n0)))
 
@@ -298,7 +298,7 @@ def dye_transmittance(transmittance, aoi_deg, n_dye: float = N_DYE, n0: float = 
 
     References
     ----------
-    .. [Macleod2010] see /tmp/refs_field.md; .. [COMPASS] likewise.
+    .. [Macleod2010] see docs/references.md; .. [COMPASS] likewise.
     """
     t = np.asarray(transmittance, dtype=np.float64)
     if not np.all(np.isfinite(t)) or np.any(t < 0) or np.any(t > 1):

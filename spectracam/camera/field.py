@@ -100,17 +100,36 @@ def _angle_kernels(camera: CameraSpec, grid, cra: np.ndarray, azimuth: np.ndarra
                                 azimuth_deg=np.broadcast_to(azimuth[None, :], theta.shape))
 
 
-def _compute_weights(camera: CameraSpec, grid, cra: np.ndarray, azimuth: np.ndarray) -> np.ndarray:
-    layout = camera.architecture().layout
-    R = np.asarray(camera_responsivities(camera, grid), float)                    # (N, B)
+def _modelled(camera: CameraSpec, grid, R: np.ndarray, cra: np.ndarray, azimuth: np.ndarray, layout) -> np.ndarray:
+    """``(n_cra, n_az, K, B)`` what each site (or plane) records per band by the pixel's model (filters at the angle,
+    acceptance × crosstalk), before its normalisation to the measured responsivities."""
     R_theta = _filter_at_angle(camera, grid, R, cra, layout)                      # (n_cra, N, B)
     kernel = _angle_kernels(camera, grid, cra, azimuth)                           # (n_cra, n_az, B, 3, 3)
     if isinstance(layout, MosaicLayout):
         th, tw = layout.tile_shape
         eff = np.stack([effective_responsivities(layout.tile, R_theta[i], kernel[i]) for i in range(cra.size)])
-        per_site = eff.reshape(cra.size, azimuth.size, th * tw, -1)               # (n_cra, n_az, K, B)
+        return eff.reshape(cra.size, azimuth.size, th * tw, -1)                  # (n_cra, n_az, K, B)
+    return R_theta[:, None, :, :] * kernel.sum((-2, -1))[:, :, None, :]          # (n_cra, n_az, N, B)
+
+
+def _compute_weights(camera: CameraSpec, grid, cra: np.ndarray, azimuth: np.ndarray) -> np.ndarray:
+    """The table of :func:`field_band_weights`.  The camera's responsivities R_k(λ) are its pixel's at normal
+    incidence, as a sensor's quantum efficiency is measured (EMVA 1288 illuminates the sensor on the axis with a beam
+    of f/8 or slower); the model m(θ) gives how what each site records changes with the angle, so each site's weights
+    are ``w(θ) = R_site + m(θ) − m(0)`` (never below 0), band by band.  Where the model alone changes nothing at
+    normal incidence (microlens, optical crosstalk) this is m(θ) itself; electrical crosstalk, which mixes charge at
+    every angle, is then counted only as its change with the angle, and a site's charge total over the tile is kept
+    as the model keeps it."""
+    layout = camera.architecture().layout
+    R = np.asarray(camera_responsivities(camera, grid), float)                    # (N, B)
+    per_site = _modelled(camera, grid, R, cra, azimuth, layout)
+    normal = _modelled(camera, grid, R, np.zeros(1), azimuth, layout)[0]         # (n_az, K, B)
+    if isinstance(layout, MosaicLayout):
+        nominal = R[np.asarray([k for row in layout.tile for k in row])]          # (K, B): each site's channel
     else:
-        per_site = R_theta[:, None, :, :] * kernel.sum((-2, -1))[:, :, None, :]   # (n_cra, n_az, N, B)
+        nominal = R
+    per_site = np.maximum(per_site + (nominal[None] - normal)[None], 0.0)
+    per_site[cra == 0] = nominal                                                   # exactly, at normal incidence
     factor = radiance_to_photon_irradiance(grid, camera.optics) * grid.widths_nm * (
         camera.sensor.pixel_area_um2 * 1e-12)
     return np.swapaxes(per_site * factor, -1, -2).astype(np.float32)
@@ -139,8 +158,8 @@ def field_band_weights(camera: CameraSpec, grid, cra_deg_bins, azimuth_deg_bins=
 
     References
     ----------
-    .. [Agranov2003] see /tmp/refs_angle.md (crosstalk and the CFA's colour mixing).
-    .. [Smith2008] see /tmp/refs_field.md (the coating's shift with angle).
+    .. [Agranov2003] see docs/references.md (crosstalk and the CFA's colour mixing).
+    .. [Smith2008] see docs/references.md (the coating's shift with angle).
     """
     cra = np.atleast_1d(np.asarray(cra_deg_bins, float))
     azimuth = np.atleast_1d(np.asarray(azimuth_deg_bins, float))
@@ -242,7 +261,7 @@ def field_rates(radiance: np.ndarray, grid, camera: CameraSpec, maps) -> np.ndar
 
     References
     ----------
-    .. [Agranov2003] see /tmp/refs_angle.md.
+    .. [Agranov2003] see docs/references.md.
     """
     h, w, _ = radiance.shape
     cra = np.zeros((h, w)) if maps is None else maps.cra_deg

@@ -163,9 +163,21 @@ def recorded_electrons(raw: RawCapture) -> tuple[np.ndarray, np.ndarray]:
     return e - dark[:, None, None], dark
 
 
-def camera_rates(raw: RawCapture, processing: ProcessingSpec) -> np.ndarray:
-    """``(H, W, N)`` photo-electrons per second per channel: demosaicked and exposure-normalised."""
+def camera_rates(raw: RawCapture, processing: ProcessingSpec, reference: ChartReference | None = None) -> np.ndarray:
+    """``(H, W, N)`` photo-electrons per second per channel: lens shading corrected (``processing.shading``, on the
+    raw channels before demosaicking, with tables calibrated for the camera on ``reference``'s wavelengths and picked
+    by its light's colour temperature: :func:`spectracam.processing.shading.shading_gain_maps`), demosaicked and
+    exposure-normalised."""
     e, _ = recorded_electrons(raw)
+    if processing.shading != "none":
+        from spectracam.processing.shading import correct_shading, light_cct_K, shading_gain_maps
+
+        if reference is None:
+            raise SpectracamError(f"processing.shading = {processing.shading!r}: the correction needs the scene's "
+                                  "chart reference (its wavelengths and light); pass reference=")
+        gains = shading_gain_maps(raw.camera, reference.grid, e.shape[-2:], processing,
+                                  light_cct_K(reference.illuminant))
+        e = correct_shading(e, raw.layout, gains)
     if isinstance(raw.layout, MosaicLayout):
         rgb = demosaic(e, raw.layout, processing.demosaic)
         del e
@@ -234,7 +246,7 @@ def developed_rgb(raw: RawCapture, reference: ChartReference, processing: Proces
     fitted on ``reference`` under its own light (which need not be the captured scene: a spectral image from another
     tool is shown through the chart's conversion); for a camera that finds its own white, the matrix it develops from
     this image (:func:`spectracam.processing.develop`)."""
-    rgb = camera_rates(raw, processing)
+    rgb = camera_rates(raw, processing, reference)
     if processing.told_the_light:
         M = conversion_matrix(reference, raw.camera, processing)
         block = oracle_block(reference, raw.camera, processing)

@@ -187,7 +187,7 @@ def image_height_mm(shape: tuple[int, int], pixel_pitch_um: float,
 
     References
     ----------
-    .. [Smith2008] see /tmp/refs_field.md; image height and field angle.
+    .. [Smith2008] see docs/references.md; image height and field angle.
     """
     x, y = pixel_positions_mm(shape, pixel_pitch_um, centre_mm)
     return np.hypot(x, y)
@@ -208,7 +208,7 @@ def half_diagonal_mm(shape: tuple[int, int], pixel_pitch_um: float) -> float:
 
     References
     ----------
-    .. [Lensfun] see /tmp/refs_field.md; vignetting radius 1 = half the diagonal.
+    .. [Lensfun] see docs/references.md; vignetting radius 1 = half the diagonal.
     """
     return float(pixel_pitch_um) * 1e-3 * math.hypot(shape[0], shape[1]) / 2
 
@@ -235,7 +235,7 @@ def chief_ray_angle_deg(height_mm, field: FieldSpec, corner_mm: float) -> np.nda
 
     References
     ----------
-    .. [Smith2008] see /tmp/refs_field.md; the chief ray and the exit pupil.
+    .. [Smith2008] see docs/references.md; the chief ray and the exit pupil.
     """
     h = np.asarray(height_mm, dtype=np.float64)
     if field.chief_ray == "table":
@@ -263,7 +263,7 @@ def cos4_illumination(angle_deg) -> np.ndarray:
 
     References
     ----------
-    .. [Smith2008] see /tmp/refs_field.md; the cosine-fourth law of illumination.
+    .. [Smith2008] see docs/references.md; the cosine-fourth law of illumination.
     """
     c = np.cos(np.radians(np.asarray(angle_deg, dtype=np.float64)))
     return c**4
@@ -292,8 +292,8 @@ def exit_pupil_illumination(height_mm, exit_pupil_mm: float, f_number: float | N
 
     References
     ----------
-    .. [Foote1915] see /tmp/refs_field.md; the irradiance from a radiating disc.
-    .. [Smith2008] see /tmp/refs_field.md; the cosine-fourth law.
+    .. [Foote1915] see docs/references.md; the irradiance from a radiating disc.
+    .. [Smith2008] see docs/references.md; the cosine-fourth law.
     """
     rho = np.asarray(height_mm, dtype=np.float64) / float(exit_pupil_mm)
     if f_number is None:
@@ -324,7 +324,7 @@ def pa_illumination(height_mm, k, radius_mm: float) -> np.ndarray:
 
     References
     ----------
-    .. [Lensfun] see /tmp/refs_field.md; vignetting model "pa" (libs/lensfun/mod-color.cpp).
+    .. [Lensfun] see docs/references.md; vignetting model "pa" (libs/lensfun/mod-color.cpp).
     """
     r2 = (np.asarray(height_mm, dtype=np.float64) / float(radius_mm)) ** 2
     k1, k2, k3 = (float(v) for v in k)
@@ -354,7 +354,7 @@ def relative_illumination(height_mm, field: FieldSpec, corner_mm: float, f_numbe
 
     References
     ----------
-    .. [Smith2008] see /tmp/refs_field.md; .. [Foote1915] and .. [Lensfun] likewise.
+    .. [Smith2008] see docs/references.md; .. [Foote1915] and .. [Lensfun] likewise.
     """
     h = np.asarray(height_mm, dtype=np.float64)
     form = field.relative_illumination
@@ -398,7 +398,7 @@ def field_maps(shape: tuple[int, int], pixel_pitch_um: float, field: FieldSpec,
 
     References
     ----------
-    .. [Smith2008] see /tmp/refs_field.md.
+    .. [Smith2008] see docs/references.md.
     """
     x, y = pixel_positions_mm(shape, pixel_pitch_um, field.optical_centre_mm)
     h = np.hypot(x, y)
@@ -503,7 +503,7 @@ def lensfun_vignetting(lens: str, focal_mm: float, aperture: float, distance_m: 
 
     References
     ----------
-    .. [Lensfun] see /tmp/refs_field.md; database format and vignetting model "pa".
+    .. [Lensfun] see docs/references.md; database format and vignetting model "pa".
     """
     if not Path(db_dir).is_dir():
         raise ConfigError("lensfun.db_dir", str(db_dir), "no lensfun database there (Debian: apt-get install "

@@ -89,6 +89,55 @@ class ProcessingSpec(Spec):
     #: The display's pixel pitch, mm (one image pixel per display pixel): 25.4/120 mm, a 120-dpi monitor, the same
     #: default; with 0.5 m it gives 41.2 samples per degree (spectracam.evaluation.scielab.samples_per_degree).
     display_pixel_pitch_mm: float = 25.4 / 120
+    #: Lens-shading correction (issue 37; spectracam.processing.shading): "none" (the paper's camera: nothing off the
+    #: axis to correct), "single" (per-channel gain tables calibrated on a flat field under the first of
+    #: ``shading_temperatures_K``) or "cct" (tables at each, interpolated in colour temperature to the light's, as
+    #: libcamera's ALSC does).  Applied to the raw channels before demosaicking.
+    shading: str = "none"
+    #: The flat fields' colour temperatures, K: libcamera's IMX477 tuning calibrates at 2960, 4850 and 5930 K.
+    shading_temperatures_K: tuple = (2960.0, 4850.0, 5930.0)
+    #: The gain table's nodes, rows × columns: libcamera's Raspberry Pi ALSC grid, 12 × 16.
+    shading_grid: tuple = (12, 16)
+    #: How the table is calibrated: "fit" (least squares over every pixel) or "cell_mean" (the tuning tool's).
+    shading_method: str = "fit"
+
+    def validate_shading(self) -> None:
+        """The ``shading*`` fields: one line naming the field, the value and what is allowed."""
+        from spectracam.processing.shading import SHADING_CORRECTIONS, SHADING_METHODS, ShadingSpec
+
+        self.choice("shading", SHADING_CORRECTIONS)
+        self.choice("shading_method", SHADING_METHODS)
+        g = self.shading_grid
+        if not (isinstance(g, tuple) and len(g) == 2 and all(isinstance(x, int) and not isinstance(x, bool)
+                                                              and 2 <= x <= 256 for x in g)):
+            raise self.error("shading_grid", "must be [rows, columns], two integers between 2 and 256",
+                             list(g) if isinstance(g, tuple) else g)
+        try:
+            spec = ShadingSpec(correction=self.shading, calibration_temperatures_K=self.shading_temperatures_K)
+        except ConfigError as e:
+            raise self.error("shading_temperatures_K", e.allowed, list(self.shading_temperatures_K)
+                             if isinstance(self.shading_temperatures_K, tuple) else self.shading_temperatures_K) \
+                from None
+        object.__setattr__(self, "shading_temperatures_K", spec.calibration_temperatures_K)
+
+    def shading_spec(self):
+        """The correction as a :class:`spectracam.processing.shading.ShadingSpec`."""
+        from spectracam.processing.shading import ShadingSpec
+
+        return ShadingSpec(correction=self.shading, calibration_temperatures_K=self.shading_temperatures_K,
+                           grid_rows=self.shading_grid[0], grid_columns=self.shading_grid[1],
+                           method=self.shading_method)
+
+    def to_dict(self) -> dict:
+        """As :meth:`Spec.to_dict`, the ``shading*`` keys left out while they hold their defaults (no correction):
+        a camera without it records exactly what it recorded before issue 37."""
+        out = super().to_dict()
+        base = ProcessingSpec.__dataclass_fields__
+        for k in ("shading", "shading_temperatures_K", "shading_grid", "shading_method"):
+            default = base[k].default
+            if out[k] == (list(default) if isinstance(default, tuple) else default):
+                del out[k]
+        return out
 
     def validate(self) -> None:
         from spectracam.scene.reflectances import LIBRARIES
@@ -110,6 +159,7 @@ class ProcessingSpec(Spec):
 
             check_available(lib, "processing.white_balance_training")
 
+        self.validate_shading()
         self.choice("demosaic", DEMOSAIC_METHODS)
         self.choice("display", DISPLAYS)
         self.choice("adaptation", ADAPTATIONS)

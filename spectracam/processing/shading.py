@@ -22,7 +22,7 @@ Calibration, two ways (``method``):
 tables ``calibrations_Cr`` / ``calibrations_Cb`` at each calibrated colour temperature (the R and B gains relative to
 G, including the white balance's ratio at that light).  :func:`table_figures` gives their corner/centre figures.
 
-References: see ``/tmp/refs_angle.md`` ([libcamera], [RPiTuning]).
+References: see ``docs/references.md`` ([libcamera], [RPiTuning]).
 """
 from __future__ import annotations
 
@@ -36,8 +36,9 @@ import numpy as np
 from spectracam.core.errors import ConfigError, SpectracamError
 from spectracam.core.spec import Spec
 
-__all__ = ["ALSC_CELLS", "LIBCAMERA_TUNING_DIRS", "PLACEMENTS", "SHADING_CORRECTIONS", "SHADING_METHODS",
-           "AlscTuning", "ShadingSpec", "ShadingTables", "apply_gain_tables", "calibrate_gain_tables",
+__all__ = ["ALSC_CELLS", "DAYLIGHT_FROM_K", "LIBCAMERA_TUNING_DIRS", "PLACEMENTS", "SHADING_CORRECTIONS", "SHADING_METHODS",
+           "AlscTuning", "ShadingSpec", "ShadingTables", "apply_gain_tables", "calibrate_gain_tables", "calibration_light",
+           "channel_planes", "correct_shading", "flat_field", "tile_planes", "light_cct_K", "shading_gain_maps",
            "find_libcamera_tuning", "interpolate_table", "interpolate_tables_by_cct", "interpolation_matrix",
            "luminance_and_colour_tables", "read_libcamera_alsc", "residual_colour_shading", "table_figures"]
 
@@ -123,7 +124,7 @@ def interpolation_matrix(n_px: int, n_nodes: int, placement: str = "corners") ->
 
     References
     ----------
-    .. [libcamera] see /tmp/refs_angle.md (ALSC cells).
+    .. [libcamera] see docs/references.md (ALSC cells).
     """
     if placement not in PLACEMENTS:
         raise ConfigError("placement", placement, "must be one of " + ", ".join(map(repr, PLACEMENTS)))
@@ -159,7 +160,7 @@ def interpolate_table(table, shape: tuple[int, int], placement: str = "corners")
 
     References
     ----------
-    .. [libcamera] see /tmp/refs_angle.md.
+    .. [libcamera] see docs/references.md.
     """
     t = np.asarray(table, dtype=float)
     wy = interpolation_matrix(shape[0], t.shape[-2], placement)
@@ -168,37 +169,64 @@ def interpolate_table(table, shape: tuple[int, int], placement: str = "corners")
 
 
 def _centre_level(plane: np.ndarray) -> float:
-    """Mean of the central box (1/8 of each side, at least one pixel) of one plane."""
+    """Mean of the central box (1/8 of each side, at least one pixel) of one plane (NaN: not this channel's pixel)."""
     h, w = plane.shape
-    bh, bw = max(1, h // 8), max(1, w // 8)
-    return float(plane[(h - bh) // 2:(h + bh) // 2, (w - bw) // 2:(w + bw) // 2].mean())
+    bh, bw = max(2, h // 8), max(2, w // 8)
+    return float(np.nanmean(plane[(h - bh) // 2:(h + bh) // 2, (w - bw) // 2:(w + bw) // 2]))
 
 
 def _fit_nodes(plane: np.ndarray, target: float, rows: int, cols: int) -> np.ndarray:
-    """Least-squares node values ``T`` minimising ``Σ (plane·(Wy T Wxᵀ) − target)²`` (normal equations)."""
+    """Least-squares node values ``T`` minimising ``Σ (plane·(Wy T Wxᵀ) − target)²`` over the plane's pixels that are
+    not NaN (a mosaic's channel: only its own sites), by the normal equations."""
+    known = np.isfinite(plane)
+    p = np.where(known, plane, 0.0)
     wy = interpolation_matrix(plane.shape[0], rows)
     wx = interpolation_matrix(plane.shape[1], cols)
-    m1 = np.einsum("ij,jb,jd->ibd", plane**2, wx, wx)  # (H, cols, cols)
+    m1 = np.einsum("ij,jb,jd->ibd", p**2, wx, wx)  # (H, cols, cols)
     ata = np.einsum("ia,ic,ibd->abcd", wy, wy, m1).reshape(rows * cols, rows * cols)
-    atb = (wy.T @ (plane * target) @ wx).reshape(-1)
+    atb = (wy.T @ (p * target) @ wx).reshape(-1)
     return np.linalg.solve(ata, atb).reshape(rows, cols)
 
 
 def _cell_means(plane: np.ndarray, rows: int, cols: int) -> np.ndarray:
     ey = np.linspace(0, plane.shape[0], rows + 1).round().astype(int)
     ex = np.linspace(0, plane.shape[1], cols + 1).round().astype(int)
-    return np.array([[plane[ey[r]:ey[r + 1], ex[c]:ex[c + 1]].mean() for c in range(cols)] for r in range(rows)])
+    return np.array([[np.nanmean(plane[ey[r]:ey[r + 1], ex[c]:ex[c + 1]]) for c in range(cols)] for r in range(rows)])
 
 
-def calibrate_gain_tables(flat, spec: ShadingSpec | None = None) -> ShadingTables:
+def channel_planes(mosaic, layout) -> np.ndarray:
+    """A mosaic's channels as full-size planes, each holding its own sites' values and NaN elsewhere (what a tuning
+    tool reads of a raw flat field: no demosaicking, whose borders would enter the table).
+
+    Parameters
+    ----------
+    mosaic : array_like
+        ``(H, W)``.
+    layout : MosaicLayout
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(N, H, W)`` float64.
+    """
+    m = np.asarray(mosaic, dtype=float)
+    channel = layout.channel_index(m.shape)
+    return np.stack([np.where(channel == k, m, np.nan) for k in range(len(layout.channels))])
+
+
+def calibrate_gain_tables(flat, spec: ShadingSpec | None = None, layout=None) -> ShadingTables:
     """Per-channel gain tables from a flat field: gain × flat = the channel's centre level.
 
     Parameters
     ----------
     flat : array_like
-        ``(N, H, W)`` the flat field's channel planes (demosaicked, or a mosaic's half-resolution planes), > 0.
+        ``(N, H, W)`` the flat field's channel planes, > 0 (NaN where a channel has no pixel); or, with ``layout`` a
+        :class:`~spectracam.architecture.base.MosaicLayout`, the raw ``(H, W)`` mosaic (each channel fitted on its own
+        sites, :func:`channel_planes`).
     spec : ShadingSpec, optional
         Grid size and method (default :class:`ShadingSpec`'s 12 × 16, "fit").
+    layout : MosaicLayout, optional
+        The mosaic's tile, when ``flat`` is a mosaic.
 
     Returns
     -------
@@ -207,10 +235,17 @@ def calibrate_gain_tables(flat, spec: ShadingSpec | None = None) -> ShadingTable
 
     References
     ----------
-    .. [libcamera] see /tmp/refs_angle.md (the tuning tool's cell means).
+    .. [libcamera] see docs/references.md (the tuning tool's cell means).
     """
     spec = spec or ShadingSpec()
-    p = _planes(flat, "flat")
+    if layout is not None and np.ndim(flat) == 2:
+        flat = channel_planes(flat, layout)
+    p = np.asarray(flat, dtype=float)
+    if p.ndim != 3 or min(p.shape[1:]) < 2:
+        raise ConfigError("flat", f"shape {p.shape}", "must be (channels, H, W) planes of at least 2×2 pixels")
+    known = p[np.isfinite(p)]
+    if known.size == 0 or np.any(known <= 0) or np.any(np.isinf(p)):
+        raise ConfigError("flat", "values ≤ 0 or not finite", "a flat field must be finite and > 0 in every channel")
     if min(p.shape[1:]) < max(spec.grid_rows, spec.grid_columns):
         raise ConfigError("flat", f"shape {p.shape}", f"must have at least {max(spec.grid_rows, spec.grid_columns)} "
                           "pixels on each side for a table of that many nodes")
@@ -239,7 +274,7 @@ def apply_gain_tables(planes, tables: ShadingTables) -> np.ndarray:
 
     References
     ----------
-    .. [libcamera] see /tmp/refs_angle.md.
+    .. [libcamera] see docs/references.md.
     """
     p = np.asarray(planes, dtype=float)
     if p.ndim != 3 or p.shape[0] != tables.gains.shape[0]:
@@ -264,7 +299,7 @@ def interpolate_tables_by_cct(tables_by_cct: dict, cct_K: float) -> ShadingTable
 
     References
     ----------
-    .. [libcamera] see /tmp/refs_angle.md (ALSC's calibration tables by colour temperature).
+    .. [libcamera] see docs/references.md (ALSC's calibration tables by colour temperature).
     """
     if not tables_by_cct:
         raise ConfigError("tables_by_cct", {}, "must hold tables at one colour temperature at least")
@@ -281,15 +316,42 @@ def interpolate_tables_by_cct(tables_by_cct: dict, cct_K: float) -> ShadingTable
     return ShadingTables(a.gains * (1 - p) + b.gains * p, a.placement)
 
 
-def residual_colour_shading(corrected, reference_channel: int = 1) -> dict:
+def tile_planes(mosaic, layout) -> np.ndarray:
+    """A mosaic's channels at one value per tile: each channel's mean over its sites in the tile (both greens of a
+    Bayer tile), ``(N, H // th, W // tw)`` (a partial last tile is left out).
+
+    Parameters
+    ----------
+    mosaic : array_like
+        ``(H, W)``.
+    layout : MosaicLayout
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(N, H // th, W // tw)`` float64.
+    """
+    m = np.asarray(mosaic, dtype=float)
+    th, tw = layout.tile_shape
+    h, w = (m.shape[0] // th) * th, (m.shape[1] // tw) * tw
+    tiles = m[:h, :w].reshape(h // th, th, w // tw, tw)
+    tile = np.asarray(layout.tile)
+    return np.stack([np.mean([tiles[:, dy, :, dx] for dy, dx in zip(*np.nonzero(tile == k))], axis=0)
+                     for k in range(len(layout.channels))])
+
+
+def residual_colour_shading(corrected, reference_channel: int = 1, layout=None) -> dict:
     """The shading a correction leaves: each channel and each colour ratio against its value at the centre.
 
     Parameters
     ----------
     corrected : array_like
-        ``(N, H, W)`` corrected planes of a flat field.
+        ``(N, H, W)`` corrected planes of a flat field; or, with ``layout`` a mosaic's, the corrected ``(H, W)`` raw
+        mosaic, read one value per tile (:func:`tile_planes`).
     reference_channel : int
         The channel colour ratios are taken against (1: G of R, G, B).
+    layout : MosaicLayout, optional
+        The mosaic's tile, when ``corrected`` is a mosaic.
 
     Returns
     -------
@@ -301,8 +363,10 @@ def residual_colour_shading(corrected, reference_channel: int = 1) -> dict:
 
     References
     ----------
-    .. [libcamera] see /tmp/refs_angle.md (ALSC's Cr, Cb: R and B against G).
+    .. [libcamera] see docs/references.md (ALSC's Cr, Cb: R and B against G).
     """
+    if layout is not None and np.ndim(corrected) == 2:
+        corrected = tile_planes(corrected, layout)
     p = _planes(corrected, "corrected")
     if not isinstance(reference_channel, int) or not 0 <= reference_channel < p.shape[0]:
         raise ConfigError("reference_channel", reference_channel, f"must be a channel index 0…{p.shape[0] - 1}")
@@ -332,7 +396,7 @@ def luminance_and_colour_tables(tables: ShadingTables, reference_channel: int = 
 
     References
     ----------
-    .. [libcamera] see /tmp/refs_angle.md.
+    .. [libcamera] see docs/references.md.
     """
     g = tables.gains
     lum = g[reference_channel] / g[reference_channel].min()
@@ -364,7 +428,7 @@ def find_libcamera_tuning(sensor: str = "imx477") -> Path | None:
 
     References
     ----------
-    .. [RPiTuning] see /tmp/refs_angle.md.
+    .. [RPiTuning] see docs/references.md.
     """
     for d in LIBCAMERA_TUNING_DIRS:
         p = Path(d) / f"{sensor}.json"
@@ -420,7 +484,7 @@ def read_libcamera_alsc(path) -> AlscTuning:
 
     References
     ----------
-    .. [RPiTuning] see /tmp/refs_angle.md.
+    .. [RPiTuning] see docs/references.md.
     """
     p = Path(path)
     try:
@@ -451,7 +515,7 @@ def table_figures(table) -> dict:
 
     References
     ----------
-    .. [RPiTuning] see /tmp/refs_angle.md.
+    .. [RPiTuning] see docs/references.md.
     """
     t = np.asarray(table, dtype=float)
     r, c = t.shape
@@ -459,3 +523,178 @@ def table_figures(table) -> dict:
     corners = [float(t[0, 0]), float(t[0, -1]), float(t[-1, 0]), float(t[-1, -1])]
     return {"centre": centre, "corners": corners, "corner_mean": float(np.mean(corners)),
             "corner_over_centre": float(np.mean(corners)) / centre, "min": float(t.min()), "max": float(t.max())}
+
+
+# -- the camera's own calibration and its correction (issue 37, item 4) ------------------------------------------------
+
+#: Below this colour temperature a calibration light is Planckian, at and above it CIE daylight of that temperature:
+#: the rule for the reference illuminants of CIE 13.3 (colour rendering), 5000 K.
+DAYLIGHT_FROM_K = 5000.0
+#: Gain maps already computed: key → (N, H, W) float32 (read-only).
+_GAIN_CACHE: dict = {}
+_GAIN_CACHE_SIZE = 8
+
+
+def calibration_light(cct_K: float, white_luminance_cd_m2: float = 100.0):
+    """The flat field's light at a colour temperature: a blackbody below :data:`DAYLIGHT_FROM_K`, CIE daylight
+    (the D series at that CCT, colour-science's ``sd_CIE_illuminant_D_series``) from it on.
+
+    Parameters
+    ----------
+    cct_K : float
+        Correlated colour temperature, K (1000–25000).
+    white_luminance_cd_m2 : float
+        Its level (a gain table does not depend on it).
+
+    Returns
+    -------
+    spectracam.scene.illuminant.IlluminantSpec
+
+    References
+    ----------
+    .. [CIE13.3] see docs/references.md (Planckian below 5000 K, daylight above, as reference illuminants).
+    """
+    from spectracam.scene.illuminant import IlluminantSpec
+
+    if not isinstance(cct_K, (int, float)) or isinstance(cct_K, bool) or not 1000 <= cct_K <= 25000:
+        raise ConfigError("cct_K", cct_K, "must be a colour temperature between 1000 and 25000 K")
+    if cct_K < DAYLIGHT_FROM_K:
+        return IlluminantSpec(kind="blackbody", temperature_K=float(cct_K), white_luminance_cd_m2=white_luminance_cd_m2)
+    import colour
+
+    xy = colour.temperature.CCT_to_xy_CIE_D(float(cct_K) * 1.4388 / 1.4380)   # the D series' own temperature scale
+    sd = colour.sd_CIE_illuminant_D_series(xy)
+    return IlluminantSpec(kind="measured", name=f"CIE daylight {cct_K:g} K", temperature_K=None,
+                          wavelengths_nm=tuple(float(w) for w in sd.wavelengths),
+                          values=tuple(max(float(v), 0.0) for v in sd.values), white_luminance_cd_m2=white_luminance_cd_m2)
+
+
+def flat_field(camera, grid, shape: tuple[int, int], illuminant) -> np.ndarray:
+    """The camera's noise-free raw image of a perfect white diffuser filling the field, photo-electrons per second.
+
+    Every pixel sees the same radiance E(λ)/π; what it records is that times the lens's relative illumination
+    (:func:`spectracam.camera.capture.field_radiance`) through its own site's weights at its chief-ray angle
+    (:func:`spectracam.camera.field.field_rates`: microlens, crosstalk, the filters' angle shifts).  The mean of many
+    frames of a real calibration tends to it.
+
+    Parameters
+    ----------
+    camera : CameraSpec
+    grid : WavelengthGrid
+    shape : tuple of int
+        ``(H, W)`` pixels.
+    illuminant : IlluminantSpec
+        The flat field's light.
+
+    Returns
+    -------
+    numpy.ndarray
+        In the layout's shape, float64: a mosaic ``(H, W)``, planes ``(N, H, W)``.
+    """
+    from spectracam.architecture.base import MosaicLayout
+    from spectracam.camera.capture import field_radiance
+    from spectracam.camera.field import field_rates
+    from spectracam.optics.field import field_maps
+    from spectracam.scene.illuminant import white_diffuser_radiance
+
+    h, w = shape
+    white = white_diffuser_radiance(illuminant, grid).astype(np.float32)
+    radiance = field_radiance(np.broadcast_to(white, (h, w, white.size)), camera)
+    maps = None if camera.optics.on_axis else field_maps((h, w), camera.sensor.pixel_pitch_um, camera.optics,
+                                                        camera.optics.f_number)
+    rates = field_rates(np.ascontiguousarray(radiance, np.float32), grid, camera, maps).astype(np.float64)
+    if isinstance(camera.architecture().layout, MosaicLayout):
+        return rates.sum(axis=-1)
+    return np.moveaxis(rates, -1, 0)
+
+
+def light_cct_K(illuminant) -> float:
+    """The correlated colour temperature of a light (Robertson's method on its chromaticity,
+    :func:`spectracam.processing.calibration.xy_to_cct`), K: the temperature ``"cct"`` correction picks its table by.
+    A camera estimates it from its white balance; here it is the light's own (the correction's best case)."""
+    if illuminant.kind == "blackbody":
+        return float(illuminant.temperature_K)
+    import colour
+
+    from spectracam.processing.calibration import xy_to_cct, xyz_to_xy
+    from spectracam.scene.illuminant import relative_spd
+
+    lam = np.arange(380.0, 781.0, 5.0)
+    spd = relative_spd(illuminant)(lam)
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(
+        colour.SpectralShape(380, 780, 5)).values
+    return xy_to_cct(xyz_to_xy(spd @ cmfs))
+
+
+def _gain_key(camera, grid, shape, processing, cct_K) -> str:
+    return json.dumps([camera.to_dict(), camera.pixel.to_dict(), list(map(float, grid.centres_nm)), list(shape),
+                       processing.to_dict(), None if cct_K is None else round(float(cct_K), 3)], sort_keys=True,
+                      default=str)
+
+
+def shading_gain_maps(camera, grid, shape: tuple[int, int], processing, cct_K: float | None = None) -> np.ndarray:
+    """The camera's lens-shading gains at every pixel, per channel: its tables calibrated on flat fields
+    (:func:`flat_field_planes`) under ``processing.shading_temperatures_K`` (:func:`calibration_light`), the one of the
+    first (``"single"``) or the ones interpolated to ``cct_K`` (``"cct"``, :func:`interpolate_tables_by_cct`), each
+    interpolated bilinearly to ``shape``.
+
+    Parameters
+    ----------
+    camera : CameraSpec
+    grid : WavelengthGrid
+    shape : tuple of int
+    processing : ProcessingSpec
+        ``shading`` (not "none"), ``shading_temperatures_K``, ``shading_grid``, ``shading_method``, ``demosaic``.
+    cct_K : float, optional
+        The light's colour temperature (needed by ``"cct"``).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(N, H, W)`` float32 gains (read-only; memoised).
+    """
+    spec = processing.shading_spec()
+    if spec.correction == "none":
+        raise ConfigError("processing.shading", "none", "names no correction: there are no gains to compute")
+    if spec.correction == "cct" and cct_K is None:
+        raise ConfigError("cct_K", None, "processing.shading = 'cct' needs the light's colour temperature")
+    key = _gain_key(camera, grid, shape, processing, cct_K if spec.correction == "cct" else None)
+    if key not in _GAIN_CACHE:
+        temps = spec.calibration_temperatures_K if spec.correction == "cct" else spec.calibration_temperatures_K[:1]
+        layout = camera.architecture().layout
+        tables = {t: calibrate_gain_tables(flat_field(camera, grid, shape, calibration_light(t)), spec, layout)
+                  for t in temps}
+        chosen = interpolate_tables_by_cct(tables, float(cct_K)) if spec.correction == "cct" else tables[temps[0]]
+        gains = interpolate_table(chosen.gains, shape, chosen.placement).astype(np.float32)
+        gains.setflags(write=False)
+        if len(_GAIN_CACHE) >= _GAIN_CACHE_SIZE:
+            _GAIN_CACHE.pop(next(iter(_GAIN_CACHE)))
+        _GAIN_CACHE[key] = gains
+    return _GAIN_CACHE[key]
+
+
+def correct_shading(electrons: np.ndarray, layout, gains: np.ndarray) -> np.ndarray:
+    """Raw electrons times their channel's gain, in place: a mosaic ``(H, W)`` pixel by pixel with its own channel's
+    gain (before demosaicking, as an ISP's lens-shading block does), planes ``(N, H, W)`` plane by plane.
+
+    Parameters
+    ----------
+    electrons : numpy.ndarray
+        The recorded, dark-subtracted electrons in the layout's shape.
+    layout : MosaicLayout or PlanesLayout
+    gains : numpy.ndarray
+        ``(N, H, W)`` (:func:`shading_gain_maps`).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``electrons``, corrected.
+    """
+    from spectracam.architecture.base import MosaicLayout
+
+    if isinstance(layout, MosaicLayout):
+        channel = layout.channel_index(electrons.shape)
+        electrons *= np.take_along_axis(gains, channel[None], axis=0)[0]
+    else:
+        electrons *= gains
+    return electrons

@@ -35,7 +35,7 @@ beyond the neighbours is given to the nearest neighbour, so the kernel sums to t
 exactly.  :func:`apply_crosstalk` spreads a charge image with it (charge conserved at the borders by reflection), and
 :func:`effective_responsivities` turns a colour-filter mosaic's responsivities into what each tile site records.
 
-References: see ``/tmp/refs_angle.md`` ([Agranov2003], [Catrysse2002], [Green2008], [Sze2007], [Zhang2007]).
+References: see ``docs/references.md`` ([Agranov2003], [Catrysse2002], [Green2008], [Sze2007], [Zhang2007]).
 """
 from __future__ import annotations
 
@@ -145,7 +145,7 @@ def angle_in_medium_deg(theta_deg, index) -> np.ndarray:
 
     References
     ----------
-    .. [Catrysse2002] see /tmp/refs_angle.md (the stack's refraction).
+    .. [Catrysse2002] see docs/references.md (the stack's refraction).
     """
     t = np.radians(_checked_angle(theta_deg))
     return np.degrees(np.arcsin(np.sin(t) / _positive(index, "index")))
@@ -169,7 +169,7 @@ def microlens_shift_um(cra_deg, spec: PixelAngleSpec) -> np.ndarray:
 
     References
     ----------
-    .. [Agranov2003] see /tmp/refs_angle.md (shifted microlenses).
+    .. [Agranov2003] see docs/references.md (shifted microlenses).
     """
     return spec.stack_height_um * np.tan(np.radians(angle_in_medium_deg(cra_deg, spec.stack_index)))
 
@@ -196,7 +196,7 @@ def spot_sigma_um(wavelength_nm, spec: PixelAngleSpec, *, pixel_pitch_um: float,
 
     References
     ----------
-    .. [Zhang2007] see /tmp/refs_angle.md (Gaussian approximation of the Airy spot).
+    .. [Zhang2007] see docs/references.md (Gaussian approximation of the Airy spot).
     """
     wl_um = _positive(wavelength_nm, "wavelength_nm", " nm") * 1e-3
     p = float(_positive(pixel_pitch_um, "pixel_pitch_um", " µm"))
@@ -263,7 +263,7 @@ def microlens_acceptance(theta_deg, wavelength_nm, spec: PixelAngleSpec, *, pixe
 
     References
     ----------
-    .. [Catrysse2002] see /tmp/refs_angle.md (geometric optical efficiency against angle).
+    .. [Catrysse2002] see docs/references.md (geometric optical efficiency against angle).
     """
     theta = _checked_angle(theta_deg)
     wl = np.atleast_1d(_positive(wavelength_nm, "wavelength_nm", " nm"))
@@ -426,9 +426,9 @@ def crosstalk_kernel(theta_deg, wavelength_nm, alpha_per_um, n_silicon, spec: Pi
 
     References
     ----------
-    .. [Agranov2003] see /tmp/refs_angle.md (optical and electrical crosstalk against angle).
-    .. [Green2008] see /tmp/refs_angle.md (α of silicon).
-    .. [Sze2007] see /tmp/refs_angle.md (minority-carrier diffusion).
+    .. [Agranov2003] see docs/references.md (optical and electrical crosstalk against angle).
+    .. [Green2008] see docs/references.md (α of silicon).
+    .. [Sze2007] see docs/references.md (minority-carrier diffusion).
     """
     depth = float(_positive(collection_depth_um, "collection_depth_um", " µm"))
     g = _Geometry(theta_deg, wavelength_nm, alpha_per_um, n_silicon, spec, float(_positive(
@@ -461,7 +461,7 @@ def pixel_angle_response(theta_deg, wavelength_nm, alpha_per_um, n_silicon, spec
 
     References
     ----------
-    .. [Catrysse2002] see /tmp/refs_angle.md.
+    .. [Catrysse2002] see docs/references.md.
     """
     kw = dict(pixel_pitch_um=pixel_pitch_um, f_number=f_number, shift_um=shift_um, azimuth_deg=azimuth_deg)
     acc = microlens_acceptance(theta_deg, wavelength_nm, spec, **kw)
@@ -487,7 +487,7 @@ def apply_crosstalk(charge_e, kernel) -> np.ndarray:
 
     References
     ----------
-    .. [Agranov2003] see /tmp/refs_angle.md.
+    .. [Agranov2003] see docs/references.md.
     """
     q = np.asarray(charge_e, dtype=float)
     k = np.asarray(kernel, dtype=float)
@@ -526,7 +526,7 @@ def effective_responsivities(tile, responsivities, kernel) -> np.ndarray:
 
     References
     ----------
-    .. [Agranov2003] see /tmp/refs_angle.md (the colour mixing that crosstalk causes in a Bayer mosaic).
+    .. [Agranov2003] see docs/references.md (the colour mixing that crosstalk causes in a Bayer mosaic).
     """
     t = np.asarray(tile)
     R = np.asarray(responsivities, dtype=float)

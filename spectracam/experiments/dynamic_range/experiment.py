@@ -191,7 +191,7 @@ def chart_rows(cube, scene, cells, camera, run: DynamicRangeRun, exposure: str) 
                     per_cell[c.name].append(dict.fromkeys(_METRICS))
                     notes[c.name] = f"not exposed: {e}"
                 continue
-            rates = camera_rates(raw, scene.processing)
+            rates = camera_rates(raw, scene.processing, metered.reference)
             for c in scored:
                 per_cell[c.name].append(_cell_score(raw, rates, c, scene.processing))
                 times[c.name] = [1e3 * t for t in raw.exposure_times_s]

@@ -39,7 +39,7 @@ def write_capture(out_dir: Path, raw, scene) -> list[Path]:
             from spectracam.scene.reference import TargetReference
 
             target = TargetReference.of(scene)
-        neutral = develop(camera_rates(raw, scene.processing), raw, reference, scene.processing, target).neutral
+        neutral = develop(camera_rates(raw, scene.processing, reference), raw, reference, scene.processing, target).neutral
     return paths + [write_dng(out_dir / "raw.dng", raw, reference, neutral_rates=neutral)]
 
 

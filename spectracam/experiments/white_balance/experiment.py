@@ -208,7 +208,7 @@ def measure(cube, scene, seed: int, processings: dict | None = None) -> dict:
 
     processings = processings or _processings(scene)
     raw = capture(cube, seed=seed, scene=scene)
-    image = camera_rates(raw, scene.processing)
+    image = camera_rates(raw, scene.processing, ChartReference.of(scene))
     camera = raw.camera
     true = white_neutral(scene.illuminant, scene.grid, camera)
     scored = scored_reflectances(ChartReference.of(scene), TargetReference.of(scene) if scene.target.textured else None)
