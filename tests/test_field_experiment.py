@@ -99,3 +99,21 @@ def test_the_command_runs_and_says_what_it_wrote(tmp_path):
     data = json.loads((tmp_path / "f" / "results.json").read_text())
     assert data["parameters"]["pixel_pitches_um"] == [1.4] and len(data["rows"]) == 2
     assert "--set image.width=96" in data["command"]
+
+
+def test_a_full_run_is_checked_against_the_measurements(tmp_path):
+    """Without --quick the run also fits the IMX477's luminance table and a lensfun lens, and reports them."""
+    from spectracam.processing.shading import find_libcamera_tuning
+
+    run = plan(seeds=1, designs=("cfa/single",), shifts=(1.0,), corrections=("none",), pitches_um=(10.0,), sets=SETS)
+    result = run_field(run, log=lambda *a: None, progress=False)
+    measured = result["measured"]
+    assert set(measured) >= {"imx477", "lensfun"}
+    if find_libcamera_tuning("imx477") is None:
+        assert measured["imx477"] is None and "imx477_not_run" in measured
+    else:
+        fitted = measured["imx477"]["fitted"]
+        assert abs(fitted["achieved"] / fitted["measured_target"] - 1) < 0.01
+    write_field_outputs(tmp_path, result, "spectracam field -o x")
+    assert "Checked against real measurements" in (tmp_path / "report.md").read_text()
+    assert json.loads((tmp_path / "results.json").read_text())["measured"].keys() == measured.keys()

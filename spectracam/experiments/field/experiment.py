@@ -88,6 +88,8 @@ class FieldResult(TypedDict, total=False):
     parameters: dict
     rows: list
     seconds: float
+    #: The checks against real measurements (IMX477 tables, lensfun); None with ``--quick``.
+    measured: dict | None
     #: (design, correction) → the flat grey's ΔE*ab map at the largest shift, first seed (not written to JSON).
     maps: dict
 
@@ -308,7 +310,24 @@ def run_field(run: FieldRun, log=print, progress: bool = True) -> FieldResult:
               "radial_bins": RADIAL_BINS, "ring_edges": np.linspace(0, 1, RADIAL_BINS + 1).tolist(),
               "patch_radius": radius.tolist(), "patch_names": list(reference.names),
               "light_cct_K": _cct(reference), "scene": scene.to_dict()}
-    return FieldResult(parameters=params, rows=rows, seconds=time.perf_counter() - t0, maps=maps)
+    measured = None if run.quick else _measured(log)
+    return FieldResult(parameters=params, rows=rows, measured=measured, seconds=time.perf_counter() - t0, maps=maps)
+
+
+def _measured(log) -> dict:
+    """The checks against real measurements (:mod:`spectracam.experiments.field.measured`): the Raspberry Pi HQ
+    camera's lens-shading tables and a lensfun lens's vignetting; each None, with the reason, where its data is not
+    installed."""
+    from spectracam.experiments.field.measured import imx477_reproduction, lensfun_reproduction
+
+    out: dict = {}
+    for name, check in (("imx477", imx477_reproduction), ("lensfun", lensfun_reproduction)):
+        try:
+            out[name] = check()
+        except SpectracamError as e:
+            out[name], out[f"{name}_not_run"] = None, str(e)
+            log(f"not checked against {name}: {e}")
+    return out
 
 
 def _cct(reference) -> float:
@@ -411,6 +430,10 @@ def field_markdown(result: dict, command: str) -> str:
                      f"{r['flat_luminance_ratio'][-1]:.3f} | {r['chart_outer_delta_e_axis']:.2f} ± "
                      f"{r['chart_outer_delta_e_axis_sd']:.2f} | "
                      f"{r['chart_mean_delta_e_ab']:.2f} |")
+    if result.get("measured"):
+        from spectracam.experiments.field.measured import measured_markdown
+
+        lines += ["", measured_markdown(result["measured"].get("imx477"), result["measured"].get("lensfun"))]
     return "\n".join(lines) + "\n"
 
 
