@@ -286,6 +286,29 @@ def test_large_images_are_strided_and_probed_exactly(tmp_path):
     assert any(f"1 pixel in {s} " in n for n in case.notes)
 
 
+def test_a_strided_bayer_capture_keeps_every_channel(tmp_path):
+    """A 640 × 480 simulate page must stride; an even stride on a 2 × 2 Bayer tile kept one site only (the page drew
+    a red raw image and its probe only ever returned R): the stride is now coprime with the tile."""
+    from spectracam.cli import main
+    from spectracam.view.cases import tile_stride
+
+    assert [tile_stride(s, (2, 2)) for s in (1, 2, 3, 4)] == [1, 3, 3, 5]
+    assert tile_stride(4, (4, 4)) == 5 and tile_stride(2, None) == 2 and tile_stride(6, (2, 3)) == 7
+    scene = str(Path(__file__).parents[1] / "scenes" / "d65.toml")
+    _invoke(main, ["simulate", scene, "-o", str(tmp_path), "--renderer", "analytic", "--quiet"])
+    case = load_case(".", tmp_path / "radiance.exr", tmp_path / "raw.exr", tmp_path / "rendered.exr")
+    assert case.stride > 1 and case.stride % 2 == 1
+    kept = np.isfinite(case.dn).reshape(-1, case.dn.shape[-1]).sum(axis=0)
+    assert np.all(kept > 0.2 * case.dn[..., 0].size), kept            # R, G and B each on a share of the pixels
+    from spectracam.io.exr import read_raw_exr
+
+    raw = read_raw_exr(tmp_path / "raw.exr").digital
+    s = case.stride
+    np.testing.assert_array_equal(np.nanmax(case.dn, axis=-1), raw[::s, ::s])  # exactly the file's numbers
+    picture = case.images["raw"].reshape(-1, 4)[:, :3].astype(int)
+    assert np.all(picture[:, 1].max() > 0) and picture[:, 2].max() > 0  # green and blue are drawn, not only red
+
+
 def test_what_cannot_be_shown_is_one_line(tmp_path):
     with pytest.raises(SpectracamError, match="does not exist"):
         write_view(tmp_path / "missing")

@@ -22,7 +22,7 @@ import numpy as np
 
 from spectracam.core.errors import SpectracamError
 
-__all__ = ["CHANNEL_COLOURS", "PAGE_VALUES", "Case", "load_case", "rgba", "srgb8"]
+__all__ = ["CHANNEL_COLOURS", "PAGE_VALUES", "Case", "load_case", "rgba", "srgb8", "tile_stride"]
 
 #: 4-byte values (spectra, digital numbers, CIELAB, image pixels) a page's cases carry at most: 6 M
 #: (24 MB; 32 MB as base64), shared equally among them.
@@ -59,6 +59,20 @@ def _stride(width: int, height: int, bands: int, share: float = 1.0) -> int:
     per_pixel = bands + 4 + 3 + 3 + 1 + 4
     s = 1
     while -(-width // s) * -(-height // s) * per_pixel > share * PAGE_VALUES and s < max(width, height):
+        s += 1
+    return s
+
+
+def tile_stride(stride: int, tile_shape: tuple[int, int] | None) -> int:
+    """The smallest stride ≥ ``stride`` that shares no factor with the mosaic's tile (1 stays 1): every ``s``-th pixel of
+    a 2 × 2 Bayer tile with an even ``s`` is always the same site (a page drew a Bayer capture red only), with an odd
+    ``s`` the kept pixels step through every site, so every channel is drawn and probed."""
+    import math
+
+    s = int(stride)
+    if s <= 1 or tile_shape is None:
+        return s
+    while any(math.gcd(s, int(n)) != 1 for n in tile_shape):
         s += 1
     return s
 
@@ -125,7 +139,7 @@ def _raw(case: Case, path: Path, grid):
     from spectracam.architecture.filters import clear_responsivity
     from spectracam.io.exr import read_raw_exr
 
-    raw = read_raw_exr(path)
+    raw = read_raw_exr(path) if isinstance(path, (str, Path)) else path
     s = case.stride
     layout = raw.layout
     channels = list(layout.channels)
@@ -207,11 +221,20 @@ def load_case(name: str, radiance: Path | None, raw: Path | None, rendered: Path
             raise SpectracamError(f"case {name!r}: no file")
         (x0, y0), (x1, y1) = read_exr_header(first)["dataWindow"]  # the size only: the pixels are read once, below
         height, width, bands = int(y1 - y0 + 1), int(x1 - x0 + 1), 0
-    case = Case(name=name, width=int(width), height=int(height), stride=_stride(width, height, bands, share))
+    raw_capture = None
+    tile = None
+    if raw is not None:
+        from spectracam.architecture.base import MosaicLayout
+        from spectracam.io.exr import read_raw_exr
+
+        raw_capture = read_raw_exr(raw)
+        tile = raw_capture.layout.tile_shape if isinstance(raw_capture.layout, MosaicLayout) else None
+    case = Case(name=name, width=int(width), height=int(height),
+                stride=tile_stride(_stride(width, height, bands, share), tile))
     scene, grid = (None, None)
     if cube is not None:
         scene, grid = _radiance(case, cube)
-    capture = _raw(case, raw, grid) if raw is not None else None
+    capture = _raw(case, raw_capture, grid) if raw_capture is not None else None
     params = _rendered(case, rendered) if rendered is not None else None
     if case.rendered_lab is not None:
         truth = case.scene_lab
