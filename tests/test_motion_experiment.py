@@ -154,3 +154,25 @@ def test_command_writes_its_files(tmp_path):
     assert np.all((0.25 < bright) & (bright < 0.45)) and 3.0 < bright.mean() / dark.mean() < 5.0
     with Image.open(out / "images" / "fsc-optimal_0.2px-per-ms_global.png") as png:
         assert png.size == (48, 32)
+
+
+def test_no_images_skips_the_case_files_and_keeps_the_rest(tmp_path):
+    """``--no-images`` (issue 38): figures, results.json (the same rows) and report.md, no images/ or maps/."""
+    from click.testing import CliRunner
+
+    from spectracam.experiments.motion.command import motion_cmd
+
+    out = tmp_path / "m"
+    args = ["-o", str(out), "--renderer", "analytic", "--quiet", "--no-images", "--set",
+            "designs=[\"cfa/single\", \"fsc/optimal\"]", "--set", "rolling_shutter=[false]"] \
+        + [a for s in TINY for a in ("--set", s)]
+    res = CliRunner().invoke(motion_cmd, args, catch_exceptions=False)
+    assert res.exit_code == 0, res.output
+    data = json.loads((out / "results.json").read_text())
+    assert len(data["rows"]) == 2 * 3 and all(list(r) == ROW_KEYS for r in data["rows"])
+    assert data["command"].endswith("--no-images") and "case_images_written" not in data
+    for f in ("report.md", "breakup_scielab.png", "crops.png", "fsc_frames.gif", "mtf_curves.json"):
+        assert (out / f).exists()
+    assert not (out / "images").exists() and not (out / "maps").exists()
+    assert data["case_files"]["images"] == 0 and not any(f.startswith("maps/") for f in data["figures"])
+    assert "images/<design>" not in (out / "report.md").read_text()

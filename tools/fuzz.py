@@ -305,7 +305,8 @@ def case_read_only(rng, d: Path):
     cmd = rng.choice([["render", "s.toml", "--renderer", "analytic"], ["simulate", "s.toml", "--renderer", "analytic"],
                       ["capture", "r/radiance.exr"], ["score", "c/raw.exr"], ["emva"],
                       ["paper", "--quick", "--renderer", "analytic"], ["sweep", "sw.toml", "--serial"],
-                      ["validate", "--renderer", "analytic"], ["motion", "--quick", "--renderer", "analytic"]])
+                      ["validate", "--renderer", "analytic"], ["motion", "--quick", "--renderer", "analytic"],
+                      ["motion", "--quick", "--renderer", "analytic", "--no-images"]])
     where = rng.choice(["out", "out/new", "cache"])
     if where == "cache":
         (d / "cache").mkdir(mode=0o555)
@@ -442,7 +443,8 @@ def case_memory_limit(rng, d: Path):
                       ["paper", "-o", "out", "--renderer", "analytic"], ["motion"]])
     if cmd == ["motion"]:   # a moving edge w px wide, rendered at 4 sub-pixels a side, under the same limit
         w //= 4
-        cmd = ["motion", "--quick", "-o", "out", "--renderer", "analytic", "--set", f"edge_size_px=[{w}, {w}]"]
+        cmd = ["motion", "--quick", "-o", "out", "--renderer", "analytic", "--set", f"edge_size_px=[{w}, {w}]"] \
+            + rng.choice([[], ["--no-images"]])
     else:
         cmd += ["--set", f"image.width={w}", "--set", f"image.height={w * 3 // 4}"]
     return cmd, False, f"memory limit {limit >> 30} GiB, {w} px: {cmd[0]}", {"address_space": limit}

@@ -18,10 +18,12 @@ __all__ = ["motion_cmd"]
 @output_option("Directory to write results.json, mtf_curves.json, report.md, the figures and fsc_frames.gif into.")
 @click.option("--quick", is_flag=True, help="A first look: a 64×64 edge, 20-nm bands, 8 speeds, 8 samples per sub-pixel.")
 @renderer_option
+@click.option("--no-images", is_flag=True, help="Skip images/ and maps/: every case's EXR, PNG and error map (the "
+              "figures, results.json and report.md are written).")
 @set_option
 @quiet_option
 @view_option
-def motion_cmd(out_dir: Path, quick: bool, renderer: str, sets, quiet: bool):
+def motion_cmd(out_dir: Path, quick: bool, renderer: str, no_images: bool, sets, quiet: bool):
     """Motion: a neutral slanted edge moving at a sweep of speeds, captured by cfa/single, prism/optimal,
     fsc/optimal and fsc/balanced with a global and a rolling shutter (time slices rendered by Mitsuba);
     colour-breakup width, S-CIELAB, MTF along the motion, SNR; results.json, figures, report.md."""
@@ -36,5 +38,6 @@ def motion_cmd(out_dir: Path, quick: bool, renderer: str, sets, quiet: bool):
     log(estimate.line())
     t0 = time.perf_counter()
     result = run_motion(spec, scene, renderer=renderer, log=log, progress=not quiet)
-    paths = write_outputs(out_dir, result, target_command("motion", out_dir, quick, renderer, sets))
+    command = target_command("motion", out_dir, quick, renderer, sets) + (" --no-images" if no_images else "")
+    paths = write_outputs(out_dir, result, command, images=not no_images)
     log_report(log, t0, answer(result), paths, out_dir)

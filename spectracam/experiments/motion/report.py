@@ -457,17 +457,19 @@ def report_markdown(result, command: str) -> str:
             continue
         out.append(f"| {k} | " + " | ".join(f"{s:.1f} … {s + d:.1f}" for s, d in zip(t["start_ms"], t["duration_ms"]))
                    + f" | {t['capture_time_ms']:.1f} |")
-    out += ["", *(_case_files(result) if result.get("images") else []), *_setup(result),
+    out += ["", *(_case_files(result) if result.get("images") and result.get("case_images_written", True) else []),
+            *_setup(result),
             "## Time per stage (s)", "", "| " + " | ".join(result["timings"]) + " |",
             "|" + "---|" * len(result["timings"]),
             "| " + " | ".join(f"{v:.2f}" for v in result["timings"].values()) + " |", ""]
     return "\n".join(out)
 
 
-def write_outputs(out_dir: Path, result: dict, command: str) -> list[Path]:
-    """The figures, every case's images and maps (:mod:`.cases`), results.json (rows as
-    :meth:`~.experiment.MotionRow.to_dict`), mtf_curves.json and report.md."""
+def write_outputs(out_dir: Path, result: dict, command: str, images: bool = True) -> list[Path]:
+    """The figures, every case's images and maps (:mod:`.cases`; not with ``images=False``, ``--no-images``),
+    results.json (rows as :meth:`~.experiment.MotionRow.to_dict`), mtf_curves.json and report.md."""
     out_dir = Path(out_dir)
+    result = {**result, "case_images_written": bool(images)}
     rows = result["rows"]
     paths = []
     paths += figure_curves(result, out_dir)
@@ -476,13 +478,13 @@ def write_outputs(out_dir: Path, result: dict, command: str) -> list[Path]:
         paths += figure_crops(result, out_dir, True)
     paths += fsc_frames_gif(result, out_dir) if any(r.design == "fsc/optimal" for r in rows) else []
     figures = [p.name for p in paths if p.suffix in (".png", ".gif")]
-    cases = write_case_outputs(result, out_dir) if result.get("images") else []
+    cases = write_case_outputs(result, out_dir) if images and result.get("images") else []
     paths += cases
     result["figures"] = figures + [p.relative_to(out_dir).as_posix() for p in cases if p.parent.name == "maps"]
     result["case_files"] = {"images": sum(p.parent.name == "images" for p in cases),
                             "pattern": "images/<design>_<speed>px-per-ms_<global|rolling>.exr and .png"}
     public = {k: ([r.to_dict() for r in v] if k == "rows" else v) for k, v in result.items()
-              if k not in ("images", "mtf_curves", "display_white")}
+              if k not in ("images", "mtf_curves", "display_white", "case_images_written")}
     public["display_white"] = np.asarray(result["display_white"]).tolist()
     public["command"] = command
     paths.append(atomic_write(out_dir / "results.json", json.dumps(public, indent=1, allow_nan=False,
