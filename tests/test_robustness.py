@@ -296,3 +296,21 @@ def test_the_fault_harness_finds_nothing_in_one_case_of_every_class(capsys):
     out = capsys.readouterr().out
     assert status == 0, out
     assert f"fuzz: {n} cases" in out and "0 tracebacks, 0 partial files, 0 silent wrong results" in out, out
+
+
+def test_the_render_cache_follows_xdg_cache_home(monkeypatch, tmp_path):
+    """``$SPECTRACAM_CACHE`` first, then the XDG user cache (an absolute ``$XDG_CACHE_HOME``), then ~/.cache."""
+    from pathlib import Path
+
+    from spectracam.io.cache import cache_dir
+
+    monkeypatch.delenv("SPECTRACAM_CACHE", raising=False)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert cache_dir() == tmp_path / "xdg" / "spectracam" / "renders"
+    monkeypatch.setenv("XDG_CACHE_HOME", "relative/dir")          # the specification: relative paths are ignored
+    assert cache_dir() == Path.home() / ".cache" / "spectracam" / "renders"
+    monkeypatch.delenv("XDG_CACHE_HOME")
+    assert cache_dir() == Path.home() / ".cache" / "spectracam" / "renders"
+    monkeypatch.setenv("SPECTRACAM_CACHE", str(tmp_path / "own"))
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert cache_dir() == tmp_path / "own"

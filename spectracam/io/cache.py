@@ -4,7 +4,8 @@ Key: SHA-256 of the scene's render-relevant tables (chart, illuminant, wavelengt
 the renderer, and the spectracam and Mitsuba versions.  An entry is a spectral EXR and, beside it, the
 SHA-256 of its pixel data; on a hit the scene recorded in the file is compared with the request and
 the pixels with their checksum, so a collision, a hand-edited file or a damaged one is rendered again,
-never served.  Location: ``$SPECTRACAM_CACHE`` or ``~/.cache/spectracam/renders``.
+never served.  Location: ``$SPECTRACAM_CACHE``, ``$XDG_CACHE_HOME/spectracam/renders`` or
+``~/.cache/spectracam/renders``.
 """
 from __future__ import annotations
 
@@ -31,7 +32,13 @@ TEXTURED_RENDER_METHOD = 3
 
 
 def cache_dir() -> Path:
-    return Path(os.environ.get("SPECTRACAM_CACHE") or Path.home() / ".cache" / "spectracam" / "renders")
+    """``$SPECTRACAM_CACHE``, else ``$XDG_CACHE_HOME/spectracam/renders`` (the XDG Base Directory specification's
+    user cache, when set to an absolute path), else ``~/.cache/spectracam/renders``."""
+    if os.environ.get("SPECTRACAM_CACHE"):
+        return Path(os.environ["SPECTRACAM_CACHE"])
+    xdg = os.environ.get("XDG_CACHE_HOME", "")
+    base = Path(xdg) if xdg and Path(xdg).is_absolute() else Path.home() / ".cache"   # a relative one is ignored
+    return base / "spectracam" / "renders"
 
 
 def render_key(scene, renderer: str) -> tuple[str, dict]:
