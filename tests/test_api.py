@@ -127,3 +127,16 @@ def test_the_version_lives_below_the_stages_and_matches_the_package_metadata():
                     and any(a.name == "__version__" for a in node.names):
                 upward.append(str(path.relative_to(root)))
     assert not upward, f"import __version__ from spectracam._version instead: {upward}"
+
+
+def test_load_scene_takes_a_shipped_name_from_any_directory(monkeypatch, tmp_path):
+    """``load_scene("d65")`` and the README's ``"scenes/d65.toml"`` work outside the checkout, as the CLI's names do."""
+    import spectracam
+
+    monkeypatch.chdir(tmp_path)
+    for name in ("d65", "d65.toml", "scenes/d65.toml"):
+        assert spectracam.load_scene(name).illuminant.name == "D65"
+    (tmp_path / "d65.toml").write_text('name = "mine"\n[illuminant]\ntype = "cie"\nname = "A"\n')
+    assert spectracam.load_scene("d65.toml").illuminant.name == "A"        # a file that exists comes first
+    with pytest.raises(spectracam.core.errors.ConfigError, match="cannot be read"):
+        spectracam.load_scene("nosuch")

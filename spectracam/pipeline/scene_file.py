@@ -361,6 +361,8 @@ def load_scene(path: str | Path, overrides=()) -> Scene:
     ----------
     path : str or os.PathLike
         The scene file; curve files it names (``illuminant.file``, ``filters.qe_file``, …) are relative to it.
+        Where no such file exists, the name of a scene shipped with spectracam (``"d65"``, ``"scenes/d65.toml"``),
+        from any working directory, as the command line takes it.
     overrides : iterable
         ``"PATH=VALUE"`` strings or ``(path, value)`` pairs, e.g. ``["image.width=320"]``, applied in order.
 
@@ -384,6 +386,11 @@ def load_scene(path: str | Path, overrides=()) -> Scene:
     if isinstance(overrides, (str, bytes)) or not hasattr(overrides, "__iter__"):
         raise ArgumentTypeError(f"load_scene(overrides): got {type(overrides).__name__}; allowed: a list of "
                                 "'PATH=VALUE' strings or (path, value) pairs, e.g. ['image.width=320']")
+    if not Path(path).is_file():   # the name of a shipped scene, as the command line takes it ("d65", "scenes/d65")
+        name = str(path).strip().removeprefix("./").removeprefix("scenes/").removesuffix(".toml")
+        root = shipped_dir()
+        if root is not None and "/" not in name and (root / f"{name}.toml").is_file():
+            path = root / f"{name}.toml"
     data = apply_overrides(read_toml(path, "scene file"), overrides)
     return parse_scene(resolve_curve_files(data, Path(path).parent), source=str(path))
 
