@@ -23,6 +23,8 @@ renderer's area-weighted mix.
 """
 from __future__ import annotations
 
+import weakref
+
 import ctypes.util
 import glob
 import os
@@ -218,12 +220,27 @@ def band_seed(seed: int, band: int) -> int:
 WITHIN_BAND = ("light-weighted", "sampled")
 
 
+#: The variant each log was last told of, so a run that renders several scenes says it once.
+_SAID: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def _said(log):
+    try:
+        return _SAID.get(log)
+    except TypeError:
+        return None
+
+
 def open_variant(scene, log=None):
     """``(mi, variant, reason, band width nm)``: Mitsuba with the variant ``scene.render.variant`` resolves
     to active (said to ``log``), and the one band width of ``scene``'s grid (evenly spaced grids only)."""
     variant, reason = select_variant(scene.render.variant)
-    if log:
+    if log and _said(log) != variant:   # once per log and variant: a paper run renders six lights
         log(f"Mitsuba variant {variant} ({reason})")
+        try:
+            _SAID[log] = variant
+        except TypeError:                # a log that cannot be weakly referenced: said every time
+            pass
     mi = activate_variant(variant)
     return mi, variant, reason, even_band_width_nm(scene.grid)
 
