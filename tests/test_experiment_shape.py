@@ -66,7 +66,7 @@ def test_each_run_returns_its_experiments_typeddict(name):
 
 def test_the_registry_imports_no_experiment():
     """The parts are strings: importing the registry (the command line's start-up does) loads no experiment."""
-    code = ("import sys, spectracam.experiments as x; assert len(x.EXPERIMENTS) == 12; "
+    code = ("import sys, spectracam.experiments as x; assert len(x.EXPERIMENTS) == 13; "
             "print(sorted(m for m in sys.modules if m.startswith('spectracam.experiments.')))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
