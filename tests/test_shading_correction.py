@@ -130,3 +130,28 @@ def test_simulate_with_the_correction_scores_the_corners_closer_to_the_axis(tmp_
     assert fixed.summary.delta_e_mean < none.summary.delta_e_mean
     assert json.dumps(fixed.parameters)                                    # what it recorded is JSON
     assert math.isfinite(fixed.summary.delta_e_mean)
+
+
+@pytest.mark.parametrize("shape, method", [((20, 20), "cell_mean"), ((30, 30), "cell_mean"), ((16, 16), "fit"),
+                                           ((30, 30), "fit")])
+def test_a_mosaic_too_small_for_the_grid_is_one_line_not_nan_gains(shape, method):
+    """A Bayer channel has a quarter to a half of the pixels: the 12 × 16 grid needs 48 × 64 of them."""
+    from spectracam.processing.shading import ShadingSpec
+
+    layout = _scene().camera.architecture().layout
+    flat = np.random.default_rng(0).uniform(0.9, 1.1, shape)
+    with pytest.raises(ConfigError) as e:
+        calibrate_gain_tables(flat, ShadingSpec(method=method), layout)
+    assert "processing.shading_grid" in str(e.value) and "\n" not in str(e.value)
+    tables = calibrate_gain_tables(np.random.default_rng(0).uniform(0.9, 1.1, (48, 64)), ShadingSpec(method=method),
+                                   layout)
+    assert np.all(np.isfinite(tables.gains)) and np.all(tables.gains > 0)
+
+
+def test_an_indexed_set_reaches_the_unrecorded_shading_lists():
+    from spectracam.pipeline.scene_file import load_scene
+
+    s = load_scene("d65", ["processing.shading_grid[0]=8", "processing.shading_temperatures_K[1]=5000",
+                           "optics.optical_centre_mm[0]=0.5"])
+    assert s.processing.shading_grid == (8, 16) and s.processing.shading_temperatures_K == (2960.0, 5000.0, 5930.0)
+    assert s.camera.optics.optical_centre_mm == (0.5, 0.0)

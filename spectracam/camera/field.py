@@ -118,8 +118,10 @@ def _compute_weights(camera: CameraSpec, grid, cra: np.ndarray, azimuth: np.ndar
     of f/8 or slower); the model m(θ) gives how what each site records changes with the angle, so each site's weights
     are ``w(θ) = R_site + m(θ) − m(0)`` (never below 0), band by band.  Where the model alone changes nothing at
     normal incidence (microlens, optical crosstalk) this is m(θ) itself; electrical crosstalk, which mixes charge at
-    every angle, is then counted only as its change with the angle, and a site's charge total over the tile is kept
-    as the model keeps it."""
+    every angle, is then counted only as its change with the angle, and the tile's charge total is kept as the model
+    keeps it (unless the clip at 0 acts).  A first-order correction: the normal-incidence crosstalk the measured R
+    holds is not scaled down with the microlens's acceptance at the corner (an error of about (1 − a)·(R − m(0)) for
+    acceptance a; nothing where electrical crosstalk is off)."""
     layout = camera.architecture().layout
     R = np.asarray(camera_responsivities(camera, grid), float)                    # (N, B)
     per_site = _modelled(camera, grid, R, cra, azimuth, layout)

@@ -176,7 +176,7 @@ def camera_rates(raw: RawCapture, processing: ProcessingSpec, reference: ChartRe
             raise SpectracamError(f"processing.shading = {processing.shading!r}: the correction needs the scene's "
                                   "chart reference (its wavelengths and light); pass reference=")
         gains = shading_gain_maps(raw.camera, reference.grid, e.shape[-2:], processing,
-                                  light_cct_K(reference.illuminant))
+                                  light_cct_K(reference.illuminant) if processing.shading == "cct" else None)
         e = correct_shading(e, raw.layout, gains)
     if isinstance(raw.layout, MosaicLayout):
         rgb = demosaic(e, raw.layout, processing.demosaic)

@@ -92,11 +92,34 @@ def apply_override(data: dict, path: str, value, defaults: Callable[[], dict] | 
     lst = t.get(key)
     if lst is None and defaults is not None:
         lst = copy.deepcopy(defaults().get(table, {}).get(key))
+    if lst is None:   # a field its spec leaves out of the record while it holds its default
+        lst = _unrecorded_default(table, key)
     if not isinstance(lst, list) or int(index) >= len(lst):
         raise ConfigError(path, value, f"{table}.{key} is not a list with an element {index}", source)
     lst[int(index)] = value
     t[key] = lst
     return out
+
+
+#: Tables whose specs leave fields out of their record while they hold their defaults (issue 37: the lens across the
+#: field, the pixel's angle response, the lens-shading correction), so an indexed ``--set`` finds the default there.
+_UNRECORDED = {"optics": ("spectracam.optics", "OpticsSpec"), "pixel": ("spectracam.sensor.angle", "PixelAngleSpec"),
+               "processing": ("spectracam.processing.color", "ProcessingSpec")}
+
+
+def _unrecorded_default(table: str, key: str):
+    """The default of ``table.key`` as a list, for a spec that does not record its defaults; None otherwise."""
+    import dataclasses
+    import importlib
+
+    if table not in _UNRECORDED:
+        return None
+    module, name = _UNRECORDED[table]
+    fields = {f.name: f for f in dataclasses.fields(getattr(importlib.import_module(module), name))}
+    f = fields.get(key)
+    if f is None or f.default is dataclasses.MISSING:
+        return None
+    return list(f.default) if isinstance(f.default, tuple) else None
 
 
 def apply_overrides(data: dict, overrides: Iterable, defaults: Callable[[], dict] | None = None,

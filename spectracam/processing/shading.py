@@ -169,7 +169,7 @@ def interpolate_table(table, shape: tuple[int, int], placement: str = "corners")
 
 
 def _centre_level(plane: np.ndarray) -> float:
-    """Mean of the central box (1/8 of each side, at least one pixel) of one plane (NaN: not this channel's pixel)."""
+    """Mean of the central box (1/8 of each side, at least two pixels) of one plane (NaN: not this channel's pixel)."""
     h, w = plane.shape
     bh, bw = max(2, h // 8), max(2, w // 8)
     return float(np.nanmean(plane[(h - bh) // 2:(h + bh) // 2, (w - bw) // 2:(w + bw) // 2]))
@@ -246,15 +246,29 @@ def calibrate_gain_tables(flat, spec: ShadingSpec | None = None, layout=None) ->
     known = p[np.isfinite(p)]
     if known.size == 0 or np.any(known <= 0) or np.any(np.isinf(p)):
         raise ConfigError("flat", "values ≤ 0 or not finite", "a flat field must be finite and > 0 in every channel")
-    if min(p.shape[1:]) < max(spec.grid_rows, spec.grid_columns):
-        raise ConfigError("flat", f"shape {p.shape}", f"must have at least {max(spec.grid_rows, spec.grid_columns)} "
-                          "pixels on each side for a table of that many nodes")
+    for k, c in enumerate(p):   # every channel needs two of its own pixels per node along each side
+        known = np.isfinite(c)
+        rows, cols = int(known.any(axis=1).sum()), int(known.any(axis=0).sum())
+        if rows < 2 * spec.grid_rows or cols < 2 * spec.grid_columns:
+            raise ConfigError("processing.shading_grid", [spec.grid_rows, spec.grid_columns],
+                              f"needs two pixels of each channel per node along each side; channel {k} has "
+                              f"{rows} rows × {cols} columns of pixels in this {p.shape[1]} × {p.shape[2]} image: "
+                              "a larger image or a coarser grid")
     targets = [_centre_level(c) for c in p]
     if spec.method == "fit":
-        gains = np.stack([_fit_nodes(c, t, spec.grid_rows, spec.grid_columns) for c, t in zip(p, targets)])
-        return ShadingTables(gains, "corners")
-    gains = np.stack([t / _cell_means(c, spec.grid_rows, spec.grid_columns) for c, t in zip(p, targets)])
-    return ShadingTables(gains, "centres")
+        try:
+            gains = np.stack([_fit_nodes(c, t, spec.grid_rows, spec.grid_columns) for c, t in zip(p, targets)])
+        except np.linalg.LinAlgError:
+            gains = np.full((1,), np.nan)   # a node no pixel constrains: refused below
+        placement = "corners"
+    else:
+        gains = np.stack([t / _cell_means(c, spec.grid_rows, spec.grid_columns) for c, t in zip(p, targets)])
+        placement = "centres"
+    if not np.all(np.isfinite(gains)) or np.any(gains <= 0):
+        raise ConfigError("processing.shading_grid", [spec.grid_rows, spec.grid_columns],
+                          f"gives gains that are not finite and > 0 on this {p.shape[1]} × {p.shape[2]} flat field: "
+                          "a coarser grid")
+    return ShadingTables(gains, placement)
 
 
 def apply_gain_tables(planes, tables: ShadingTables) -> np.ndarray:
@@ -532,7 +546,7 @@ def table_figures(table) -> dict:
 DAYLIGHT_FROM_K = 5000.0
 #: Gain maps already computed: key → (N, H, W) float32 (read-only).
 _GAIN_CACHE: dict = {}
-_GAIN_CACHE_SIZE = 8
+_GAIN_CACHE_SIZE = 4
 
 
 def calibration_light(cct_K: float, white_luminance_cd_m2: float = 100.0):
@@ -562,7 +576,7 @@ def calibration_light(cct_K: float, white_luminance_cd_m2: float = 100.0):
         return IlluminantSpec(kind="blackbody", temperature_K=float(cct_K), white_luminance_cd_m2=white_luminance_cd_m2)
     import colour
 
-    xy = colour.temperature.CCT_to_xy_CIE_D(float(cct_K) * 1.4388 / 1.4380)   # the D series' own temperature scale
+    xy = colour.temperature.CCT_to_xy_CIE_D(float(cct_K))   # a measured CCT, as libcamera's tuning states its lights
     sd = colour.sd_CIE_illuminant_D_series(xy)
     return IlluminantSpec(kind="measured", name=f"CIE daylight {cct_K:g} K", temperature_K=None,
                           wavelengths_nm=tuple(float(w) for w in sd.wavelengths),
@@ -634,7 +648,7 @@ def _gain_key(camera, grid, shape, processing, cct_K) -> str:
 
 def shading_gain_maps(camera, grid, shape: tuple[int, int], processing, cct_K: float | None = None) -> np.ndarray:
     """The camera's lens-shading gains at every pixel, per channel: its tables calibrated on flat fields
-    (:func:`flat_field_planes`) under ``processing.shading_temperatures_K`` (:func:`calibration_light`), the one of the
+    (:func:`flat_field`) under ``processing.shading_temperatures_K`` (:func:`calibration_light`), the one of the
     first (``"single"``) or the ones interpolated to ``cct_K`` (``"cct"``, :func:`interpolate_tables_by_cct`), each
     interpolated bilinearly to ``shape``.
 

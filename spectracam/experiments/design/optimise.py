@@ -46,8 +46,9 @@ def optimise(problem, x0: np.ndarray | None = None, max_iterations: int = 80, to
                        options={"maxiter": int(max_iterations), "ftol": float(tolerance), "gtol": 1e-9},
                        callback=(lambda xk: b.update(1)) if progress else None)
     msg = res.message if isinstance(res.message, str) else res.message.decode()
-    # L-BFGS-B's status 1 ("STOP: TOTAL NO. OF ITERATIONS REACHED LIMIT") is the budget asked for, not a failure
-    why = f"stopped at the iteration budget, {int(max_iterations)}" if res.status == 1 else msg
+    # L-BFGS-B's status 1 ("STOP: TOTAL NO. OF ITERATIONS REACHED LIMIT", or its evaluations' limit) is the budget
+    # asked for, not a failure
+    why = f"stopped at the budget of {int(max_iterations)} iterations" if res.status == 1 else msg
     log(f"{problem.design}: {len(history)} evaluations, {res.nit} iterations, training "
         f"{'S-CIELAB' if getattr(problem, 'score', 'delta_e') == 's_cielab' else 'ΔE'} {best['de']:.4f} ({why})")
     return Optimisation(best["x"], float(best["v"]), float(best["de"]), len(history), int(res.nit), msg, history)

@@ -129,7 +129,7 @@ def plan(quick: bool = False, seeds: int | None = None, renderer: str = "analyti
         for path, option in (("pixel.microlens_shift_fraction", "--shift"), ("processing.shading", "--correction"),
                              ("optics.cra_corner_deg", "--cra"), ("sensor.pixel_pitch_um", "--pitch"),
                              ("capture.architecture", "--design"),
-                             ("capture.exposure", "--design")):
+                             ("capture.exposure", "--design"), ("capture.design", "--design")):
             if str(s).split("=", 1)[0].strip() == path:
                 raise SpectracamError(f"--set {s}: field sets {path} for each case; use {option}")
     scene = _scene(quick, tuple(sets), float(cra_deg))

@@ -500,7 +500,7 @@ def capture_at_seed(setup: MotionSetup, dm: DesignModel, rates: np.ndarray, seed
     """One capture of the rates by the design (its noise at ``seed``), processed to the display:
     ``(camera rates (H, W, N), display XYZ (H, W, 3))``."""
     raw = record(rates, camera or dm.camera, dm.white_rate, seed, dm.times_s)
-    return process(raw, setup.scene.processing, dm.conversion)
+    return process(raw, setup.scene.processing, dm.conversion, setup.reference)
 
 
 def capture(setup: MotionSetup, dm: DesignModel, rates: np.ndarray, timings: dict) -> Capture:

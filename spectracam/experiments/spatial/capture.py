@@ -102,11 +102,14 @@ def record(rates: np.ndarray, camera: CameraSpec, metered_rate: np.ndarray, seed
                       metered_rate_e_per_s=np.asarray(metered_rate, float))
 
 
-def process(raw: RawCapture, processing: ProcessingSpec, conversion: Conversion) -> tuple[np.ndarray, np.ndarray]:
-    """``(camera rates (H, W, N) e⁻/s, display XYZ (H, W, 3), white Y = 1)`` of a capture."""
+def process(raw: RawCapture, processing: ProcessingSpec, conversion: Conversion,
+            reference=None) -> tuple[np.ndarray, np.ndarray]:
+    """``(camera rates (H, W, N) e⁻/s, display XYZ (H, W, 3), white Y = 1)`` of a capture; ``reference``: the scene's
+    chart reference, whose wavelengths and light a lens-shading correction (``processing.shading``) is calibrated
+    for."""
     if not isinstance(raw.layout, MosaicLayout):
         processing = processing.replace(demosaic="bilinear")  # unused for planes
-    rates = camera_rates(raw, processing)
+    rates = camera_rates(raw, processing, reference)
     xyz = rates @ conversion.matrix @ conversion.rgb_to_xyz.T
     return rates, xyz
 

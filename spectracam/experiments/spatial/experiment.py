@@ -512,7 +512,7 @@ def score_design(run: _Run, case: Case, tname: str, target: Target, geometry: Ca
         t0 = time.perf_counter()
         raw = record(rates, camera, white_rate(run.reference, camera), spec.seed + s)
         t0 = run.timed(tname, "capture", t0)
-        cam_rates, xyz = process(raw, processing, conv)
+        cam_rates, xyz = process(raw, processing, conv, run.reference)
         t0 = run.timed(tname, "processing", t0)
         ctx = ScoringContext(target, geometry, xyz, reference_xyz, own_xyz, optics_xyz, cam_rates, conv.display_white,
                              spec.samples_per_degree, tuple(raw.layout.channels), spec.esfr_correct_binning)
