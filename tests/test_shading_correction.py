@@ -11,7 +11,8 @@ from spectracam.architecture.base import MosaicLayout
 from spectracam.core.errors import ConfigError, SpectracamError
 from spectracam.processing.color import ProcessingSpec
 from spectracam.processing.shading import (calibrate_gain_tables, calibration_light, correct_shading, flat_field,
-                                           light_cct_K, residual_colour_shading, shading_gain_maps)
+                                           residual_colour_shading, shading_gain_maps)
+from spectracam.processing.calibration import light_cct_K
 
 SHAPE = (96, 128)
 

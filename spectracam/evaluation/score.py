@@ -170,7 +170,8 @@ def camera_rates(raw: RawCapture, processing: ProcessingSpec, reference: ChartRe
     exposure-normalised."""
     e, _ = recorded_electrons(raw)
     if processing.shading != "none":
-        from spectracam.processing.shading import correct_shading, light_cct_K, shading_gain_maps
+        from spectracam.processing.calibration import light_cct_K
+        from spectracam.processing.shading import correct_shading, shading_gain_maps
 
         if reference is None:
             raise SpectracamError(f"processing.shading = {processing.shading!r}: the correction needs the scene's "

@@ -40,7 +40,7 @@ from spectracam.processing.registries import CALIBRATIONS  # noqa: F401  (the ca
 
 __all__ = ["CALIBRATIONS", "CALIBRATION_LIGHTS", "CCT_RANGE_K", "D50_XYZ", "NEUTRAL_XY_ITERATIONS",
            "NEUTRAL_XY_TOLERANCE", "Calibration", "DualIlluminant", "constrained_lstsq", "conversion_matrix",
-           "conversion_target_rgb", "dual_illuminant_matrices", "white_neutral", "xy_to_cct", "xyz_to_display_rgb",
+           "conversion_target_rgb", "dual_illuminant_matrices", "light_cct_K", "white_neutral", "xy_to_cct", "xyz_to_display_rgb",
            "xyz_to_xy"]
 
 #: The DNG's two calibration lights (EXIF LightSource 17 = Standard light A, 21 = D65), as spectracam names them.
@@ -161,6 +161,23 @@ def xy_to_cct(xy) -> float:
     if not np.isfinite(cct):
         return CCT_RANGE_K[1]
     return float(np.clip(cct, *CCT_RANGE_K))
+
+
+def light_cct_K(illuminant) -> float:
+    """The correlated colour temperature of a light (Robertson's method on its chromaticity,
+    :func:`spectracam.processing.calibration.xy_to_cct`), K: the temperature the lens-shading ``"cct"`` correction (:mod:`spectracam.processing.shading`) picks its table by.
+    A camera estimates it from its white balance; here it is the light's own (the correction's best case)."""
+    if illuminant.kind == "blackbody":
+        return float(illuminant.temperature_K)
+    import colour
+
+    from spectracam.scene.illuminant import relative_spd
+
+    lam = np.arange(380.0, 781.0, 5.0)
+    spd = relative_spd(illuminant)(lam)
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(
+        colour.SpectralShape(380, 780, 5)).values
+    return xy_to_cct(xyz_to_xy(spd @ cmfs))
 
 
 def _illuminant_cct(name: str) -> float:

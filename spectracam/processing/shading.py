@@ -38,7 +38,7 @@ from spectracam.core.spec import Spec
 
 __all__ = ["ALSC_CELLS", "DAYLIGHT_FROM_K", "LIBCAMERA_TUNING_DIRS", "PLACEMENTS", "SHADING_CORRECTIONS", "SHADING_METHODS",
            "AlscTuning", "ShadingSpec", "ShadingTables", "apply_gain_tables", "calibrate_gain_tables", "calibration_light",
-           "channel_planes", "correct_shading", "flat_field", "tile_planes", "light_cct_K", "shading_gain_maps",
+           "channel_planes", "correct_shading", "flat_field", "tile_planes", "shading_gain_maps",
            "find_libcamera_tuning", "interpolate_table", "interpolate_tables_by_cct", "interpolation_matrix",
            "luminance_and_colour_tables", "read_libcamera_alsc", "residual_colour_shading", "table_figures"]
 
@@ -620,24 +620,6 @@ def flat_field(camera, grid, shape: tuple[int, int], illuminant) -> np.ndarray:
     if isinstance(camera.architecture().layout, MosaicLayout):
         return rates.sum(axis=-1)
     return np.moveaxis(rates, -1, 0)
-
-
-def light_cct_K(illuminant) -> float:
-    """The correlated colour temperature of a light (Robertson's method on its chromaticity,
-    :func:`spectracam.processing.calibration.xy_to_cct`), K: the temperature ``"cct"`` correction picks its table by.
-    A camera estimates it from its white balance; here it is the light's own (the correction's best case)."""
-    if illuminant.kind == "blackbody":
-        return float(illuminant.temperature_K)
-    import colour
-
-    from spectracam.processing.calibration import xy_to_cct, xyz_to_xy
-    from spectracam.scene.illuminant import relative_spd
-
-    lam = np.arange(380.0, 781.0, 5.0)
-    spd = relative_spd(illuminant)(lam)
-    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(
-        colour.SpectralShape(380, 780, 5)).values
-    return xy_to_cct(xyz_to_xy(spd @ cmfs))
 
 
 def _gain_key(camera, grid, shape, processing, cct_K) -> str:

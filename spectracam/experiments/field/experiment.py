@@ -331,7 +331,7 @@ def _measured(log) -> dict:
 
 
 def _cct(reference) -> float:
-    from spectracam.processing.shading import light_cct_K
+    from spectracam.processing.calibration import light_cct_K
 
     return light_cct_K(reference.illuminant)
 

@@ -17,6 +17,28 @@ Two checks, each stating what is **fitted** (one number) and what is **predicted
 or string (JSON-serialisable).
 
 References: see ``docs/references.md`` ([RPiTuning], [libcamera], [Lensfun], [Smith2008], [Foote1915]).
+
+The IMX477 model (:func:`imx477_reproduction`).  The camera: Bayer (``cfa/single``); :data:`IMX477_PIXEL`,
+:data:`IMX477_FILTERS`; the lens the HQ camera's 6 mm CS-mount lens by assumption (the tuning file names none; its 33°
+corner field angle can give the file's fall-off, the 16 mm C lens's 14° could not by cos⁴ alone), at
+:data:`IMX477_F_NUMBER` (assumed).
+
+Why a reduced image is exact here: in spectracam a pixel's flat-field value depends on where it is only through
+the chief-ray angle, the azimuth and the relative illumination there (the crosstalk kernel and microlens are
+evaluated per pixel for a locally uniform scene, :func:`~spectracam.camera.field.field_rates`), and all three
+depend on h/z only.  So the sensor is simulated with positions shrunk by ``decimation`` (507 × 380 pixels at
+the real 1.55 µm pitch, which the crosstalk and the microlens spot depend on) and the exit pupil shrunk by the
+same factor: simulated pixel (i, j) is exactly the real sensor's point (8i + 3.5, 8j + 3.5), the centre of its
+8 × 8 block.  The fitted and stated distance is the full sensor's.  What is lost: each 16 × 12 cell averages 507
+× 380 / 192 ≈ 1000 sampled points rather than 64 times as many (the field is smooth at that scale), and a
+sampled R site stands 8 real pixels from its G neighbour rather than one.
+
+What the model lacks, each a cause of colour shading in a real module that is absent here: the IR-cut filter's
+angle dependence (an interference coating's edge moves to shorter wavelengths with the chief ray's angle,
+cutting red at the corners: in a real module a major cause of Cr > 1; here the IR cut is the same at every
+angle); the lens's own colour (chromatic vignetting, coatings); mechanical vignetting; the lens's decentring (the
+file's corners differ, 1.548 to 1.619; the model is centred); the sensor's real microlens shift, stack, dyes and
+spectral responses (all stated, not known); the tool's reading of one green and its rounding.
 """
 from __future__ import annotations
 
@@ -196,26 +218,7 @@ def imx477_reproduction(tuning_path=None, *, decimation: int = IMX477_DECIMATION
     fitted lens gives), and the luminance table's shape away from the corners (the middles of its edges, and the
     rms over all cells of the ratio of the two tables normalised at the centre).
 
-    The camera: Bayer (``cfa/single``); :data:`IMX477_PIXEL`, :data:`IMX477_FILTERS`; the lens the HQ camera's 6 mm
-    CS-mount lens by assumption (the tuning file names none; its 33° corner field angle can give the file's
-    fall-off, the 16 mm C lens's 14° could not by cos⁴ alone), at :data:`IMX477_F_NUMBER` (assumed).
-
-    Why a reduced image is exact here: in spectracam a pixel's flat-field value depends on where it is only through
-    the chief-ray angle, the azimuth and the relative illumination there (the crosstalk kernel and microlens are
-    evaluated per pixel for a locally uniform scene, :func:`~spectracam.camera.field.field_rates`), and all three
-    depend on h/z only.  So the sensor is simulated with positions shrunk by ``decimation`` (507 × 380 pixels at
-    the real 1.55 µm pitch, which the crosstalk and the microlens spot depend on) and the exit pupil shrunk by the
-    same factor: simulated pixel (i, j) is exactly the real sensor's point (8i + 3.5, 8j + 3.5), the centre of its
-    8 × 8 block.  The fitted and stated distance is the full sensor's.  What is lost: each 16 × 12 cell averages 507
-    × 380 / 192 ≈ 1000 sampled points rather than 64 times as many (the field is smooth at that scale), and a
-    sampled R site stands 8 real pixels from its G neighbour rather than one.
-
-    What the model lacks, each a cause of colour shading in a real module that is absent here: the IR-cut filter's
-    angle dependence (an interference coating's edge moves to shorter wavelengths with the chief ray's angle,
-    cutting red at the corners: in a real module a major cause of Cr > 1; here the IR cut is the same at every
-    angle); the lens's own colour (chromatic vignetting, coatings); mechanical vignetting; the lens's decentring (the
-    file's corners differ, 1.548 to 1.619; the model is centred); the sensor's real microlens shift, stack, dyes and
-    spectral responses (all stated, not known); the tool's reading of one green and its rounding.
+    The camera, why a reduced image is exact here, and what the model lacks: the module docstring.
 
     Parameters
     ----------
@@ -231,11 +234,8 @@ def imx477_reproduction(tuning_path=None, *, decimation: int = IMX477_DECIMATION
     Returns
     -------
     dict
-        ``fitted`` (parameter, value in mm, the corner chief-ray angle it gives, measured target, achieved,
-        relative error, evaluations), ``predicted`` (per CCT, keyed "2960" …: model and measured Cr and Cb
-        corner/centre), ``luminance_shape`` (edge figures, model and measured; rms and max of the normalised
-        tables' ratio − 1), ``parameters`` (every stated parameter: value and source or assumption),
-        ``agreement`` (booleans), ``tuning_file``, ``seconds``; plain Python numbers throughout.
+        ``fitted``, ``predicted`` (per CCT, keyed "2960" …), ``luminance_shape``, ``parameters`` (each stated
+        parameter's value and source), ``agreement`` (booleans), ``tuning_file``, ``seconds``; plain numbers.
 
     Raises
     ------
@@ -244,11 +244,9 @@ def imx477_reproduction(tuning_path=None, *, decimation: int = IMX477_DECIMATION
 
     References
     ----------
-    .. [RPiTuning] see docs/references.md (the tables reproduced).
-    .. [libcamera] see docs/references.md (how the tuning tool reads a flat field).
-    .. [Foote1915] see docs/references.md; .. [Smith2008] likewise.
+    .. [RPiTuning], [libcamera], [Foote1915], [Smith2008] see docs/references.md.
     """
-    from spectracam.processing.shading import find_libcamera_tuning, read_libcamera_alsc, table_figures
+    from spectracam.processing.shading import find_libcamera_tuning, read_libcamera_alsc
 
     t0 = time.perf_counter()
     path = find_libcamera_tuning("imx477") if tuning_path is None else Path(tuning_path)
@@ -256,6 +254,20 @@ def imx477_reproduction(tuning_path=None, *, decimation: int = IMX477_DECIMATION
         raise SpectracamError("the Raspberry Pi HQ camera's tuning file imx477.json is not installed (Debian: "
                               "apt-get install libcamera-ipa)")
     alsc = read_libcamera_alsc(path)
+    temps, measured_lum, corner_mm, z, fit, fitted = _fit_imx477(alsc, decimation, f_number, microlens_shift_fraction)
+    predicted, (cr_s, cb_s, cr_m, cb_m) = _predictions(fit, alsc, temps)
+    shape = _luminance_shape(fit, alsc, measured_lum)
+    agreement = _agreement(fitted, cr_s, cb_s, cr_m, cb_m)
+    parameters = _parameters(decimation, f_number, microlens_shift_fraction, corner_mm, z, temps)
+    return {"fitted": fitted, "predicted": predicted, "luminance_shape": shape, "parameters": parameters,
+            "agreement": agreement, "tuning_file": str(path), "seconds": time.perf_counter() - t0}
+
+
+def _fit_imx477(alsc, decimation: int, f_number: float, microlens_shift_fraction: float) -> tuple:
+    """``(lights, the file's luminance figures, corner mm, fitted z mm, the simulated tables at z, the fit's
+    record)``: the exit pupil fitted to the tuning file's luminance corner gain."""
+    from spectracam.processing.shading import table_figures
+
     temps = tuple(sorted(alsc.cr_by_cct))
     measured_lum = table_figures(alsc.luminance_lut)
     target = measured_lum["corner_over_centre"]
@@ -273,12 +285,28 @@ def imx477_reproduction(tuning_path=None, *, decimation: int = IMX477_DECIMATION
     def gain(z_mm: float) -> float:
         return table_figures(tables(z_mm)["luminance"])["corner_over_centre"]
 
+    cell_h = math.hypot(IMX477_SIZE_PX[0] / 2 * 11 / 12, IMX477_SIZE_PX[1] / 2 * 15 / 16) * IMX477_PITCH_UM * 1e-3
+    z = _fit_pupil(gain, target, cell_h)
+    fit = tables(z)
+    achieved = gain(z)
+    fitted = {"parameter": "optics.exit_pupil_mm", "value": z, "simulated_value_mm": z / decimation,
+              "corner_cra_deg": math.degrees(math.atan(corner_mm / z)),
+              "corner_cell_cra_deg": math.degrees(math.atan(cell_h / z)),
+              "lens_corner_cell_illumination": float(exit_pupil_illumination(cell_h, z, f_number)),
+              "measured_target": target, "achieved": achieved, "relative_error": achieved / target - 1.0,
+              "what": "the luminance table's corner/centre gain (mean of the 4 corner cells over the central 2 × 2)",
+              "evaluations": len(runs)}
+
+    return temps, measured_lum, corner_mm, z, fit, fitted
+
+
+def _fit_pupil(gain, target: float, cell_h: float) -> float:
+    """The exit-pupil distance, mm, at which ``gain(z)`` is ``target`` (Brent's method in log z)."""
     def residual(log_z: float) -> float:      # nearly linear in log z: Brent converges in a few steps
         return math.log(max(gain(math.exp(log_z)) - 1.0, 1e-12)) - math.log(target - 1.0)
 
     # start: the lens alone (small pupil, cos⁴ at the corner cell's centre) giving the whole fall-off; the pixel's
     # own loss makes the fitted pupil farther; the bracket is widened until it changes sign
-    cell_h = math.hypot(IMX477_SIZE_PX[0] / 2 * 11 / 12, IMX477_SIZE_PX[1] / 2 * 15 / 16) * IMX477_PITCH_UM * 1e-3
     z0 = cell_h / math.sqrt(math.sqrt(target) - 1.0)
     lo, hi = math.log(z0), math.log(2.5 * z0)
     for _ in range(6):
@@ -292,16 +320,12 @@ def imx477_reproduction(tuning_path=None, *, decimation: int = IMX477_DECIMATION
     if residual(lo) <= 0 or residual(hi) >= 0:
         raise SpectracamError(f"imx477: no exit-pupil distance between {math.exp(lo):.3g} and {math.exp(hi):.3g} "
                               f"mm gives the tuning file's corner/centre gain {target:.4f}")
-    z = math.exp(brentq(residual, lo, hi, xtol=1e-3))     # 0.1 % in z: ≈ 0.2 % in the gain's excess over 1
-    fit = tables(z)
-    achieved = gain(z)
-    fitted = {"parameter": "optics.exit_pupil_mm", "value": z, "simulated_value_mm": z / decimation,
-              "corner_cra_deg": math.degrees(math.atan(corner_mm / z)),
-              "corner_cell_cra_deg": math.degrees(math.atan(cell_h / z)),
-              "lens_corner_cell_illumination": float(exit_pupil_illumination(cell_h, z, f_number)),
-              "measured_target": target, "achieved": achieved, "relative_error": achieved / target - 1.0,
-              "what": "the luminance table's corner/centre gain (mean of the 4 corner cells over the central 2 × 2)",
-              "evaluations": len(runs)}
+    return math.exp(brentq(residual, lo, hi, xtol=1e-3))     # 0.1 % in z: ≈ 0.2 % in the gain's excess over 1
+
+
+def _predictions(fit: dict, alsc, temps) -> tuple[dict, tuple]:
+    """Per light: the model's and the file's Cr and Cb corner/centre ratios; and the four series."""
+    from spectracam.processing.shading import table_figures
 
     predicted, cr_m, cb_m, cr_s, cb_s = {}, [], [], [], []
     for t in temps:
@@ -314,6 +338,13 @@ def imx477_reproduction(tuning_path=None, *, decimation: int = IMX477_DECIMATION
         cr_s.append(row["model_cr"]), cb_s.append(row["model_cb"])
         cr_m.append(row["measured_cr"]), cb_m.append(row["measured_cb"])
 
+    return predicted, (cr_s, cb_s, cr_m, cb_m)
+
+
+def _luminance_shape(fit: dict, alsc, measured_lum: dict) -> dict:
+    """The luminance tables' shapes, model against file, both over their centres."""
+    from spectracam.processing.shading import table_figures
+
     model_lum = fit["luminance"] / table_figures(fit["luminance"])["centre"]
     meas_lum = alsc.luminance_lut / measured_lum["centre"]
     ratio = model_lum / meas_lum - 1.0
@@ -322,11 +353,15 @@ def imx477_reproduction(tuning_path=None, *, decimation: int = IMX477_DECIMATION
              "max_abs_ratio_minus_1": float(np.abs(ratio).max()),
              "model_table": [[float(v) for v in row] for row in model_lum],
              "what": "both tables over their centres; ratio = model / measured cell by cell"}
+    return shape
 
+
+def _agreement(fitted: dict, cr_s, cb_s, cr_m, cb_m) -> dict:
+    """What agrees with the file: the fit, the signs, the steps with colour temperature, the sizes."""
     def within_2x(model, meas):
         return all(0.5 <= (a - 1.0) / (b - 1.0) <= 2.0 for a, b in zip(model, meas))
 
-    agreement = {
+    return {
         "luminance_fit_within_1pct": abs(fitted["relative_error"]) < 0.01,
         "cr_sign": all((a > 1) == (b > 1) for a, b in zip(cr_s, cr_m)),
         "cb_sign": all((a < 1) == (b < 1) for a, b in zip(cb_s, cb_m)),
@@ -337,7 +372,12 @@ def imx477_reproduction(tuning_path=None, *, decimation: int = IMX477_DECIMATION
         "cr_magnitude_within_2x": within_2x(cr_s, cr_m),
         "cb_magnitude_within_2x": within_2x(cb_s, cb_m),
     }
-    parameters = {
+
+
+def _parameters(decimation: int, f_number: float, microlens_shift_fraction: float, corner_mm: float, z: float,
+                temps) -> dict:
+    """Every stated parameter of the IMX477 model: its value and its source (or that it is assumed)."""
+    return {
         "sensor": {"value": f"{IMX477_SIZE_PX[1]} × {IMX477_SIZE_PX[0]} px, {IMX477_PITCH_UM} µm pitch, "
                             f"{2 * corner_mm:.3f} mm diagonal",
                    "source": "Sony IMX477 (Raspberry Pi HQ camera product brief)"},
@@ -360,8 +400,6 @@ def imx477_reproduction(tuning_path=None, *, decimation: int = IMX477_DECIMATION
         "tables": {"value": "12 × 16 cell means per channel, 3 × 3 median, luminance = mean over the lights of G's "
                             "table / its minimum", "source": "Raspberry Pi's ctt_alsc.py [libcamera]"},
     }
-    return {"fitted": fitted, "predicted": predicted, "luminance_shape": shape, "parameters": parameters,
-            "agreement": agreement, "tuning_file": str(path), "seconds": time.perf_counter() - t0}
 
 
 # --------------------------------------------------------------------------------------------------- lensfun
@@ -492,6 +530,12 @@ def lensfun_reproduction(lens: str = LENSFUN_LENS, focal_mm: float = 50.0, apert
     field = cos4_illumination(np.degrees(np.arctan(h / at.focal_mm)))
     pred = exit_pupil_illumination(h, ep["exit_pupil_mm"], wide.aperture)
     c4_curve = cos4_illumination(c4["cra_corner_deg"] * r)
+    out = _lensfun_result(lens, at, wide, radius, r, h, v_fit, v_wide, ep, c4, field, pred, c4_curve)
+    return {**out, "seconds": time.perf_counter() - t0}
+
+
+def _lensfun_result(lens, at, wide, radius, r, h, v_fit, v_wide, ep, c4, field, pred, c4_curve) -> dict:
+    """:func:`lensfun_reproduction`'s figures and curves (plain numbers)."""
     return {
         "lens": lens,
         "calibration": {"focal_mm": float(at.focal_mm), "crop_factor": float(at.crop_factor), "radius_mm": radius,
@@ -518,7 +562,6 @@ def lensfun_reproduction(lens: str = LENSFUN_LENS, focal_mm: float = 50.0, apert
         "curves": {"r": r.tolist(), "measured_fit_aperture": v_fit.tolist(), "exit_pupil_fit": (
             exit_pupil_illumination(h, ep["exit_pupil_mm"], at.aperture)).tolist(), "cos4_fit": c4_curve.tolist(),
             "measured_predict_aperture": v_wide.tolist(), "exit_pupil_predicted": pred.tolist()},
-        "seconds": time.perf_counter() - t0,
     }
 
 
@@ -543,7 +586,11 @@ def measured_markdown(imx: dict | None, lens: dict | None) -> str:
     ----------
     .. [RPiTuning], [Lensfun] see docs/references.md.
     """
-    out = ["## Checked against real measurements", ""]
+    return "\n".join(["## Checked against real measurements", "", *_imx477_markdown(imx), *_lensfun_markdown(lens)])
+
+
+def _imx477_markdown(imx: dict | None) -> list:
+    out: list = []
     if imx is None:
         out += ["The Raspberry Pi HQ camera's tuning file is not installed (Debian: `libcamera-ipa`): not checked.", ""]
     else:
@@ -568,6 +615,11 @@ def measured_markdown(imx: dict | None, lens: dict | None) -> str:
                 f"Luminance table, model over measured cell by cell: rms {s['rms_ratio_minus_1']:.1%}, max "
                 f"{s['max_abs_ratio_minus_1']:.1%}. The model has no angle-dependent IR cut, chromatic or mechanical "
                 "vignetting, or decentring.", ""]
+    return out
+
+
+def _lensfun_markdown(lens: dict | None) -> list:
+    out: list = []
     if lens is None:
         out += ["lensfun's database is not installed (Debian: `liblensfun-data-v1`): not checked.", ""]
     else:
@@ -587,4 +639,4 @@ def measured_markdown(imx: dict | None, lens: dict | None) -> str:
                 f"{p['measured_corner']:.3f} | {p['rms']:.4f} | {p['max_abs']:.4f} |", "",
                 f"Wide open (f/{p['aperture']:g}) the lens's fall-off is mostly mechanical vignetting, which the "
                 "exit-pupil model lacks.", ""]
-    return "\n".join(out)
+    return out
