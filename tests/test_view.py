@@ -309,6 +309,29 @@ def test_a_strided_bayer_capture_keeps_every_channel(tmp_path):
     assert np.all(picture[:, 1].max() > 0) and picture[:, 2].max() > 0  # green and blue are drawn, not only red
 
 
+def test_a_640x480_page_probes_r_g_and_b_in_the_browser(tmp_path, browser):
+    """Issue 39: on a strided 640 × 480 page the raw panel's probe returns each channel, each the file's number."""
+    from spectracam.cli import main
+    from spectracam.io.exr import read_raw_exr
+
+    scene = str(Path(__file__).parents[1] / "scenes" / "d65.toml")
+    _invoke(main, ["simulate", scene, "-o", str(tmp_path), "--renderer", "analytic", "--quiet"])
+    write_view(tmp_path)
+    check_page(browser, tmp_path, 4)
+    raw = read_raw_exr(tmp_path / "raw.exr")
+    seen = set()
+    for row in (0, 1):
+        for col in (0, 1):
+            s = browser.execute_script("return window.spectracam.data(0).stride")
+            h = browser.execute_script("return window.spectracam.data(0).height")
+            p = browser.execute_script(f"return window.spectracam.probe({col * s + 0.5}, {h - row * s - 0.5})")
+            assert p["stride"] == s and s % 2 == 1 and (p["x"], p["y"]) == (col * s, row * s)
+            shown = [(ch, v) for ch, v in zip(p["channels"], p["dn"]) if v is not None and v == v]
+            assert len(shown) == 1 and shown[0][1] == raw.digital[p["y"], p["x"]]
+            seen.add(shown[0][0])
+    assert seen == {"R", "G", "B"}
+
+
 def test_what_cannot_be_shown_is_one_line(tmp_path):
     with pytest.raises(SpectracamError, match="does not exist"):
         write_view(tmp_path / "missing")
