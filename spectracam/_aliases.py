@@ -3,8 +3,8 @@
 ``import spectracam.score`` or ``from spectracam.filters import X`` still work for one release and
 warn (DeprecationWarning) naming the new place; the next release removes them.  An old name is the
 same module object as its new one (monkeypatching either patches both).  Old names that the package's
-face already binds to a function (``spectracam.capture``, ``spectracam.score``) are registered at
-import without a warning, so importing them can never replace the function.  The old scene-file
+face binds to a function (``spectracam.capture``, ``spectracam.score``) load without a warning, and the
+face never lets a module of those names replace the function (``spectracam.__init__._Face``).  The old scene-file
 module's names (``from spectracam.scene import load_scene``) come from :data:`SCENE_FILE_NAMES`.
 """
 from __future__ import annotations
@@ -113,7 +113,7 @@ class _Finder(importlib.abc.MetaPathFinder, importlib.abc.Loader):
     """Finds an old module name and loads it as the module at its new place."""
 
     def find_spec(self, fullname, path=None, target=None):
-        if fullname in OLD_MODULES and fullname not in _BOUND:
+        if fullname in OLD_MODULES:
             return importlib.util.spec_from_loader(fullname, self)
         return None
 
@@ -122,7 +122,8 @@ class _Finder(importlib.abc.MetaPathFinder, importlib.abc.Loader):
 
     def exec_module(self, module) -> None:
         new = OLD_MODULES[module.__name__]
-        _moved(module.__name__, new)
+        if module.__name__ not in _BOUND:   # the face's own names: no warning (spectracam.capture is the function)
+            _moved(module.__name__, new)
         sys.modules[module.__name__] = importlib.import_module(new)   # importlib returns this entry
 
 
@@ -137,7 +138,5 @@ def install() -> None:
     """Register the old names (called once by the package's face)."""
     if not any(isinstance(f, _Finder) for f in sys.meta_path):
         sys.meta_path.insert(0, _Finder())  # before the path finder: an old package name must not load its files twice
-    for old in _BOUND:
-        sys.modules.setdefault(old, importlib.import_module(OLD_MODULES[old]))
     scene = importlib.import_module("spectracam.scene")
     scene.__getattr__ = _scene_file_name
