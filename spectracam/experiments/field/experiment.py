@@ -1,8 +1,8 @@
 """Which architecture keeps colour uniform to the corner, and with which microlens shift (issue 37, item 5):
 ``spectracam field``.
 
-Every design (architecture / exposure scheme) × microlens shift × lens-shading correction captures two scenes through
-a stated lens and pixel:
+Every design (architecture / exposure scheme) × pixel pitch (:data:`PITCHES_UM`: 1.4 and 10 µm) × microlens shift ×
+lens-shading correction captures two scenes through a stated lens and pixel:
 
 * the lens: the relative illumination falls as cos⁴ of the chief ray's angle, which grows linearly with image height
   to :data:`CRA_CORNER_DEG` at the sensor's corner (``--cra``; 25°, a phone-class camera module);
@@ -21,7 +21,7 @@ The scenes, under the d65 scene's light (``--set`` changes it):
   which the conversion's own error does not enter; ``delta_ab_centre``, its chroma part √(Δa*² + Δb*²), the colour
   shading without the lightness), the ring's luminance against the centre's, and the ring's mean
   per-pixel S-CIELAB against the scene;
-* ``chart``: the ColorChecker filling the field (its patches lie at r = 0.13 … 0.83).  Each patch's mean per-pixel
+* ``chart``: the ColorChecker filling the field (its patches' centres lie at r = 0.18 … 0.73).  Each patch's mean per-pixel
   ΔE*ab and S-CIELAB against the scene, and ``delta_e_axis``: ΔE*ab between its mean colour and that of the same
   design on the axis (no field: the paper's camera), the colour the field alone costs.
 
