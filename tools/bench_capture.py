@@ -12,7 +12,8 @@ Z = time(c) / time(a).  Issue 10 targets on the 2-core machine: X >= 40, Y >= 2.
 
 Unless ``--no-memory``, it then runs a ``simulate``-like pipeline (analytic render -> capture ->
 score) at the same size in a fresh process and reports each stage's peak memory relative to the
-float32 cube (target <= 1.5x): tracemalloc's peak (every NumPy allocation; numba's and BLAS's
+float32 cube (target <= 1.5x), and the score's time against the capture's: the scene's first score (its truth's
+S-CIELAB computed) and another capture's (the truth memoised, as every later capture of a scene): tracemalloc's peak (every NumPy allocation; numba's and BLAS's
 internal buffers are not traced) and the resident-set high-water mark (VmHWM) above the resident set
 once spectracam is loaded.
 ``--all-fpn`` also switches on PRNU, DSNU and column FPN (the paper has none).
@@ -112,6 +113,10 @@ def memory_run(width: int, height: int, all_fpn: bool) -> dict:
     tracemalloc.stop()
     hwm = _vm("VmHWM")
     out["rss_total"] = None if hwm is None or base is None else hwm - base
+    raw = capture(cube, seed=1, scene=scene)   # another capture of the same scene: its truth's S-CIELAB is memoised
+    t0 = time.perf_counter()
+    score(raw, scene)
+    out["score_again_s"] = time.perf_counter() - t0
     return out
 
 
@@ -182,6 +187,9 @@ def main() -> None:
                   f"({c / 2**30:.2f} GiB), tracemalloc:")
             print(f"  render {m['render'] / c:.2f}x; capture {m['capture'] / c:.2f}x ({m['capture_s']:.2f} s); "
                   f"score {m['score'] / c:.2f}x ({m['score_s']:.1f} s) (each: everything alive at the stage's peak)")
+            print(f"  score / capture: {m['score_s'] / m['capture_s']:.1f} (the scene's first score, its truth's "
+                  f"S-CIELAB included), {m['score_again_s'] / m['capture_s']:.1f} (another capture of it, "
+                  f"{m['score_again_s']:.1f} s; the truth memoised)")
             if m["rss_total"] is not None:
                 print(f"  resident-set peak above the loaded baseline (VmHWM): {m['rss_to_capture'] / c:.2f}x "
                       f"render + capture, {m['rss_total'] / c:.2f}x with the score (target <= 1.5x)")

@@ -9,7 +9,8 @@ import numpy as np
 
 from spectracam.core.registry import Registry
 
-__all__ = ["DELTA_E_METHODS", "SNR_COMBINATIONS", "combine_snr_db", "delta_e", "snr_db", "xyz_to_lab"]
+__all__ = ["DELTA_E_CODES", "DELTA_E_METHODS", "FUSED_MIN_COLOURS", "SNR_COMBINATIONS", "combine_snr_db", "delta_e",
+           "lab_white", "rgb_to_lab", "snr_db", "xyz_to_lab"]
 
 #: Colour-difference formulas: name → function ``(lab1, lab2) → ΔE`` over the last axis.
 DELTA_E_METHODS: Registry = Registry("processing.delta_e", "colour-difference formula")
@@ -37,10 +38,69 @@ def xyz_to_lab(xyz: np.ndarray, white_xyz: np.ndarray) -> np.ndarray:
     .. [CIE015] see docs/references.md; CIE 1976 L*a*b*.
     .. [Catrysse1999] see docs/references.md; section 3.6.
     """
+    x = np.asarray(xyz)
+    if x.ndim >= 1 and x.shape[-1] == 3 and x.size >= 3 * FUSED_MIN_COLOURS and _kernels() is not None:
+        return rgb_to_lab(x, np.eye(3), white_xyz)
     import colour
 
     white = np.asarray(white_xyz, float)
     return colour.XYZ_to_Lab(np.asarray(xyz, float) / white[1], colour.XYZ_to_xy(white / white[1]))
+
+
+#: Colours from which :func:`xyz_to_lab` and :func:`delta_e` run the compiled kernels (``core/_numba_colour.py``,
+#: one pass, float64, on every core): below it colour-science's array formulas cost no more.  The two agree to the
+#: rounding of float64 (``tests/test_fused_score.py``); ``SPECTRACAM_FUSED=0`` or no numba: colour-science's.
+FUSED_MIN_COLOURS = 4096
+#: The ΔE formulas the kernels compute, by the code they know them by.
+DELTA_E_CODES = {"cie1976": 0, "ciede2000": 1}
+_STATE: dict = {}
+
+
+def _kernels():
+    """The compiled colour kernels' module, or None (numba missing or broken, or ``SPECTRACAM_FUSED=0``)."""
+    import os
+
+    if os.environ.get("SPECTRACAM_FUSED", "1").strip().lower() in ("0", "no", "false", "off", "numpy"):
+        return None
+    if "module" not in _STATE:
+        try:
+            from spectracam.core import _numba_colour as mod
+        except Exception:  # noqa: BLE001 - no numba, or one that does not load: colour-science's formulas
+            mod = None
+        _STATE["module"] = mod
+    return _STATE["module"]
+
+
+def lab_white(white_xyz) -> np.ndarray:
+    """The white as colour-science's ``XYZ_to_Lab`` takes it: its chromaticity back to XYZ with Y = 1."""
+    import colour
+
+    white = np.asarray(white_xyz, float)
+    return np.asarray(colour.xyY_to_XYZ(colour.xy_to_xyY(colour.XYZ_to_xy(white / white[1]))), float)
+
+
+def rgb_to_lab(rgb: np.ndarray, matrix: np.ndarray, white_xyz: np.ndarray) -> np.ndarray:
+    """CIE 1976 L*a*b* ``(..., 3)`` of ``rgb @ matrix.T`` (any linear RGB to XYZ) against ``white_xyz``: what
+    ``xyz_to_lab(rgb @ matrix.T, white_xyz)`` gives, in one compiled pass without the XYZ image where the kernels
+    run (:data:`FUSED_MIN_COLOURS`).
+
+    >>> rgb_to_lab(np.ones((1, 3)), np.eye(3), np.ones(3)).round(6).tolist()
+    [[100.0, 0.0, 0.0]]
+    """
+    from spectracam.core.parallel import run_bands
+
+    x = np.asarray(rgb)
+    mod = _kernels()
+    if mod is None or x.size < 3 * FUSED_MIN_COLOURS:
+        return xyz_to_lab(x @ np.asarray(matrix, float).T, white_xyz) if x.size else np.zeros(x.shape)
+    flat = x.reshape(-1, 3)
+    if flat.dtype not in (np.float32, np.float64) or not flat.flags.c_contiguous:
+        flat = np.ascontiguousarray(flat, np.float64)
+    m = np.ascontiguousarray(np.asarray(matrix, float) / float(np.asarray(white_xyz, float)[1]))
+    out = np.empty(flat.shape, np.float64)
+    wn = lab_white(white_xyz)
+    run_bands(mod.lab_kernel, len(flat), lambda a, b: (np.int64(a), np.int64(b), flat, m, wn, out))
+    return out.reshape(x.shape)
 
 
 @DELTA_E_METHODS.register("cie1976")
@@ -88,7 +148,18 @@ def delta_e(lab1: np.ndarray, lab2: np.ndarray, method: str = "cie1976") -> np.n
     >>> float(delta_e([50.0, 0.0, 0.0], [50.0, 3.0, 4.0]))
     5.0
     """
-    return DELTA_E_METHODS[method](lab1, lab2)
+    fn = DELTA_E_METHODS[method]
+    a, b = np.asarray(lab1, float), np.asarray(lab2, float)
+    mod = _kernels() if method in DELTA_E_CODES and a.size >= 3 * FUSED_MIN_COLOURS else None
+    if mod is None or a.ndim != 2 or a.shape[1] != 3 or b.shape not in (a.shape, (3,), (1, 3)):
+        return fn(lab1, lab2)
+    from spectracam.core.parallel import run_bands
+
+    a, b = np.ascontiguousarray(a), np.ascontiguousarray(b.reshape(-1, 3))
+    out = np.empty(len(a))
+    code = np.int64(DELTA_E_CODES[method])
+    run_bands(mod.delta_e_kernel, len(a), lambda i, j: (np.int64(i), np.int64(j), a, b, code, out))
+    return out
 
 
 def snr_db(means: np.ndarray, stds: np.ndarray) -> np.ndarray:

@@ -323,7 +323,44 @@ DELTA_E_2000_CHUNK_PIXELS = 1 << 18
 
 
 def _box_delta_es(rgb: np.ndarray, boxes, M_disp: np.ndarray, display_white: np.ndarray, against: np.ndarray,
-                  method: str):
+                  method: str, de_map: np.ndarray):
+    """``[(mean ΔE of the method, mean CIEDE2000)]`` of each box against ``against[p]``, writing each pixel's ΔE of
+    the method into ``de_map``: in one compiled pass over the boxes (:func:`_box_delta_es_fused`) or, without the
+    kernels, with colour-science's formulas on runs of boxes (:func:`_box_delta_es_arrays`)."""
+    from spectracam.core.cielab import DELTA_E_CODES, _kernels
+
+    mod = _kernels() if method in DELTA_E_CODES else None
+    if mod is not None and rgb.dtype in (np.float32, np.float64) and rgb.flags.c_contiguous \
+            and de_map.dtype == np.float32 and de_map.flags.c_contiguous:
+        return _box_delta_es_fused(mod, rgb, boxes, M_disp, display_white, against, method, de_map)
+    out = []
+    for (r, c), (de, de_2000) in zip(boxes, _box_delta_es_arrays(rgb, boxes, M_disp, display_white, against,
+                                                                    method)):
+        de_map[r, c] = de
+        out.append((float(de.mean()), de_2000))
+    return out
+
+
+def _box_delta_es_fused(mod, rgb, boxes, M_disp, display_white, against, method, de_map):
+    """:func:`_box_delta_es` by the compiled kernel (``core/_numba_colour.py: box_kernel``): the display RGB → XYZ
+    → CIELAB → ΔE of every box's pixels in one pass, boxes shared out among the threads, sums in float64."""
+    from spectracam.core.cielab import DELTA_E_CODES, lab_white
+    from spectracam.core.parallel import run_bands
+
+    spans = np.array([[r.start, r.stop, c.start, c.stop] for r, c in boxes], np.int64).reshape(-1, 4)
+    m = np.ascontiguousarray(np.asarray(M_disp, float) / float(np.asarray(display_white, float)[1]))
+    ref = np.ascontiguousarray(np.asarray(against, float).reshape(-1, 3))
+    sums = np.zeros((len(spans), 2))
+    code = np.int64(DELTA_E_CODES[method])
+    wn = lab_white(display_white)
+    run_bands(mod.box_kernel, len(spans), lambda a, b: (np.int64(a), np.int64(b), rgb, spans, m, wn, ref, code,
+                                                        de_map, sums))
+    n = (spans[:, 1] - spans[:, 0]) * (spans[:, 3] - spans[:, 2])
+    return [(float(s0 / k), float(s1 / k)) if k > 0 else (float("nan"), float("nan")) for (s0, s1), k in zip(sums, n)]
+
+
+def _box_delta_es_arrays(rgb: np.ndarray, boxes, M_disp: np.ndarray, display_white: np.ndarray, against: np.ndarray,
+                         method: str):
     """Per box in turn: ``(per-pixel ΔE of the method (h, w), mean CIEDE2000 over the box)`` against ``against[p]``,
     the ΔE of boxes computed together in runs of at most :data:`DELTA_E_2000_CHUNK_PIXELS` pixels (or one box)."""
     pending: list = []
@@ -626,16 +663,15 @@ def _patch_scores(raw: RawCapture, reference: ChartReference, processing: Proces
     mean_labs = xyz_to_lab(np.stack([rgb[r, c].reshape(-1, 3).mean(axis=0) for r, c in boxes]) @ M_disp.T,
                            display_white)
     sc_map = chart_scielab_map(rgb, reference, processing)
-    per_box = _box_delta_es(rgb, boxes, M_disp, display_white, against, method)
+    per_box = _box_delta_es(rgb, boxes, M_disp, display_white, against, method, de_map)
     patches, de2000 = [], []
-    for p, (r, c), (de, de_2000) in zip(range(len(boxes)), boxes, per_box):
-        de_map[r, c] = de
+    for p, (r, c), (de_mean, de_2000) in zip(range(len(boxes)), boxes, per_box):
         de2000.append(de_2000)
         snr, combined, rendered = _patch_snrs(means[p], stds[p], luminance, times_s, processing.snr_combination)
         by_name = dict(zip(channels, snr))
         patches.append(PatchScore(
             patch=p, name=reference.names[p], scene_lab=tuple(scene_lab[p].round(4).tolist()),
-            rendered_lab=tuple(mean_labs[p].round(4).tolist()), delta_e_mean=float(de.mean()),
+            rendered_lab=tuple(mean_labs[p].round(4).tolist()), delta_e_mean=de_mean,
             delta_e_of_mean=float(delta_e(mean_labs[p], scene_lab[p], method)),
             delta_e_conversion=float(delta_e(colours.conversion_lab[p], scene_lab[p], method)),
             **{f"snr_{k}_db": _finite(by_name[k]) if k in by_name else None for k in "RGB"},

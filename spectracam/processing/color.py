@@ -423,6 +423,8 @@ def demosaic(mosaic: np.ndarray, layout: MosaicLayout, method: str) -> np.ndarra
     .. [Catrysse1999] see docs/references.md; section 3.5.
     """
     fn = DEMOSAIC_METHODS[method]
+    if method == "bilinear" and (fused := _bilinear_bayer_fused(mosaic, layout)) is not None:
+        return fused
     h = mosaic.shape[0]
     step = DEMOSAIC_BAND_ROWS
     if h <= step + 2 * DEMOSAIC_MARGIN:
@@ -433,6 +435,29 @@ def demosaic(mosaic: np.ndarray, layout: MosaicLayout, method: str) -> np.ndarra
     for a in range(0, h, step):
         lo, hi = max(0, a - margin), min(h, a + step + margin)
         out[a:a + step] = fn(mosaic[lo:hi], layout)[a - lo:a - lo + min(step, h - a)]
+    return out
+
+
+def _bilinear_bayer_fused(mosaic: np.ndarray, layout: MosaicLayout) -> np.ndarray | None:
+    """``bilinear`` on a Bayer mosaic in one compiled pass (``processing/_numba_demosaic.py``: colour-demosaicing's
+    arithmetic, to the rounding of float64), or None: another mosaic, no numba, or ``SPECTRACAM_FUSED=0``."""
+    from spectracam.core.cielab import _kernels
+
+    if layout.bayer_pattern is None or mosaic.ndim != 2 or min(mosaic.shape) < 2 or _kernels() is None:
+        return None
+    try:
+        from spectracam.processing import _numba_demosaic as mod
+    except Exception:  # noqa: BLE001 - a numba that does not load: colour-demosaicing's
+        return None
+    from spectracam.core.parallel import run_bands
+
+    cfa = mosaic if mosaic.dtype in (np.float32, np.float64) and mosaic.flags.c_contiguous else \
+        np.ascontiguousarray(mosaic, np.float64)
+    chan = np.array(["RGB".index(k) for k in layout.bayer_pattern], np.int64).reshape(2, 2)
+    green = np.array([0, 1, 0], np.int64)
+    out = np.empty((*cfa.shape, 3), np.float64)
+    run_bands(mod.bilinear_bayer_kernel, cfa.shape[0],
+              lambda a, b: (np.int64(a), np.int64(b), cfa, chan, green, mod._WEIGHTS, out))
     return out
 
 

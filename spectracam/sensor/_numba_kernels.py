@@ -21,23 +21,13 @@ from llvmlite import ir
 from numba.core import cgutils, types
 from numba.extending import intrinsic
 
+from spectracam.core.parallel import njit_cached as _njit
+
 LANES = 16
 _F32 = ir.FloatType()
 _I32 = ir.IntType(32)
 _I64 = ir.IntType(64)
 _VF = ir.VectorType(_F32, LANES)
-
-
-def _njit(**kw):
-    """``numba.njit(cache=True)``, or without the on-disk cache where no cache directory can be used."""
-
-    def deco(fn):
-        try:
-            return nb.njit(cache=True, **kw)(fn)
-        except RuntimeError:  # "cannot cache function ...: no locator available"
-            return nb.njit(**kw)(fn)
-
-    return deco
 
 
 @intrinsic

@@ -33,17 +33,15 @@ import os
 
 import numpy as np
 
+from spectracam.core.parallel import pool as _pool  # noqa: F401  (the pool, for the read-out's kernels)
+from spectracam.core.parallel import run_bands, threads
+
 __all__ = ["LANES", "CounterRNG", "SpectralRates", "available", "expose", "normal_pair_np", "philox_np",
            "record", "stream_key", "threads", "uniform_np"]
 
 #: Bands weighted per SIMD instruction; the weight rows are padded to a multiple of it.
 LANES = 16
 _STATE: dict = {}
-
-
-def threads() -> int:
-    """``SPECTRACAM_THREADS`` (default: all cores), read at every call."""
-    return max(1, int(os.environ.get("SPECTRACAM_THREADS") or os.cpu_count() or 1))
 
 
 def _numba():
@@ -64,17 +62,6 @@ def available() -> bool:
     return _numba() is not None
 
 
-def _pool():
-    """The kernels' thread pool; a new one in a forked child (the parent's threads are not there)."""
-    if _STATE.get("pool_pid") != os.getpid():
-        from concurrent.futures import ThreadPoolExecutor
-
-        _STATE["pool"] = ThreadPoolExecutor(max_workers=max(threads(), os.cpu_count() or 1),
-                                            thread_name_prefix="spectracam-kernels")
-        _STATE["pool_pid"] = os.getpid()
-    return _STATE["pool"]
-
-
 def _run(kernel: str, n: int, args_for) -> bool:
     """Run numba kernel ``kernel(*args_for(start, stop))`` over ``[0, n)`` split into one band per
     thread (the kernels release the GIL); False if the backend cannot run here — it is then switched
@@ -83,15 +70,8 @@ def _run(kernel: str, n: int, args_for) -> bool:
     mod = _numba()
     if mod is None:
         return False
-    fn = getattr(mod, kernel)
-    parts = max(1, min(threads(), n))
-    bounds = [(n * k // parts, n * (k + 1) // parts) for k in range(parts)]
     try:
-        if parts == 1:
-            fn(*args_for(0, n))
-        else:
-            for f in [_pool().submit(fn, *args_for(a, b)) for a, b in bounds]:
-                f.result()
+        run_bands(getattr(mod, kernel), n, args_for)
     except Exception as e:
         try:
             from numba.core.errors import NumbaError

@@ -1,0 +1,51 @@
+"""One thread pool for every compiled kernel (the sensor's fused capture, the score's colour): bands of an index
+range run on ``SPECTRACAM_THREADS`` threads (default: all cores).  The kernels release the GIL, and every value
+they write depends on its index alone, so the bands decide only who computes what, never a number."""
+from __future__ import annotations
+
+import os
+
+__all__ = ["njit_cached", "pool", "run_bands", "threads"]
+
+_STATE: dict = {}
+
+
+def threads() -> int:
+    """``SPECTRACAM_THREADS`` (default: all cores), read at every call."""
+    return max(1, int(os.environ.get("SPECTRACAM_THREADS") or os.cpu_count() or 1))
+
+
+def pool():
+    """The kernels' thread pool; a new one in a forked child (the parent's threads are not there)."""
+    if _STATE.get("pool_pid") != os.getpid():
+        from concurrent.futures import ThreadPoolExecutor
+
+        _STATE["pool"] = ThreadPoolExecutor(max_workers=max(threads(), os.cpu_count() or 1),
+                                            thread_name_prefix="spectracam-kernels")
+        _STATE["pool_pid"] = os.getpid()
+    return _STATE["pool"]
+
+
+def run_bands(fn, n: int, args_for, parts: int | None = None) -> None:
+    """``fn(*args_for(start, stop))`` over ``[0, n)`` split into ``parts`` bands (default: one per thread), each
+    on the pool; returns when all are done and raises the first band's exception."""
+    parts = max(1, min(parts or threads(), n))
+    if parts == 1:
+        fn(*args_for(0, n))
+        return
+    bounds = [(n * k // parts, n * (k + 1) // parts) for k in range(parts)]
+    for f in [pool().submit(fn, *args_for(a, b)) for a, b in bounds]:
+        f.result()
+
+
+def njit_cached(**kw):
+    """``numba.njit(cache=True, **kw)``, or without the on-disk cache where no cache directory can be used."""
+    import numba as nb
+
+    def deco(fn):
+        try:
+            return nb.njit(cache=True, **kw)(fn)
+        except RuntimeError:  # "cannot cache function ...: no locator available"
+            return nb.njit(**kw)(fn)
+
+    return deco

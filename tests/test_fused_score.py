@@ -1,0 +1,132 @@
+"""The score's compiled kernels (issue 38) give colour-science's, SciPy's and colour-demosaicing's numbers.
+
+CIELAB, ΔE*ab and CIEDE2000 (``core/_numba_colour.py``), the per-box ΔE pass of the chart score and the bilinear
+Bayer demosaicking (``processing/_numba_demosaic.py``) are checked against the libraries they replace, on inputs
+that reach every branch (colours below CIE's ε, greys whose hue is undefined, hue differences across 0°, every
+Bayer phase, odd image sizes), and a whole chart score against the same score with ``SPECTRACAM_FUSED=0``.
+"""
+import numpy as np
+import pytest
+
+from spectracam.core import cielab
+from spectracam.core.cielab import FUSED_MIN_COLOURS, delta_e, rgb_to_lab, xyz_to_lab
+from test_reference_values import load_sharma_table
+
+
+@pytest.fixture
+def fused():
+    if cielab._kernels() is None:
+        pytest.skip("the compiled colour kernels (numba) are not available here")
+
+
+def colour_lab(xyz, white):
+    import colour
+
+    white = np.asarray(white, float)
+    return colour.XYZ_to_Lab(np.asarray(xyz, float) / white[1], colour.XYZ_to_xy(white / white[1]))
+
+
+def hard_colours(n, seed=0):
+    """``n`` XYZ colours, a tenth of them so dark that CIE's lightness function takes its linear part."""
+    rng = np.random.default_rng(seed)
+    xyz = rng.random((n, 3)) * 1.1
+    xyz[: n // 10] *= 1e-3
+    xyz[n // 10: n // 10 + 3] = 0.0
+    return xyz
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_lab_is_colour_sciences(fused, dtype):
+    white = np.array([0.9505, 1.0, 1.089])
+    xyz = hard_colours(2 * FUSED_MIN_COLOURS).astype(dtype)
+    got = xyz_to_lab(xyz, white)
+    assert got.shape == xyz.shape and got.dtype == np.float64
+    np.testing.assert_allclose(got, colour_lab(xyz, white), rtol=0, atol=1e-12)
+    # an image (H, W, 3) keeps its shape; a white of any Y scale
+    img = xyz[: 64 * 128].reshape(64, 128, 3) * 7.0
+    np.testing.assert_allclose(xyz_to_lab(img, 7.0 * white), colour_lab(img, 7.0 * white), rtol=0, atol=1e-12)
+
+
+def test_rgb_to_lab_is_the_matrix_then_lab(fused):
+    rng = np.random.default_rng(2)
+    rgb = rng.random((FUSED_MIN_COLOURS + 5, 3))
+    M = np.array([[0.4124, 0.3576, 0.1805], [0.2126, 0.7152, 0.0722], [0.0193, 0.1192, 0.9505]])
+    white = M.sum(axis=1)
+    np.testing.assert_allclose(rgb_to_lab(rgb, M, white), colour_lab(rgb @ M.T, white), rtol=0, atol=1e-11)
+    small = rgb[:10]   # below the kernels' size: the array formulas, the same numbers
+    np.testing.assert_allclose(rgb_to_lab(small, M, white), colour_lab(small @ M.T, white), rtol=0, atol=1e-12)
+
+
+def test_ciede2000_kernel_on_sharmas_pairs(fused):
+    table = load_sharma_table()
+    reps = -(-FUSED_MIN_COLOURS // len(table))
+    lab1, lab2, want = (np.tile(table[:, 0:3], (reps, 1)), np.tile(table[:, 3:6], (reps, 1)),
+                        np.tile(table[:, 6], reps))
+    got = delta_e(lab1, lab2, "ciede2000")
+    assert got.shape == want.shape
+    assert np.abs(got - want).max() <= 1e-4   # the table's four decimals
+
+
+@pytest.mark.parametrize("method", ["cie1976", "ciede2000"])
+def test_delta_e_kernels_are_colour_sciences(fused, method, monkeypatch):
+    import colour
+
+    rng = np.random.default_rng(3)
+    n = FUSED_MIN_COLOURS * 2
+    lab1 = np.column_stack([rng.random(n) * 100, rng.normal(0, 40, n), rng.normal(0, 40, n)])
+    lab2 = lab1 + rng.normal(0, 3, (n, 3))
+    lab1[:50, 1:] = 0.0                          # greys: hue undefined (0 by convention), C'1·C'2 = 0
+    lab2[50:100, 1] = -np.abs(lab2[50:100, 1])   # hues either side of 180° and 0°
+    lab1[50:100, 2], lab2[50:100, 2] = 1e-3, -1e-3
+    ref = (np.linalg.norm(lab1 - lab2, axis=-1) if method == "cie1976"
+           else colour.delta_E(lab1, lab2, method="CIE 2000"))
+    np.testing.assert_allclose(delta_e(lab1, lab2, method), ref, rtol=0, atol=1e-10)
+    one = np.array([50.0, 3.0, -4.0])   # every colour against one
+    ref_one = (np.linalg.norm(lab1 - one, axis=-1) if method == "cie1976"
+               else colour.delta_E(lab1, one, method="CIE 2000"))
+    np.testing.assert_allclose(delta_e(lab1, one, method), ref_one, rtol=0, atol=1e-10)
+    monkeypatch.setenv("SPECTRACAM_FUSED", "0")   # the switch: colour-science's own, the same numbers
+    assert cielab._kernels() is None
+    np.testing.assert_allclose(delta_e(lab1, lab2, method), ref, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("pattern", ["RGGB", "GRBG", "BGGR", "GBRG"])
+@pytest.mark.parametrize("shape", [(2, 2), (3, 2), (7, 9), (120, 160), (1100, 37)])
+def test_bilinear_bayer_is_colour_demosaicings(fused, pattern, shape):
+    import colour_demosaicing as cd
+
+    from spectracam.architecture.base import MosaicLayout
+    from spectracam.processing.color import demosaic
+
+    mosaic = np.random.default_rng(4).random(shape) * 1000
+    want = cd.demosaicing_CFA_Bayer_bilinear(mosaic, pattern)
+    for m in (mosaic, mosaic.astype(np.float32)):
+        got = demosaic(m, MosaicLayout.bayer(pattern), "bilinear")
+        ref = want if m.dtype == np.float64 else cd.demosaicing_CFA_Bayer_bilinear(m, pattern)
+        assert got.shape == (*shape, 3) and got.dtype == np.float64
+        np.testing.assert_allclose(got, ref, rtol=1e-15, atol=0)
+
+
+@pytest.mark.parametrize("method", ["cie1976", "ciede2000"])
+def test_a_chart_score_is_the_same_without_the_kernels(fused, method, monkeypatch):
+    """The whole chart score — the box ΔE pass, S-CIELAB's CIELAB and ΔE, the demosaicking — against the same
+    capture scored with ``SPECTRACAM_FUSED=0`` (colour-science, colour-demosaicing)."""
+    from conftest import small_scene
+    from spectracam import capture, render, score
+
+    scene = small_scene(image={"width": 240, "height": 180}, processing={"delta_e": method})
+    raw = capture(render(scene, "analytic"), scene=scene)
+    a = score(raw, scene)
+    monkeypatch.setenv("SPECTRACAM_FUSED", "0")
+    b = score(raw, scene)
+    from dataclasses import asdict
+
+    for key, va in asdict(a.summary).items():
+        vb = getattr(b.summary, key)
+        if isinstance(va, float):
+            assert va == pytest.approx(vb, rel=1e-10, abs=1e-12), key
+    for pa, pb in zip(a.patches, b.patches):
+        assert pa.delta_e_mean == pytest.approx(pb.delta_e_mean, rel=1e-10)
+        assert pa.s_cielab_mean == pytest.approx(pb.s_cielab_mean, rel=1e-9)
+    np.testing.assert_allclose(a.delta_e_map, b.delta_e_map, rtol=1e-6, equal_nan=True)
+    assert np.isnan(a.delta_e_map).sum() == np.isnan(b.delta_e_map).sum() > 0
