@@ -39,18 +39,20 @@ def xyz_to_lab(xyz: np.ndarray, white_xyz: np.ndarray) -> np.ndarray:
     .. [Catrysse1999] see docs/references.md; section 3.6.
     """
     x = np.asarray(xyz)
-    if x.ndim >= 1 and x.shape[-1] == 3 and x.size >= 3 * FUSED_MIN_COLOURS and _kernels() is not None:
-        return rgb_to_lab(x, np.eye(3), white_xyz)
+    if x.ndim >= 1 and x.shape[-1] == 3 and x.size and _kernels() is not None:
+        return rgb_to_lab(x, _EYE, white_xyz)
     import colour
 
     white = np.asarray(white_xyz, float)
     return colour.XYZ_to_Lab(np.asarray(xyz, float) / white[1], colour.XYZ_to_xy(white / white[1]))
 
 
-#: Colours from which :func:`xyz_to_lab` and :func:`delta_e` run the compiled kernels (``core/_numba_colour.py``,
-#: one pass, float64, on every core): below it colour-science's array formulas cost no more.  The two agree to the
-#: rounding of float64 (``tests/test_fused_score.py``); ``SPECTRACAM_FUSED=0`` or no numba: colour-science's.
+#: :func:`xyz_to_lab` and :func:`delta_e` run compiled kernels (``core/_numba_colour.py``: one pass, float64, no
+#: temporaries; colour-science's own formulas cost ~1 ms a call whatever the size, 1.8 s of a paper run), on every
+#: core from this many colours.  The two agree to the rounding of float64 (``tests/test_fused_score.py``);
+#: ``SPECTRACAM_FUSED=0`` or no numba: colour-science's.
 FUSED_MIN_COLOURS = 4096
+_EYE = np.eye(3)
 #: The ΔE formulas the kernels compute, by the code they know them by.
 DELTA_E_CODES = {"cie1976": 0, "ciede2000": 1}
 _STATE: dict = {}
@@ -72,11 +74,17 @@ def _kernels():
 
 
 def lab_white(white_xyz) -> np.ndarray:
-    """The white as colour-science's ``XYZ_to_Lab`` takes it: its chromaticity back to XYZ with Y = 1."""
-    import colour
+    """The white as colour-science's ``XYZ_to_Lab`` takes it: its chromaticity ``x, y`` (``XYZ_to_xy``) back to
+    XYZ with Y = 1 (``xyY_to_XYZ``: ``x·Y/y``, ``(1 − x − y)·Y/y``), the same operations in the same order.
 
-    white = np.asarray(white_xyz, float)
-    return np.asarray(colour.xyY_to_XYZ(colour.xy_to_xyY(colour.XYZ_to_xy(white / white[1]))), float)
+    >>> lab_white([0.5, 2.0, 1.5]).tolist()
+    [0.25, 1.0, 0.75]
+    """
+    w = np.asarray(white_xyz, float)
+    w = w / w[1]
+    total = w[0] + w[1] + w[2]
+    x, y = w[0] / total, w[1] / total
+    return np.array([x * 1.0 / y, 1.0, (1.0 - x - y) * 1.0 / y])
 
 
 def rgb_to_lab(rgb: np.ndarray, matrix: np.ndarray, white_xyz: np.ndarray) -> np.ndarray:
@@ -91,7 +99,7 @@ def rgb_to_lab(rgb: np.ndarray, matrix: np.ndarray, white_xyz: np.ndarray) -> np
 
     x = np.asarray(rgb)
     mod = _kernels()
-    if mod is None or x.size < 3 * FUSED_MIN_COLOURS:
+    if mod is None or not x.size:
         return xyz_to_lab(x @ np.asarray(matrix, float).T, white_xyz) if x.size else np.zeros(x.shape)
     flat = x.reshape(-1, 3)
     if flat.dtype not in (np.float32, np.float64) or not flat.flags.c_contiguous:
@@ -99,7 +107,8 @@ def rgb_to_lab(rgb: np.ndarray, matrix: np.ndarray, white_xyz: np.ndarray) -> np
     m = np.ascontiguousarray(np.asarray(matrix, float) / float(np.asarray(white_xyz, float)[1]))
     out = np.empty(flat.shape, np.float64)
     wn = lab_white(white_xyz)
-    run_bands(mod.lab_kernel, len(flat), lambda a, b: (np.int64(a), np.int64(b), flat, m, wn, out))
+    run_bands(mod.lab_kernel, len(flat), lambda a, b: (np.int64(a), np.int64(b), flat, m, wn, out),
+              parts=None if len(flat) >= FUSED_MIN_COLOURS else 1)
     return out.reshape(x.shape)
 
 
@@ -150,15 +159,19 @@ def delta_e(lab1: np.ndarray, lab2: np.ndarray, method: str = "cie1976") -> np.n
     """
     fn = DELTA_E_METHODS[method]
     a, b = np.asarray(lab1, float), np.asarray(lab2, float)
-    mod = _kernels() if method in DELTA_E_CODES and a.size >= 3 * FUSED_MIN_COLOURS else None
-    if mod is None or a.ndim != 2 or a.shape[1] != 3 or b.shape not in (a.shape, (3,), (1, 3)):
+    mod = _kernels() if method in DELTA_E_CODES else None
+    if mod is None or a.ndim not in (1, 2) or a.shape[-1] != 3 or b.shape not in (a.shape, (3,), (1, 3)) \
+            or (a.ndim == 1 and b.ndim != 1):
         return fn(lab1, lab2)
+    if a.ndim == 1:   # one colour: a number, as the formulas give
+        return delta_e(a[None], b.reshape(1, 3), method)[0]
     from spectracam.core.parallel import run_bands
 
     a, b = np.ascontiguousarray(a), np.ascontiguousarray(b.reshape(-1, 3))
     out = np.empty(len(a))
     code = np.int64(DELTA_E_CODES[method])
-    run_bands(mod.delta_e_kernel, len(a), lambda i, j: (np.int64(i), np.int64(j), a, b, code, out))
+    run_bands(mod.delta_e_kernel, len(a), lambda i, j: (np.int64(i), np.int64(j), a, b, code, out),
+              parts=None if len(a) >= FUSED_MIN_COLOURS else 1)
     return out
 
 

@@ -50,6 +50,20 @@ def summary(errors: np.ndarray, library: str) -> dict:
 
 def held_out_block(library: str, illuminant: IlluminantSpec, grid: WavelengthGrid, camera: CameraSpec,
                    conversion: np.ndarray, processing: ProcessingSpec) -> dict:
-    """:func:`summary` of ``library`` under the light, through a conversion fitted elsewhere."""
-    colours = held_out_colours(library, illuminant, grid)
-    return summary(conversion_errors(colours, camera, grid, conversion, processing), library)
+    """:func:`summary` of ``library`` under the light, through a conversion fitted elsewhere.  Memoised per
+    camera, light and conversion (the last :data:`HELD_OUT_MEMO` of them): every seed and noise step of a camera
+    under a light shares its conversion, so a paper run computes each once instead of once per case."""
+    conversion = np.asarray(conversion, float)
+    key = (library, illuminant, grid, camera, conversion.shape, conversion.tobytes(), processing.display,
+           processing.delta_e)
+    if key not in _BLOCKS:
+        colours = held_out_colours(library, illuminant, grid)
+        _BLOCKS[key] = summary(conversion_errors(colours, camera, grid, conversion, processing), library)
+        while len(_BLOCKS) > HELD_OUT_MEMO:
+            _BLOCKS.pop(next(iter(_BLOCKS)))
+    return dict(_BLOCKS[key])
+
+
+#: Held-out blocks kept by :func:`held_out_block` (a few hundred bytes each).
+HELD_OUT_MEMO = 256
+_BLOCKS: dict = {}

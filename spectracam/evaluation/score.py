@@ -330,8 +330,7 @@ def _box_delta_es(rgb: np.ndarray, boxes, M_disp: np.ndarray, display_white: np.
     from spectracam.core.cielab import DELTA_E_CODES, _kernels
 
     mod = _kernels() if method in DELTA_E_CODES else None
-    if mod is not None and rgb.dtype in (np.float32, np.float64) and rgb.flags.c_contiguous \
-            and de_map.dtype == np.float32 and de_map.flags.c_contiguous:
+    if mod is not None and rgb.dtype in (np.float32, np.float64) and rgb.ndim == 3 and de_map.dtype == np.float32:
         return _box_delta_es_fused(mod, rgb, boxes, M_disp, display_white, against, method, de_map)
     out = []
     for (r, c), (de, de_2000) in zip(boxes, _box_delta_es_arrays(rgb, boxes, M_disp, display_white, against,
@@ -664,6 +663,8 @@ def _patch_scores(raw: RawCapture, reference: ChartReference, processing: Proces
                            display_white)
     sc_map = chart_scielab_map(rgb, reference, processing)
     per_box = _box_delta_es(rgb, boxes, M_disp, display_white, against, method, de_map)
+    of_mean = delta_e(mean_labs, scene_lab, method)                      # each patch's, in one call
+    of_conversion = delta_e(colours.conversion_lab, scene_lab, method)
     patches, de2000 = [], []
     for p, (r, c), (de_mean, de_2000) in zip(range(len(boxes)), boxes, per_box):
         de2000.append(de_2000)
@@ -672,8 +673,7 @@ def _patch_scores(raw: RawCapture, reference: ChartReference, processing: Proces
         patches.append(PatchScore(
             patch=p, name=reference.names[p], scene_lab=tuple(scene_lab[p].round(4).tolist()),
             rendered_lab=tuple(mean_labs[p].round(4).tolist()), delta_e_mean=de_mean,
-            delta_e_of_mean=float(delta_e(mean_labs[p], scene_lab[p], method)),
-            delta_e_conversion=float(delta_e(colours.conversion_lab[p], scene_lab[p], method)),
+            delta_e_of_mean=float(of_mean[p]), delta_e_conversion=float(of_conversion[p]),
             **{f"snr_{k}_db": _finite(by_name[k]) if k in by_name else None for k in "RGB"},
             snr_combined_db=_finite(combined), pixels=int((r.stop - r.start) * (c.stop - c.start)),
             snr_undefined=tuple(k for k, m, sd in zip(channels, means[p], stds[p]) if m <= 0 and sd > 0),
