@@ -1,4 +1,8 @@
-"""Shared fixtures: a small chart scene (160x120 px) rendered once per test session."""
+"""Shared fixtures: a small chart scene (160x120 px) rendered once per test session; Debian's Chromium, headless."""
+import os
+import shutil
+import tempfile
+
 import numpy as np
 import pytest
 
@@ -62,3 +66,32 @@ def assert_gradient_is_central_differences(problem, x, g, indices, rel: float = 
         xm[i] -= h
         fd = (problem.value_and_gradient(xp)[0] - problem.value_and_gradient(xm)[0]) / (2 * h)
         assert abs(g[i] - fd) <= rel * max(abs(fd), 1e-3), (i, g[i], fd)
+
+
+CHROMIUM, CHROMEDRIVER = "/usr/bin/chromium", "/usr/bin/chromedriver"
+
+
+@pytest.fixture(scope="session")
+def browser():
+    """Debian's Chromium, headless, through its own chromedriver (tools/setup.sh --test installs both)."""
+    webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed (tools/setup.sh --test)")
+    from selenium.webdriver.chrome.service import Service
+
+    missing = [p for p in (CHROMIUM, CHROMEDRIVER) if not os.access(p, os.X_OK)]
+    if missing:
+        pytest.skip(f"{', '.join(missing)} missing: Debian's chromium and chromium-driver (tools/setup.sh --test "
+                    "installs them where apt-get may run)")
+    os.environ["SE_OFFLINE"] = "true"  # Selenium Manager must never fetch a browser or driver
+    opts = webdriver.ChromeOptions()
+    opts.binary_location = CHROMIUM
+    profile = tempfile.mkdtemp(prefix="spectracam-chromium-")
+    for a in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+              "--disable-background-networking", "--disable-component-update", "--disable-sync",
+              "--disable-dev-shm-usage", f"--user-data-dir={profile}", "--window-size=1400,1500",
+              "--force-device-scale-factor=1"):
+        opts.add_argument(a)
+    opts.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=opts)
+    yield driver
+    driver.quit()
+    shutil.rmtree(profile, ignore_errors=True)

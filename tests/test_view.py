@@ -4,8 +4,6 @@ data checked against the files by a second reader (OpenImageIO)."""
 import io
 import json
 import os
-import shutil
-import tempfile
 import time
 from pathlib import Path
 
@@ -18,7 +16,6 @@ from spectracam.view import write_view
 from spectracam.view.cases import PAGE_VALUES, load_case
 from spectracam.view.contents import find_contents
 
-CHROMIUM, CHROMEDRIVER = "/usr/bin/chromium", "/usr/bin/chromedriver"
 SIZE = ["--set", "image.width=160", "--set", "image.height=120"]
 
 
@@ -50,32 +47,6 @@ def outputs(tmp_path_factory):
     _invoke(motion_cmd, ["-o", str(root / "motion"), "--renderer", "analytic", "--quiet",
                          *[a for s in motion for a in ("--set", s)]])
     return root
-
-
-@pytest.fixture(scope="module")
-def browser():
-    """Debian's Chromium, headless, through its own chromedriver (tools/setup.sh --test installs both)."""
-    webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed (tools/setup.sh --test)")
-    from selenium.webdriver.chrome.service import Service
-
-    missing = [p for p in (CHROMIUM, CHROMEDRIVER) if not os.access(p, os.X_OK)]
-    if missing:
-        pytest.skip(f"{', '.join(missing)} missing: Debian's chromium and chromium-driver (tools/setup.sh --test "
-                    "installs them where apt-get may run)")
-    os.environ["SE_OFFLINE"] = "true"  # Selenium Manager must never fetch a browser or driver
-    opts = webdriver.ChromeOptions()
-    opts.binary_location = CHROMIUM
-    profile = tempfile.mkdtemp(prefix="spectracam-chromium-")
-    for a in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-              "--disable-background-networking", "--disable-component-update", "--disable-sync",
-              "--disable-dev-shm-usage", f"--user-data-dir={profile}", "--window-size=1400,1500",
-              "--force-device-scale-factor=1"):
-        opts.add_argument(a)
-    opts.set_capability("goog:loggingPrefs", {"browser": "ALL"})
-    driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=opts)
-    yield driver
-    driver.quit()
-    shutil.rmtree(profile, ignore_errors=True)
 
 
 #: Every canvas (Bokeh draws each figure on its own, inside shadow roots), as viewport rectangles.

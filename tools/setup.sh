@@ -2,7 +2,8 @@
 # Install spectracam on a fresh Debian/Ubuntu machine, into the project's virtual environment .venv/
 # (so it also works where pip refuses to touch the system Python, PEP 668):
 #   bash tools/setup.sh          # the package, its runtime dependencies and the "exr" extra
-#   bash tools/setup.sh --test   # ... plus the test dependencies (the "test" extra)
+#   bash tools/setup.sh --test   # ... plus the test dependencies (the "test" extra, which holds "docs")
+#   bash tools/setup.sh --docs   # ... plus what builds the documentation site (the "docs" extra; mkdocs.yml)
 # Then run .venv/bin/python -m spectracam ... (or `source .venv/bin/activate`).
 # .venv is made by `python3 -m venv` with the python3 first on PATH (Python >= 3.11); on Debian and
 # Ubuntu that needs the python3-venv package, installed here when missing and we may.
@@ -17,7 +18,8 @@ extras="exr"
 case "${1:-}" in
   "") ;;
   --test) extras="exr,test" ;;
-  *) echo "usage: bash tools/setup.sh [--test]" >&2; exit 2 ;;
+  --docs) extras="exr,docs" ;;
+  *) echo "usage: bash tools/setup.sh [--test | --docs]" >&2; exit 2 ;;
 esac
 
 # May we install Debian packages? (root, or passwordless sudo, and apt-get)
@@ -181,6 +183,6 @@ if [ "$have" = "$want $extras" ] || [ "$have" = "$want exr,test" ]; then
 fi
 rm -f "$stamp"
 echo "setup: installing spectracam[$extras] into .venv"
-"$PY" -m pip install --disable-pip-version-check -q -e ".[$extras]"
+"$PY" -m pip install --disable-pip-version-check --progress-bar off -e ".[$extras]"
 echo "$want $extras" > "$stamp"
 echo "setup: done"

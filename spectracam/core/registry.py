@@ -6,6 +6,8 @@ the registered names — the same line from Python, from a file and from the com
 spec validation and CLI choices read the same registry.  A plug-in registers under a new name and
 is accepted everywhere at once (the pattern of colour-science's ``*_METHODS`` mappings).
 
+Examples
+--------
 >>> from spectracam.core.registry import Registry
 >>> SHAPES = Registry("demo.shape", "shape")
 >>> @SHAPES.register("square")

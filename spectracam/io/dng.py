@@ -82,7 +82,7 @@ readers that interpolate between the calibrations, as the DNG SDK does):
 What no file can change (the camera's own colour error on the chart's white, the developers' clip of
 negative noise on a CFA's weak channel) and what the standard illuminants cost (all three developers convert
 with the D65 matrix whatever the light) are measured by ``tools/dng_developers.py``; the figures are in the
-README ("Raw developers").
+user guide (`docs/guide/commands.md`, "Raw developers").
 
 ``ForwardMatrix1``/``ForwardMatrix2`` (issue 33; :func:`forward_matrices`) are written for readers that use them
 (the DNG SDK, Adobe's converters, RawTherapee's DCP path): LibRaw parses them but does not use them, and darktable's
