@@ -493,3 +493,31 @@ def test_dng_four_planes_get_two_4x3_matrices(tmp_path, scene_5000, analytic_500
     with rawpy.imread(str(tmp_path / "raw.dng")) as r:
         assert r.num_colors == 4
         assert r.postprocess(use_camera_wb=True).shape == (120, 160, 3)
+
+
+def test_dng_carries_its_date_for_libraw(tmp_path, cfa_raw, scene_5000, monkeypatch):
+    """Issue 39: LibRaw (through OpenImageIO) reads the DNG's date, which is SOURCE_DATE_EPOCH where set (a file
+    made byte for byte again) and otherwise the time it was written; a bad SOURCE_DATE_EPOCH is one line."""
+    import datetime as dt
+
+    from spectracam.core.errors import SpectracamError
+
+    oiio = pytest.importorskip("OpenImageIO")
+    reference = ChartReference.of(scene_5000)
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "1767225600")   # 2026-01-01 00:00:00 UTC
+    write_dng(tmp_path / "a.dng", cfa_raw, reference)
+    write_dng(tmp_path / "b.dng", cfa_raw, reference)
+    assert (tmp_path / "a.dng").read_bytes() == (tmp_path / "b.dng").read_bytes()
+    spec = oiio.ImageInput.open(str(tmp_path / "a.dng")).spec()
+    assert spec.getattribute("DateTime") == "2026:01:01 00:00:00"
+    assert spec.getattribute("Exif:DateTimeOriginal") == "2026:01:01 00:00:00"
+    monkeypatch.delenv("SOURCE_DATE_EPOCH")
+    before = dt.datetime.now(dt.timezone.utc).replace(microsecond=0)
+    write_dng(tmp_path / "c.dng", cfa_raw, reference)
+    stamp = oiio.ImageInput.open(str(tmp_path / "c.dng")).spec().getattribute("DateTime")
+    when = dt.datetime.strptime(stamp, "%Y:%m:%d %H:%M:%S").replace(tzinfo=dt.timezone.utc)
+    assert before <= when <= dt.datetime.now(dt.timezone.utc)
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "yesterday")
+    with pytest.raises(SpectracamError, match=r"^SOURCE_DATE_EPOCH = 'yesterday': must be whole seconds") as e:
+        write_dng(tmp_path / "d.dng", cfa_raw, reference)
+    assert "\n" not in str(e.value) and not (tmp_path / "d.dng").exists()

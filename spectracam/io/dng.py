@@ -48,7 +48,9 @@ has three or four colour planes, so other counts have no DNG form).  With N colo
   (where LibRaw, exiv2 and exiftool look for them) ``ExposureTime`` (the capture time), ``FNumber``,
   ``ISOSpeedRatings`` with ``SensitivityType`` 3 (ISO speed): ISO 12232's saturation-based speed
   ``S_sat = 78/H_sat``, ``H_sat = k_v·L_sat·t`` lux·s, the focal-plane exposure of the luminance that
-  first fills a channel (:func:`saturation_exposure_lux_s`).
+  first fills a channel (:func:`saturation_exposure_lux_s`); ``DateTime`` and, in the Exif IFD,
+  ``DateTimeOriginal``/``DateTimeDigitized`` with ``OffsetTime*`` "+00:00": when the file was written, UTC, or
+  ``SOURCE_DATE_EPOCH`` where set (:func:`capture_datetime`).
 
 What each developer does with these (``tools/dng_developers.py`` develops the default camera's cfa/single,
 prism/optimal and fsc/optimal captures of the chart at 3000 K and 6500 K in all three; none of the three reads
@@ -119,11 +121,11 @@ from spectracam.core.errors import SpectracamError
 from spectracam.processing.calibration import D50_XYZ, constrained_lstsq, white_neutral  # D50: the DNG SDK's normalisation
 from spectracam.core.files import atomic_write
 
-__all__ = ["CALIBRATION_ILLUMINANTS", "DNG_MAX_BITS", "ISO_SATURATION_CONSTANT", "MAKE", "as_shot_neutral",
-           "calibration_reference", "camera_model", "camera_patches", "camera_to_xyz_matrix", "camera_white",
-           "color_matrices", "dng_image", "dng_levels", "dng_tags", "exif_entries", "forward_matrices",
-           "linear_raw_pedestal", "normalise_color_matrix", "saturation_exposure_lux_s", "saturation_iso",
-           "white_radiance", "white_rates", "write_dng", "xyz_to_camera_matrix"]
+__all__ = ["CALIBRATION_ILLUMINANTS", "DNG_MAX_BITS", "EXIF_DATETIME", "ISO_SATURATION_CONSTANT", "MAKE",
+           "as_shot_neutral", "calibration_reference", "camera_model", "camera_patches", "camera_to_xyz_matrix",
+           "camera_white", "capture_datetime", "color_matrices", "dng_image", "dng_levels", "dng_tags", "exif_entries",
+           "forward_matrices", "linear_raw_pedestal", "normalise_color_matrix", "saturation_exposure_lux_s",
+           "saturation_iso", "white_radiance", "white_rates", "write_dng", "xyz_to_camera_matrix"]
 
 #: DNG CFAPattern colour codes.
 _CFA_CODE = {"R": 0, "G": 1, "B": 2, "C": 3, "M": 4, "Y": 5, "W": 6}
@@ -303,7 +305,7 @@ def _exposure_rational(t_s: float) -> tuple[int, int]:
 
 
 #: TIFF field types: (code, struct format of one value).
-_TYPES = {"SHORT": (3, "H"), "LONG": (4, "I"), "RATIONAL": (5, "II"), "UNDEFINED": (7, "B")}
+_TYPES = {"ASCII": (2, "B"), "SHORT": (3, "H"), "LONG": (4, "I"), "RATIONAL": (5, "II"), "UNDEFINED": (7, "B")}
 
 
 #: tifffile refuses to write the ExifIFD pointer (34665) itself: a placeholder with the next lower
@@ -439,11 +441,16 @@ def dng_tags(raw: RawCapture, reference=None, mid_step: bool = False, layout=Non
     return tags
 
 
-def exif_entries(raw: RawCapture, reference=None) -> list[tuple[int, str, tuple]]:
-    """The Exif IFD: ExposureTime, FNumber, ISOSpeedRatings + SensitivityType 3 (ISO speed), ExifVersion."""
+def exif_entries(raw: RawCapture, reference=None, stamp=None) -> list[tuple[int, str, tuple]]:
+    """The Exif IFD: ExposureTime, FNumber, ISOSpeedRatings + SensitivityType 3 (ISO speed), ExifVersion, and with
+    ``stamp`` (a UTC datetime) DateTimeOriginal, DateTimeDigitized and their OffsetTime "+00:00"."""
     entries = [(33434, "RATIONAL", _exposure_rational(float(raw.capture_time_s))),
                (33437, "RATIONAL", _rational([raw.camera.optics.f_number])),
                (36864, "UNDEFINED", tuple(b"0230"))]
+    if stamp is not None:
+        text = tuple(stamp.strftime(EXIF_DATETIME).encode() + b"\0")
+        entries += [(36867, "ASCII", text), (36868, "ASCII", text),   # DateTimeOriginal, DateTimeDigitized
+                    (36881, "ASCII", tuple(b"+00:00\0")), (36882, "ASCII", tuple(b"+00:00\0"))]  # OffsetTime*
     if reference is not None:
         iso = int(np.clip(round(saturation_iso(raw, reference)), 1, 65535))
         entries += [(34855, "SHORT", (iso,)), (34864, "SHORT", (3,))]
@@ -520,7 +527,30 @@ def write_dng(path: str | Path, raw: RawCapture, reference=None, mid_step: bool 
                               "capture_time_s": float(raw.capture_time_s), "seed": raw.seed,
                               "camera": raw.camera.to_dict(), "scene": raw.scene, **extra}, sort_keys=True)
     buf = io.BytesIO()
+    stamp = capture_datetime()
     tifffile.imwrite(buf, data, photometric=photometric, planarconfig="contig" if data.ndim == 3 else None,
                      compression=None, extratags=dng_tags(raw, reference, mid_step, layout, neutral_rates), metadata=None, subfiletype=0,
-                     description=description, software=f"spectracam {__version__}", byteorder="<")
-    return atomic_write(path, _append_exif_ifd(buf.getvalue(), exif_entries(raw, reference)))
+                     description=description, software=f"spectracam {__version__}", byteorder="<",
+                     datetime=stamp.strftime(EXIF_DATETIME))
+    return atomic_write(path, _append_exif_ifd(buf.getvalue(), exif_entries(raw, reference, stamp)))
+
+
+#: Exif's date and time form (Exif 2.3, DateTimeOriginal): 19 characters and a NUL.
+EXIF_DATETIME = "%Y:%m:%d %H:%M:%S"
+
+
+def capture_datetime():
+    """When the DNG's capture was taken, UTC: the time it is written, or ``SOURCE_DATE_EPOCH`` (seconds since 1970,
+    the reproducible-builds convention) where that is set, so that a file can be made byte for byte again.  Without
+    a date LibRaw and the developers that use it show 1 January 1970."""
+    import datetime as dt
+    import os
+
+    epoch = os.environ.get("SOURCE_DATE_EPOCH", "").strip()
+    if epoch:
+        try:
+            return dt.datetime.fromtimestamp(int(epoch), dt.timezone.utc)
+        except (ValueError, OverflowError, OSError):
+            raise SpectracamError(f"SOURCE_DATE_EPOCH = {epoch!r}: must be whole seconds since 1970-01-01 UTC, "
+                                  "such as 1767225600") from None
+    return dt.datetime.now(dt.timezone.utc).replace(microsecond=0)
