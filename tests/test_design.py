@@ -225,8 +225,14 @@ def test_design_command_quick(tmp_path):
     assert res["designs"]["fsc/split"]["camera"]["capture"]["exposure"] == "split"
     for f in ("report.md", "curves.csv", "curves.png", "convergence.png", "comparison.png"):
         assert (out / f).stat().st_size > 100
-    header = (out / "curves.csv").read_text().splitlines()[2].split(",")
-    assert header[0] == "wavelength_nm" and "cfa/single:optimised:R" in header
+    import csv
+
+    with open(out / "curves.csv", newline="") as f:   # one header row (issue 39): any CSV reader takes it
+        rows = list(csv.DictReader(f))
+    assert rows and float(rows[0]["wavelength_nm"]) > 300 and "cfa/single:optimised:R" in rows[0]
+    assert json.loads((out / "curves.json").read_text())["command"].startswith("spectracam design")
+    for f in ("curves.svg", "convergence.svg", "comparison.svg"):
+        assert (out / f).read_text().lstrip().startswith(("<?xml", "<svg"))
     page = (out / "index.html").read_text()  # --view: the figures embedded, report.md's tables as HTML
     assert "spectracam design" in page and page.count("data:image/png;base64,") >= 3 and "<table>" in page
 

@@ -8,7 +8,19 @@ import numpy as np
 
 from spectracam.core.files import atomic_write
 
-__all__ = ["pyplot", "save_figure", "srgb_image"]
+__all__ = ["FIGURE_DPI", "OKABE_ITO", "palette", "pyplot", "save_figure", "srgb_image"]
+
+#: Every PNG figure's resolution, dots per inch (fit to print; the SVG beside it scales without limit).
+FIGURE_DPI = 200
+#: Okabe & Ito's eight colours, which stay distinct for readers with any common colour-vision deficiency
+#: (docs/references.md [Okabe2008]); yellow last, since it is faint on white.  The default colour cycle of every
+#: figure.
+OKABE_ITO = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000", "#F0E442")
+
+
+def palette(n: int) -> list[str]:
+    """``n`` colours: :data:`OKABE_ITO` in order, repeated past eight (tell such lines apart by their markers)."""
+    return [OKABE_ITO[i % len(OKABE_ITO)] for i in range(n)]
 
 
 def pyplot():
@@ -18,14 +30,19 @@ def pyplot():
 
     matplotlib.use("Agg")
     matplotlib.rcParams["svg.fonttype"] = "none"
+    from cycler import cycler
+
+    matplotlib.rcParams["axes.prop_cycle"] = cycler(color=list(OKABE_ITO))
     import matplotlib.pyplot as plt
 
     return plt
 
 
-def save_figure(fig, *paths: str | Path, dpi: int = 120, tight: bool = True) -> list[Path] | Path:
-    """Save a figure in the format of each path's suffix (png, svg), atomically, then close it.
-    Returns the path, or the list of paths when several are given."""
+def save_figure(fig, *paths: str | Path, dpi: int | None = None, tight: bool = True) -> list[Path] | Path:
+    """Save a figure in the format of each path's suffix (png, svg), atomically, then close it: PNGs at ``dpi``
+    (default :data:`FIGURE_DPI`; a lower one only for a picture shown at its own pixel size, such as motion's
+    per-case maps).  Returns the path, or the list of paths when several are given."""
+    dpi = FIGURE_DPI if dpi is None else dpi
     plt = pyplot()
     out = []
     try:

@@ -429,12 +429,11 @@ def write_architectures_outputs(out_dir: str | Path, results: dict, command: str
 
     out = Path(out_dir)
     results = {**results, "command": command}
-    paths = save_figure(figure_comparison(results), out / "architectures.png", out / "architectures.svg", dpi=120)
-    paths += save_figure(figure_responsivities(results), out / "responsivities.png", out / "responsivities.svg",
-                         dpi=120)
+    paths = save_figure(figure_comparison(results), out / "architectures.png", out / "architectures.svg")
+    paths += save_figure(figure_responsivities(results), out / "responsivities.png", out / "responsivities.svg")
     if "space" in results:
         paths += save_figure(figure_spacetime(results), out / "architectures_spacetime.png",
-                             out / "architectures_spacetime.svg", dpi=110)
+                             out / "architectures_spacetime.svg")
     paths.append(atomic_write(out / "results.json", json.dumps(results, indent=1, allow_nan=False).encode()))
     paths.append(atomic_write(out / "report.md", report_markdown(results, command).encode()))
     step(f"wrote {out}/results.json, report.md, architectures.png/.svg, responsivities.png/.svg"

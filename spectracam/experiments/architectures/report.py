@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from spectracam.io.plots import pyplot
+from spectracam.io.plots import palette, pyplot
 
 __all__ = ["figure_comparison", "figure_responsivities", "figure_spacetime", "report_markdown"]
 
@@ -128,10 +128,9 @@ def figure_spacetime(results: dict):
     (c) colour breakup and (d) S-CIELAB against the own still capture, against speed."""
     plt = pyplot()
     space, time_ = results["space"], results["time"]
-    cmap = plt.get_cmap("tab10")
     archs = list(dict.fromkeys(r["design"].split("/")[0] for r in time_["rows"]))
-    colour = {a: cmap(i % 10) for i, a in enumerate(archs)}
-    fig, axes = plt.subplots(2, 2, figsize=(15, 11))
+    colour = dict(zip(archs, palette(len(archs))))
+    fig, axes = plt.subplots(2, 2, figsize=(18, 11), gridspec_kw={"wspace": 0.75})
     ax = axes[0, 0]
     points: dict = {}    # designs that coincide (noise-free planes of the same filters) share one label
     for r in space["rows"]:
@@ -143,8 +142,11 @@ def figure_spacetime(results: dict):
                    facecolors="none" if olpf else c, edgecolors=c, linewidths=1.5)
         key = (round(r["false_colour_edge"], 2), round(r["mtf50_cy_per_px"], 3))
         points.setdefault(key, []).append(r["label"].replace("/single", "").replace("/optimal", "").replace(" aligned", ""))
-    for (x, y), names in points.items():
-        ax.annotate(" = ".join(names), (x, y), fontsize=7, xytext=(4, 3), textcoords="offset points")
+    key = []   # numbers beside the points and a key beside the panel: the names no longer collide
+    for n, ((x, y), names) in enumerate(sorted(points.items(), key=lambda kv: (-kv[0][1], kv[0][0])), start=1):
+        ax.annotate(str(n), (x, y), fontsize=7, xytext=(4, 2) if n % 2 else (4, -8), textcoords="offset points")
+        key.append(f"{n:>2}  {' = '.join(names)}")
+    ax.text(1.02, 1.0, "\n".join(key), transform=ax.transAxes, va="top", ha="left", fontsize=6.5, family="monospace")
     ax.set_xscale("symlog", linthresh=0.5)
     ax.set(xlabel="false colour at the neutral edge, √(Δa*²+Δb*²) (lower is better)",
            ylabel="MTF50 of displayed luminance, cy/px (higher is better)",
@@ -177,7 +179,7 @@ def figure_spacetime(results: dict):
     sp = space["parameters"]
     fig.suptitle(f"Space (noise off, {sp['pixel_pitch_um']:g} µm pixel, f/{sp['f_number']:g}) and time (the paper's "
                  "noise and light, global shutter): every architecture", fontsize=12)
-    fig.tight_layout(rect=(0, 0, 1, 0.96))
+    fig.subplots_adjust(left=0.05, right=0.98, top=0.92, bottom=0.06, hspace=0.3)   # room for panel (a)'s key
     return fig
 
 

@@ -356,7 +356,7 @@ def write_consistency_outputs(out_dir, result: dict, command: str) -> list:
     from spectracam.io.plots import save_figure
 
     out = Path(out_dir)
-    paths = save_figure(consistency_figure(result), out / "consistency.png", out / "consistency.svg", dpi=130)
+    paths = save_figure(consistency_figure(result), out / "consistency.png", out / "consistency.svg")
     paths.append(atomic_write(out / "consistency.json",
                               json.dumps({**result, "command": command}, indent=1, allow_nan=False).encode()))
     paths.append(atomic_write(out / "consistency.md", consistency_markdown(result, command).encode()))

@@ -108,7 +108,10 @@ def responsivity_table(results: dict, grid) -> tuple[list[str], np.ndarray]:
     return cols, np.stack(data, axis=1)
 
 
-_COLOURS = {"R": "tab:red", "G": "tab:green", "B": "tab:blue", "W": "0.4", "Y": "goldenrod", "C": "c", "M": "m"}
+#: Channel colours: Okabe & Ito's vermillion, bluish green and blue for R, G, B (spectracam.io.plots.OKABE_ITO), which
+#: keep their meaning and stay apart for colour-blind readers.
+_COLOURS = {"R": "#D55E00", "G": "#009E73", "B": "#0072B2", "W": "0.4", "Y": "#E69F00", "C": "#56B4E9",
+            "M": "#CC79A7"}
 
 
 def figure_curves(results: dict, grid):
@@ -121,7 +124,7 @@ def figure_curves(results: dict, grid):
     n = len(names)
     cols = min(3, n)
     rows = -(-n // cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.0 * rows), squeeze=False, sharex=True)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.0 * rows + 0.9), squeeze=False, sharex=True)
     lam = np.asarray(grid.centres_nm, float)
     for ax, name in zip(axes.flat, names):
         e = results["designs"][name]
@@ -133,12 +136,16 @@ def figure_curves(results: dict, grid):
         p, q = e["predicted_delta_e"], e["paper_filters"]["predicted_delta_e"]
         ax.set_title(f"{name}: held-out ΔE {q['held_out']:.2f} → {p['held_out']:.2f}", fontsize=9)
         ax.set_ylabel("e⁻ per photon")
-        ax.legend(fontsize=6, ncol=2, loc="upper right")
     for ax in axes.flat[n:]:
         ax.axis("off")
     for ax in axes[-1]:
         ax.set_xlabel("wavelength, nm")
+    handles, labels = axes.flat[0].get_legend_handles_labels()   # one key for every panel, below them all
+    handles.append(plt.Line2D([], [], ls="--", color="0.3", lw=1.0))
+    labels.append("the paper's filters")
+    fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=8, frameon=False)
     fig.suptitle("optimised responsivities (solid) against the paper's filters (dashed)", fontsize=10)
+    fig.tight_layout(rect=(0, 0.07, 1, 0.95))
     return fig
 
 
@@ -168,15 +175,16 @@ def figure_comparison(results: dict):
     plt = pyplot()
     names = list(results["designs"])
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
-    width = 0.2
-    for j, (key, label) in enumerate(VARIANTS):
+    present = [(k, lab) for k, lab in VARIANTS if any(_variant(results["designs"][n], k) is not None for n in names)]
+    width = 0.8 / len(present)    # the variants a run has, side by side, centred on their design (no empty slot)
+    for j, (key, label) in enumerate(present):
         for ax, what in zip(axes, ("held_out", "mc")):
             xs, ys, es = [], [], []
             for i, name in enumerate(names):
                 v = _variant(results["designs"][name], key)
                 if v is None:
                     continue
-                xs.append(i + (j - 1.5) * width)
+                xs.append(i + (j - (len(present) - 1) / 2) * width)
                 if what == "held_out":
                     ys.append(v["held_out_delta_e"])
                     es.append(0.0)
@@ -191,8 +199,9 @@ def figure_comparison(results: dict):
         ax.set_title(title, fontsize=10)
         ax.grid(axis="y", alpha=0.3)
     axes[0].set_ylabel("ΔE*ab")
-    axes[0].legend(fontsize=7)
-    fig.tight_layout()
+    handles, labels = axes[0].get_legend_handles_labels()   # below the panels, over no bar
+    fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=8, frameon=False)
+    fig.tight_layout(rect=(0, 0.07, 1, 1))
     return fig
 
 
@@ -210,12 +219,16 @@ def write_design_outputs(out_dir, results: dict, command: str, step=lambda m: No
                                                            default=json_default).encode())]
     paths.append(atomic_write(out / "report.md", report_markdown(results, command).encode()))
     header, data = responsivity_table(results, grid)
-    lines = [f"# {command}", "# band-averaged responsivities, electrons per photon: design:optimised|paper:channel",
-             ",".join(header)] + [",".join(f"{v:.6g}" for v in row) for row in data]
+    lines = [",".join(header)] + [",".join(f"{v:.6g}" for v in row) for row in data]   # one header row: any reader
     paths.append(atomic_write(out / "curves.csv", ("\n".join(lines) + "\n").encode()))
+    meta = {"command": command, "file": "curves.csv",
+            "columns": "wavelength_nm (the band's centre, nm), then design:optimised|paper:channel",
+            "unit": "band-averaged responsivity, electrons per photon"}
+    paths.append(atomic_write(out / "curves.json", (json.dumps(meta, indent=1) + "\n").encode()))
     for name, fig in (("curves", figure_curves(results, grid)), ("convergence", figure_convergence(results)),
                       ("comparison", figure_comparison(results))):
-        fig.text(0.005, 0.002, command, fontsize=5, color="0.45", va="bottom")   # where the figure came from
-        paths.append(save_figure(fig, out / f"{name}.png", dpi=110))
-    step(f"wrote {out}/results.json, report.md, curves.csv, curves.png, convergence.png, comparison.png")
+        fig.text(0.005, -0.01, command, fontsize=5, color="0.45", va="top")   # where it came from, below everything
+        paths += save_figure(fig, out / f"{name}.png", out / f"{name}.svg")
+    step(f"wrote {out}/results.json, report.md, curves.csv (+ curves.json), curves, convergence and comparison "
+         ".png/.svg")
     return paths

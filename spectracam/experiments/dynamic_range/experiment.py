@@ -290,16 +290,15 @@ def dynamic_range_figure(result: dict):
     """Mean ΔE against the chart's white luminance on the ladder (one exposure for the scene, the first temperature):
     against the scene (top) and against the camera's noise-free rendering (bottom), a column per design, a line per
     read-out; the kept threshold dashed; values above 1000 drawn at 1000."""
-    import matplotlib
+    from spectracam.io.plots import palette, pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()   # Agg, the colour-blind-safe cycle
 
     p = result["parameters"]
     designs, readouts, t0 = p["designs"], p["readouts"], p["temperatures_C"][0]
     fig, axes = plt.subplots(2, len(designs), figsize=(3.8 * len(designs) + 1.6, 6.4), sharex=True, sharey=True,
                              squeeze=False)
-    colours = plt.get_cmap("tab10")
+    colours = palette(len(readouts))
     for col, design in enumerate(designs):
         for row, (metric, label) in enumerate((("delta_e_ab", "ΔE*ab against the scene"),
                                                 ("delta_e_capture", "ΔE against the noise-free capture"))):
@@ -309,7 +308,7 @@ def dynamic_range_figure(result: dict):
                              and r["readout"] == readout and r["temperature_C"] == t0 and r["exposure"] == "scene"),
                             key=lambda r: r["white_luminance_cd_m2"])
                 y = np.minimum([np.nan if r[metric] is None else r[metric] for r in rs], 1e3)
-                ax.plot([r["white_luminance_cd_m2"] for r in rs], y, "o-", color=colours(k), label=readout, ms=3)
+                ax.plot([r["white_luminance_cd_m2"] for r in rs], y, "o-", color=colours[k], label=readout, ms=3)
             ax.axhline(DELTA_E_KEPT, color="0.4", ls="--", lw=0.8)
             ax.set_xscale("log")
             ax.set_yscale("log")

@@ -16,7 +16,8 @@ from spectracam.experiments.motion.experiment import series
 __all__ = ["COLOURS", "REST_AT", "answer", "figure_crops", "figure_curves", "fsc_frames_gif",
            "report_markdown", "write_outputs"]
 
-COLOURS = {"cfa/single": "#d62728", "prism/optimal": "#1f77b4", "fsc/optimal": "#2ca02c", "fsc/balanced": "#9467bd"}
+COLOURS = {"cfa/single": "#D55E00", "prism/optimal": "#0072B2", "fsc/optimal": "#009E73",
+           "fsc/balanced": "#CC79A7"}   # Okabe & Ito's (spectracam.io.plots.OKABE_ITO): distinct to colour-blind readers
 
 
 def _designs(rows):

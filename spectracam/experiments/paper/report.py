@@ -224,7 +224,7 @@ def write_paper_outputs(out_dir: str | Path, results: dict, cases: dict, cubes: 
     out = Path(out_dir)
     paths = []
     for name, make in (("fig4", figures.fig4), ("fig5", figures.fig5), ("fig6", figures.fig6)):
-        paths += save_figure(make(results), out / f"{name}.png", out / f"{name}.svg", dpi=130, tight=False)
+        paths += save_figure(make(results), out / f"{name}.png", out / f"{name}.svg", tight=False)
     paths.append(atomic_write(out / "results.json", json.dumps(results, indent=1, allow_nan=False).encode()))
     paths.append(atomic_write(out / "report.md", report_markdown(results, command).encode()))
     step("figures, results.json and report.md written")

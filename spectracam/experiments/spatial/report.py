@@ -36,10 +36,10 @@ def _design_of(rows) -> dict:
     return {r.label: r for r in rows}
 
 
-COLOURS = {("cfa", "bilinear"): "#d62728", ("cfa", "malvar2004"): "#ff7f0e", ("cfa", "menon2007"): "#e377c2",
-           ("prism", None): "#1f77b4", ("fsc", None): "#2ca02c"}
+COLOURS = {("cfa", "bilinear"): "#D55E00", ("cfa", "malvar2004"): "#E69F00", ("cfa", "menon2007"): "#CC79A7",
+           ("prism", None): "#0072B2", ("fsc", None): "#009E73"}   # Okabe & Ito's (spectracam.io.plots.OKABE_ITO)
 #: Other architectures (``spectracam architectures``), one colour each whatever their demosaicker.
-ARCH_COLOURS = {"stacked": "#8c564b", "rgbw": "#9467bd", "ryyb": "#bcbd22", "cmy": "#17becf", "quad_bayer": "#7f7f7f"}
+ARCH_COLOURS = {"stacked": "#000000", "rgbw": "#56B4E9", "ryyb": "#F0E442", "cmy": "#999999", "quad_bayer": "#666666"}
 
 
 def _colour(row) -> str:

@@ -367,6 +367,6 @@ def plot_sweep(out_dir: str | Path, x: str | None = None, line: str | None = Non
     paths = []
     for metric in metrics or meta["metrics"]:
         fig = sweep_figure(meta, rows, metric, x, line, panel, base)
-        paths += save_figure(fig, *(Path(out_dir) / "plots" / f"{metric}.{fmt}" for fmt in ("png", "svg")), dpi=130,
+        paths += save_figure(fig, *(Path(out_dir) / "plots" / f"{metric}.{fmt}" for fmt in ("png", "svg")),
                              tight=False)
     return paths
