@@ -2,6 +2,7 @@
 import os
 import shutil
 import tempfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -9,6 +10,17 @@ import pytest
 from spectracam.pipeline.scene_file import parse_scene
 
 SMALL = {"image": {"width": 160, "height": 120}}
+
+#: The tests marked slow (issue 39's quick subset: ``pytest -m "not slow"``), measured: see the file's header.
+SLOW_TESTS = Path(__file__).parent / "slow_tests.txt"
+
+
+def pytest_collection_modifyitems(config, items):
+    """Mark the tests listed in :data:`SLOW_TESTS` slow (a test may also carry ``@pytest.mark.slow`` itself)."""
+    slow = {ln.strip() for ln in SLOW_TESTS.read_text().splitlines() if ln.strip() and not ln.startswith("#")}
+    for item in items:
+        if item.nodeid in slow:
+            item.add_marker(pytest.mark.slow)
 
 
 def small_scene(**tables):
