@@ -89,8 +89,8 @@ def lab_white(white_xyz) -> np.ndarray:
 
 def rgb_to_lab(rgb: np.ndarray, matrix: np.ndarray, white_xyz: np.ndarray) -> np.ndarray:
     """CIE 1976 L*a*b* ``(..., 3)`` of ``rgb @ matrix.T`` (any linear RGB to XYZ) against ``white_xyz``: what
-    ``xyz_to_lab(rgb @ matrix.T, white_xyz)`` gives, in one compiled pass without the XYZ image where the kernels
-    run (:data:`FUSED_MIN_COLOURS`).
+    ``xyz_to_lab(rgb @ matrix.T, white_xyz)`` gives, in one compiled pass without the XYZ image where numba is
+    available (on every core from :data:`FUSED_MIN_COLOURS` colours).
 
     >>> rgb_to_lab(np.ones((1, 3)), np.eye(3), np.ones(3)).round(6).tolist()
     [[100.0, 0.0, 0.0]]

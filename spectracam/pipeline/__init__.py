@@ -146,9 +146,10 @@ def stand_in_scene(cube: RadianceCube, data: dict | None = None, source: str = "
 RADIANCE_MATCH_TOLERANCE = 0.01
 
 
-#: Rows and columns of a patch's box that :func:`check_cube_matches` reads, at most (evenly spaced): 64 × 64 pixels
-#: of a uniform patch give its mean spectrum as all of them would (a render's noise averages to < 0.1 %), and the
-#: check no longer reads a 12-Mpx cube once more (0.22 s, 40 % of a capture; issue 38).
+#: Rows and columns of a patch's box that :func:`check_cube_matches` reads, at most (evenly spaced): a render's pixels
+#: inside a patch agree to about 1e-7 (docs/guide/performance.md), so 64 × 64 of them give its mean spectrum as all
+#: would, against a tolerance of 1 %; the check no longer reads a 12-Mpx cube once more (0.22 s, 40 % of a capture;
+#: issue 38).
 PATCH_CHECK_SAMPLES = 64
 
 
