@@ -187,6 +187,9 @@ def test_paper_page_switches_cases_and_probes_digital_numbers(outputs, browser):
     write_view(d)
     contents = find_contents(d)
     assert len(contents.cases) == 25 and contents.kind == "paper"
+    page = (d / "index.html").read_text()   # the spectrum's absence is said at the top (issue 39)
+    assert page.index("No spectrum in the probe for 25 of 25 cases") < page.index("images and pixel probe")
+    assert "--save-cubes" in page
     rects = check_page(browser, d, 3)
     names = [n for n, _ in contents.cases]
     i = names.index(next(n for n in names if n.endswith("prism-optimal")))

@@ -44,6 +44,7 @@ th{background:#f4f4f4} td.name{text-align:left} .sw{width:1.4em;height:1em;displ
 figure{display:inline-block;margin:0.4em;vertical-align:top;max-width:48%} figure img{max-width:100%;border:1px solid #ddd}
 figcaption{font-size:0.8em;color:#555;word-break:break-all} pre{background:#f8f8f8;padding:0.6em;overflow:auto;max-height:30em}
 .note{color:#555;font-size:0.9em} table.probe th{text-align:left}
+.missing{background:#fff4d6;border-left:4px solid #E69F00;padding:0.4em 0.8em}
 """
 
 
@@ -296,6 +297,11 @@ def build_page(c: Contents, cases: list[Case]) -> str:
             f"<p class=note>written by spectracam {__version__} from {html.escape(str(c.directory))}; "
             "see docs/metrics.md for every score's definition</p>"]
     script = ""
+    bare = [case for case in cases if any(n.startswith("no radiance.exr") for n in case.notes)]
+    if bare:   # said at the top, not only in each case's notes far below (issue 39)
+        body.append(f"<p class=missing><b>No spectrum in the probe for {len(bare)} of {len(cases)} cases:</b> they "
+                    "carry no radiance.exr (a paper run writes it with <code>--save-cubes</code>), so their scene "
+                    "colours are the chart reference's patch colours, inside the patches only.</p>")
     if cases:
         script, div = components(interactive(cases))
         body += ["<h2>images and pixel probe</h2>",
