@@ -147,6 +147,23 @@ def test_simulate_page_probes_the_spectrum_the_exr_holds(outputs, browser):
     assert f"{last['x']}, {last['y']}" in text and "ΔE*ab" in text
     shown = browser.execute_script("return window.Bokeh.documents[0].get_model_by_name('probe_spectrum').data.radiance")
     assert np.allclose(shown, want)
+    # the probed spectrum as CSV (one header row, the file's values) and the patch under the pointer (issue 39)
+    csv_text = browser.execute_script("return window.spectracam.csv()")
+    lines = csv_text.strip().split("\n")
+    assert lines[0] == "wavelength_nm,radiance_W_m2_sr_nm" and len(lines) == len(bands) + 1
+    assert np.array_equal(np.array([float(v.split(",")[1]) for v in lines[1:]], np.float32), want.astype(np.float32))
+    assert "spectrum as CSV" in text and 'download="spectrum_' in text
+    from spectracam.pipeline.scene_file import parse_scene
+    from spectracam.scene.reference import ChartReference
+
+    ref = ChartReference.of(parse_scene(json.loads((d / "report.json").read_text())["parameters"]["scene"]))
+    for p in (0, 13, 23):
+        r, c = ref.boxes[p]
+        cx, cy = (c.start + c.stop) / 2, (r.start + r.stop) / 2   # data coordinates: y up from the bottom
+        probed = browser.execute_script(f"return window.spectracam.probe({cx}, {capture.digital.shape[0] - cy})")
+        assert probed["patch"] == ref.names[p]
+    outside = browser.execute_script("return window.spectracam.probe(0.5, 0.5)")   # the surround, bottom left
+    assert outside["patch"] is None
     # the patch table and the filter × QE × IR-cut curves
     page = (d / "index.html").read_text()
     assert page.count("<tr><td>") >= 24

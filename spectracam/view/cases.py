@@ -51,6 +51,8 @@ class Case:
     responsivities: dict = field(default_factory=dict)  # channel → (B,) e⁻/photon; "QE × IR cut" too
     notes: list = field(default_factory=list)
     design: str = ""
+    #: The chart's patches the score measures: ``[name, x0, y0, x1, y1]`` in the files' pixels (x1, y1 exclusive).
+    patches: list = field(default_factory=list)
 
 
 def _stride(width: int, height: int, bands: int, share: float = 1.0) -> int:
@@ -207,6 +209,21 @@ def _chart_lab(case: Case, scene) -> np.ndarray | None:
     return lab[::case.stride, ::case.stride]
 
 
+def _chart_patches(scene) -> list:
+    """``[name, x0, y0, x1, y1]`` of each patch box the score measures (the probe names the patch under the
+    pointer), or ``[]`` for a scene that is not a chart."""
+    from spectracam.scene.reference import ChartReference
+
+    if scene is None or getattr(scene, "target", None) is not None and scene.target.textured:
+        return []
+    try:
+        ref = ChartReference.of(scene)
+    except Exception:  # noqa: BLE001 - a scene the page cannot lay out still shows its pixels, unnamed
+        return []
+    return [[str(name), int(c.start), int(r.start), int(c.stop), int(r.stop)] for name, (r, c) in zip(ref.names,
+                                                                                                      ref.boxes)]
+
+
 def load_case(name: str, radiance: Path | None, raw: Path | None, rendered: Path | None, share: float = 1.0) -> Case:
     """A case from its files (any of them may be missing); ``share``: its part of the page's budget
     (:func:`_stride`)."""
@@ -248,6 +265,8 @@ def load_case(name: str, radiance: Path | None, raw: Path | None, rendered: Path
                                   "(inside the patches only)")
         if truth is not None and truth.shape == case.rendered_lab.shape:
             case.images["error"] = np.linalg.norm(case.rendered_lab - truth, axis=-1).astype(np.float32)
+    recorded = (params or {}).get("scene") or (capture.scene if capture is not None else None)
+    case.patches = _chart_patches(_scene_of(recorded)) if recorded else []
     if case.stride > 1:
         case.notes.append(f"1 pixel in {case.stride} along each axis is shown and probed (the files hold "
                           f"{width} × {height})")

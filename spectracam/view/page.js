@@ -64,6 +64,7 @@
         channels: c.channels, dn: slice(c.dn, k, c.channels.length),
         scene_lab: slice(c.scene_lab, k, 3), rendered_lab: slice(c.rendered_lab, k, 3),
         delta_e: c.error ? c.error[k] : null,
+        patch: patchAt(c, col * s, row * s),
       };
       this.last = out;
       this.show(out, c);
@@ -85,13 +86,25 @@
       const lab = (v) => v ? `${fmt(v[0], 2)}, ${fmt(v[1], 2)}, ${fmt(v[2], 2)}` : "–";
       const dn = p.dn ? p.channels.map((ch, i) => Number.isNaN(p.dn[i]) ? "" : `${ch} ${fmt(p.dn[i], 0)}`)
                           .filter((t) => t).join(", ") : "–";
+      const csv = p.spectrum ? `<a download="spectrum_${p.x}_${p.y}.csv" href="data:text/csv;charset=utf-8,` +
+        `${encodeURIComponent(spectracam.csv(p))}">spectrum as CSV</a>` : "";
       info.text = `<table class="probe"><tr><th>case</th><td>${p.case}</td></tr>` +
         `<tr><th>pixel (x, y)</th><td>${p.x}, ${p.y}</td></tr>` +
+        `<tr><th>patch</th><td>${p.patch || "–"}</td></tr>` +
         `<tr><th>digital numbers</th><td>${dn}</td></tr>` +
         `<tr><th>scene L*, a*, b*</th><td>${lab(p.scene_lab)}</td></tr>` +
         `<tr><th>rendered L*, a*, b*</th><td>${lab(p.rendered_lab)}</td></tr>` +
         `<tr><th>ΔE*ab</th><td>${fmt(p.delta_e, 2)}</td></tr>` +
-        `<tr><th>radiance at 550 nm</th><td>${p.spectrum ? fmt(interp(c.wavelengths_nm, p.spectrum, 550), 5) + " W·m⁻²·sr⁻¹·nm⁻¹" : "– (no radiance.exr)"}</td></tr></table>`;
+        `<tr><th>radiance at 550 nm</th><td>${p.spectrum ? fmt(interp(c.wavelengths_nm, p.spectrum, 550), 5) + " W·m⁻²·sr⁻¹·nm⁻¹" : "– (no radiance.exr)"}</td></tr></table>` + csv;
+    },
+
+    // The probed pixel's spectrum as CSV: one header row, one band a line (the file's float32 values).
+    csv: function (p) {
+      p = p || this.last;
+      if (!p || !p.spectrum) return "";
+      const lines = ["wavelength_nm,radiance_W_m2_sr_nm"];
+      p.wavelengths_nm.forEach((w, i) => lines.push(`${w},${p.spectrum[i]}`));
+      return lines.join("\n") + "\n";
     },
 
     // Show case i: its images in the linked figures, its camera's responsivities.
@@ -119,6 +132,14 @@
       return true;
     },
   };
+
+  // The name of the chart patch whose scored box holds pixel (x, y) of the files, or null.
+  function patchAt(c, x, y) {
+    for (const [name, x0, y0, x1, y1] of (c.patches || [])) {
+      if (x >= x0 && x < x1 && y >= y0 && y < y1) return name;
+    }
+    return null;
+  }
 
   function interp(xs, ys, x) {
     if (!xs.length) return NaN;

@@ -70,7 +70,8 @@ def case_json(case: Case) -> dict:
             "wavelengths_nm": [float(w) for w in case.wavelengths_nm], "channels": list(case.channels),
             "colours": curve_colours(case), "responsivities": case.responsivities, "notes": case.notes,
             "spectra": _b64(case.spectra), "dn": _b64(case.dn), "scene_lab": _b64(case.scene_lab),
-            "rendered_lab": _b64(case.rendered_lab), "error": _b64(case.images.get("error"))}
+            "rendered_lab": _b64(case.rendered_lab), "error": _b64(case.images.get("error")),
+            "patches": case.patches}
 
 
 def _image_data(case: Case, role: str) -> dict:
