@@ -288,6 +288,17 @@ def _figures_html(c: Contents) -> str:
     return "".join(parts)
 
 
+def _missing_spectra(cases: list[Case]) -> list[str]:
+    """The note at the top of a page whose cases carry no radiance.exr (issue 39: said first, not only in each
+    case's notes far below)."""
+    bare = [case for case in cases if any(n.startswith("no radiance.exr") for n in case.notes)]
+    if not bare:
+        return []
+    return [f"<p class=missing><b>No spectrum in the probe for {len(bare)} of {len(cases)} cases:</b> they carry no "
+            "radiance.exr (a paper run writes it with <code>--save-cubes</code>), so their scene colours are the chart "
+            "reference's patch colours, inside the patches only.</p>"]
+
+
 def build_page(c: Contents, cases: list[Case]) -> str:
     """The whole page as one HTML string."""
     from bokeh.embed import components
@@ -298,11 +309,7 @@ def build_page(c: Contents, cases: list[Case]) -> str:
             f"<p class=note>written by spectracam {__version__} from {html.escape(str(c.directory))}; "
             "see docs/metrics.md for every score's definition</p>"]
     script = ""
-    bare = [case for case in cases if any(n.startswith("no radiance.exr") for n in case.notes)]
-    if bare:   # said at the top, not only in each case's notes far below (issue 39)
-        body.append(f"<p class=missing><b>No spectrum in the probe for {len(bare)} of {len(cases)} cases:</b> they "
-                    "carry no radiance.exr (a paper run writes it with <code>--save-cubes</code>), so their scene "
-                    "colours are the chart reference's patch colours, inside the patches only.</p>")
+    body += _missing_spectra(cases)
     if cases:
         script, div = components(interactive(cases))
         body += ["<h2>images and pixel probe</h2>",

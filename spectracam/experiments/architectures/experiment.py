@@ -39,6 +39,8 @@ conversion was not fitted on, at each target's viewing geometry.
 """
 from __future__ import annotations
 
+import re
+
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TypedDict
@@ -56,8 +58,8 @@ from spectracam.experiments.paper.experiment import PaperExperiment, calibrated_
 from spectracam.evaluation.usability import NO_USABLE_IMAGE, UsabilitySpec
 
 __all__ = ["LIGHT_FACTORS", "NATURAL_SCENES", "SEEDS", "WINNER_METRICS", "ArchitecturesResult", "ArchitecturesRun",
-           "case", "designs", "developed_case", "judge", "natural_case", "run_architectures", "run_natural",
-           "time_limit_s", "winners", "write_architectures_outputs"]
+           "case", "designs", "developed_case", "judge", "natural_case", "restamped", "run_architectures",
+           "run_natural", "time_limit_s", "winners", "write_architectures_outputs"]
 
 #: Light levels, as fractions of the paper's (its calibrated white luminance).
 LIGHT_FACTORS = (1.0, 0.1, 0.01)
@@ -251,16 +253,33 @@ def run_architectures(run: ArchitecturesRun, renderer: str = "mitsuba", use_cach
              f"({time.perf_counter() - t1:.1f} s)")
     if spacetime:
         base = exp.base.replace(illuminant=IlluminantSpec("blackbody", exp.calibration_temperature_K, None, level))
-        extra["space"] = run_space(base, renderer, run.quick, log, progress=progress)
+        sub_log = restamped(step) if log is not None else None   # one clock for the whole run
+        extra["space"] = run_space(base, renderer, run.quick, sub_log, progress=progress)
         step(f"space: {len(extra['space']['rows'])} designs on the slanted edge and the Siemens star "
              f"({extra['space']['wall_s']:.1f} s)")
-        extra["time"] = run_time(base, renderer, run.quick, log, progress=progress)
+        extra["time"] = run_time(base, renderer, run.quick, sub_log, progress=progress)
         step(f"time: {len({r['design'] for r in extra['time']['rows']})} designs × "
              f"{len({r['speed_px_per_ms'] for r in extra['time']['rows']})} speeds ({extra['time']['wall_s']:.1f} s)")
         extra["spacetime_winners"] = spacetime_winners(extra["space"], extra["time"])
     return {"parameters": _run_parameters(run, renderer, level, seeds),
             "rows": rows, "winners": winners(rows), **extra,
             "timings_s": {"chart": t_chart, "total": time.perf_counter() - t0}}
+
+
+#: The clock a sub-run (spatial, motion) stamps its own lines with, ``[  12.3 s] `` from its own start.
+_OWN_CLOCK = re.compile(r"^\[\s*[\d.]+ s\] ")
+
+
+def restamped(step):
+    """A log for the space and time sub-runs whose lines carry this run's clock (``step``) instead of their own,
+    which restarts at 0 in each: the command's log reads as one clock (issue 39).
+
+    >>> lines = []
+    >>> restamped(lambda m: lines.append("[ 99.0 s] " + m))("[   1.5 s] 10 µm, f/1.4, edge: 8 designs scored")
+    >>> lines
+    ['[ 99.0 s] 10 µm, f/1.4, edge: 8 designs scored']
+    """
+    return lambda msg: step(_OWN_CLOCK.sub("", msg))
 
 
 def _chart_rows(run: ArchitecturesRun, level: float, seeds: list, renderer: str, use_cache: bool, step, log,
