@@ -12,10 +12,11 @@ Z = time(c) / time(a).  Issue 10 targets on the 2-core machine: X >= 40, Y >= 2.
 
 Unless ``--no-memory``, it then runs a ``simulate``-like pipeline (analytic render -> capture ->
 score) at the same size in a fresh process and reports each stage's peak memory relative to the
-float32 cube (target <= 1.5x), and the score's time against the capture's: the scene's first score (its truth's
-S-CIELAB computed) and another capture's (the truth memoised, as every later capture of a scene): tracemalloc's peak (every NumPy allocation; numba's and BLAS's
+float32 cube (target <= 1.5x): tracemalloc's peak (every NumPy allocation; numba's and BLAS's
 internal buffers are not traced) and the resident-set high-water mark (VmHWM) above the resident set
-once spectracam is loaded.
+once spectracam is loaded.  It also prints the score's time against the capture's, for the scene's first
+score (its truth's S-CIELAB computed) and for another capture of it (the truth memoised, as for every later
+capture of a scene; issue 38's target: <= 2).
 ``--all-fpn`` also switches on PRNU, DSNU and column FPN (the paper has none).
 """
 from __future__ import annotations
