@@ -60,9 +60,9 @@ _STATE: dict = {}
 
 def _kernels():
     """The compiled colour kernels' module, or None (numba missing or broken, or ``SPECTRACAM_FUSED=0``)."""
-    import os
+    from spectracam.core.parallel import fused_enabled
 
-    if os.environ.get("SPECTRACAM_FUSED", "1").strip().lower() in ("0", "no", "false", "off", "numpy"):
+    if not fused_enabled():
         return None
     if "module" not in _STATE:
         try:

@@ -5,9 +5,15 @@ from __future__ import annotations
 
 import os
 
-__all__ = ["njit_cached", "pool", "run_bands", "threads"]
+__all__ = ["fused_enabled", "njit_cached", "pool", "run_bands", "threads"]
 
 _STATE: dict = {}
+
+
+def fused_enabled() -> bool:
+    """Whether the compiled kernels may run: ``SPECTRACAM_FUSED`` (read at every call) is not 0, no, false, off or
+    numpy.  Off, the sensor takes its NumPy steps and the score colour-science's and colour-demosaicing's formulas."""
+    return os.environ.get("SPECTRACAM_FUSED", "1").strip().lower() not in ("0", "no", "false", "off", "numpy")
 
 
 def threads() -> int:

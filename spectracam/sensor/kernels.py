@@ -29,12 +29,10 @@ hands the same numbers to :func:`~spectracam.sensor.fixed_pattern`; without numb
 """
 from __future__ import annotations
 
-import os
-
 import numpy as np
 
 from spectracam.core.parallel import pool as _pool  # noqa: F401  (the pool, for the read-out's kernels)
-from spectracam.core.parallel import run_bands, threads
+from spectracam.core.parallel import fused_enabled, run_bands, threads
 
 __all__ = ["LANES", "CounterRNG", "SpectralRates", "available", "expose", "normal_pair_np", "philox_np",
            "record", "stream_key", "threads", "uniform_np"]
@@ -46,7 +44,7 @@ _STATE: dict = {}
 
 def _numba():
     """The numba kernels module, or None (numba missing, broken, or ``SPECTRACAM_FUSED=0``)."""
-    if os.environ.get("SPECTRACAM_FUSED", "1").strip().lower() in ("0", "no", "false", "off", "numpy"):
+    if not fused_enabled():
         return None
     if "module" not in _STATE:
         try:
