@@ -130,3 +130,22 @@ def test_a_chart_score_is_the_same_without_the_kernels(fused, method, monkeypatc
         assert pa.s_cielab_mean == pytest.approx(pb.s_cielab_mean, rel=1e-9)
     np.testing.assert_allclose(a.delta_e_map, b.delta_e_map, rtol=1e-6, equal_nan=True)
     assert np.isnan(a.delta_e_map).sum() == np.isnan(b.delta_e_map).sum() > 0
+
+
+@pytest.mark.parametrize("n", [1, 2, 7, 1000, 100_000])
+def test_the_p95_of_a_map_is_nanpercentiles(n):
+    """The summary's 95th percentiles (ΔE and S-CIELAB maps, NaN off the scored pixels) drop the NaNs by one mask
+    and take ``np.percentile``: exactly ``np.nanpercentile``'s value, and NaN for a map with nothing scored."""
+    import warnings
+
+    from spectracam.evaluation.score import _p95
+
+    rng = np.random.default_rng(n)
+    a = rng.gamma(2.0, 1.5, (n, 3)).astype(np.float32)
+    a[rng.random((n, 3)) < 0.6] = np.nan
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)   # nanpercentile of all-NaN warns; _p95 returns NaN quietly
+        want = float(np.nanpercentile(a, 95))
+    got = _p95(a)
+    assert (np.isnan(want) and np.isnan(got)) or got == want
+    assert np.isnan(_p95(np.full((4, 5), np.nan, np.float32)))
