@@ -17,7 +17,8 @@ from spectracam._version import __version__  # noqa: E402
 _FACE = {
     "CameraSpec": "spectracam.camera", "RawCapture": "spectracam.camera.capture",
     "capture": "spectracam.pipeline", "render": "spectracam.pipeline", "score": "spectracam.pipeline",
-    "simulate": "spectracam.pipeline", "ChartReference": "spectracam.scene.reference",
+    "simulate": "spectracam.pipeline", "render_planes": "spectracam.pipeline", "ChannelPlanes": "spectracam.render",
+    "ChartReference": "spectracam.scene.reference",
     "RadianceCube": "spectracam.render", "Scene": "spectracam.pipeline.scene_file",
     "load_scene": "spectracam.pipeline.scene_file", "parse_scene": "spectracam.pipeline.scene_file",
     "ChartScore": "spectracam.evaluation.score", "SensorSpec": "spectracam.sensor",

@@ -1217,12 +1217,36 @@ def case_field(rng, d: Path):
     return _with_fault(rng, cmd, bad)
 
 
+def case_channel_planes(rng, d: Path):
+    """Issue 38: ``simulate --channel-planes`` on good chart scenes (analytic, Mitsuba, another design) under a full
+    disk, SIGTERM or a memory limit, and on what it refuses (a textured target, light groups, a bad value beside it)."""
+    text, _ = _lights_scene(rng)
+    (d / "hdr.toml").write_text(text)
+    sim = ["simulate", "s.toml", "-o", "out", "--quiet", "--channel-planes"]
+    cases = [
+        (sim + ["--renderer", "analytic"], False),
+        (sim + ["--renderer", "mitsuba"], False),
+        (sim + ["--renderer", "analytic", "--arch", rng.choice(["stacked", "fsc", "rgbw", "cmy"])], False),
+        (sim + ["--renderer", "analytic", "--set", 'target.kind="photo"'], True),
+        (["simulate", "hdr.toml", "-o", "out", "--quiet", "--channel-planes", "--renderer", "analytic"], True),
+        (sim + ["--renderer", rng.choice(["nosuch", ""])], True),
+        (sim + ["--renderer", "analytic", "--set", f"image.width={rng.choice(['0', '-1', 'nan'])}"], True),
+        (sim + ["--renderer", "analytic", "--set", "optics.relative_illumination='cos4'"], True),
+        (sim + ["--channel-planes=yes"], True),
+    ]
+    cmd, bad = rng.choice(cases)
+    if not bad and rng.random() < 0.25:   # 6000 x 4500: the planes' run needs ~6.3 GiB, above a 4 GiB limit
+        return cmd + ["--set", "image.width=6000", "--set", "image.height=4500"], False, \
+            f"memory limit 4 GiB: {' '.join(cmd)}", {"address_space": 4 * 2**30}
+    return _with_fault(rng, cmd, bad)
+
+
 CASES = [case_damaged_file, case_scene_value, case_environment, case_garbage_text, case_camera_file, case_foreign_exr,
          case_new_commands, case_signal, case_full_disk, case_memory_limit, case_raw_attributes, case_journal,
          case_experiment_values, case_group_signal, case_scheduler_peer, case_read_only, case_reflectances,
          case_target, case_architectures, case_spacetime, case_design, case_view, case_developed,
          case_white_balance, case_user_faults, case_valid, case_physical, case_honest_scores, case_dynamic_range,
-         case_field]
+         case_field, case_channel_planes]
 
 
 def one(i: int, seed: int, base: Path, cycle: bool = False, classes=None) -> tuple[str, dict]:

@@ -16,10 +16,13 @@ import numpy as np
 
 from spectracam.architecture.base import MosaicLayout, PlanesLayout
 from spectracam.camera import CameraSpec, band_weights
+from spectracam.core.errors import SpectracamError
+from spectracam.render.cube import ChannelPlanes
 from spectracam.sensor.exposure import exposure_times_s
 from spectracam.sensor.kernels import SpectralRates
 
-__all__ = ["RawCapture", "capture", "capture_time_s", "field_radiance"]
+__all__ = ["PLANES_WEIGHT_RTOL", "RawCapture", "capture", "capture_time_s", "check_planes_camera",
+           "check_planes_capturable", "field_radiance"]
 
 
 @dataclass
@@ -79,6 +82,41 @@ def _rates(radiance: np.ndarray, grid, camera: CameraSpec, weights: np.ndarray):
     return field_rates(radiance, grid, camera, maps)
 
 
+#: How closely a :class:`ChannelPlanes`' weights must be the capturing camera's band weights (relative, per
+#: element against the largest): they were computed by the same function, so any camera difference shows far above.
+PLANES_WEIGHT_RTOL = 1e-6
+
+
+def check_planes_capturable(camera: CameraSpec) -> None:
+    """Refuse, in one line naming the setting, a camera whose channel planes cannot stand for its cube: an off-axis
+    field (relative illumination, an oblique chief ray, an image circle) or the pixel's angle response (microlens,
+    crosstalk) weight each pixel's spectrum by its place in the field (:func:`_rates`)."""
+    o, px = camera.optics, camera.pixel
+    found = [f"optics.relative_illumination = {o.relative_illumination!r}"] if o.relative_illumination != "none" else []
+    found += [f"optics.chief_ray = {o.chief_ray!r}"] if o.chief_ray != "linear" else []
+    found += [f"optics.cra_corner_deg = {o.cra_corner_deg:g}"] if o.cra_corner_deg != 0 else []
+    found += [f"optics.image_circle_diameter_mm = {o.image_circle_diameter_mm:g}"] \
+        if o.image_circle_diameter_mm is not None else []
+    found += [f"pixel.{k} = {getattr(px, k)!r}" for k in ("microlens", "optical_crosstalk", "electrical_crosstalk")
+              if getattr(px, k)]
+    if found or px.any_on or not o.on_axis:
+        raise SpectracamError(f"channel planes: {', '.join(found) or 'the field or the pixel angle response'} weights "
+                              "each pixel's spectrum by its place; allowed: an on-axis camera without a pixel angle "
+                              "response; render the radiance cube instead")
+
+
+def check_planes_camera(planes: ChannelPlanes, camera: CameraSpec) -> None:
+    """Refuse channel planes integrated for another camera than ``camera`` (other filters, optics or pixel: its band
+    weights differ), or a camera whose pixels see more than one spectrum's integral (the pixel's angle response, an
+    off-axis field): those need each pixel's spectrum, i.e. the cube."""
+    check_planes_capturable(camera)
+    want = band_weights(camera, planes.grid).astype(np.float64)
+    got = np.asarray(planes.weights, np.float64)
+    if got.shape != want.shape or np.abs(got - want).max() > PLANES_WEIGHT_RTOL * np.abs(want).max():
+        raise SpectracamError(f"channel planes: integrated with weights {got.shape} for another camera than the one "
+                              f"capturing them ({camera.design}, {want.shape}); render them for this camera")
+
+
 def capture_time_s(arch, times_s: np.ndarray, sensor) -> float:
     """How long the capture takes, s: the architecture's sum or maximum of its exposures (paper 2), each exposure
     as long as the sensor's read-out takes for it (a bracketed exposure: its frames together)."""
@@ -93,7 +131,8 @@ def capture_time_s(arch, times_s: np.ndarray, sensor) -> float:
 def capture(cube, camera: CameraSpec, seed: int, metering_box: tuple[slice, slice] | None = None, *,
             white_radiance: np.ndarray | None = None, metering: dict | None = None,
             time_limit_s: float | None = None) -> RawCapture:
-    """Capture a :class:`~spectracam.render.RadianceCube` with ``camera``; exposure is metered on
+    """Capture a :class:`~spectracam.render.RadianceCube` (or :class:`~spectracam.render.ChannelPlanes` rendered
+    for ``camera``: its rates, :func:`check_planes_camera`) with ``camera``; exposure is metered on
     the mean rates of the pixels in ``metering_box`` (the white patch, paper 4.5) or, for any other
     white (:mod:`spectracam.sensor.metering`), on the rates of its radiance ``white_radiance`` ``(B,)``,
     recorded as ``metering``; a camera that meters itself (``capture.metering`` average or percentile,
@@ -101,9 +140,16 @@ def capture(cube, camera: CameraSpec, seed: int, metering_box: tuple[slice, slic
     limit) shortens its metered exposures in proportion so the capture lasts at most that long; ``seed`` fixes every
     random draw (fixed pattern and temporal noise)."""
     arch = camera.architecture()
-    weights = band_weights(camera, cube.grid)
-    radiance = field_radiance(cube.radiance, camera)
-    rates = _rates(radiance, cube.grid, camera, weights)
+    if isinstance(cube, ChannelPlanes):   # the camera's rates themselves: identity weights (issue 38)
+        check_planes_camera(cube, camera)
+        radiance = rates = cube.planes
+        weights = np.eye(rates.shape[-1], dtype=np.float32)
+        if white_radiance is not None:
+            white_radiance = np.asarray(white_radiance, np.float64) @ np.asarray(cube.weights, np.float64)
+    else:
+        weights = band_weights(camera, cube.grid)
+        radiance = field_radiance(cube.radiance, camera)
+        rates = _rates(radiance, cube.grid, camera, weights)
     if camera.capture.metering not in ("auto", "white_patch"):   # the camera meters its own preview (issue 33)
         from spectracam.sensor.metering import metered_white_rates, metering_record
 
@@ -113,6 +159,8 @@ def capture(cube, camera: CameraSpec, seed: int, metering_box: tuple[slice, slic
         white_rate = np.asarray(white_radiance, np.float64) @ weights.astype(np.float64)
     elif isinstance(rates, SpectralRates):
         white_rate = rates.mean(*metering_box)
+    elif isinstance(cube, ChannelPlanes):                # every pixel of the box, as SpectralRates.mean
+        white_rate = cube.planes[metering_box].mean(axis=(0, 1), dtype=np.float64)
     else:                                                # each pixel's rate at its place in the field
         from spectracam.camera.field import metered_field_rates
 

@@ -15,38 +15,40 @@ from spectracam.camera.capture import capture as capture_stage
 from spectracam.processing.color import ProcessingSpec
 from spectracam.core.errors import ArgumentTypeError, SpectracamError, expect, expect_integer
 from spectracam.scene.reference import ChartReference
-from spectracam.render import RENDERERS, RadianceCube
+from spectracam.render import RENDERERS, ChannelPlanes, RadianceCube
 from spectracam.render import render as render_stage
 from spectracam.pipeline.scene_file import Scene
 from spectracam.evaluation.score import ChartScore
 from spectracam.evaluation.score import score as score_stage
 from spectracam.sensor import SensorSpec
 
-__all__ = ["BOTH_WAYS_FIELDS", "MEMORY_PER_CUBE", "RADIANCE_MATCH_TOLERANCE", "STAND_IN_SCENE", "Scene",
-           "both_ways", "camera_processing", "capture", "capture_spectral_image", "check_bytes",
-           "check_cube_matches", "check_memory", "memory_available", "render", "scene_of", "score",
-           "score_row", "simulate", "stand_in_scene"]
+__all__ = ["BOTH_WAYS_FIELDS", "MEMORY_PER_CUBE", "MEMORY_PER_PIXEL_PLANES", "RADIANCE_MATCH_TOLERANCE",
+           "STAND_IN_SCENE", "Scene", "both_ways", "camera_processing", "capture", "capture_spectral_image",
+           "check_bytes", "check_cube_matches", "check_memory", "check_planes_match", "memory_available", "render",
+           "render_planes", "scene_of", "score", "score_row", "simulate", "stand_in_scene"]
 
 
 def scene_of(obj, what: str = "cube") -> Scene:
     """The scene a cube or capture records."""
-    recorded = obj.metadata.get("scene") if isinstance(obj, RadianceCube) else getattr(obj, "scene", None)
+    recorded = obj.metadata.get("scene") if isinstance(obj, (RadianceCube, ChannelPlanes)) \
+        else getattr(obj, "scene", None)
     if recorded is None:
         raise SpectracamError(f"{what}: records no scene, so the chart (for metering and scoring) is unknown; "
                               "pass scene=")
     return Scene.from_dict(recorded, source=f"the scene recorded in the {what}")
 
 
-def capture(cube: RadianceCube, camera: CameraSpec | None = None, seed: int | None = None, *,
+def capture(cube: RadianceCube | ChannelPlanes, camera: CameraSpec | None = None, seed: int | None = None, *,
             scene: Scene | None = None, sensor: SensorSpec | None = None, design: str | None = None,
             white=None) -> RawCapture:
     """Capture a cube: expose the camera's sensor to it and record digital numbers.
 
     Parameters
     ----------
-    cube : RadianceCube
+    cube : RadianceCube or ChannelPlanes
         A spectral image from any other tool (no recorded scene, no ``scene=``) is captured too: the camera is
         ``camera`` (default: spectracam's), the scene :func:`stand_in_scene`; it records no scene (nothing to score).
+        Channel planes (:func:`render_planes`): by their camera, on the white patch (:func:`_capture_planes`).
     camera, seed, scene, sensor, design, white : optional
         The camera, seed and chart default to those of ``scene`` (default: the scene the cube records); ``sensor``
         and ``design`` (``"arch/scheme"``) replace the camera's parts; the exposure is metered on ``white``
@@ -62,12 +64,14 @@ def capture(cube: RadianceCube, camera: CameraSpec | None = None, seed: int | No
         An argument of the wrong type (ArgumentTypeError), or a cube whose bands or pixels contradict its scene."""
     from spectracam.sensor.metering import metered_radiance, parse_white
 
-    expect(cube, RadianceCube, "capture(cube)")
+    expect(cube, (RadianceCube, ChannelPlanes), "capture(cube)")
     expect(camera, CameraSpec, "capture(camera)", optional=True)
     expect_integer(seed, "capture(seed)", optional=True)
     expect(scene, Scene, "capture(scene)", optional=True)
     expect(sensor, SensorSpec, "capture(sensor)", optional=True)
     expect(design, str, "capture(design)", "an 'architecture/exposure' name such as 'fsc/optimal'", optional=True)
+    if isinstance(cube, ChannelPlanes):
+        return _capture_planes(cube, camera, seed, scene, sensor, design, white)
     if cube.metadata.get("renderer") is None:  # made by hand, not rendered or read (both checked)
         cube.check()
     foreign = scene is None and cube.metadata.get("scene") is None
@@ -76,15 +80,7 @@ def capture(cube: RadianceCube, camera: CameraSpec | None = None, seed: int | No
     else:
         scene = scene or scene_of(cube)
         check_cube_matches(cube, scene)
-    camera = camera or scene.camera
-    if not foreign:   # capture.metering "auto": the metering of processing.camera (spectracam.processing)
-        from spectracam.processing import metered_camera
-
-        camera = metered_camera(camera, scene.processing)
-    if sensor is not None:
-        camera = camera.replace(sensor=sensor)
-    if design is not None:
-        camera = camera.with_design(design)
+    camera = _capturing_camera(camera or scene.camera, None if foreign else scene, sensor, design)
     if foreign:
         return capture_spectral_image(cube, scene.replace(camera=camera), seed, white)
     seed = scene.render.seed if seed is None else seed
@@ -97,6 +93,37 @@ def capture(cube: RadianceCube, camera: CameraSpec | None = None, seed: int | No
         return capture_stage(cube, camera, seed, ChartReference.of(scene).white_box)
     return capture_stage(cube, camera, seed, white_radiance=metered_radiance(cube, white, scene),
                          metering=white.to_dict())
+
+
+def _capture_planes(planes: ChannelPlanes, camera, seed, scene, sensor, design, white) -> RawCapture:
+    """:func:`capture` of channel planes: the scene they record (or ``scene``), checked against them; the camera
+    as for a cube (the stage refuses one they were not rendered for); metered on the chart's white patch only
+    (any other white is found in the spectra, which the planes no longer hold)."""
+    scene = scene or scene_of(planes, "channel planes")
+    check_planes_match(planes, scene)
+    from spectracam.sensor.metering import parse_white
+
+    if white is not None and parse_white(white, "white").kind != "patch":
+        raise SpectracamError(f"white = {white!r}: channel planes are metered on the chart's white patch only "
+                              "('patch'); capture the radiance cube to meter another white")
+    camera = _capturing_camera(camera or scene.camera, scene, sensor, design)
+    seed = scene.render.seed if seed is None else seed
+    return capture_stage(planes, camera, seed, ChartReference.of(scene).white_box)
+
+
+def _capturing_camera(camera: CameraSpec, scene: Scene | None, sensor, design) -> CameraSpec:
+    """The camera that captures: with a chart ``scene``, its ``capture.metering = "auto"`` made the metering of
+    ``processing.camera`` (:func:`spectracam.processing.metered_camera`); ``sensor`` and ``design`` replace its
+    parts."""
+    if scene is not None:
+        from spectracam.processing import metered_camera
+
+        camera = metered_camera(camera, scene.processing)
+    if sensor is not None:
+        camera = camera.replace(sensor=sensor)
+    if design is not None:
+        camera = camera.with_design(design)
+    return camera
 
 
 def capture_spectral_image(cube: RadianceCube, stand_in: Scene, seed: int | None = None, white=None) -> RawCapture:
@@ -202,6 +229,33 @@ def check_cube_matches(cube: RadianceCube, scene: Scene, source: str = "cube", r
                               "another scene is not captured as this one")
 
 
+def check_planes_match(planes: ChannelPlanes, scene: Scene, source: str = "channel planes") -> None:
+    """Refuse channel planes whose size, bands or pixels contradict ``scene``: each patch's mean (on at most
+    :data:`PATCH_CHECK_SAMPLES`² of its pixels) must be the chart reference's radiance through the planes' weights
+    within :data:`RADIANCE_MATCH_TOLERANCE` (rms over the channels, relative), as :func:`check_cube_matches` holds
+    a cube's spectra."""
+    h, w, n = planes.planes.shape
+    if (w, h) != (scene.image.width, scene.image.height):
+        raise SpectracamError(f"{source}: {w}x{h} pixels, but its scene says {scene.image.width}x{scene.image.height}")
+    weights = np.asarray(planes.weights, np.float64)
+    if weights.shape != (len(scene.grid), n) or not np.allclose(planes.wavelengths_nm, scene.grid.centres_nm,
+                                                                 rtol=0, atol=1e-6):
+        raise SpectracamError(f"{source}: weights {weights.shape} over {len(planes.wavelengths_nm)} bands, but its "
+                              f"scene's grid has {len(scene.grid)} bands and the planes {n} channels")
+    if scene.target.textured:
+        raise SpectracamError(f"{source}: channel planes are rendered for a chart scene only")
+    ref = ChartReference.of(scene)
+    want = ref.patch_radiance @ weights                                           # (24, N)
+    got = np.stack([planes.planes[_sampled(r), _sampled(c)].mean(axis=(0, 1), dtype=np.float64) for r, c in ref.boxes])
+    err = np.sqrt(np.mean((got - want) ** 2, axis=1) / np.maximum(np.mean(want ** 2, axis=1), 1e-300))
+    if err.max() > RADIANCE_MATCH_TOLERANCE:
+        p = int(err.argmax())
+        raise SpectracamError(f"{source}: its pixels contradict the scene it records ({scene.illuminant.label}, "
+                              f"{scene.chart.dataset}): patch {p} ({ref.names[p]}) differs by {100 * err[p]:.1f} % "
+                              f"rms from its radiance through the weights, at most {100 * RADIANCE_MATCH_TOLERANCE:g} "
+                              "% is allowed")
+
+
 #: How much memory a run needs, in float32 radiance cubes: the cube, the renderer's film, the
 #: capture's (H, W, 3) float32 planes and scoring's float64 images.  An independent measurement of
 #: render → capture → score found a peak of 3.2 cubes (issue 18; the earlier 2.5 was too low): 3.5.
@@ -241,12 +295,20 @@ def check_bytes(need: float, what: str, advice: str) -> None:
         raise SpectracamError(f"{what}: needs about {need / 2**30:.1f} GiB, {avail / 2**30:.1f} GiB {why}; {advice}")
 
 
-def check_memory(scene: Scene, copies: float = 1.0, what: str = "") -> None:
+def check_memory(scene: Scene, copies: float = 1.0, what: str = "", channel_planes: bool = False) -> None:
     """Refuse, before any work, a scene whose cubes (``copies`` of them held at once) would not fit in
-    the memory available to this process."""
-    need = scene.image.width * scene.image.height * len(scene.grid) * 4 * MEMORY_PER_CUBE * copies
-    check_bytes(need, f"image = {scene.image.width}x{scene.image.height} with {len(scene.grid)} bands{what}",
-                "use a smaller image or fewer bands")
+    the memory available to this process; with ``channel_planes`` (:func:`render_planes`), what a run that holds the
+    camera's planes instead of the cube needs (:data:`MEMORY_PER_PIXEL_PLANES`)."""
+    px = scene.image.width * scene.image.height
+    need = px * (MEMORY_PER_PIXEL_PLANES if channel_planes else len(scene.grid) * 4 * MEMORY_PER_CUBE) * copies
+    check_bytes(need, f"image = {scene.image.width}x{scene.image.height} with {len(scene.grid)} bands{what}"
+                + (" in channel planes" if channel_planes else ""), "use a smaller image or fewer bands")
+
+
+#: Bytes per pixel a run that renders into channel planes needs at its peak: the planes, the captures of both cameras
+#: and the score's float64 images, which dominate.  ``simulate d65 --channel-planes`` at 2000 × 1500 peaked 231 B/px
+#: above its resident set once loaded (``/usr/bin/time -f %M``; the cube's run 343 B/px, 2.9 cubes of 30 bands).
+MEMORY_PER_PIXEL_PLANES = 300
 
 
 def score(raw: RawCapture, scene: Scene | None = None, processing: ProcessingSpec | None = None,
@@ -340,7 +402,56 @@ def render(scene: Scene, renderer: str = "mitsuba", progress: bool = False, log=
     return render_stage(scene, renderer, progress=progress, log=log)
 
 
-def simulate(scene: Scene, renderer: str = "mitsuba", seed: int | None = None):
+def render_planes(scene: Scene, renderer: str = "mitsuba", progress: bool = False, log=None,
+                  camera: CameraSpec | None = None) -> ChannelPlanes:
+    """Render ``scene`` straight into one camera's channel planes: its photo-electron rates at every pixel, each band
+    integrated as it is rendered, so the ``(H, W, B)`` cube is never held (issue 38; ``N/B`` of its memory).
+
+    Parameters
+    ----------
+    scene : Scene
+        A chart scene of one light.
+    renderer : {"mitsuba", "analytic"}
+        The renderer, as for :func:`render`.
+    progress : bool
+        Show a progress bar (Mitsuba: over the bands).
+    log : callable, optional
+        A function of one string that receives one-line notices.
+    camera : CameraSpec, optional
+        The camera whose band weights (:func:`spectracam.camera.band_weights`) the bands are integrated against
+        (default: the scene's); :func:`capture` refuses the planes for any other.
+
+    Returns
+    -------
+    ChannelPlanes
+        ``(H, W, N)`` float32 photo-electron rates, e⁻/s, recording the scene in ``metadata["scene"]``.
+
+    Raises
+    ------
+    SpectracamError
+        An argument of the wrong type, a renderer other than mitsuba or analytic, a textured target or a scene of
+        several light groups (they render a cube).
+
+    References
+    ----------
+    .. [Catrysse1999] see docs/references.md; section 3.3 (ρ_k = A·T_k·∫E_q(λ)·R_k(λ)dλ).
+    """
+    from spectracam.camera import band_weights
+    from spectracam.camera.capture import check_planes_capturable
+    from spectracam.render import render_planes as render_planes_stage
+
+    expect(scene, Scene, "render_planes(scene)")
+    expect(renderer, str, "render_planes(renderer)", "'mitsuba' or 'analytic'")
+    expect(camera, CameraSpec, "render_planes(camera)", optional=True)
+    camera = camera or scene.camera
+    check_planes_capturable(camera)   # before any work
+    planes = render_planes_stage(scene, band_weights(camera, scene.grid), renderer, progress=progress, log=log)
+    planes.metadata["channel_planes"] = {"channels": list(camera.architecture().layout.channels),
+                                         "camera": camera.to_dict(), "units": "e-/s (photo-electron rates)"}
+    return planes
+
+
+def simulate(scene: Scene, renderer: str = "mitsuba", seed: int | None = None, channel_planes: bool = False):
     """render → capture → score: ``(cube, raw, score)``.
 
     Parameters
@@ -351,11 +462,14 @@ def simulate(scene: Scene, renderer: str = "mitsuba", seed: int | None = None):
         A registered renderer's name, as for :func:`render`.
     seed : int, optional
         The capture's noise seed (default: the scene's).
+    channel_planes : bool
+        Render into the scene camera's channel planes (:func:`render_planes`) instead of the radiance cube: the
+        same capture for a tenth of the memory (30 bands, 3 channels); a chart scene of one light.
 
     Returns
     -------
-    tuple of (RadianceCube, RawCapture, ChartScore or TargetScore)
-        What :func:`render`, :func:`capture` and :func:`score` return.
+    tuple of (RadianceCube or ChannelPlanes, RawCapture, ChartScore or TargetScore)
+        What :func:`render` (or :func:`render_planes`), :func:`capture` and :func:`score` return.
 
     Raises
     ------
@@ -368,7 +482,8 @@ def simulate(scene: Scene, renderer: str = "mitsuba", seed: int | None = None):
     """
     expect(scene, Scene, "simulate(scene)")
     expect_integer(seed, "simulate(seed)", optional=True)
-    cube = render(scene, renderer)
+    expect(channel_planes, bool, "simulate(channel_planes)", "True or False")
+    cube = render_planes(scene, renderer) if channel_planes else render(scene, renderer)
     raw = capture(cube, seed=seed, scene=scene)
     return cube, raw, score(raw, scene)
 

@@ -8,9 +8,9 @@ other.  A new renderer is a function ``(scene, progress, log) → RadianceCube``
 from __future__ import annotations
 
 from spectracam.core.registry import Registry
-from spectracam.render.cube import VARIANTS, RadianceCube, RenderSpec
+from spectracam.render.cube import VARIANTS, ChannelPlanes, RadianceCube, RenderSpec
 
-__all__ = ["RENDERERS", "VARIANTS", "RadianceCube", "RenderSpec", "render"]
+__all__ = ["RENDERERS", "VARIANTS", "ChannelPlanes", "RadianceCube", "RenderSpec", "render", "render_planes"]
 
 #: Renderers: name → function ``(scene, progress: bool, log) → RadianceCube``.
 RENDERERS: Registry = Registry("renderer", "renderer")
@@ -43,3 +43,30 @@ def render(scene, renderer: str = "mitsuba", progress: bool = False, log=None) -
     cube = RENDERERS[renderer](scene, progress=progress, log=log)
     cube.metadata["scene"] = scene.to_dict()  # later stages find the chart geometry here
     return cube
+
+
+def render_planes(scene, weights, renderer: str = "mitsuba", progress: bool = False, log=None) -> ChannelPlanes:
+    """Render ``scene`` straight into :class:`ChannelPlanes` (``weights`` ``(B, N)``, e.g. a camera's band weights):
+    each band integrated into the planes as it is rendered, the ``(H, W, B)`` cube never held (issue 38).  A chart
+    scene of one light, by the ``mitsuba`` or ``analytic`` renderer; anything else is refused in one line."""
+    from spectracam.core.errors import SpectracamError
+
+    RENDERERS[renderer]   # an unknown renderer: the registry's one line
+    if renderer not in ("mitsuba", "analytic"):
+        raise SpectracamError(f"renderer = {renderer!r}: channel planes are rendered by 'mitsuba' or 'analytic' only")
+    if scene.target.textured:
+        raise SpectracamError(f"target = {scene.target.kind!r}: channel planes are rendered for a chart scene only; "
+                              "render the radiance cube")
+    if len(scene.lights) > 1:
+        raise SpectracamError(f"lights = {len(scene.lights)} light groups: channel planes are rendered for a scene of "
+                              "one light; render the radiance cube")
+    if renderer == "analytic":
+        from spectracam.render.analytic import render_analytic_planes
+
+        planes = render_analytic_planes(scene, weights)
+    else:
+        from spectracam.render.mitsuba import render_mitsuba
+
+        planes = render_mitsuba(scene, progress=progress, log=log, weights=weights)
+    planes.metadata["scene"] = scene.to_dict()
+    return planes

@@ -13,9 +13,9 @@ import numpy as np
 
 from spectracam.scene.chart import ChartSpec, View, patch_coverage
 from spectracam.scene.reference import ChartReference, chart_cells
-from spectracam.render.cube import RadianceCube
+from spectracam.render.cube import ChannelPlanes, RadianceCube
 
-__all__ = ["chart_block", "lights_metadata", "render_analytic"]
+__all__ = ["ANALYTIC_METADATA", "chart_block", "lights_metadata", "render_analytic", "render_analytic_planes"]
 
 
 def chart_block(chart: ChartSpec, patches: np.ndarray, surround: np.ndarray, width_px: int,
@@ -77,6 +77,21 @@ def render_analytic(scene) -> RadianceCube:
     else:
         ref = ChartReference.of(scene)
         cube = chart_block(scene.chart, ref.patch_radiance, ref.surround_radiance, W, H)
-    meta = {"renderer": "analytic", "variant": None, "samples_per_pixel": None, "seed": scene.render.seed,
-            **lights_metadata(scene)}
+    meta = {**ANALYTIC_METADATA, "seed": scene.render.seed, **lights_metadata(scene)}
     return RadianceCube(cube, np.asarray(scene.grid.centres_nm, float), meta)
+
+
+#: What an analytic render records of how it was made (the seed is the scene's).
+ANALYTIC_METADATA = {"renderer": "analytic", "variant": None, "samples_per_pixel": None}
+
+
+def render_analytic_planes(scene, weights: np.ndarray) -> ChannelPlanes:
+    """The chart's :class:`ChannelPlanes` in closed form: the pixels mix the patches' and the surround's integrated
+    values ``radiance @ weights`` (``(n_bands, N)``) as the cube's pixels mix their spectra, the mixing being linear;
+    no cube is made.  One light (a scene of several light groups renders a cube only)."""
+    ref = ChartReference.of(scene)
+    w = np.asarray(weights, np.float64)
+    planes = chart_block(scene.chart, ref.patch_radiance @ w, ref.surround_radiance @ w, scene.image.width,
+                         scene.image.height)
+    return ChannelPlanes(planes, np.asarray(scene.grid.centres_nm, float), w,
+                         {**ANALYTIC_METADATA, "seed": scene.render.seed})

@@ -9,7 +9,7 @@ import numpy as np
 from spectracam.core.spec import Spec
 from spectracam.core.spectra import WavelengthGrid
 
-__all__ = ["VARIANTS", "RadianceCube", "RenderSpec"]
+__all__ = ["VARIANTS", "ChannelPlanes", "RadianceCube", "RenderSpec"]
 
 #: Mitsuba variants a scene may ask for; ``auto`` picks the fastest that renders here.
 VARIANTS = ("auto", "llvm", "scalar", "cuda")
@@ -74,3 +74,29 @@ class RadianceCube:
                 raise SpectracamError(f"{source}: radiance is {what} in {int(count.sum())} values; first in band "
                                       f"{wl[b]:g} nm ({int(count[b])} pixels); a radiance is finite and ≥ 0")
         return self
+
+
+@dataclass
+class ChannelPlanes:
+    """The radiance integrated over wavelength against ``N`` weight functions while it is rendered, so the
+    ``(H, W, n_bands)`` cube is never held (issue 38): ``planes[..., k] = Σ_b L_b · weights[b, k]``, float32.
+
+    With a camera's band weights (:func:`spectracam.camera.band_weights`) the planes are its photo-electron rates
+    ``ρ_k = A·T_k·∫E_q(λ)·R_k(λ)dλ`` in e⁻/s at every pixel (paper 3.3), what the sensor's pass would compute from
+    the cube, for that one camera only.  ``weights`` is the ``(n_bands, N)`` matrix used; ``metadata`` records how
+    it was made, as a cube's does (``metadata["scene"]``, and ``metadata["channel_planes"]``: the camera's
+    channels).  A renderer accumulates each band's image into the planes as it is rendered: memory ``N/n_bands``
+    of the cube's."""
+
+    planes: np.ndarray
+    wavelengths_nm: np.ndarray
+    weights: np.ndarray
+    metadata: dict = field(default_factory=dict)
+
+    @property
+    def grid(self) -> WavelengthGrid:
+        return WavelengthGrid(np.asarray(self.wavelengths_nm, dtype=float))
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        return tuple(self.planes.shape)  # type: ignore[return-value]

@@ -39,7 +39,7 @@ from spectracam.core.errors import SpectracamError
 from spectracam.scene.illuminant import spectral_irradiance
 from spectracam.core.spectra import band_average, band_sample_points
 from spectracam.render.analytic import lights_metadata
-from spectracam.render.cube import RadianceCube
+from spectracam.render.cube import ChannelPlanes, RadianceCube
 
 __all__ = ["CAMERA_DISTANCE_MM", "PATCH_LIFT_MM", "POINTS_PER_BAND", "REFERENCE_WINDOW_NM", "VARIANT_NAMES",
            "WITHIN_BAND", "activate_variant", "band_scene", "band_seed", "build_lights_scene", "build_scene",
@@ -253,21 +253,32 @@ def load_scene(mi, d: dict):
     return mi_scene, mi.traverse(mi_scene)
 
 
-def render_bands(mi, mi_scene, params, scene, set_band, seed, progress: bool = False) -> np.ndarray:
+def render_bands(mi, mi_scene, params, scene, set_band, seed, progress: bool = False,
+                 weights: np.ndarray | None = None) -> np.ndarray:
     """The ``(H, W, B)`` float32 cube of ``scene``'s image and grid from the one compiled scene: per
     band ``b``, ``set_band(b)`` writes its spectra into ``params``, then one render with sampler seed
-    ``seed(b)``."""
+    ``seed(b)``.  With ``weights`` ``(B, N)``, each band's image is added into ``N`` planes as it is rendered
+    (``planes[k] += weights[b, k] · L_b``) and the ``(N, H, W)`` float32 planes are returned: no cube is held
+    (:class:`spectracam.render.cube.ChannelPlanes`)."""
     from spectracam.core.progress import bar
 
     H, W, B = scene.image.height, scene.image.width, len(scene.grid)
-    cube = np.empty((H, W, B), dtype=np.float32)
+    if weights is None:
+        out = np.empty((H, W, B), dtype=np.float32)
+    else:
+        w = np.asarray(weights, np.float32)
+        out = np.zeros((w.shape[1], H, W), dtype=np.float32)
     # a bar on a terminal only; a log (stderr redirected) gets the one line the caller writes per stage
     for b in bar(range(B), desc="render bands", unit="band", progress=progress):
         set_band(b)
         params.update()
-        img = mi.render(mi_scene, params, seed=seed(b))
-        cube[:, :, b] = np.asarray(img)[:, :, 0]
-    return cube
+        img = np.asarray(mi.render(mi_scene, params, seed=seed(b)))[:, :, 0]
+        if weights is None:
+            out[:, :, b] = img
+            continue
+        for k in range(out.shape[0]):   # each plane contiguous: one multiply-add pass over the image
+            out[k] += w[b, k] * img
+    return out
 
 
 def render_metadata(mi, variant: str, reason: str, samples_per_pixel: int, seed: int, within_band: str,
@@ -278,12 +289,17 @@ def render_metadata(mi, variant: str, reason: str, samples_per_pixel: int, seed:
             "mitsuba_version": mi.__version__}
 
 
-def render_mitsuba(scene, progress: bool = False, log=None, within_band: str = "light-weighted") -> RadianceCube:
+def render_mitsuba(scene, progress: bool = False, log=None, within_band: str = "light-weighted",
+                   weights: np.ndarray | None = None) -> RadianceCube | ChannelPlanes:
     """The chart scene's radiance cube by Mitsuba (module docstring); a scene of several light groups by
-    :func:`render_lights_mitsuba`."""
+    :func:`render_lights_mitsuba`.  With ``weights`` ``(B, N)`` (one light), the :class:`ChannelPlanes` of the same
+    renders, each band added into the planes as it is rendered (:func:`render_bands`)."""
     if within_band not in WITHIN_BAND:
         raise SpectracamError(f"within_band = {within_band!r}: must be one of " + ", ".join(map(repr, WITHIN_BAND)))
     if len(scene.lights) > 1:
+        if weights is not None:
+            raise SpectracamError(f"lights = {len(scene.lights)} light groups: channel planes are rendered for a scene "
+                                  "of one light; render the radiance cube")
         return render_lights_mitsuba(scene, progress, log, within_band)
     mi, variant, reason, ref_width = open_variant(scene, log)
     grid = scene.grid
@@ -311,10 +327,14 @@ def render_mitsuba(scene, progress: bool = False, log=None, within_band: str = "
                 params[f"patch{p:02d}.bsdf.reflectance.values"] = Float(np.full(POINTS_PER_BAND + 1, rho[b],
                                                                                 np.float32))
 
-    cube = render_bands(mi, mi_scene, params, scene, set_band, lambda b: band_seed(scene.render.seed, b), progress)
+    out = render_bands(mi, mi_scene, params, scene, set_band, lambda b: band_seed(scene.render.seed, b), progress,
+                       weights)
     meta = render_metadata(mi, variant, reason, scene.render.samples_per_pixel, scene.render.seed, within_band,
                            **lights_metadata(scene))
-    return RadianceCube(cube, np.asarray(grid.centres_nm, float), meta)
+    if weights is not None:
+        return ChannelPlanes(np.ascontiguousarray(np.moveaxis(out, 0, -1)), np.asarray(grid.centres_nm, float),
+                             np.asarray(weights, np.float64), meta)
+    return RadianceCube(out, np.asarray(grid.centres_nm, float), meta)
 
 
 def build_lights_scene(mi, scene, cells, width_nm: float) -> dict:

@@ -130,32 +130,38 @@ def score_cmd(raw_file, scene_file, out_dir, demosaic, display, adaptation, delt
 @click.argument("scene_file", type=ShippedFile("scene file"))
 @output_option("Directory to write every file of render, capture and score into.")
 @renderer_option
+@click.option("--channel-planes", is_flag=True,
+              help="Integrate each band into the camera's channel planes as it is rendered: the same capture without "
+                   "the spectral cube (no radiance.exr; a chart scene of one light).")
 @camera_options
 @processing_options
 @set_option
 @quiet_option
 @view_option
-def simulate_cmd(scene_file, out_dir, renderer, arch, exposure, config_file, seed, demosaic, display, adaptation,
-                 delta_e, gamut_clip, sets, quiet):
+def simulate_cmd(scene_file, out_dir, renderer, channel_planes, arch, exposure, config_file, seed, demosaic, display,
+                 adaptation, delta_e, gamut_clip, sets, quiet):
     """Render → capture → score SCENE_FILE in one go; writes every file of the three steps.
 
     SCENE_FILE is a path, or the name of a scene shipped with spectracam (d65, blackbody_3000K …
     blackbody_7000K, cfi99, mondrian, dead_leaves, photo), with or without .toml."""
     from spectracam.io.exr import write_radiance_exr
-    from spectracam.pipeline import capture
+    from spectracam.pipeline import capture, check_memory, render_planes
     from spectracam.render import render
     from spectracam.pipeline.scene_file import read_toml
 
     flags = flag_overrides(arch=arch, exposure=exposure, demosaic=demosaic, display=display, adaptation=adaptation,
                             delta_e=delta_e, gamut_clip=gamut_clip)
-    from spectracam.pipeline import check_memory
-
     scene = scene_from(read_toml(scene_file, "scene file"), str(scene_file), config_file, flags, sets)
-    check_memory(scene)
+    check_memory(scene, channel_planes=channel_planes)
     check_writable(out_dir)
     log = progress_log(quiet)
-    cube = render(scene, renderer=renderer, progress=not quiet, log=log)
-    write_radiance_exr(out_dir / "radiance.exr", cube)
+    if channel_planes:   # refused in one line before any file is written: a textured target, light groups …
+        cube = render_planes(scene, renderer, progress=not quiet, log=log)
+        log("radiance.exr not written: --channel-planes integrated each band into the camera's "
+            f"{'/'.join(cube.metadata['channel_planes']['channels'])} planes as it was rendered (no spectral cube)")
+    else:
+        cube = render(scene, renderer=renderer, progress=not quiet, log=log)
+        write_radiance_exr(out_dir / "radiance.exr", cube)
     raw = capture(cube, seed=seed, scene=scene)
     write_capture(out_dir, raw, scene)
     score_and_write(raw, scene, out_dir, log, cube)
