@@ -20,6 +20,7 @@ import numpy as np
 
 from spectracam.camera import CameraSpec
 from spectracam.processing.color import ProcessingSpec
+from spectracam.io.plots import OKABE_ITO
 from spectracam.experiments.paper.claims import evaluate
 from spectracam.experiments.paper.experiment import PaperExperiment, calibrated_luminance, comparison, scenes_for
 
@@ -276,7 +277,7 @@ def _draw_choice_table(ax, lay: _MapLayout, columns: list, extra: list, n_factor
             default = bool(extra[i]) and j < n_factors  # a one-at-a-time reading's unchanged choice
             ax.text(0, i, v, transform=at, ha="left", va="center", fontsize=_FS,
                     fontweight="bold" if i == 0 else "normal",
-                    color="tab:red" if i == b else ("#8c8c8c" if default else "black"))
+                    color=OKABE_ITO[1] if i == b else ("#8c8c8c" if default else "black"))
         x += w + lay.gap
 
 
@@ -298,10 +299,10 @@ def _map_legend(ax, cmap, n_claims: int, b: int, map_w: float) -> None:
     from matplotlib.patches import Rectangle
 
     ax.add_patch(Rectangle((-0.5, -0.5), n_claims, 1, fill=False, ec="black", lw=1.8))
-    ax.add_patch(Rectangle((-0.5, b - 0.5), n_claims, 1, fill=False, ec="tab:red", lw=1.8, ls="--"))
+    ax.add_patch(Rectangle((-0.5, b - 0.5), n_claims, 1, fill=False, ec=OKABE_ITO[1], lw=1.8, ls="--"))
     handles = [Rectangle((0, 0), 1, 1, color=cmap(i)) for i in (2, 1, 0)]
     handles += [Rectangle((0, 0), 1, 1, fill=False, ec="black", lw=1.8),
-                Rectangle((0, 0), 1, 1, fill=False, ec="tab:red", ls="--", lw=1.8)]
+                Rectangle((0, 0), 1, 1, fill=False, ec=OKABE_ITO[1], ls="--", lw=1.8)]
     ax.legend(handles, ["reproduced", "partly (direction\nholds, size not)", "not",
                         "the experiment's\nreading (bold)", "most claims\nreproduced (red)"],
               loc="upper left", bbox_to_anchor=(1 + 0.1 / map_w, 1.0), borderaxespad=0.0,

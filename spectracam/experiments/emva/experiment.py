@@ -21,6 +21,7 @@ from spectracam.evaluation.emva1288 import LINEARITY_FIT_RANGE, SENSITIVITY_FIT_
 from spectracam.architecture.filters import CHANNELS, responsivities
 from spectracam.sensor import dark_gain_moments, fixed_pattern, noise_stream, read_frame
 from spectracam.core.spectra import WavelengthGrid
+from spectracam.io.plots import OKABE_ITO
 
 __all__ = ["EMVA_STREAM", "KEYS", "LABELS", "LINEARITY_CLAUSE", "ROLES", "SATURATION_CLAUSE",
            "SENSITIVITY_CLAUSE", "EmvaResult", "EmvaSetup", "channel_qe", "configured", "datasheet_markdown", "figures",
@@ -242,8 +243,8 @@ def _draw_steps(ax, x, y, roles, fit_label, clause, shown=None, off_scale=None):
     n = len(x)
     shown = np.ones(n, bool) if shown is None else shown
     off = np.zeros(n, int) if off_scale is None else off_scale
-    style = {"fit": dict(marker="o", ms=3.5, color="tab:blue", label=fit_label),
-             "excluded": dict(marker="o", ms=4.5, mfc="none", mew=1.1, color="tab:orange",
+    style = {"fit": dict(marker="o", ms=3.5, color=OKABE_ITO[0], label=fit_label),
+             "excluded": dict(marker="o", ms=4.5, mfc="none", mew=1.1, color=OKABE_ITO[4],
                               label=f"excluded from the fit ({clause})"),
              "beyond_saturation": dict(marker="x", ms=4.5, mew=1.1, color="0.4",
                                        label=f"excluded from the fit ({SATURATION_CLAUSE})")}
@@ -288,7 +289,7 @@ def _photon_transfer_figure(plt, fit: dict, r: dict, signal, excess, K: float, s
     _draw_steps(ax, signal, excess, r, f"fit range (0–{100 * SENSITIVITY_FIT_MAX:.0f} % of saturation)",
                 SENSITIVITY_CLAUSE)
     x = np.array([0, signal[r["fit"]].max()])
-    ax.plot(x, K * x + fit["ptc_offset_DN2"], "-", color="tab:red", label=f"fit: slope K = {K:.4g} DN/e⁻")
+    ax.plot(x, K * x + fit["ptc_offset_DN2"], "-", color=OKABE_ITO[1], label=f"fit: slope K = {K:.4g} DN/e⁻")
     ax.axvline(fit["mu_y_sat_minus_dark_DN"], **sat)
     ax.set_xlabel("μ_y − μ_y.dark (DN)")
     ax.set_ylabel("σ²_y − σ²_y.dark (DN²)")
@@ -307,7 +308,7 @@ def _snr_figure(plt, cv: dict, fit: dict, r: dict, mu_p, sat: dict):
     ax.set_yscale("log")
     _draw_steps(ax, mu_p, snr, r, "measured (the steps K and η are fitted on)", SENSITIVITY_CLAUSE,
                 shown=shown)
-    ax.plot(mu_p[shown], np.asarray(cv["snr_model"])[shown], "-", color="tab:red", label="EMVA 1288 model")
+    ax.plot(mu_p[shown], np.asarray(cv["snr_model"])[shown], "-", color=OKABE_ITO[1], label="EMVA 1288 model")
     ax.plot(mu_p[shown], np.asarray(cv["snr_ideal"])[shown], "--", color="0.5", label="ideal sensor")
     ax.axvline(fit["mu_p_sat"], **sat)
     ax.set_xlabel("μ_p (photons per pixel)")
@@ -325,7 +326,7 @@ def _linearity_figure(plt, cv: dict, fit: dict, r: dict, mu_p, signal, sat: dict
     fit_label = f"fit range ({100 * LINEARITY_FIT_RANGE[0]:.0f}–{100 * LINEARITY_FIT_RANGE[1]:.0f} % of saturation)"
     _draw_steps(top, mu_p, signal, r, fit_label, LINEARITY_CLAUSE)
     xs = np.array([0.0, mu_p.max()])
-    top.plot(xs, a0 + a1 * xs, "-", color="tab:red", lw=1, label="fit (weights 1/y², EMVA 1288 §6.9)")
+    top.plot(xs, a0 + a1 * xs, "-", color=OKABE_ITO[1], lw=1, label="fit (weights 1/y², EMVA 1288 §6.9)")
     top.axvline(fit["mu_p_sat"], **sat)
     top.set_ylabel("μ_y − μ_y.dark (DN)")
     top.set_title("Linearity", fontsize=10)

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from spectracam.io.plots import OKABE_ITO
 from spectracam.io.plots import pyplot as _plt
 
 __all__ = ["CHANNEL_STYLE", "DESIGN_STYLE", "PAPER_DESIGNS", "fig4", "fig5", "fig6"]
@@ -13,8 +14,8 @@ CHANNEL_STYLE = {"R": ("o", "tab:red"), "G": ("^", "tab:green"), "B": ("s", "tab
                  "M": ("D", "m"), "Y": ("P", "goldenrod"), "W": ("*", "0.3")}
 #: The paper's four designs (Fig. 4 draws the paper's two of them; any other architecture gets its own panel).
 PAPER_DESIGNS = ("cfa/single", "fsc/optimal", "fsc/balanced", "prism/optimal")
-DESIGN_STYLE = {"cfa/single": ("o", "black", "-"), "fsc/optimal": ("^", "tab:blue", "--"),
-                "fsc/balanced": ("s", "tab:orange", ":"), "prism/optimal": ("D", "tab:purple", "-.")}
+DESIGN_STYLE = {"cfa/single": ("o", "black", "-"), "fsc/optimal": ("^", OKABE_ITO[0], "--"),
+                "fsc/balanced": ("s", OKABE_ITO[4], ":"), "prism/optimal": ("D", OKABE_ITO[3], "-.")}
 
 
 def fig4(results: dict):

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from spectracam.core.errors import SpectracamError
+from spectracam.io.plots import OKABE_ITO
 
 __all__ = ["AXIS_LABELS", "LARGER_IS_BETTER", "LEGEND_ROWS", "METRIC_LABELS", "axis_label", "load_results",
            "metric_label", "natural_key", "plot_sweep", "resolve_axes", "sweep_figure", "with_value"]
@@ -157,9 +158,9 @@ def _annotate_best(ax, xy, text: str, points) -> None:
             if best_corner is None or score < best_corner[0]:
                 best_corner = (score, (cx, cy), ha, va)
     _, xyt, ha, va = best_corner
-    ax.annotate(text, xy, xytext=xyt, textcoords="axes fraction", ha=ha, va=va, fontsize=8, color="tab:red",
-                zorder=6, bbox=dict(boxstyle="round,pad=0.3", fc="white", ec="tab:red", lw=0.6, alpha=0.9),
-                arrowprops=dict(arrowstyle="-", color="tab:red", lw=0.8, shrinkB=7))
+    ax.annotate(text, xy, xytext=xyt, textcoords="axes fraction", ha=ha, va=va, fontsize=8, color=OKABE_ITO[1],
+                zorder=6, bbox=dict(boxstyle="round,pad=0.3", fc="white", ec=OKABE_ITO[1], lw=0.6, alpha=0.9),
+                arrowprops=dict(arrowstyle="-", color=OKABE_ITO[1], lw=0.8, shrinkB=7))
 
 
 def resolve_axes(meta: dict, x: str | None = None, line: str | None = None,
@@ -300,7 +301,7 @@ def _mark_best(ax, lay: _Layout, series: list, best):
     if best:
         li, bx, bv = best
         pos, x, line = lay.pos, lay.x, lay.line
-        ax.plot([pos[bx]], [bv], marker="o", ms=12, mfc="none", mec="tab:red", mew=1.6, ls="none", zorder=5)
+        ax.plot([pos[bx]], [bv], marker="o", ms=12, mfc="none", mec=OKABE_ITO[1], mew=1.6, ls="none", zorder=5)
         text = f"best: {_fmt(bv)}\nat {with_value(x, bx)}" + (f"\non {with_value(line, lay.lines[li])}" if line else "")
         return (ax, (pos[bx], bv), text, [(pos[v], m) for _, xs, mean, _, _ in series for v, m in zip(xs, mean)])
     if any(np.isfinite(m).any() for _, _, m, _, _ in series):
@@ -334,7 +335,7 @@ def _sweep_legend(fig, lay: _Layout, starred: bool, line_name: str):
     if starred:
         handles.append(Line2D([], [], marker="*", ms=11, mfc="none", mec="black", ls="none"))
         labels.append("the base scene")
-    handles.append(Line2D([], [], marker="o", ms=10, mfc="none", mec="tab:red", mew=1.6, ls="none"))
+    handles.append(Line2D([], [], marker="o", ms=10, mfc="none", mec=OKABE_ITO[1], mew=1.6, ls="none"))
     labels.append("best (annotated;\nits line thick)" if line else "best (annotated)")
     ncol = -(-len(handles) // LEGEND_ROWS)
     return fig.legend(handles, labels, loc="center left", bbox_to_anchor=(1.0, 0.5), fontsize=8, frameon=False,
