@@ -11,6 +11,7 @@ records, noise and ADC in the same loop; without it they are computed as
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -18,6 +19,11 @@ from spectracam.architecture.base import MosaicLayout, PlanesLayout
 from spectracam.camera import CameraSpec, band_weights
 from spectracam.sensor.exposure import exposure_times_s
 from spectracam.sensor.kernels import SpectralRates
+
+if TYPE_CHECKING:
+    from spectracam.architecture.base import Architecture
+    from spectracam.render.cube import RadianceCube
+    from spectracam.sensor import SensorSpec
 
 __all__ = ["RawCapture", "capture", "capture_time_s", "field_radiance"]
 
@@ -54,7 +60,20 @@ def field_radiance(radiance: np.ndarray, camera: CameraSpec) -> np.ndarray:
     """The radiance as the sensor receives it across the field (issue 37): each pixel's spectrum times the lens's
     relative illumination there (:func:`spectracam.optics.field.field_maps`: cos⁴ of the chief ray's angle, the
     exit-pupil form, a measured curve or lensfun's polynomial; 0 outside the image circle).  On the axis (the
-    default, the paper's camera) the cube itself, not a copy."""
+    default, the paper's camera) the cube itself, not a copy.
+
+    Parameters
+    ----------
+    radiance : ndarray
+        ``(H, W, B)`` band-averaged spectral radiance, W·m⁻²·sr⁻¹·nm⁻¹.
+    camera : CameraSpec
+        The camera (its optics' field and its sensor's pixel pitch).
+
+    Returns
+    -------
+    ndarray
+        ``(H, W, B)`` of the radiance's dtype, W·m⁻²·sr⁻¹·nm⁻¹.
+    """
     if camera.optics.on_axis:
         return radiance
     from spectracam.optics.field import field_maps
@@ -79,9 +98,24 @@ def _rates(radiance: np.ndarray, grid, camera: CameraSpec, weights: np.ndarray):
     return field_rates(radiance, grid, camera, maps)
 
 
-def capture_time_s(arch, times_s: np.ndarray, sensor) -> float:
+def capture_time_s(arch: Architecture, times_s: np.ndarray, sensor: SensorSpec) -> float:
     """How long the capture takes, s: the architecture's sum or maximum of its exposures (paper 2), each exposure
-    as long as the sensor's read-out takes for it (a bracketed exposure: its frames together)."""
+    as long as the sensor's read-out takes for it (a bracketed exposure: its frames together).
+
+    Parameters
+    ----------
+    arch : Architecture
+        The architecture (how its exposures combine in time).
+    times_s : ndarray
+        Its exposure times, s.
+    sensor : SensorSpec
+        The sensor (its read-out scheme).
+
+    Returns
+    -------
+    float
+        The capture time, s.
+    """
     if sensor.readout != "single":
         from spectracam.sensor.readout import READOUTS
 
@@ -90,16 +124,34 @@ def capture_time_s(arch, times_s: np.ndarray, sensor) -> float:
     return arch.capture_time_s(times_s)
 
 
-def capture(cube, camera: CameraSpec, seed: int, metering_box: tuple[slice, slice] | None = None, *,
+def capture(cube: RadianceCube, camera: CameraSpec, seed: int, metering_box: tuple[slice, slice] | None = None, *,
             white_radiance: np.ndarray | None = None, metering: dict | None = None,
             time_limit_s: float | None = None) -> RawCapture:
-    """Capture a :class:`~spectracam.render.RadianceCube` with ``camera``; exposure is metered on
-    the mean rates of the pixels in ``metering_box`` (the white patch, paper 4.5) or, for any other
-    white (:mod:`spectracam.sensor.metering`), on the rates of its radiance ``white_radiance`` ``(B,)``,
-    recorded as ``metering``; a camera that meters itself (``capture.metering`` average or percentile,
-    :mod:`spectracam.sensor.metering`) ignores both and meters a preview of the cube, and with ``time_limit_s`` (a hand-held
-    limit) shortens its metered exposures in proportion so the capture lasts at most that long; ``seed`` fixes every
-    random draw (fixed pattern and temporal noise)."""
+    """Capture a :class:`~spectracam.render.RadianceCube` with ``camera``, the exposure metered first (paper 4.5).
+
+    Parameters
+    ----------
+    cube : RadianceCube
+        The scene's band-averaged spectral radiance, W·m⁻²·sr⁻¹·nm⁻¹.
+    camera : CameraSpec
+        The camera: optics, filters, sensor, pixel, architecture and exposure scheme.
+    seed : int
+        Fixes every random draw (fixed pattern and temporal noise).
+    metering_box : tuple of slice or None
+        Rows and columns of the pixels whose mean rates meter the exposure (the white patch, paper 4.5).
+    white_radiance : ndarray or None
+        ``(B,)`` radiance of another white to meter on instead (:mod:`spectracam.sensor.metering`).
+    metering : dict or None
+        The record of that metering, kept in the capture.
+    time_limit_s : float or None
+        A hand-held limit, s: a camera that meters itself (``capture.metering`` average or percentile; it ignores
+        the box and the white) shortens its exposures in proportion so that the capture lasts at most this.
+
+    Returns
+    -------
+    RawCapture
+        Digital numbers, expected electrons, exposure and capture times (s), layout, camera, seed and metering.
+    """
     arch = camera.architecture()
     weights = band_weights(camera, cube.grid)
     radiance = field_radiance(cube.radiance, camera)

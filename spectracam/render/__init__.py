@@ -7,8 +7,14 @@ other.  A new renderer is a function ``(scene, progress, log) → RadianceCube``
 """
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
 from spectracam.core.registry import Registry
 from spectracam.render.cube import VARIANTS, RadianceCube, RenderSpec
+
+if TYPE_CHECKING:
+    from spectracam.pipeline.scene_file import Scene
 
 __all__ = ["RENDERERS", "VARIANTS", "RadianceCube", "RenderSpec", "render"]
 
@@ -38,8 +44,27 @@ def _analytic(scene, progress=False, log=None):
     return render_analytic(scene)
 
 
-def render(scene, renderer: str = "mitsuba", progress: bool = False, log=None) -> RadianceCube:
-    """Render ``scene`` with the registered renderer; ``log`` (a callable) receives one-line notices."""
+def render(scene: Scene, renderer: str = "mitsuba", progress: bool = False,
+           log: Callable[[str], object] | None = None) -> RadianceCube:
+    """Render ``scene`` with the registered renderer; ``log`` (a callable) receives one-line notices.
+
+    Parameters
+    ----------
+    scene : Scene
+        What is in front of the camera: target, light, geometry, bands, image size, render settings.
+    renderer : str
+        A name in :data:`RENDERERS`: ``"mitsuba"`` (spectral Monte Carlo) or ``"analytic"`` (closed form).
+    progress : bool
+        Draw a bar over the bands (on a terminal).
+    log : callable or None
+        Receives one-line notices (e.g. the Mitsuba variant chosen); None: none.
+
+    Returns
+    -------
+    RadianceCube
+        ``(H, W, B)`` float32 band-averaged spectral radiance, W·m⁻²·sr⁻¹·nm⁻¹; its metadata records the
+        renderer and the scene.
+    """
     cube = RENDERERS[renderer](scene, progress=progress, log=log)
     cube.metadata["scene"] = scene.to_dict()  # later stages find the chart geometry here
     return cube

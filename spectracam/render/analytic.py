@@ -9,11 +9,16 @@ the one-chart closed form of the cell's size (:func:`chart_block`); unlit cells 
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from spectracam.scene.chart import ChartSpec, View, patch_coverage
 from spectracam.scene.reference import ChartReference, chart_cells
 from spectracam.render.cube import RadianceCube
+
+if TYPE_CHECKING:
+    from spectracam.pipeline.scene_file import Scene
 
 __all__ = ["chart_block", "lights_metadata", "render_analytic"]
 
@@ -52,9 +57,20 @@ def chart_block(chart: ChartSpec, patches: np.ndarray, surround: np.ndarray, wid
     return cube
 
 
-def lights_metadata(scene) -> dict:
+def lights_metadata(scene: Scene) -> dict:
     """What a cube records of a scene's light groups: ``{"lights": [...]}`` (each group's table, and for a chart
-    its cell's pixels), or nothing without light groups (the metadata of a one-light scene is unchanged)."""
+    its cell's pixels), or nothing without light groups (the metadata of a one-light scene is unchanged).
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene.
+
+    Returns
+    -------
+    dict
+        ``{}``, or ``{"lights": [table, ...]}`` with ``cell_px`` = [row start, row stop, column start, column stop].
+    """
     if not scene.lights:
         return {}
     groups = [g.to_dict() for g in scene.lights]
@@ -64,9 +80,20 @@ def lights_metadata(scene) -> dict:
     return {"lights": groups}
 
 
-def render_analytic(scene) -> RadianceCube:
+def render_analytic(scene: Scene) -> RadianceCube:
     """The chart's radiance cube in closed form: each pixel mixes the surround and the patches in
-    proportion to the area of its footprint they cover; with light groups, one chart per group's cell."""
+    proportion to the area of its footprint they cover; with light groups, one chart per group's cell.
+
+    Parameters
+    ----------
+    scene : Scene
+        A chart scene.
+
+    Returns
+    -------
+    RadianceCube
+        ``(H, W, B)`` float32 band-averaged radiance, W·m⁻²·sr⁻¹·nm⁻¹.
+    """
     W, H, B = scene.image.width, scene.image.height, len(scene.grid)
     if len(scene.lights) > 1:
         cube = np.zeros((H, W, B), dtype=np.float32)
