@@ -410,7 +410,24 @@ class LibraryColours:
 
 @lru_cache(maxsize=16)
 def library_colours(library: str, illuminant: IlluminantSpec, grid: WavelengthGrid) -> LibraryColours:
-    """Band radiance and CIE 1931 XYZ of every sample of ``library`` under ``illuminant`` (memoised)."""
+    """Band radiance and CIE 1931 XYZ of every sample of ``library`` under ``illuminant`` (memoised).
+
+    Parameters
+    ----------
+    library : str
+        A reflectance library's name or ``file:PATH`` (:func:`spectracam.scene.reflectances.load`); it must cover
+        the grid's range.
+    illuminant : IlluminantSpec
+        The light, at its absolute level.
+    grid : WavelengthGrid
+        The bands.
+
+    Returns
+    -------
+    LibraryColours
+        ``(n, B)`` radiance (W·m⁻²·sr⁻¹·nm⁻¹) and ``(n, 3)`` XYZ with Y = 1 for a perfect white diffuser (shared:
+        do not change it).
+    """
     lo, hi = float(grid.edges_nm[0]), float(grid.edges_nm[-1])
     rset = load_library(library)
     rset.check_covers(lo, hi)
