@@ -3,12 +3,22 @@ build time so that it always lists every public name (a module's ``__all__``, wh
 
 Each page is ``::: spectracam.<module>`` for mkdocstrings, which reads the numpydoc docstrings statically (griffe);
 ``api/index.md`` lists the modules stage by stage.  Nothing is written into docs/.
+
+The example notebooks (examples/*.ipynb, committed without outputs) enter the site as executed pages under
+"Examples": :mod:`mkdocs_notebooks` (beside this file) executes each with nbclient and writes it as Markdown with its
+figures beside it.  Why not mkdocs-jupyter: it would be one more dependency (with nbconvert, and through it
+jupyterlab-pygments, bleach, mistune ...) for what nbclient, nbformat and ipykernel already do here -- the example
+tests run the notebooks with them -- plus a 100-line converter; and the pages stay ordinary Markdown, so the strict
+build checks their links and images like every other page's.
 """
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import mkdocs_notebooks  # noqa: E402
 #: The stages in the order data flows through them (docs/architecture.md), then the rest.
 STAGES = ["core", "scene", "optics", "render", "sensor", "architecture", "camera", "processing", "evaluation", "io",
           "pipeline", "view", "experiments"]
@@ -50,11 +60,13 @@ def _index(modules: list[str]) -> str:
 
 
 def on_config(config):
-    """The API pages enter the nav under "API reference" (after its index), so the strict build also holds every
-    page to be reachable."""
+    """The API pages enter the nav under "API reference" (after its index), and the executed notebooks under
+    "Examples" (after theirs), so the strict build also holds every page to be reachable."""
     for item in config["nav"]:
         if isinstance(item, dict) and "API reference" in item:
             item["API reference"] = ["api/index.md"] + [{m: f"api/{m}.md"} for m in public_modules()]
+        if isinstance(item, dict) and "Examples" in item:
+            item["Examples"] = ["examples/index.md"] + [f"examples/{nb.stem}.md" for nb in mkdocs_notebooks.notebooks()]
     return config
 
 
@@ -65,4 +77,6 @@ def on_files(files, config):
     files.append(File.generated(config, "api/index.md", content=_index(modules)))
     for m in modules:
         files.append(File.generated(config, f"api/{m}.md", content=f"# `{m}`\n\n::: {m}\n"))
+    for uri, content in mkdocs_notebooks.site_files():
+        files.append(File.generated(config, uri, content=content))
     return files

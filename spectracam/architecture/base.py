@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -25,6 +26,13 @@ from spectracam.sensor import kernels
 from spectracam.architecture.filters import CHANNELS, responsivities
 from spectracam.core.registry import Registry
 from spectracam.sensor import NOISE_SOURCES, TEMPORAL_STREAM, PatternRef, SensorSpec, noise_stream, read_frame
+
+if TYPE_CHECKING:
+    from spectracam.architecture.filters import FilterSpec
+    from spectracam.camera import CameraSpec
+    from spectracam.core.spectra import WavelengthGrid
+    from spectracam.sensor import FixedPattern
+    from spectracam.sensor.kernels import SpectralRates
 
 __all__ = ["ARCHITECTURES", "CFA_PATTERNS", "FIXED_PATTERN_CHOICES", "PLANE_KINDS", "Architecture",
            "ColourFilterArray", "DichroicPrism", "FieldSequential", "MosaicArchitecture", "MosaicLayout",
@@ -54,7 +62,18 @@ class MosaicLayout:
 
     @classmethod
     def bayer(cls, pattern: str) -> "MosaicLayout":
-        """The 2×2 Bayer tile of a pattern such as ``"RGGB"`` (read row by row)."""
+        """The 2×2 Bayer tile of a pattern such as ``"RGGB"`` (read row by row).
+
+        Parameters
+        ----------
+        pattern : str
+            Four of R, G, B, row by row.
+
+        Returns
+        -------
+        MosaicLayout
+            The layout of that tile.
+        """
         k = [CHANNELS.index(c) for c in pattern]
         return cls(((k[0], k[1]), (k[2], k[3])))
 
@@ -82,13 +101,35 @@ class MosaicLayout:
         return [(dy, dx, k) for dy, row in enumerate(self.tile) for dx, k in enumerate(row)]
 
     def channel_index(self, shape: tuple[int, int]) -> np.ndarray:
-        """``(H, W)`` channel index of every pixel."""
+        """``(H, W)`` channel index of every pixel.
+
+        Parameters
+        ----------
+        shape : tuple of int
+            ``(H, W)`` pixels.
+
+        Returns
+        -------
+        ndarray
+            ``(H, W)`` integer channel indices, the tile repeated from the top left.
+        """
         th, tw = self.tile_shape
         h, w = shape
         return np.tile(np.asarray(self.tile), (-(-h // th), -(-w // tw)))[:h, :w]
 
     def sample(self, rates: np.ndarray) -> np.ndarray:
-        """``(H, W)`` mosaic of an ``(H, W, 3)`` image: strided selection, no per-pixel work."""
+        """``(H, W)`` mosaic of an ``(H, W, 3)`` image: strided selection, no per-pixel work.
+
+        Parameters
+        ----------
+        rates : ndarray
+            ``(H, W, N)``, every channel at every pixel.
+
+        Returns
+        -------
+        ndarray
+            ``(H, W)`` float32, each pixel its own channel's value.
+        """
         h, w, _ = rates.shape
         th, tw = self.tile_shape
         mosaic = np.empty((h, w), dtype=np.float32)
@@ -125,7 +166,16 @@ class Architecture(ABC):
     and ``layout`` and implement :meth:`capture_time_s` and :meth:`record`; one whose channels are
     made of the three filters of ``[filters]`` otherwise than one each says how in :attr:`primaries`, and
     one whose channels are not made of them at all implements :meth:`responsivities` (and, to be
-    designed, :meth:`design_variables`)."""
+    designed, :meth:`design_variables`).
+
+    Parameters
+    ----------
+    cfa_pattern : str
+        The Bayer phase, one of :data:`CFA_PATTERNS` (a mosaic's tile follows it).
+    fixed_pattern : str
+        One of :data:`FIXED_PATTERN_CHOICES`: ``"physical"`` (one pattern per physical sensor), ``"shared"``
+        (one for every channel) or ``"independent"`` (one per channel).
+    """
 
     name: str = ""
     #: Can each channel have its own exposure time?
@@ -141,10 +191,21 @@ class Architecture(ABC):
     def __init__(self, cfa_pattern: str = "RGGB", fixed_pattern: str = "physical"):
         self.cfa_pattern, self.fixed_pattern = cfa_pattern, fixed_pattern
 
-    def configure(self, camera) -> "Architecture":
+    def configure(self, camera: CameraSpec) -> "Architecture":
         """This architecture as ``camera`` (a :class:`~spectracam.camera.CameraSpec`) builds it: an
         architecture whose channels depend on the camera (the number of stacked layers) returns a
-        configured copy; by default itself."""
+        configured copy; by default itself.
+
+        Parameters
+        ----------
+        camera : CameraSpec
+            The camera.
+
+        Returns
+        -------
+        Architecture
+            Itself, or a configured copy.
+        """
         return self
 
     @property
@@ -152,9 +213,22 @@ class Architecture(ABC):
         """The recorded channels' names, in the order of the rates and exposure times."""
         return self.layout.channels
 
-    def responsivities(self, filters, grid) -> np.ndarray:
+    def responsivities(self, filters: FilterSpec, grid: WavelengthGrid) -> np.ndarray:
         """``(N, n_bands)`` band-averaged responsivities of the channels, electrons per photon (paper
-        3.3): the three filters of ``[filters]`` × QE × IR cut, combined as :attr:`primaries` says."""
+        3.3): the three filters of ``[filters]`` × QE × IR cut, combined as :attr:`primaries` says.
+
+        Parameters
+        ----------
+        filters : FilterSpec
+            The ``[filters]`` table (filters, QE, IR cut).
+        grid : WavelengthGrid
+            The bands.
+
+        Returns
+        -------
+        ndarray
+            ``(N, n_bands)``, electrons per photon.
+        """
         R = responsivities(filters, grid)
         if tuple(self.primaries) == CHANNELS:
             return R
@@ -171,10 +245,27 @@ class Architecture(ABC):
         name).  Stacked photodiodes answer ``"depths"``."""
         return "filters" if cls.responsivities is Architecture.responsivities else None
 
-    def channel_patterns(self, sensor: SensorSpec, shape, seed: int, drawn: bool = True) -> list:
+    def channel_patterns(self, sensor: SensorSpec, shape: tuple[int, int], seed: int, drawn: bool = True) -> list:
         """The fixed pattern each of the channels is recorded with (see FIXED_PATTERN_CHOICES);
         ``drawn=False``: :class:`~spectracam.sensor.PatternRef` s, drawn where they are used (the
-        fused capture draws the per-pixel parts in its own pass)."""
+        fused capture draws the per-pixel parts in its own pass).
+
+        Parameters
+        ----------
+        sensor : SensorSpec
+            The sensor (its fixed-pattern noise).
+        shape : tuple of int
+            ``(H, W)`` pixels.
+        seed : int
+            The capture's seed.
+        drawn : bool
+            Draw the patterns now (:class:`~spectracam.sensor.FixedPattern`) or leave them references.
+
+        Returns
+        -------
+        list
+            One pattern (or reference) per channel; channels on one sensor share one object.
+        """
         independent = self.fixed_pattern == "independent" or (self.fixed_pattern == "physical" and self.sensors > 1)
         shape, n = tuple(shape), len(self.channels)
         if independent:
@@ -192,17 +283,63 @@ class Architecture(ABC):
 
     @abstractmethod
     def capture_time_s(self, times_s: np.ndarray) -> float:
-        """Total time the capture takes, given the per-channel exposure times."""
+        """Total time the capture takes, given the per-channel exposure times.
+
+        Parameters
+        ----------
+        times_s : ndarray
+            ``(N,)`` exposure times, s.
+
+        Returns
+        -------
+        float
+            The capture time, s (the sum of sequential exposures, the longest of simultaneous ones).
+        """
 
     @abstractmethod
-    def record(self, rates: np.ndarray, times_s: np.ndarray, sensor: SensorSpec, seed: int):
-        """Returns ``(digital, expected_e)``: arrays of the architecture's layout."""
+    def record(self, rates: np.ndarray | SpectralRates, times_s: np.ndarray, sensor: SensorSpec,
+               seed: int) -> tuple[np.ndarray, np.ndarray]:
+        """Returns ``(digital, expected_e)``: arrays of the architecture's layout.
 
-    def record_mosaic(self, rates, times_s, sensor, seed):
+        Parameters
+        ----------
+        rates : ndarray or SpectralRates
+            ``(H, W, N)`` photo-electron rates, e⁻/s, of every channel at every pixel (or the spectral rates the
+            fused kernel weights itself).
+        times_s : ndarray
+            ``(N,)`` exposure times, s (a mosaic uses the first).
+        sensor : SensorSpec
+            The sensor.
+        seed : int
+            The capture's seed (fixed pattern and temporal noise).
+
+        Returns
+        -------
+        digital, expected_e : ndarray
+            Digital numbers (DN) and the expected charge (e⁻): ``(H, W)`` for a mosaic, ``(N, H, W)`` for planes.
+        """
+
+    def record_mosaic(self, rates: np.ndarray | SpectralRates, times_s: np.ndarray, sensor: SensorSpec,
+                      seed: int) -> tuple[np.ndarray, np.ndarray]:
         """One exposure of one sensor behind a colour filter array of this architecture's layout.
 
-        ``rates``: ``(H, W, 3)`` — an array, or a :class:`~spectracam.sensor.kernels.SpectralRates` whose
-        cube the fused kernel reads once, weighting each pixel with its own channel only."""
+        Parameters
+        ----------
+        rates : ndarray or SpectralRates
+            ``(H, W, 3)`` e⁻/s — an array, or a :class:`~spectracam.sensor.kernels.SpectralRates` whose cube the
+            fused kernel reads once, weighting each pixel with its own channel only.
+        times_s : ndarray
+            Exposure times, s; the first is used.
+        sensor : SensorSpec
+            The sensor.
+        seed : int
+            The capture's seed.
+
+        Returns
+        -------
+        digital, expected_e : ndarray
+            ``(H, W)`` digital numbers (DN) and expected charge (e⁻).
+        """
         noise, pattern = noise_stream(seed, TEMPORAL_STREAM, 0), PatternRef(sensor, tuple(rates.shape[:2]), seed, 0)
         tile = getattr(self.layout, "tile", None)
         if tile is not None and sensor.readout == "single":   # the fused pass reads once; other read-outs: their own
@@ -225,11 +362,32 @@ class Architecture(ABC):
         return self.layout.sample(rates)
 
     @staticmethod
-    def record_planes(rates, times_s, sensor, seed, patterns):
+    def record_planes(rates: np.ndarray | SpectralRates, times_s: np.ndarray, sensor: SensorSpec, seed: int,
+                      patterns: list[FixedPattern | PatternRef]) -> tuple[np.ndarray, np.ndarray]:
         """Full-resolution exposures, channel k with fixed pattern ``patterns[k]`` (a
         :class:`~spectracam.sensor.FixedPattern` or a :class:`~spectracam.sensor.PatternRef`);
         returns ``(N, H, W)`` digital numbers and expected electrons.  The fused kernel records up to
-        three in one pass over the cube."""
+        three in one pass over the cube.
+
+        Parameters
+        ----------
+        rates : ndarray or SpectralRates
+            ``(H, W, N)`` photo-electron rates, e⁻/s, of every channel at every pixel (or the spectral rates the
+            fused kernel weights itself).
+        times_s : ndarray
+            ``(N,)`` exposure times, s one per channel.
+        sensor : SensorSpec
+            The sensor.
+        seed : int
+            The capture's seed (fixed pattern and temporal noise).
+        patterns : list
+            One fixed pattern (or reference) per channel.
+
+        Returns
+        -------
+        digital, expected_e : ndarray
+            ``(N, H, W)`` digital numbers (DN) and expected charge (e⁻).
+        """
         n = len(patterns)
         noises = [noise_stream(seed, TEMPORAL_STREAM, k) for k in range(n)]
         out = None if sensor.readout != "single" else kernels.record(
@@ -255,25 +413,54 @@ class MosaicArchitecture(Architecture):
     channel_names: tuple[str, ...] = CHANNELS
 
     def tile_for(self, cfa_pattern: str) -> tuple[tuple[int, ...], ...]:
-        """The tile for a Bayer phase (default: the 2×2 Bayer geometry, channel 1 on the diagonal)."""
+        """The tile for a Bayer phase (default: the 2×2 Bayer geometry, channel 1 on the diagonal).
+
+        Parameters
+        ----------
+        cfa_pattern : str
+            One of :data:`CFA_PATTERNS`.
+
+        Returns
+        -------
+        tuple of tuple of int
+            The tile's channel indices, row by row.
+        """
         return MosaicLayout.bayer(cfa_pattern).tile
 
     @property
     def layout(self):
         return MosaicLayout(self.tile_for(self.cfa_pattern), self.channel_names)
 
-    def capture_time_s(self, times_s):
+    def capture_time_s(self, times_s: np.ndarray) -> float:
         return float(times_s[0])
 
-    def record(self, rates, times_s, sensor, seed):
+    def record(self, rates: np.ndarray | SpectralRates, times_s: np.ndarray, sensor: SensorSpec,
+               seed: int) -> tuple[np.ndarray, np.ndarray]:
         return self.record_mosaic(rates, times_s, sensor, seed)
 
 
-def complementary(R: np.ndarray, filters, grid, *pairs: str) -> np.ndarray:
+def complementary(R: np.ndarray, filters: FilterSpec, grid: WavelengthGrid, *pairs: str) -> np.ndarray:
     """Responsivities of filters that pass what two of the primaries R, G, B of ``R`` ``(3, B)`` pass
     together (``"RG"``: yellow, ``"GB"``: cyan, ``"RB"``: magenta) or everything (``"W"``: no
     filter), ``(len(pairs), B)``: the sum, capped at the unfiltered pixel's QE × IR cut (no dye
-    transmits more than 1).  For the paper's block filters these are exact complements."""
+    transmits more than 1).  For the paper's block filters these are exact complements.
+
+    Parameters
+    ----------
+    R : ndarray
+        ``(3, B)`` responsivities of R, G, B, electrons per photon.
+    filters : FilterSpec
+        The ``[filters]`` table (the unfiltered pixel's QE × IR cut).
+    grid : WavelengthGrid
+        The bands.
+    *pairs : str
+        ``"RG"``, ``"GB"``, ``"RB"`` or ``"W"``.
+
+    Returns
+    -------
+    ndarray
+        ``(len(pairs), B)``, electrons per photon.
+    """
     from spectracam.architecture.filters import clear_responsivity
 
     clear = clear_responsivity(filters, grid)
@@ -298,10 +485,11 @@ class DichroicPrism(Architecture):
     sensors = 3  # three physical sensors: three fixed patterns
     layout = PlanesLayout("sensors", "R, G, B: three sensors behind a dichroic prism, exposed together")
 
-    def capture_time_s(self, times_s):
+    def capture_time_s(self, times_s: np.ndarray) -> float:
         return float(np.max(times_s))
 
-    def record(self, rates, times_s, sensor, seed):
+    def record(self, rates: np.ndarray | SpectralRates, times_s: np.ndarray, sensor: SensorSpec,
+               seed: int) -> tuple[np.ndarray, np.ndarray]:
         return self.record_planes(rates, times_s, sensor, seed,
                                  self.channel_patterns(sensor, rates.shape[:2], seed, drawn=False))
 
@@ -313,14 +501,30 @@ class FieldSequential(Architecture):
     name = "fsc"
     layout = PlanesLayout("frames", "R, G, B: three exposures of one sensor in sequence, in this order")
 
-    def capture_time_s(self, times_s):
+    def capture_time_s(self, times_s: np.ndarray) -> float:
         return float(np.sum(times_s))
 
-    def record(self, rates, times_s, sensor, seed):  # one sensor: the same FPN in every frame
+    def record(self, rates: np.ndarray | SpectralRates, times_s: np.ndarray, sensor: SensorSpec,
+               seed: int) -> tuple[np.ndarray, np.ndarray]:  # one sensor: the same FPN in every frame
         return self.record_planes(rates, times_s, sensor, seed,
                                  self.channel_patterns(sensor, rates.shape[:2], seed, drawn=False))
 
 
 def make_architecture(name: str, cfa_pattern: str = "RGGB", fixed_pattern: str = "physical") -> Architecture:
-    """An instance of the registered architecture ``name``."""
+    """An instance of the registered architecture ``name``.
+
+    Parameters
+    ----------
+    name : str
+        A name in :data:`ARCHITECTURES`.
+    cfa_pattern : str
+        The Bayer phase (mosaics).
+    fixed_pattern : str
+        One of :data:`FIXED_PATTERN_CHOICES`.
+
+    Returns
+    -------
+    Architecture
+        The instance (not yet configured for a camera: :meth:`Architecture.configure`).
+    """
     return ARCHITECTURES[name](cfa_pattern, fixed_pattern)

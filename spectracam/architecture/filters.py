@@ -6,6 +6,7 @@ scene's wavelength grid, channels in the order R, G, B.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -13,8 +14,8 @@ from spectracam.core.errors import ConfigError
 from spectracam.core.registry import Registry
 from spectracam.core.spec import Spec, check_curve
 from spectracam.architecture.cameras import CAMERA_UNITS, CAMERAS, FROM_FILE
-from spectracam.core.spectra import (WavelengthGrid, band_average, cmf_band_weights, logistic_cut, logistic_scale_nm,
-                                     tabulated)
+from spectracam.core.spectra import (Spectrum, WavelengthGrid, band_average, cmf_band_weights, logistic_cut,
+                                     logistic_scale_nm, tabulated)
 from spectracam.architecture.layers import LAYER_COUNTS, MAX_CONDITION, check_layers
 
 __all__ = ["CHANNELS", "FILTER_KINDS", "QE_MODELS", "SILICON_QE_SHAPE", "FilterSpec", "clear_responsivity", "ir_cut",
@@ -270,9 +271,22 @@ def _is_real(x) -> bool:
     return isinstance(x, (int, float)) and not isinstance(x, bool)
 
 
-def load_curve(path, what: str) -> tuple[tuple, tuple]:
+def load_curve(path: str | Path, what: str) -> tuple[tuple, tuple]:
     """``(wavelengths_nm, values)`` from a CSV (two columns, ``#`` comments, an optional header) or a
-    TOML file (``wavelength_nm = [...]``, ``values = [...]``)."""
+    TOML file (``wavelength_nm = [...]``, ``values = [...]``).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file (``.toml`` read as TOML, anything else as CSV).
+    what : str
+        The field that named it, for the error.
+
+    Returns
+    -------
+    tuple of (tuple, tuple)
+        Wavelengths, nm, and the values (checked, and made floats, by the spec that holds them).
+    """
     from pathlib import Path
 
     from spectracam.core.files import regular_file
@@ -297,9 +311,20 @@ def load_curve(path, what: str) -> tuple[tuple, tuple]:
         raise ConfigError(what, str(p), f"is not a curve: two columns wavelength_nm, value ({e})") from None
 
 
-def ir_cut(spec: FilterSpec):
+def ir_cut(spec: FilterSpec) -> Spectrum | None:
     """Transmittance of the IR-cut filter: a logistic edge, 50 % at ``ir_cut_nm``, 90 % → 10 % over
-    ``ir_cut_width_nm``; 1 everywhere without one."""
+    ``ir_cut_width_nm``; 1 everywhere without one.
+
+    Parameters
+    ----------
+    spec : FilterSpec
+        The ``[filters]`` table.
+
+    Returns
+    -------
+    Spectrum or None
+        The transmittance as a function of wavelength in nm; None without an IR cut (``ir_cut_nm`` unset).
+    """
     if spec.ir_cut_nm is None:
         return None
     return logistic_cut(spec.ir_cut_nm, spec.ir_cut_width_nm)
@@ -335,9 +360,20 @@ def _data_qe(spec: FilterSpec):
     return tabulated(spec.qe_curve_nm, spec.qe_curve)
 
 
-def quantum_efficiency(spec: FilterSpec):
+def quantum_efficiency(spec: FilterSpec) -> Spectrum:
     """QE(λ) of the registered model ``spec.qe`` times the IR-cut filter's transmittance, if any:
-    electrons per photon reaching the sensor (before the colour filters)."""
+    electrons per photon reaching the sensor (before the colour filters).
+
+    Parameters
+    ----------
+    spec : FilterSpec
+        The ``[filters]`` table (``qe``, its parameters, the IR cut).
+
+    Returns
+    -------
+    Spectrum
+        Electrons per photon as a function of wavelength in nm.
+    """
     qe = QE_MODELS[spec.qe](spec)
     cut = ir_cut(spec)
     return qe if cut is None else (lambda lam: qe(lam) * cut(lam))
@@ -345,7 +381,20 @@ def quantum_efficiency(spec: FilterSpec):
 
 def clear_responsivity(spec: FilterSpec, grid: WavelengthGrid) -> np.ndarray:
     """``(n_bands,)`` band-averaged QE × IR cut: the responsivity of a pixel with no colour filter
-    (transmittance 1; a W pixel), electrons per photon."""
+    (transmittance 1; a W pixel), electrons per photon.
+
+    Parameters
+    ----------
+    spec : FilterSpec
+        The ``[filters]`` table (QE model, IR cut).
+    grid : WavelengthGrid
+        The bands.
+
+    Returns
+    -------
+    ndarray
+        ``(n_bands,)``, electrons per photon.
+    """
     return band_average(quantum_efficiency(spec), grid, 400)
 
 
@@ -440,6 +489,18 @@ def responsivities(spec: FilterSpec, grid: WavelengthGrid) -> np.ndarray:
     >>> R = responsivities(FilterSpec(), WavelengthGrid(np.arange(400.0, 701.0, 10.0)))
     >>> R.shape, float(R[:, 15].sum())  # at 550 nm only green passes, with QE 0.5
     ((3, 31), 0.5)
+
+    Parameters
+    ----------
+    spec : FilterSpec
+        The ``[filters]`` table.
+    grid : WavelengthGrid
+        The bands.
+
+    Returns
+    -------
+    ndarray
+        ``(3, n_bands)``, electrons per photon (memoised: do not change it).
     """
     key = (spec, grid)
     try:

@@ -5,17 +5,36 @@ checks) and the architecture (which records through it), so neither imports the 
 """
 from __future__ import annotations
 
-import numpy as np
+from typing import TYPE_CHECKING
 
-from spectracam.core.spectra import logistic_cut, logistic_scale_nm
+import numpy as np
+from numpy.typing import ArrayLike
+
+from spectracam.core.spectra import Spectrum, logistic_cut, logistic_scale_nm
+
+if TYPE_CHECKING:
+    from spectracam.architecture.filters import FilterSpec
 
 __all__ = ["LAYER_COUNTS", "MAX_CONDITION", "MIN_WHITE_FRACTION", "check_layers", "layer_diagnostics", "layer_names",
            "layer_qe", "stacked_cut"]
 
 
-def layer_qe(wavelength_nm, depths_um) -> np.ndarray:
+def layer_qe(wavelength_nm: ArrayLike, depths_um: ArrayLike) -> np.ndarray:
     """``(n, len(λ))`` QE of each photodiode, bottom first (so three layers are R, G, B), electrons
-    per incident photon, without IR cut; ``depths_um`` the n + 1 window boundaries (module docstring)."""
+    per incident photon, without IR cut; ``depths_um`` the n + 1 window boundaries (module docstring).
+
+    Parameters
+    ----------
+    wavelength_nm : array_like
+        Wavelengths, nm.
+    depths_um : array_like
+        The n + 1 boundaries of the collection windows below the surface, µm, increasing.
+
+    Returns
+    -------
+    ndarray
+        ``(n, len(wavelength_nm))``, electrons per incident photon.
+    """
     from spectracam.architecture.silicon import absorption_coefficient_per_um, reflectance
 
     lam = np.asarray(wavelength_nm, float)
@@ -44,10 +63,21 @@ MAX_CONDITION = 100.0
 LAYER_COUNTS = (3, 4)
 
 
-def stacked_cut(filters):
+def stacked_cut(filters: FilterSpec) -> Spectrum | None:
     """Transmittance ``λ → T`` of the filters in front of the stacked sensor: its own IR cut
     (``stacked_ir_cut_nm``, edge ``stacked_ir_cut_width_nm``) times the shared ``ir_cut_nm`` if set; None
-    when there is neither."""
+    when there is neither.
+
+    Parameters
+    ----------
+    filters : FilterSpec
+        The ``[filters]`` table.
+
+    Returns
+    -------
+    Spectrum or None
+        The transmittance as a function of wavelength in nm.
+    """
     shared = None if filters.ir_cut_nm is None else logistic_cut(filters.ir_cut_nm, filters.ir_cut_width_nm)
     if filters.stacked_ir_cut_nm is None:
         return shared
@@ -60,9 +90,21 @@ def stacked_cut(filters):
     return cut
 
 
-def layer_diagnostics(filters) -> tuple[np.ndarray, float]:
+def layer_diagnostics(filters: FilterSpec) -> tuple[np.ndarray, float]:
     """``(white fraction of each layer (bottom first; the strongest = 1), condition number)`` of the
-    layers × IR cuts on 400–700 nm at 1 nm under an equal-energy white (:data:`MAX_CONDITION`)."""
+    layers × IR cuts on 400–700 nm at 1 nm under an equal-energy white (:data:`MAX_CONDITION`).
+
+    Parameters
+    ----------
+    filters : FilterSpec
+        The ``[filters]`` table.
+
+    Returns
+    -------
+    tuple of (ndarray, float)
+        Each layer's share of the white relative to the strongest, and the condition number (inf when a layer
+        collects nothing).
+    """
     lam = np.arange(400.0, 701.0)
     cut = stacked_cut(filters)
     q = layer_qe(lam, filters.stacked_depths_um) * (1.0 if cut is None else cut(lam))
@@ -75,9 +117,15 @@ def layer_diagnostics(filters) -> tuple[np.ndarray, float]:
     return white / white.max(), kappa if np.isfinite(kappa) and kappa < 1e12 else float("inf")
 
 
-def check_layers(filters) -> None:
+def check_layers(filters: FilterSpec) -> None:
     """Refuse ``filters.stacked_depths_um`` whose layers cannot form a colour image (module docstring),
-    in one line naming the field, the value and what is allowed."""
+    in one line naming the field, the value and what is allowed.
+
+    Parameters
+    ----------
+    filters : FilterSpec
+        The ``[filters]`` table (the stacked sensor's depths and IR cuts).
+    """
     from spectracam.core.errors import ConfigError
 
     depths = list(filters.stacked_depths_um)
@@ -98,5 +146,16 @@ def check_layers(filters) -> None:
 
 
 def layer_names(n: int) -> tuple[str, ...]:
-    """Three layers are R, G, B (bottom, middle, top); other counts L1 (bottom) … Ln (top)."""
+    """Three layers are R, G, B (bottom, middle, top); other counts L1 (bottom) … Ln (top).
+
+    Parameters
+    ----------
+    n : int
+        The number of layers.
+
+    Returns
+    -------
+    tuple of str
+        The layers' channel names, bottom first.
+    """
     return ("R", "G", "B") if n == 3 else tuple(f"L{k + 1}" for k in range(n))

@@ -19,6 +19,6 @@ class QuadBayer(MosaicArchitecture):
 
     name = "quad_bayer"
 
-    def tile_for(self, cfa_pattern):
+    def tile_for(self, cfa_pattern: str) -> tuple[tuple[int, ...], ...]:
         bayer = MosaicLayout.bayer(cfa_pattern).tile
         return tuple(tuple(bayer[y // 2][x // 2] for x in range(4)) for y in range(4))

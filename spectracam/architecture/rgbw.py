@@ -34,5 +34,5 @@ class RedGreenBlueWhite(MosaicArchitecture):
     channel_names = ("R", "G", "B", "W")
     primaries = ("R", "G", "B", "W")
 
-    def tile_for(self, cfa_pattern):
+    def tile_for(self, cfa_pattern: str) -> tuple[tuple[int, ...], ...]:
         return TILE

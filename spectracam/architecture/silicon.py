@@ -21,6 +21,7 @@ from importlib.resources import files
 from typing import NamedTuple
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 __all__ = ["DATA_FILE", "absorption_coefficient_per_um", "photodiode_qe", "reflectance", "refractive_index"]
 
@@ -67,7 +68,7 @@ def _alpha_per_um(wl: np.ndarray) -> np.ndarray:
     return np.exp(np.interp(wl, t.wavelength_nm, t.log_alpha_per_um))
 
 
-def absorption_coefficient_per_um(wavelength_nm):
+def absorption_coefficient_per_um(wavelength_nm: ArrayLike) -> np.ndarray:
     """Band-to-band absorption coefficient α of intrinsic silicon at 300 K, in 1/µm.
 
     Linear interpolation in log α of the table of M. A. Green, "Self-consistent optical parameters
@@ -108,7 +109,7 @@ def _n_k(wl: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return n, k
 
 
-def refractive_index(wavelength_nm):
+def refractive_index(wavelength_nm: ArrayLike) -> np.ndarray:
     """Real refractive index n of intrinsic silicon at 300 K (Green 2008), linearly interpolated.
 
     Parameters
@@ -134,7 +135,7 @@ def refractive_index(wavelength_nm):
     return _n_k(_checked_wavelength(wavelength_nm))[0]
 
 
-def reflectance(wavelength_nm):
+def reflectance(wavelength_nm: ArrayLike) -> np.ndarray:
     """Normal-incidence reflectance of a bare air/silicon interface.
 
     Fresnel's formula for an absorbing medium, ``R = ((n − 1)² + k²) / ((n + 1)² + k²)``, with the
@@ -168,7 +169,8 @@ def reflectance(wavelength_nm):
     return ((n - 1) ** 2 + k**2) / ((n + 1) ** 2 + k**2)
 
 
-def photodiode_qe(wavelength_nm, depth_um, *, reflectance_loss=True, surface_dead_layer_um=0.0):
+def photodiode_qe(wavelength_nm: ArrayLike, depth_um: ArrayLike, *, reflectance_loss: bool = True,
+                  surface_dead_layer_um: ArrayLike = 0.0) -> np.ndarray:
     """External quantum efficiency of a silicon photodiode in the collection-depth model.
 
     ``QE = (1 − R)·(exp(−α·z0) − exp(−α·d))`` with ``z0 = surface_dead_layer_um`` and
@@ -197,8 +199,7 @@ def photodiode_qe(wavelength_nm, depth_um, *, reflectance_loss=True, surface_dea
         If True (default) multiply by ``1 − R`` of bare silicon (:func:`reflectance`); if False,
         assume a perfect anti-reflection coating (R = 0).
     surface_dead_layer_um : float or array_like, optional
-        Depth z0 of the surface layer whose carriers recombine before collection, µm (default 0).
-        Must satisfy ``0 ≤ z0 ≤ d``.
+        Depth z0 of the surface layer whose carriers recombine before collection, µm; ``0 ≤ z0 ≤ d``.
 
     Returns
     -------

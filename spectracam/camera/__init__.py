@@ -33,6 +33,18 @@ def split_design(design: str, field: str = "design") -> tuple[str, str]:
 
     >>> split_design("fsc/balanced")
     ('fsc', 'balanced')
+
+    Parameters
+    ----------
+    design : str
+        ``"architecture/exposure"``.
+    field : str
+        The field or option that gave it, for the error.
+
+    Returns
+    -------
+    tuple of str
+        The architecture's and the exposure scheme's registered names.
     """
     if not isinstance(design, str):
         raise ConfigError(field, design, "must be a string 'architecture/exposure', e.g. 'fsc/optimal'")
@@ -130,9 +142,24 @@ class CameraSpec(Spec):
         return out
 
     @classmethod
-    def from_dict(cls, data, source: str | None = None, base: "CameraSpec | None" = None) -> "CameraSpec":
+    def from_dict(cls, data: object, source: str | None = None, base: "CameraSpec | None" = None) -> "CameraSpec":
         """A camera from ``[optics]``/``[filters]``/``[sensor]``/``[capture]``/``[pixel]`` tables; keys not given
-        keep the values of ``base`` (default: the paper's camera)."""
+        keep the values of ``base`` (default: the paper's camera).
+
+        Parameters
+        ----------
+        data : object
+            A table of those tables (any may be left out); another key is refused.
+        source : str or None
+            Where the tables came from, for the error.
+        base : CameraSpec or None
+            The camera whose values fill what is not given; None: the paper's camera.
+
+        Returns
+        -------
+        CameraSpec
+            The validated camera.
+        """
         base = base or cls()
         if not isinstance(data, dict):
             raise ConfigError("camera", data, "must be a table", source)
@@ -154,12 +181,38 @@ class CameraSpec(Spec):
 
     def photo_electron_rates(self, radiance: np.ndarray, grid: WavelengthGrid) -> np.ndarray:
         """Noise-free photo-electron rates of this camera (:func:`photo_electron_rates`): what the scene's chart
-        reference asks of a camera, without importing the camera stage it sits below."""
+        reference asks of a camera, without importing the camera stage it sits below.
+
+        Parameters
+        ----------
+        radiance : ndarray
+            ``(…, B)`` band-averaged spectral radiance, W·m⁻²·sr⁻¹·nm⁻¹.
+        grid : WavelengthGrid
+            The bands.
+
+        Returns
+        -------
+        ndarray
+            ``(…, N)`` photo-electrons per second per pixel, one per channel.
+        """
         return photo_electron_rates(radiance, grid, self)
 
     def with_design(self, design: str, field: str = "design") -> "CameraSpec":
         """This camera with another ``"arch/scheme"`` design, validated (cfa + optimal is refused);
-        an error names ``field``."""
+        an error names ``field``.
+
+        Parameters
+        ----------
+        design : str
+            ``"architecture/exposure"``, e.g. ``"fsc/optimal"`` (``"cfa"`` alone: ``cfa/single``).
+        field : str
+            The field or option that gave it, for the error.
+
+        Returns
+        -------
+        CameraSpec
+            A copy with the capture's architecture and exposure scheme replaced.
+        """
         arch, scheme = split_design(design, field)
         try:
             return self.replace(capture=self.capture.replace(architecture=arch, exposure=scheme))
@@ -171,7 +224,20 @@ def camera_responsivities(camera: CameraSpec, grid: WavelengthGrid) -> np.ndarra
     """``(N, n_bands)`` band-averaged responsivities R_k(λ) of the channels the camera's architecture
     records, electrons per photon (paper 3.3): by default the three filters × QE × IR cut; an
     architecture with other channels (a W pixel, complementary filters, stacked photodiodes) says
-    what they are."""
+    what they are.
+
+    Parameters
+    ----------
+    camera : CameraSpec
+        The camera (its filters and architecture).
+    grid : WavelengthGrid
+        The bands.
+
+    Returns
+    -------
+    ndarray
+        ``(N, n_bands)``, electrons per photon.
+    """
     return camera.architecture().responsivities(camera.filters, grid)
 
 

@@ -11,15 +11,20 @@ records, noise and ADC in the same loop; without it they are computed as
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from spectracam.architecture.base import MosaicLayout, PlanesLayout
 from spectracam.camera import CameraSpec, band_weights
 from spectracam.core.errors import SpectracamError
-from spectracam.render.cube import ChannelPlanes
+from spectracam.render.cube import ChannelPlanes, RadianceCube
 from spectracam.sensor.exposure import exposure_times_s
 from spectracam.sensor.kernels import SpectralRates
+
+if TYPE_CHECKING:
+    from spectracam.architecture.base import Architecture
+    from spectracam.sensor import SensorSpec
 
 __all__ = ["PLANES_WEIGHT_RTOL", "RawCapture", "capture", "capture_time_s", "check_planes_camera",
            "check_planes_capturable", "field_radiance"]
@@ -57,7 +62,20 @@ def field_radiance(radiance: np.ndarray, camera: CameraSpec) -> np.ndarray:
     """The radiance as the sensor receives it across the field (issue 37): each pixel's spectrum times the lens's
     relative illumination there (:func:`spectracam.optics.field.field_maps`: cos⁴ of the chief ray's angle, the
     exit-pupil form, a measured curve or lensfun's polynomial; 0 outside the image circle).  On the axis (the
-    default, the paper's camera) the cube itself, not a copy."""
+    default, the paper's camera) the cube itself, not a copy.
+
+    Parameters
+    ----------
+    radiance : ndarray
+        ``(H, W, B)`` band-averaged spectral radiance, W·m⁻²·sr⁻¹·nm⁻¹.
+    camera : CameraSpec
+        The camera (its optics' field and its sensor's pixel pitch).
+
+    Returns
+    -------
+    ndarray
+        ``(H, W, B)`` of the radiance's dtype, W·m⁻²·sr⁻¹·nm⁻¹.
+    """
     if camera.optics.on_axis:
         return radiance
     from spectracam.optics.field import field_maps
@@ -90,7 +108,18 @@ PLANES_WEIGHT_RTOL = 1e-6
 def check_planes_capturable(camera: CameraSpec) -> None:
     """Refuse, in one line naming the setting, a camera whose channel planes cannot stand for its cube: an off-axis
     field (relative illumination, an oblique chief ray, an image circle) or the pixel's angle response (microlens,
-    crosstalk) weight each pixel's spectrum by its place in the field (:func:`_rates`)."""
+    crosstalk) weight each pixel's spectrum by its place in the field (:func:`_rates`).
+
+    Parameters
+    ----------
+    camera : CameraSpec
+        The camera that would capture the planes.
+
+    Raises
+    ------
+    SpectracamError
+        Naming each setting that needs the cube.
+    """
     o, px = camera.optics, camera.pixel
     found = [f"optics.relative_illumination = {o.relative_illumination!r}"] if o.relative_illumination != "none" else []
     found += [f"optics.chief_ray = {o.chief_ray!r}"] if o.chief_ray != "linear" else []
@@ -108,7 +137,21 @@ def check_planes_capturable(camera: CameraSpec) -> None:
 def check_planes_camera(planes: ChannelPlanes, camera: CameraSpec) -> None:
     """Refuse channel planes integrated for another camera than ``camera`` (other filters, optics or pixel: its band
     weights differ), or a camera whose pixels see more than one spectrum's integral (the pixel's angle response, an
-    off-axis field): those need each pixel's spectrum, i.e. the cube."""
+    off-axis field): those need each pixel's spectrum, i.e. the cube.
+
+    Parameters
+    ----------
+    planes : ChannelPlanes
+        Planes rendered for some camera (their ``weights``).
+    camera : CameraSpec
+        The camera about to capture them.
+
+    Raises
+    ------
+    SpectracamError
+        Weights other than ``camera``'s band weights (within :data:`PLANES_WEIGHT_RTOL`), or
+        :func:`check_planes_capturable`'s refusal.
+    """
     check_planes_capturable(camera)
     want = band_weights(camera, planes.grid).astype(np.float64)
     got = np.asarray(planes.weights, np.float64)
@@ -117,9 +160,36 @@ def check_planes_camera(planes: ChannelPlanes, camera: CameraSpec) -> None:
                               f"capturing them ({camera.design}, {want.shape}); render them for this camera")
 
 
-def capture_time_s(arch, times_s: np.ndarray, sensor) -> float:
+def _exposed(cube: RadianceCube | ChannelPlanes, camera: CameraSpec) -> tuple:
+    """``(radiance as the sensor receives it, band weights (B, N), rates to record)``: of a cube, through the field
+    and the camera's band weights (:func:`_rates`); of channel planes rendered for ``camera``, the planes themselves
+    with identity weights (the fused pass then records them exactly; issue 38)."""
+    if isinstance(cube, ChannelPlanes):
+        check_planes_camera(cube, camera)
+        return cube.planes, np.eye(cube.planes.shape[-1], dtype=np.float32), cube.planes
+    weights = band_weights(camera, cube.grid)
+    radiance = field_radiance(cube.radiance, camera)
+    return radiance, weights, _rates(radiance, cube.grid, camera, weights)
+
+
+def capture_time_s(arch: Architecture, times_s: np.ndarray, sensor: SensorSpec) -> float:
     """How long the capture takes, s: the architecture's sum or maximum of its exposures (paper 2), each exposure
-    as long as the sensor's read-out takes for it (a bracketed exposure: its frames together)."""
+    as long as the sensor's read-out takes for it (a bracketed exposure: its frames together).
+
+    Parameters
+    ----------
+    arch : Architecture
+        The architecture (how its exposures combine in time).
+    times_s : ndarray
+        Its exposure times, s.
+    sensor : SensorSpec
+        The sensor (its read-out scheme).
+
+    Returns
+    -------
+    float
+        The capture time, s.
+    """
     if sensor.readout != "single":
         from spectracam.sensor.readout import READOUTS
 
@@ -128,28 +198,39 @@ def capture_time_s(arch, times_s: np.ndarray, sensor) -> float:
     return arch.capture_time_s(times_s)
 
 
-def capture(cube, camera: CameraSpec, seed: int, metering_box: tuple[slice, slice] | None = None, *,
+def capture(cube: RadianceCube | ChannelPlanes, camera: CameraSpec, seed: int, metering_box: tuple[slice, slice] | None = None, *,
             white_radiance: np.ndarray | None = None, metering: dict | None = None,
             time_limit_s: float | None = None) -> RawCapture:
-    """Capture a :class:`~spectracam.render.RadianceCube` (or :class:`~spectracam.render.ChannelPlanes` rendered
-    for ``camera``: its rates, :func:`check_planes_camera`) with ``camera``; exposure is metered on
-    the mean rates of the pixels in ``metering_box`` (the white patch, paper 4.5) or, for any other
-    white (:mod:`spectracam.sensor.metering`), on the rates of its radiance ``white_radiance`` ``(B,)``,
-    recorded as ``metering``; a camera that meters itself (``capture.metering`` average or percentile,
-    :mod:`spectracam.sensor.metering`) ignores both and meters a preview of the cube, and with ``time_limit_s`` (a hand-held
-    limit) shortens its metered exposures in proportion so the capture lasts at most that long; ``seed`` fixes every
-    random draw (fixed pattern and temporal noise)."""
+    """Capture a :class:`~spectracam.render.RadianceCube` with ``camera``, the exposure metered first (paper 4.5).
+
+    Parameters
+    ----------
+    cube : RadianceCube or ChannelPlanes
+        The scene's band-averaged spectral radiance, W·m⁻²·sr⁻¹·nm⁻¹; or channel planes rendered for ``camera``
+        (its rates; :func:`check_planes_camera`).
+    camera : CameraSpec
+        The camera: optics, filters, sensor, pixel, architecture and exposure scheme.
+    seed : int
+        Fixes every random draw (fixed pattern and temporal noise).
+    metering_box : tuple of slice or None
+        Rows and columns of the pixels whose mean rates meter the exposure (the white patch, paper 4.5).
+    white_radiance : ndarray or None
+        ``(B,)`` radiance of another white to meter on instead (:mod:`spectracam.sensor.metering`).
+    metering : dict or None
+        The record of that metering, kept in the capture.
+    time_limit_s : float or None
+        A hand-held limit, s: a camera that meters itself (``capture.metering`` average or percentile; it ignores
+        the box and the white) shortens its exposures in proportion so that the capture lasts at most this.
+
+    Returns
+    -------
+    RawCapture
+        Digital numbers, expected electrons, exposure and capture times (s), layout, camera, seed and metering.
+    """
     arch = camera.architecture()
-    if isinstance(cube, ChannelPlanes):   # the camera's rates themselves: identity weights (issue 38)
-        check_planes_camera(cube, camera)
-        radiance = rates = cube.planes
-        weights = np.eye(rates.shape[-1], dtype=np.float32)
-        if white_radiance is not None:
-            white_radiance = np.asarray(white_radiance, np.float64) @ np.asarray(cube.weights, np.float64)
-    else:
-        weights = band_weights(camera, cube.grid)
-        radiance = field_radiance(cube.radiance, camera)
-        rates = _rates(radiance, cube.grid, camera, weights)
+    radiance, weights, rates = _exposed(cube, camera)
+    if isinstance(cube, ChannelPlanes) and white_radiance is not None:   # its rates, through the planes' weights
+        white_radiance = np.asarray(white_radiance, np.float64) @ np.asarray(cube.weights, np.float64)
     if camera.capture.metering not in ("auto", "white_patch"):   # the camera meters its own preview (issue 33)
         from spectracam.sensor.metering import metered_white_rates, metering_record
 

@@ -25,7 +25,10 @@ A filter's transmittance is read as its responsivity over the unfiltered pixel's
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from spectracam.architecture.angle import (N_PRISM_GLASS, dye_transmittance, prism_incidence_deg, shift_curve,
                                            wheel_filter_curve)
@@ -35,6 +38,11 @@ from spectracam.architecture.silicon import absorption_coefficient_per_um, refra
 from spectracam.camera import CameraSpec, camera_responsivities
 from spectracam.optics import radiance_to_photon_irradiance
 from spectracam.sensor.angle import effective_responsivities, microlens_shift_um, pixel_angle_response
+
+if TYPE_CHECKING:
+    from spectracam.architecture.base import PlanesLayout
+    from spectracam.core.spectra import WavelengthGrid
+    from spectracam.optics.field import FieldMaps
 
 __all__ = ["AZIMUTH_BINS", "CRA_BINS", "field_active", "field_band_weights", "field_rates", "metered_field_rates",
            "site_index"]
@@ -137,7 +145,8 @@ def _compute_weights(camera: CameraSpec, grid, cra: np.ndarray, azimuth: np.ndar
     return np.swapaxes(per_site * factor, -1, -2).astype(np.float32)
 
 
-def field_band_weights(camera: CameraSpec, grid, cra_deg_bins, azimuth_deg_bins=(0.0,)) -> np.ndarray:
+def field_band_weights(camera: CameraSpec, grid: WavelengthGrid, cra_deg_bins: ArrayLike,
+                       azimuth_deg_bins: ArrayLike = (0.0,)) -> np.ndarray:
     """Band weights of each tile site (or plane) at each chief-ray angle and azimuth.
 
     Parameters
@@ -176,7 +185,7 @@ def field_band_weights(camera: CameraSpec, grid, cra_deg_bins, azimuth_deg_bins=
     return _CACHE[key]
 
 
-def site_index(layout, shape: tuple[int, int]) -> np.ndarray | None:
+def site_index(layout: MosaicLayout | PlanesLayout, shape: tuple[int, int]) -> np.ndarray | None:
     """Each pixel's tile site in a mosaic layout.
 
     Parameters
@@ -240,7 +249,7 @@ def _interpolated_rates(radiance, table, sites, cra_idx, az_idx) -> np.ndarray:
     return out.reshape((h, w) if s is not None else (h, w, k))
 
 
-def field_rates(radiance: np.ndarray, grid, camera: CameraSpec, maps) -> np.ndarray:
+def field_rates(radiance: np.ndarray, grid: WavelengthGrid, camera: CameraSpec, maps: FieldMaps | None) -> np.ndarray:
     """Photo-electron rates of each pixel at its place in the field.
 
     Parameters
@@ -282,7 +291,7 @@ def field_rates(radiance: np.ndarray, grid, camera: CameraSpec, maps) -> np.ndar
     return out
 
 
-def metered_field_rates(rates: np.ndarray, box: tuple[slice, slice], layout) -> np.ndarray:
+def metered_field_rates(rates: np.ndarray, box: tuple[slice, slice], layout: MosaicLayout | PlanesLayout) -> np.ndarray:
     """The mean rate of each channel over a box of pixels (the white patch), from per-pixel rates
     (:func:`field_rates`): in a mosaic the mean over the box's pixels that record the channel.
 

@@ -16,7 +16,7 @@ import os
 import stat
 import tempfile
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Iterator
 
 __all__ = ["WriteError", "atomic_write", "json_default", "regular_file", "remove_unfinished",
            "stage_outputs", "staged", "staged_after"]
@@ -54,7 +54,20 @@ def regular_file(path: str | Path, what: str) -> Path:
     reflectances, EXRs, photographs, a directory's report.json for ``view``) calls this first.  A FIFO
     opened for reading blocks until a writer comes — a hang, not an error — and a device may never end:
     both are refused in one line (:class:`~spectracam.core.errors.ConfigError` naming ``what``, exit 2).  A path
-    that does not exist is returned as is: the caller's own open says "no such file" in its words."""
+    that does not exist is returned as is: the caller's own open says "no such file" in its words.
+
+    Parameters
+    ----------
+    path : str or Path
+        The user's file.
+    what : str
+        The field or option that named it, for the error.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     from spectracam.core.errors import ConfigError
 
     p = Path(path)
@@ -75,10 +88,25 @@ class WriteError(OSError):
 
 
 def atomic_write(path: str | Path, content: bytes | Callable[[str], object], now: bool = False) -> Path:
-    """Write ``content`` (bytes, or a function that writes a file at the path it is given) to
-    ``path`` atomically; returns the path.  ``now``: rename at once even inside :func:`staged` (a
-    journal's header, which must survive an interruption).  Any failure of the writer is an
-    :class:`OSError` naming the path; a target that is a directory is refused before writing."""
+    """Write ``content`` to ``path`` atomically (a temporary file beside it, then a rename).
+
+    Any failure of the writer is an :class:`OSError` naming the path; a target that is a directory is refused
+    before writing.
+
+    Parameters
+    ----------
+    path : str or Path
+        The output file; missing parent directories are made.
+    content : bytes or callable
+        The bytes, or a function that writes the file at the (temporary) path it is given.
+    now : bool
+        Rename at once even inside :func:`staged` (a journal's header, which must survive an interruption).
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     path = Path(path)
     if path.is_dir():
         raise IsADirectoryError(21, "a directory is in the way of the output file", str(path))
@@ -134,7 +162,7 @@ def remove_unfinished() -> None:
 
 
 @contextlib.contextmanager
-def staged():
+def staged() -> Iterator[None]:
     """All files written inside appear together when the block ends, or none (see the module doc)."""
     stage = {"files": [], "dirs": []}
     _STAGES.append(stage)
@@ -175,10 +203,21 @@ def stage_outputs() -> tuple[list, list]:
 
 
 @contextlib.contextmanager
-def staged_after(outputs: tuple[list, list]):
+def staged_after(outputs: tuple[list, list]) -> Iterator[None]:
     """A stage for files made from ``outputs`` (:func:`stage_outputs` of a stage just put in place): should
     it fail or a signal come, those outputs and their directories are removed too, so they and what is
-    made from them (``--view``'s page) appear together or not at all."""
+    made from them (``--view``'s page) appear together or not at all.
+
+    Parameters
+    ----------
+    outputs : tuple of (list, list)
+        The files and the directories the earlier stage made (:func:`stage_outputs`).
+
+    Yields
+    ------
+    None
+        The block runs inside the new stage.
+    """
     paths, dirs = outputs
     made = [str(p) for p in paths]
     _LIVE.update(made)  # remove_unfinished (a signal) takes them too
@@ -211,8 +250,19 @@ def _discard(stage: dict, renamed: list) -> None:
             d.rmdir()
 
 
-def json_default(o):
-    """``json.dumps(default=)`` for NumPy scalars and arrays."""
+def json_default(o: object) -> object:
+    """``json.dumps(default=)`` for NumPy scalars and arrays.
+
+    Parameters
+    ----------
+    o : object
+        What ``json`` cannot write itself.
+
+    Returns
+    -------
+    object
+        The Python scalar of a NumPy scalar, the nested list of an array; anything else raises ``TypeError``.
+    """
     import numpy as np
 
     if isinstance(o, np.generic):

@@ -24,7 +24,13 @@ def is_main() -> bool:
 
 def terminate_children(timeout_s: float = 2.0) -> None:
     """SIGTERM every child process this one started with multiprocessing, then SIGKILL what is left
-    after ``timeout_s``; safe to call from a signal handler."""
+    after ``timeout_s``; safe to call from a signal handler.
+
+    Parameters
+    ----------
+    timeout_s : float
+        How long the children together get to exit after SIGTERM, s.
+    """
     try:
         import multiprocessing
 

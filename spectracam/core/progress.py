@@ -12,6 +12,13 @@ from __future__ import annotations
 
 import os
 import sys
+from collections.abc import Callable, Iterable, Iterator
+from typing import TYPE_CHECKING, Any, TypeVar
+
+if TYPE_CHECKING:
+    from tqdm import tqdm
+
+T = TypeVar("T")
 
 __all__ = ["DEFAULT_SIZE", "Counter", "bar", "close_bars", "duration_text", "note", "on_terminal"]
 
@@ -20,7 +27,18 @@ DEFAULT_SIZE = (80, 24)
 
 
 def on_terminal(progress: bool = True) -> bool:
-    """Should a bar be drawn: progress asked for, and stderr a terminal?"""
+    """Should a bar be drawn: progress asked for, and stderr a terminal?
+
+    Parameters
+    ----------
+    progress : bool
+        Whether progress was asked for (False with ``--quiet``).
+
+    Returns
+    -------
+    bool
+        True when ``progress`` and stderr is a terminal.
+    """
     try:
         return bool(progress) and sys.stderr is not None and sys.stderr.isatty()
     except (AttributeError, ValueError):  # a replaced or closed stderr
@@ -38,10 +56,33 @@ def _size() -> dict:
     return {"ncols": (cols if cols > 0 else DEFAULT_SIZE[0]) - 1, "nrows": rows if rows > 0 else DEFAULT_SIZE[1]}
 
 
-def bar(iterable=None, *, total: int | None = None, desc: str, unit: str, progress: bool = True,
-        leave: bool = False, **kwargs):
+def bar(iterable: Iterable | None = None, *, total: int | None = None, desc: str, unit: str, progress: bool = True,
+        leave: bool = False, **kwargs: Any) -> tqdm:
     """A tqdm bar on stderr over ``iterable`` (or ``total`` steps, advanced with ``.update()``), disabled
-    unless :func:`on_terminal`; cleared when done (``leave=False``): the command's own lines stay."""
+    unless :func:`on_terminal`; cleared when done (``leave=False``): the command's own lines stay.
+
+    Parameters
+    ----------
+    iterable : iterable or None
+        What the bar iterates over; None: a bar advanced by hand.
+    total : int or None
+        The number of steps (default: ``len(iterable)`` where it has one).
+    desc : str
+        The bar's label.
+    unit : str
+        One step's name.
+    progress : bool
+        False: no bar at all (``--quiet``).
+    leave : bool
+        Keep the finished bar on the terminal.
+    **kwargs : Any
+        More of ``tqdm``'s options.
+
+    Returns
+    -------
+    tqdm
+        The bar (disabled, but still counting, where none is drawn).
+    """
     from tqdm import tqdm
 
     enabled = on_terminal(progress)
@@ -50,7 +91,13 @@ def bar(iterable=None, *, total: int | None = None, desc: str, unit: str, progre
 
 
 def note(msg: str) -> None:
-    """One line on stderr that does not tear a bar being drawn (tqdm clears and redraws around it)."""
+    """One line on stderr that does not tear a bar being drawn (tqdm clears and redraws around it).
+
+    Parameters
+    ----------
+    msg : str
+        The line, without its newline.
+    """
     tqdm = sys.modules.get("tqdm")
     if tqdm is not None and getattr(tqdm.tqdm, "_instances", None):
         tqdm.tqdm.write(msg, file=sys.stderr)
@@ -70,7 +117,18 @@ def close_bars() -> None:
 
 
 def duration_text(seconds: float) -> str:
-    """``"3 h 05 min"``, ``"12 min 40 s"``, ``"9 s"``: a time left, to the precision that matters."""
+    """``"3 h 05 min"``, ``"12 min 40 s"``, ``"9 s"``: a time left, to the precision that matters.
+
+    Parameters
+    ----------
+    seconds : float
+        The time, s (rounded to whole seconds; below 0 reads 0).
+
+    Returns
+    -------
+    str
+        Hours and minutes from an hour up, minutes and seconds from a minute up, else seconds.
+    """
     s = max(0, int(round(seconds)))
     if s >= 3600:
         return f"{s // 3600} h {s % 3600 // 60:02d} min"
@@ -86,9 +144,34 @@ class Counter:
     ``sweep cells: 1200 of 99999 cells, 45.1 cells/s, about 36 min 30 s left``.  Once, as soon as a rate is
     known (``estimate_after_s`` in, or after ``estimate_after_n`` units), it says the estimate up front
     (``sweep cells: 99999 cells, about 36 min (45.1 cells/s)``) when the work will take longer than
-    ``announce_over_s``.  ``progress`` off (``--quiet``): nothing at all.  Like a bar, it only counts."""
+    ``announce_over_s``.  ``progress`` off (``--quiet``): nothing at all.  Like a bar, it only counts.
 
-    def __init__(self, total: int, *, desc: str, unit: str, log=None, progress: bool = True, initial: int = 0,
+    Parameters
+    ----------
+    total : int
+        How many units the work has.
+    desc : str
+        What is counted, the lines' and the bar's first words (``"sweep cells"``).
+    unit : str
+        One unit's name, singular (``"cell"``).
+    log : callable or None
+        Where the lines go (a function of one string); None: nowhere.
+    progress : bool
+        False (``--quiet``): no bar and no lines.
+    initial : int
+        Units already done (a resumed run).
+    every_s : float
+        The least time between two lines, s.
+    estimate_after_s : float
+        Time after the first update when the estimate is said, s (or after ``estimate_after_n`` units).
+    estimate_after_n : int
+        Units after the first update when the estimate is said.
+    announce_over_s : float
+        Say the estimate only for work estimated to take longer than this, s.
+    """
+
+    def __init__(self, total: int, *, desc: str, unit: str, log: Callable[[str], object] | None = None,
+                 progress: bool = True, initial: int = 0,
                  every_s: float = 30.0, estimate_after_s: float = 2.0, estimate_after_n: int = 50,
                  announce_over_s: float = 10.0):
         import time
@@ -119,6 +202,13 @@ class Counter:
         return (self.total - self.done) / r if r else None
 
     def update(self, n: int = 1) -> None:
+        """Count ``n`` more units done; advance the bar, or say a line when one is due.
+
+        Parameters
+        ----------
+        n : int
+            Units just done.
+        """
         self.done += n
         self.bar.update(n)
         now = self._clock()
@@ -149,8 +239,19 @@ class Counter:
     def close(self) -> None:
         self.bar.close()
 
-    def iterate(self, items):
-        """``items``, each counted once the loop's body is done with it; closed when the loop ends."""
+    def iterate(self, items: Iterable[T]) -> Iterator[T]:
+        """``items``, each counted once the loop's body is done with it; closed when the loop ends.
+
+        Parameters
+        ----------
+        items : iterable
+            The work, one unit an item.
+
+        Yields
+        ------
+        T
+            Each item of ``items``.
+        """
         try:
             for x in items:
                 yield x

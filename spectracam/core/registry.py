@@ -32,14 +32,36 @@ T = TypeVar("T")
 
 
 class Registry(Mapping[str, T], Generic[T]):
-    """A name → implementation map for one field (e.g. ``processing.delta_e``)."""
+    """A name → implementation map for one field (e.g. ``processing.delta_e``).
+
+    Parameters
+    ----------
+    field : str
+        The field whose values name the implementations (``"processing.delta_e"``): the field an unknown name's
+        :class:`~spectracam.core.errors.ConfigError` names.
+    what : str
+        What an implementation is, in words, for errors about the registry itself.
+    """
 
     def __init__(self, field: str, what: str):
         self.field, self.what = field, what
         self._items: dict[str, T] = {}
 
     def register(self, name: str, obj: T | None = None) -> Callable[[T], T] | T:
-        """Register ``obj`` under ``name``; without ``obj``, a decorator that does so."""
+        """Register ``obj`` under ``name``; without ``obj``, a decorator that does so.
+
+        Parameters
+        ----------
+        name : str
+            The name (not empty); registering it again replaces the earlier implementation.
+        obj : T or None
+            The implementation; None: return a decorator that registers what it decorates.
+
+        Returns
+        -------
+        T or callable
+            ``obj``; without it, the decorator (which returns what it decorates).
+        """
         if not isinstance(name, str) or not name:
             raise ValueError(f"{self.what}: a registered name must be a non-empty string, not {name!r}")
 
@@ -50,7 +72,13 @@ class Registry(Mapping[str, T], Generic[T]):
         return add if obj is None else add(obj)
 
     def unregister(self, name: str) -> None:
-        """Remove a plug-in (tests that register one clean up with this)."""
+        """Remove a plug-in (tests that register one clean up with this).
+
+        Parameters
+        ----------
+        name : str
+            The registered name; an unknown name is ignored.
+        """
         self._items.pop(name, None)
 
     @property
@@ -60,13 +88,40 @@ class Registry(Mapping[str, T], Generic[T]):
     def allowed(self) -> str:
         return "must be one of " + ", ".join(repr(n) for n in self._items)
 
-    def check(self, name, field: str | None = None) -> str:
-        """``name`` if it is registered, else a ConfigError naming ``field`` (default: this registry's)."""
+    def check(self, name: object, field: str | None = None) -> str:
+        """``name`` if it is registered, else a ConfigError naming ``field`` (default: this registry's).
+
+        Parameters
+        ----------
+        name : object
+            The name given (anything that is not a registered string is refused).
+        field : str or None
+            The field to name in the error; None: this registry's.
+
+        Returns
+        -------
+        str
+            ``name``.
+        """
         if not isinstance(name, str) or name not in self._items:
             raise ConfigError(field or self.field, name, self.allowed())
         return name
 
-    def get(self, name, field: str | None = None) -> T:  # type: ignore[override]
+    def get(self, name: object, field: str | None = None) -> T:  # type: ignore[override]
+        """The implementation registered under ``name`` (:meth:`check`'s error if none is).
+
+        Parameters
+        ----------
+        name : object
+            The name given.
+        field : str or None
+            The field to name in the error; None: this registry's.
+
+        Returns
+        -------
+        T
+            The implementation.
+        """
         return self._items[self.check(name, field)]
 
     def __getitem__(self, name: str) -> T:

@@ -26,11 +26,14 @@ import dataclasses
 import functools
 import math
 import typing
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar, Self
 
 import numpy as np
 
 from spectracam.core.errors import ConfigError
+
+if TYPE_CHECKING:
+    from spectracam.core.registry import Registry
 
 __all__ = ["Spec", "check_curve"]
 
@@ -78,36 +81,119 @@ class Spec:
         """Check every field; overridden by each stage's spec."""
 
     def field_name(self, name: str) -> str:
+        """A field's name as the user writes it, under the spec's table.
+
+        Parameters
+        ----------
+        name : str
+            The dataclass field.
+
+        Returns
+        -------
+        str
+            ``"TABLE.name"`` (``name`` for a spec without a table).
+        """
         return f"{self.TABLE}.{name}" if self.TABLE else name
 
     def error(self, name: str, allowed: str, value: Any = dataclasses.MISSING) -> ConfigError:
+        """The :class:`~spectracam.core.errors.ConfigError` of a field (to raise).
+
+        Parameters
+        ----------
+        name : str
+            The dataclass field.
+        allowed : str
+            What is allowed, as a phrase.
+        value : Any
+            The value to show; default: the field's.
+
+        Returns
+        -------
+        ConfigError
+            The error, naming the field under the spec's table.
+        """
         return ConfigError(self.field_name(name), getattr(self, name) if value is dataclasses.MISSING else value,
                            allowed)
 
     def number(self, name: str, lo: float = -math.inf, hi: float = math.inf, *, lo_open: bool = False,
                unit: str = "") -> None:
+        """Check that a field is a real number (not a bool) in ``[lo, hi]``; else raise its error.
+
+        Parameters
+        ----------
+        name : str
+            The dataclass field.
+        lo, hi : float
+            The bounds, in the field's unit.
+        lo_open : bool
+            Exclude ``lo`` itself.
+        unit : str
+            The unit, for the error's wording.
+        """
         v = getattr(self, name)
         ok = _is_number(v) and lo <= v <= hi and not (lo_open and v == lo)
         if not ok:
             raise self.error(name, f"must be a number {_range_text(lo, hi, lo_open, unit)}")
 
     def integer(self, name: str, lo: int, hi: int | None = None) -> None:
+        """Check that a field is an integer (not a bool) of at least ``lo`` and at most ``hi``.
+
+        Parameters
+        ----------
+        name : str
+            The dataclass field.
+        lo : int
+            The least value allowed.
+        hi : int or None
+            The largest value allowed; None: no bound.
+        """
         v = getattr(self, name)
         if isinstance(v, bool) or not isinstance(v, int) or v < lo or (hi is not None and v > hi):
             raise self.error(name, f"must be an integer ≥ {lo}" if hi is None else
                              f"must be an integer between {lo} and {hi}")
 
     def boolean(self, *names: str) -> None:
+        """Check that fields are true or false (a bool, not 0 or 1).
+
+        Parameters
+        ----------
+        *names : str
+            The dataclass fields.
+        """
         for name in names:
             if not isinstance(getattr(self, name), bool):
                 raise self.error(name, "must be true or false")
 
     def string(self, name: str) -> None:
+        """Check that a field is a string.
+
+        Parameters
+        ----------
+        name : str
+            The dataclass field.
+        """
         if not isinstance(getattr(self, name), str):
             raise self.error(name, "must be a string")
 
     def numbers(self, name: str, n: int, lo: float = -math.inf, *, lo_open: bool = False, increasing: bool = False,
                 unit: str = "") -> None:
+        """Check that a field is a tuple of ``n`` real numbers of at least ``lo``; store them as floats.
+
+        Parameters
+        ----------
+        name : str
+            The dataclass field.
+        n : int
+            How many numbers.
+        lo : float
+            The least value allowed, in the field's unit.
+        lo_open : bool
+            Exclude ``lo`` itself.
+        increasing : bool
+            Require strictly increasing numbers.
+        unit : str
+            The unit, for the error's wording.
+        """
         v = getattr(self, name)
         ok = (isinstance(v, tuple) and len(v) == n and all(_is_number(x) for x in v)
               and all(x > lo if lo_open else x >= lo for x in v))
@@ -116,8 +202,16 @@ class Spec:
                              + (", increasing" if increasing else ""), list(v) if isinstance(v, tuple) else v)
         object.__setattr__(self, name, tuple(float(x) for x in v))
 
-    def choice(self, name: str, registry) -> None:
-        """The field names a member of ``registry`` (a :class:`~spectracam.core.registry.Registry` or a tuple)."""
+    def choice(self, name: str, registry: Registry | tuple) -> None:
+        """The field names a member of ``registry`` (a :class:`~spectracam.core.registry.Registry` or a tuple).
+
+        Parameters
+        ----------
+        name : str
+            The dataclass field.
+        registry : Registry or tuple
+            The names allowed.
+        """
         v = getattr(self, name)
         if hasattr(registry, "check"):
             registry.check(v, self.field_name(name))
@@ -134,9 +228,24 @@ class Spec:
         return out
 
     @classmethod
-    def from_dict(cls, data, source: str | None = None, base: "Spec | None" = None):
+    def from_dict(cls, data: object, source: str | None = None, base: "Spec | None" = None) -> Self:
         """Build from a table; keys not given keep ``base``'s values (default: the defaults).
-        Unknown keys and bad values raise one ConfigError naming ``source``."""
+        Unknown keys and bad values raise one ConfigError naming ``source``.
+
+        Parameters
+        ----------
+        data : object
+            The table (a dict of field names to values, as TOML reads them); anything else is refused.
+        source : str or None
+            Where the table came from (a file, ``"command line"``), for the error.
+        base : Spec or None
+            The spec whose values fill the keys not given; None: the defaults.
+
+        Returns
+        -------
+        Self
+            The validated spec.
+        """
         try:
             if not isinstance(data, dict):
                 raise ConfigError(cls.TABLE or "table", data, "must be a table")
@@ -152,13 +261,38 @@ class Spec:
         except ConfigError as e:
             raise e.with_source(source) from None
 
-    def replace(self, **changes):
-        """A validated copy with some fields changed."""
+    def replace(self, **changes: Any) -> Self:
+        """A validated copy with some fields changed.
+
+        Parameters
+        ----------
+        **changes : Any
+            New values by field name.
+
+        Returns
+        -------
+        Self
+            The copy (validated as a new spec is).
+        """
         return dataclasses.replace(self, **changes)
 
 
 def check_curve(spec: "Spec", wl_field: str, value_field: str, required: bool) -> None:
-    """A tabulated curve of a spec: increasing wavelengths and values in [0, 1], of equal length."""
+    """A tabulated curve of a spec: increasing wavelengths and values in [0, 1], of equal length.
+
+    Checks the curve (raising the spec's error) and stores both fields as tuples of floats.
+
+    Parameters
+    ----------
+    spec : Spec
+        The spec holding the curve.
+    wl_field : str
+        The field of its wavelengths, nm.
+    value_field : str
+        The field of its values (transmittance or QE, 0…1).
+    required : bool
+        Whether an empty curve is an error.
+    """
     wl, v = getattr(spec, wl_field), getattr(spec, value_field)
     if not wl and not v:
         if required:

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 __all__ = ["BOLTZMANN_K_J_PER_K", "CIE_RANGE_NM", "CMFS_NAME", "K_M_LM_PER_W", "PLANCK_H_J_S",
            "SPEED_OF_LIGHT_M_S", "Spectrum", "WavelengthGrid", "band_average", "band_sample_points",
@@ -92,7 +93,7 @@ def planck_radiance(wavelength_nm: np.ndarray, temperature_K: float) -> np.ndarr
     return per_m * 1e-9
 
 
-def tabulated(wavelengths_nm, values) -> Spectrum:
+def tabulated(wavelengths_nm: ArrayLike, values: ArrayLike) -> Spectrum:
     """Piecewise-linear interpolation of tabulated data, zero outside the table.
 
     Linear interpolation is what Mitsuba's ``regular``/``irregular`` spectra do, so both renderers
@@ -272,7 +273,7 @@ def logistic_scale_nm(edge_width_nm: float) -> float:
     return edge_width_nm / (2 * np.log(9.0))
 
 
-def logistic_cut(cut_nm: float, edge_width_nm: float):
+def logistic_cut(cut_nm: float, edge_width_nm: float) -> Spectrum:
     """Transmittance ``λ → T`` of a short-pass (IR-cut) edge.
 
     Parameters

@@ -8,6 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from spectracam.core.registry import Registry
 from spectracam.core.spec import check_curve
@@ -80,7 +81,7 @@ def irradiance_factor(optics: OpticsSpec) -> float:
     return float(IRRADIANCE_FORMS[optics.irradiance_form](optics.f_number))
 
 
-def radiance_to_photon_irradiance(grid, optics: OpticsSpec) -> np.ndarray:
+def radiance_to_photon_irradiance(grid: WavelengthGrid | ArrayLike, optics: OpticsSpec) -> np.ndarray:
     """Per-band factor from spectral radiance to photon irradiance at the sensor.
 
     Parameters

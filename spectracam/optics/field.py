@@ -17,10 +17,12 @@ from __future__ import annotations
 import functools
 import math
 import xml.etree.ElementTree as ET
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from spectracam.core.errors import ConfigError
 from spectracam.core.spec import Spec
@@ -213,7 +215,7 @@ def half_diagonal_mm(shape: tuple[int, int], pixel_pitch_um: float) -> float:
     return float(pixel_pitch_um) * 1e-3 * math.hypot(shape[0], shape[1]) / 2
 
 
-def chief_ray_angle_deg(height_mm, field: FieldSpec, corner_mm: float) -> np.ndarray:
+def chief_ray_angle_deg(height_mm: ArrayLike, field: FieldSpec, corner_mm: float) -> np.ndarray:
     """The chief ray's angle of incidence on the sensor at each image height.
 
     Parameters
@@ -248,7 +250,7 @@ def chief_ray_angle_deg(height_mm, field: FieldSpec, corner_mm: float) -> np.nda
     return field.cra_corner_deg * h / h_c
 
 
-def cos4_illumination(angle_deg) -> np.ndarray:
+def cos4_illumination(angle_deg: ArrayLike) -> np.ndarray:
     """The natural vignetting of a small pupil: ``cos⁴θ``.
 
     Parameters
@@ -269,7 +271,7 @@ def cos4_illumination(angle_deg) -> np.ndarray:
     return c**4
 
 
-def exit_pupil_illumination(height_mm, exit_pupil_mm: float, f_number: float | None = None) -> np.ndarray:
+def exit_pupil_illumination(height_mm: ArrayLike, exit_pupil_mm: float, f_number: float | None = None) -> np.ndarray:
     """A lens's relative illumination from its exit pupil's distance and the image height.
 
     Parameters
@@ -304,7 +306,7 @@ def exit_pupil_illumination(height_mm, exit_pupil_mm: float, f_number: float | N
     return np.where(rho == 0, 1.0, e / (2.0 * a2 / (1.0 + a2)))  # exactly 1 on the axis
 
 
-def pa_illumination(height_mm, k, radius_mm: float) -> np.ndarray:
+def pa_illumination(height_mm: ArrayLike, k: Sequence[float], radius_mm: float) -> np.ndarray:
     """lensfun's (Hugin's, Pablo d'Angelo's) vignetting polynomial.
 
     Parameters
@@ -331,7 +333,8 @@ def pa_illumination(height_mm, k, radius_mm: float) -> np.ndarray:
     return 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
 
 
-def relative_illumination(height_mm, field: FieldSpec, corner_mm: float, f_number: float | None = None) -> np.ndarray:
+def relative_illumination(height_mm: ArrayLike, field: FieldSpec, corner_mm: float,
+                          f_number: float | None = None) -> np.ndarray:
     """The relative illumination ``E(h)/E(0)`` the field spec describes, 0 outside the image circle.
 
     Parameters
@@ -428,8 +431,19 @@ class LensfunVignetting:
         """Half the diagonal of the frame it was calibrated on, mm (36 × 24 mm / crop factor)."""
         return FULL_FRAME_HALF_DIAGONAL_MM / self.crop_factor
 
-    def field(self, **changes) -> FieldSpec:
-        """A :class:`FieldSpec` with this relative illumination (``"pa"``) and any other fields changed."""
+    def field(self, **changes: object) -> FieldSpec:
+        """A :class:`FieldSpec` with this relative illumination (``"pa"``) and any other fields changed.
+
+        Parameters
+        ----------
+        **changes : object
+            Other fields of the :class:`FieldSpec` (not its ``pa_`` ones).
+
+        Returns
+        -------
+        FieldSpec
+            ``relative_illumination = "pa"`` with this lens's ``k`` and ``radius_mm``.
+        """
         return FieldSpec(relative_illumination="pa", pa_k=self.k, pa_radius_mm=self.radius_mm, **changes)
 
 

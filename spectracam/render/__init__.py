@@ -7,8 +7,16 @@ other.  A new renderer is a function ``(scene, progress, log) → RadianceCube``
 """
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
+import numpy as np
+
 from spectracam.core.registry import Registry
 from spectracam.render.cube import VARIANTS, ChannelPlanes, RadianceCube, RenderSpec
+
+if TYPE_CHECKING:
+    from spectracam.pipeline.scene_file import Scene
 
 __all__ = ["RENDERERS", "VARIANTS", "ChannelPlanes", "RadianceCube", "RenderSpec", "render", "render_planes"]
 
@@ -38,17 +46,61 @@ def _analytic(scene, progress=False, log=None):
     return render_analytic(scene)
 
 
-def render(scene, renderer: str = "mitsuba", progress: bool = False, log=None) -> RadianceCube:
-    """Render ``scene`` with the registered renderer; ``log`` (a callable) receives one-line notices."""
+def render(scene: Scene, renderer: str = "mitsuba", progress: bool = False,
+           log: Callable[[str], object] | None = None) -> RadianceCube:
+    """Render ``scene`` with the registered renderer; ``log`` (a callable) receives one-line notices.
+
+    Parameters
+    ----------
+    scene : Scene
+        What is in front of the camera: target, light, geometry, bands, image size, render settings.
+    renderer : str
+        A name in :data:`RENDERERS`: ``"mitsuba"`` (spectral Monte Carlo) or ``"analytic"`` (closed form).
+    progress : bool
+        Draw a bar over the bands (on a terminal).
+    log : callable or None
+        Receives one-line notices (e.g. the Mitsuba variant chosen); None: none.
+
+    Returns
+    -------
+    RadianceCube
+        ``(H, W, B)`` float32 band-averaged spectral radiance, W·m⁻²·sr⁻¹·nm⁻¹; its metadata records the
+        renderer and the scene.
+    """
     cube = RENDERERS[renderer](scene, progress=progress, log=log)
     cube.metadata["scene"] = scene.to_dict()  # later stages find the chart geometry here
     return cube
 
 
-def render_planes(scene, weights, renderer: str = "mitsuba", progress: bool = False, log=None) -> ChannelPlanes:
-    """Render ``scene`` straight into :class:`ChannelPlanes` (``weights`` ``(B, N)``, e.g. a camera's band weights):
-    each band integrated into the planes as it is rendered, the ``(H, W, B)`` cube never held (issue 38).  A chart
-    scene of one light, by the ``mitsuba`` or ``analytic`` renderer; anything else is refused in one line."""
+def render_planes(scene: Scene, weights: np.ndarray, renderer: str = "mitsuba", progress: bool = False,
+                  log: Callable[[str], object] | None = None) -> ChannelPlanes:
+    """Render ``scene`` straight into :class:`ChannelPlanes`: each band integrated into the planes as it is rendered,
+    the ``(H, W, B)`` cube never held (issue 38).
+
+    Parameters
+    ----------
+    scene : Scene
+        A chart scene of one light.
+    weights : ndarray
+        ``(B, N)`` weights of the scene's bands, e.g. a camera's band weights (:func:`spectracam.camera.band_weights`,
+        e⁻/s per W·m⁻²·sr⁻¹·nm⁻¹).
+    renderer : {"mitsuba", "analytic"}
+        The renderer; any other is refused.
+    progress : bool
+        Draw a bar over the bands (Mitsuba).
+    log : callable or None
+        Told the Mitsuba variant chosen.
+
+    Returns
+    -------
+    ChannelPlanes
+        ``(H, W, N)`` float32 ``Σ_b L_b · weights[b, k]``, recording the scene in ``metadata["scene"]``.
+
+    Raises
+    ------
+    SpectracamError
+        Another renderer, a textured target or a scene of several light groups, in one line.
+    """
     from spectracam.core.errors import SpectracamError
 
     RENDERERS[renderer]   # an unknown renderer: the registry's one line

@@ -9,11 +9,16 @@ the one-chart closed form of the cell's size (:func:`chart_block`); unlit cells 
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from spectracam.scene.chart import ChartSpec, View, patch_coverage
 from spectracam.scene.reference import ChartReference, chart_cells
 from spectracam.render.cube import ChannelPlanes, RadianceCube
+
+if TYPE_CHECKING:
+    from spectracam.pipeline.scene_file import Scene
 
 __all__ = ["ANALYTIC_METADATA", "chart_block", "lights_metadata", "render_analytic", "render_analytic_planes"]
 
@@ -52,9 +57,20 @@ def chart_block(chart: ChartSpec, patches: np.ndarray, surround: np.ndarray, wid
     return cube
 
 
-def lights_metadata(scene) -> dict:
+def lights_metadata(scene: Scene) -> dict:
     """What a cube records of a scene's light groups: ``{"lights": [...]}`` (each group's table, and for a chart
-    its cell's pixels), or nothing without light groups (the metadata of a one-light scene is unchanged)."""
+    its cell's pixels), or nothing without light groups (the metadata of a one-light scene is unchanged).
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene.
+
+    Returns
+    -------
+    dict
+        ``{}``, or ``{"lights": [table, ...]}`` with ``cell_px`` = [row start, row stop, column start, column stop].
+    """
     if not scene.lights:
         return {}
     groups = [g.to_dict() for g in scene.lights]
@@ -64,9 +80,20 @@ def lights_metadata(scene) -> dict:
     return {"lights": groups}
 
 
-def render_analytic(scene) -> RadianceCube:
+def render_analytic(scene: Scene) -> RadianceCube:
     """The chart's radiance cube in closed form: each pixel mixes the surround and the patches in
-    proportion to the area of its footprint they cover; with light groups, one chart per group's cell."""
+    proportion to the area of its footprint they cover; with light groups, one chart per group's cell.
+
+    Parameters
+    ----------
+    scene : Scene
+        A chart scene.
+
+    Returns
+    -------
+    RadianceCube
+        ``(H, W, B)`` float32 band-averaged radiance, W·m⁻²·sr⁻¹·nm⁻¹.
+    """
     W, H, B = scene.image.width, scene.image.height, len(scene.grid)
     if len(scene.lights) > 1:
         cube = np.zeros((H, W, B), dtype=np.float32)
@@ -85,10 +112,22 @@ def render_analytic(scene) -> RadianceCube:
 ANALYTIC_METADATA = {"renderer": "analytic", "variant": None, "samples_per_pixel": None}
 
 
-def render_analytic_planes(scene, weights: np.ndarray) -> ChannelPlanes:
+def render_analytic_planes(scene: Scene, weights: np.ndarray) -> ChannelPlanes:
     """The chart's :class:`ChannelPlanes` in closed form: the pixels mix the patches' and the surround's integrated
-    values ``radiance @ weights`` (``(n_bands, N)``) as the cube's pixels mix their spectra, the mixing being linear;
-    no cube is made.  One light (a scene of several light groups renders a cube only)."""
+    values ``radiance @ weights`` as the cube's pixels mix their spectra (the mixing is linear); no cube is made.
+
+    Parameters
+    ----------
+    scene : Scene
+        A chart scene of one light.
+    weights : ndarray
+        ``(B, N)`` weights of its bands (a camera's band weights: e⁻/s per W·m⁻²·sr⁻¹·nm⁻¹).
+
+    Returns
+    -------
+    ChannelPlanes
+        ``(H, W, N)`` float32 planes.
+    """
     ref = ChartReference.of(scene)
     w = np.asarray(weights, np.float64)
     planes = chart_block(scene.chart, ref.patch_radiance @ w, ref.surround_radiance @ w, scene.image.width,

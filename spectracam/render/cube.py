@@ -54,7 +54,18 @@ class RadianceCube:
 
     def check(self, source: str = "radiance") -> "RadianceCube":
         """Refuse a cube that is not a physical radiance: wrong shape, NaN/inf or negative values
-        (one line naming where: the first bad band and how many pixels)."""
+        (one line naming where: the first bad band and how many pixels).
+
+        Parameters
+        ----------
+        source : str
+            Where the cube came from (a file, a function), as the error names it.
+
+        Returns
+        -------
+        RadianceCube
+            This cube, when it is one.
+        """
         from spectracam.core.errors import SpectracamError
 
         r = self.radiance

@@ -30,7 +30,10 @@ import glob
 import os
 import subprocess
 import sys
+from collections.abc import Callable
 from functools import lru_cache
+from types import ModuleType
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -40,6 +43,11 @@ from spectracam.scene.illuminant import spectral_irradiance
 from spectracam.core.spectra import band_average, band_sample_points
 from spectracam.render.analytic import lights_metadata
 from spectracam.render.cube import ChannelPlanes, RadianceCube
+
+if TYPE_CHECKING:
+    from spectracam.core.spectra import WavelengthGrid
+    from spectracam.pipeline.scene_file import Scene
+    from spectracam.scene.reference import ChartCell
 
 __all__ = ["CAMERA_DISTANCE_MM", "PATCH_LIFT_MM", "POINTS_PER_BAND", "REFERENCE_WINDOW_NM", "VARIANT_NAMES",
            "WITHIN_BAND", "activate_variant", "band_scene", "band_seed", "build_lights_scene", "build_scene",
@@ -101,6 +109,18 @@ def run_probe(variant: str, env: dict) -> bool:
 
     A subprocess, because with the wrong libLLVM (drjit 1.5 needs 19; 15 aborts) the first render aborts the
     whole process.
+
+    Parameters
+    ----------
+    variant : str
+        A Mitsuba variant (``"llvm_ad_spectral"``).
+    env : dict
+        The subprocess's environment (where drjit finds libLLVM).
+
+    Returns
+    -------
+    bool
+        True if the test render ran and gave the right value within 300 s.
     """
     try:
         r = subprocess.run([sys.executable, "-c", _PROBE, variant], env=env, capture_output=True, timeout=300)
@@ -111,7 +131,18 @@ def run_probe(variant: str, env: dict) -> bool:
 
 @lru_cache(maxsize=None)
 def probe_variant(variant: str) -> bool:
-    """Does ``variant`` actually render here (probed once per process)?"""
+    """Does ``variant`` actually render here (probed once per process)?
+
+    Parameters
+    ----------
+    variant : str
+        A Mitsuba variant.
+
+    Returns
+    -------
+    bool
+        :func:`run_probe`'s answer with the libLLVM drjit should use.
+    """
     return run_probe(variant, _jit_env())
 
 
@@ -120,7 +151,19 @@ def _gpu_present() -> bool:
 
 
 def select_variant(requested: str) -> tuple[str, str]:
-    """Resolve ``auto|llvm|scalar|cuda`` to a Mitsuba variant that renders here, and say why."""
+    """Resolve ``auto|llvm|scalar|cuda`` to a Mitsuba variant that renders here, and say why.
+
+    Parameters
+    ----------
+    requested : str
+        ``render.variant``: ``"auto"`` (CUDA if a GPU renders, else LLVM if it renders, else scalar) or a backend
+        asked for by name (refused in one line where it does not render).
+
+    Returns
+    -------
+    tuple of str
+        The Mitsuba variant and the reason it was chosen.
+    """
     if requested == "auto":
         if _gpu_present() and probe_variant(VARIANT_NAMES["cuda"]):
             return VARIANT_NAMES["cuda"], "auto: a CUDA GPU renders"
@@ -138,7 +181,19 @@ def select_variant(requested: str) -> tuple[str, str]:
     return name, f"requested: {requested}"
 
 
-def activate_variant(variant: str):
+def activate_variant(variant: str) -> ModuleType:
+    """Mitsuba, imported with drjit pointed at a libLLVM 19 where one is found, with ``variant`` set.
+
+    Parameters
+    ----------
+    variant : str
+        A Mitsuba variant that renders here (:func:`select_variant`).
+
+    Returns
+    -------
+    ModuleType
+        The ``mitsuba`` module.
+    """
     env = _jit_env()
     if "DRJIT_LIBLLVM_PATH" in env:
         os.environ.setdefault("DRJIT_LIBLLVM_PATH", env["DRJIT_LIBLLVM_PATH"])
@@ -150,13 +205,38 @@ def activate_variant(variant: str):
 
 
 def regular_spectrum(values: np.ndarray, width_nm: float) -> dict:
+    """A Mitsuba ``regular`` spectrum of ``values`` spread evenly over the reference window.
+
+    Parameters
+    ----------
+    values : ndarray
+        The values, from the window's start to its end.
+    width_nm : float
+        The window's width (the bands' width), nm.
+
+    Returns
+    -------
+    dict
+        The spectrum's plug-in dictionary.
+    """
     return {"type": "regular", "wavelength_min": REFERENCE_WINDOW_NM,
             "wavelength_max": REFERENCE_WINDOW_NM + width_nm,
             "values": ", ".join(f"{v:.9g}" for v in values)}
 
 
-def even_band_width_nm(grid) -> float:
-    """The one band width of an evenly spaced grid (every band is mapped into one reference window)."""
+def even_band_width_nm(grid: WavelengthGrid) -> float:
+    """The one band width of an evenly spaced grid (every band is mapped into one reference window).
+
+    Parameters
+    ----------
+    grid : WavelengthGrid
+        The scene's bands (bands of unequal width are refused).
+
+    Returns
+    -------
+    float
+        The width, nm.
+    """
     widths = grid.widths_nm
     width_nm = float(widths.max())
     if not np.allclose(widths, width_nm):
@@ -165,10 +245,27 @@ def even_band_width_nm(grid) -> float:
     return width_nm
 
 
-def band_scene(mi, scene, view_width: float, width_nm: float) -> dict:
+def band_scene(mi: ModuleType, scene: Scene, view_width: float, width_nm: float) -> dict:
     """What every band render shares: the direct integrator, an orthographic camera looking down at a
     view ``view_width`` wide (the image's aspect) with a one-band ``specfilm`` over the reference window,
-    and a directional light whose irradiance is updated per band."""
+    and a directional light whose irradiance is updated per band.
+
+    Parameters
+    ----------
+    mi : ModuleType
+        Mitsuba, its variant set.
+    scene : Scene
+        The scene (image size, samples per pixel).
+    view_width : float
+        The view's width in world units.
+    width_nm : float
+        The bands' width, nm.
+
+    Returns
+    -------
+    dict
+        The scene dictionary's integrator, sensor and light.
+    """
     T = mi.ScalarTransform4f
     return {
         "type": "scene",
@@ -191,8 +288,23 @@ def band_scene(mi, scene, view_width: float, width_nm: float) -> dict:
     }
 
 
-def build_scene(mi, scene, width_nm: float) -> dict:
-    """The Mitsuba scene dictionary: board, 24 patches, a directional light, an orthographic camera."""
+def build_scene(mi: ModuleType, scene: Scene, width_nm: float) -> dict:
+    """The Mitsuba scene dictionary: board, 24 patches, a directional light, an orthographic camera.
+
+    Parameters
+    ----------
+    mi : ModuleType
+        Mitsuba, its variant set.
+    scene : Scene
+        A chart scene; world units are mm of the chart plane.
+    width_nm : float
+        The bands' width, nm.
+
+    Returns
+    -------
+    dict
+        The scene dictionary (placeholder spectra, set per band).
+    """
     view = View.fit(scene.chart, scene.image.width, scene.image.height)
     vw, vh = view.size_mm
     T = mi.ScalarTransform4f
@@ -210,7 +322,20 @@ def build_scene(mi, scene, width_nm: float) -> dict:
 
 
 def band_seed(seed: int, band: int) -> int:
-    """Independent, reproducible 32-bit sampler seed for each band of one render."""
+    """Independent, reproducible 32-bit sampler seed for each band of one render.
+
+    Parameters
+    ----------
+    seed : int
+        The scene's ``render.seed``.
+    band : int
+        The band's index.
+
+    Returns
+    -------
+    int
+        The sampler seed, 0 … 2³² − 1.
+    """
     return int(np.random.SeedSequence([seed, band]).generate_state(1)[0])
 
 
@@ -231,9 +356,22 @@ def _said(log):
         return None
 
 
-def open_variant(scene, log=None):
+def open_variant(scene: Scene, log: Callable[[str], object] | None = None) -> tuple[ModuleType, str, str, float]:
     """``(mi, variant, reason, band width nm)``: Mitsuba with the variant ``scene.render.variant`` resolves
-    to active (said to ``log``), and the one band width of ``scene``'s grid (evenly spaced grids only)."""
+    to active (said to ``log``), and the one band width of ``scene``'s grid (evenly spaced grids only).
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene (its ``render.variant`` and wavelength grid).
+    log : callable or None
+        Told the variant, once per log and variant.
+
+    Returns
+    -------
+    tuple of (ModuleType, str, str, float)
+        Mitsuba, the variant, why it was chosen, and the bands' width in nm.
+    """
     variant, reason = select_variant(scene.render.variant)
     if log and _said(log) != variant:   # once per log and variant: a paper run renders six lights
         log(f"Mitsuba variant {variant} ({reason})")
@@ -245,21 +383,62 @@ def open_variant(scene, log=None):
     return mi, variant, reason, even_band_width_nm(scene.grid)
 
 
-def load_scene(mi, d: dict):
+def load_scene(mi: ModuleType, d: dict) -> tuple[object, object]:
     """``(mi_scene, params)`` of a scene dictionary.  optimize=False: the loader would otherwise merge
     rectangles with identical placeholder BSDFs into one mesh, and their spectra could no longer be
-    updated per band."""
+    updated per band.
+
+    Parameters
+    ----------
+    mi : ModuleType
+        Mitsuba, its variant set.
+    d : dict
+        The scene dictionary.
+
+    Returns
+    -------
+    mi_scene : mitsuba.Scene
+        The loaded scene.
+    params : mitsuba.SceneParameters
+        Its parameters (``mi.traverse``), updated per band.
+    """
     mi_scene = mi.load_dict(d, optimize=False)
     return mi_scene, mi.traverse(mi_scene)
 
 
-def render_bands(mi, mi_scene, params, scene, set_band, seed, progress: bool = False,
+def render_bands(mi: ModuleType, mi_scene: object, params: object, scene: Scene, set_band: Callable[[int], object],
+                 seed: Callable[[int], int], progress: bool = False,
                  weights: np.ndarray | None = None) -> np.ndarray:
     """The ``(H, W, B)`` float32 cube of ``scene``'s image and grid from the one compiled scene: per
     band ``b``, ``set_band(b)`` writes its spectra into ``params``, then one render with sampler seed
-    ``seed(b)``.  With ``weights`` ``(B, N)``, each band's image is added into ``N`` planes as it is rendered
-    (``planes[k] += weights[b, k] · L_b``) and the ``(N, H, W)`` float32 planes are returned: no cube is held
-    (:class:`spectracam.render.cube.ChannelPlanes`)."""
+    ``seed(b)``.  With ``weights``, each band's image is added into the planes as it is rendered instead: no cube is
+    held (:class:`spectracam.render.cube.ChannelPlanes`).
+
+    Parameters
+    ----------
+    mi : ModuleType
+        Mitsuba, its variant set.
+    mi_scene : mitsuba.Scene
+        The loaded scene.
+    params : mitsuba.SceneParameters
+        Its parameters.
+    scene : Scene
+        The scene (image size, bands).
+    set_band : callable
+        Writes band ``b``'s spectra into ``params``.
+    seed : callable
+        Band index → sampler seed.
+    progress : bool
+        Draw a bar over the bands.
+    weights : ndarray or None
+        ``(B, N)``: ``planes[k] += weights[b, k] · L_b`` for each band ``b`` as it is rendered.
+
+    Returns
+    -------
+    ndarray
+        ``(H, W, B)`` float32 band-averaged radiance, W·m⁻²·sr⁻¹·nm⁻¹; with ``weights``, the ``(N, H, W)`` float32
+        planes.
+    """
     from spectracam.core.progress import bar
 
     H, W, B = scene.image.height, scene.image.width, len(scene.grid)
@@ -281,30 +460,69 @@ def render_bands(mi, mi_scene, params, scene, set_band, seed, progress: bool = F
     return out
 
 
-def render_metadata(mi, variant: str, reason: str, samples_per_pixel: int, seed: int, within_band: str,
-                    **more) -> dict:
-    """A Mitsuba cube's ``metadata`` (``more``: the caller's own entries, before the version)."""
+def render_metadata(mi: ModuleType, variant: str, reason: str, samples_per_pixel: int, seed: int, within_band: str,
+                    **more: object) -> dict:
+    """A Mitsuba cube's ``metadata`` (``more``: the caller's own entries, before the version).
+
+    Parameters
+    ----------
+    mi : ModuleType
+        Mitsuba (its version is recorded).
+    variant, reason : str
+        The variant and why it was chosen.
+    samples_per_pixel, seed : int
+        The sampler's samples per pixel and the scene's seed.
+    within_band : str
+        How spectra were handled within a band (``"light-weighted"`` or ``"sampled"``).
+    **more : object
+        The caller's own entries.
+
+    Returns
+    -------
+    dict
+        The metadata.
+    """
     return {"renderer": "mitsuba", "variant": variant, "variant_reason": reason,
             "samples_per_pixel": samples_per_pixel, "seed": seed, "within_band": within_band, **more,
             "mitsuba_version": mi.__version__}
 
 
-def render_mitsuba(scene, progress: bool = False, log=None, within_band: str = "light-weighted",
+def _no_planes(scene: Scene) -> ChannelPlanes:
+    """Refuse channel planes of a scene of light groups (each group is rendered and summed per band)."""
+    raise SpectracamError(f"lights = {len(scene.lights)} light groups: channel planes are rendered for one light")
+
+
+def render_mitsuba(scene: Scene, progress: bool = False, log: Callable[[str], object] | None = None,
+                   within_band: str = "light-weighted",
                    weights: np.ndarray | None = None) -> RadianceCube | ChannelPlanes:
     """The chart scene's radiance cube by Mitsuba (module docstring); a scene of several light groups by
-    :func:`render_lights_mitsuba`.  With ``weights`` ``(B, N)`` (one light), the :class:`ChannelPlanes` of the same
-    renders, each band added into the planes as it is rendered (:func:`render_bands`)."""
+    :func:`render_lights_mitsuba`.
+
+    Parameters
+    ----------
+    scene : Scene
+        A chart scene.
+    progress : bool
+        Draw a bar over the bands.
+    log : callable or None
+        Told the Mitsuba variant chosen.
+    within_band : str
+        ``"light-weighted"`` (light-weighted band-average reflectances: exact) or ``"sampled"`` (spectra sampled).
+    weights : ndarray or None
+        ``(B, N)``, one light: each band added into channel planes as it is rendered (:func:`render_bands`).
+
+    Returns
+    -------
+    RadianceCube or ChannelPlanes
+        ``(H, W, B)`` float32 band-averaged radiance, W·m⁻²·sr⁻¹·nm⁻¹; with ``weights``, ``(H, W, N)`` planes.
+    """
     if within_band not in WITHIN_BAND:
         raise SpectracamError(f"within_band = {within_band!r}: must be one of " + ", ".join(map(repr, WITHIN_BAND)))
     if len(scene.lights) > 1:
-        if weights is not None:
-            raise SpectracamError(f"lights = {len(scene.lights)} light groups: channel planes are rendered for a scene "
-                                  "of one light; render the radiance cube")
-        return render_lights_mitsuba(scene, progress, log, within_band)
+        return render_lights_mitsuba(scene, progress, log, within_band) if weights is None else _no_planes(scene)
     mi, variant, reason, ref_width = open_variant(scene, log)
     grid = scene.grid
     mi_scene, params = load_scene(mi, build_scene(mi, scene, ref_width))
-
     E = spectral_irradiance(scene.illuminant)
     reflectances = patch_reflectances(scene.chart)
     lam = band_sample_points(grid, POINTS_PER_BAND)  # (B, N+1), for "sampled"
@@ -331,17 +549,33 @@ def render_mitsuba(scene, progress: bool = False, log=None, within_band: str = "
                        weights)
     meta = render_metadata(mi, variant, reason, scene.render.samples_per_pixel, scene.render.seed, within_band,
                            **lights_metadata(scene))
-    if weights is not None:
-        return ChannelPlanes(np.ascontiguousarray(np.moveaxis(out, 0, -1)), np.asarray(grid.centres_nm, float),
-                             np.asarray(weights, np.float64), meta)
-    return RadianceCube(out, np.asarray(grid.centres_nm, float), meta)
+    if weights is None:
+        return RadianceCube(out, np.asarray(grid.centres_nm, float), meta)
+    return ChannelPlanes(np.moveaxis(out, 0, -1).copy(), np.asarray(grid.centres_nm, float), np.asarray(weights, float), meta)
 
 
-def build_lights_scene(mi, scene, cells, width_nm: float) -> dict:
+def build_lights_scene(mi: ModuleType, scene: Scene, cells: list[ChartCell], width_nm: float) -> dict:
     """The Mitsuba scene of a light-group chart scene: per cell (:func:`spectracam.scene.reference.chart_cells`) a
     board covering the cell and 24 patches, the chart fitted and centred in the cell as the one-chart scene is in
     the image; one directional light.  World units are pixels (the view is the image, W × H units), origin at
-    the image centre, y up."""
+    the image centre, y up.
+
+    Parameters
+    ----------
+    mi : ModuleType
+        Mitsuba, its variant set.
+    scene : Scene
+        The scene.
+    cells : list of ChartCell
+        Its chart cells.
+    width_nm : float
+        The bands' width, nm.
+
+    Returns
+    -------
+    dict
+        The scene dictionary (spectra to be set per band).
+    """
     W, H = scene.image.width, scene.image.height
     T = mi.ScalarTransform4f
     d = band_scene(mi, scene, W, width_nm)
@@ -371,13 +605,30 @@ def _group_spectra(scene, illuminant) -> tuple[np.ndarray, np.ndarray]:
     return light_band, rho
 
 
-def render_lights_mitsuba(scene, progress: bool = False, log=None, within_band: str = "light-weighted"
-                          ) -> RadianceCube:
+def render_lights_mitsuba(scene: Scene, progress: bool = False, log: Callable[[str], object] | None = None,
+                          within_band: str = "light-weighted") -> RadianceCube:
     """A light-group chart scene by Mitsuba: per band, one render per group — its light on, every surface of the
     other groups black (reflectance 0) — summed (rendering is linear: the "light groups" of production
     renderers); the same band seed for every group.  Surfaces are uniform spectra (a band's light-weighted
     reflectance is constant over the band; a regular spectrum cannot be 0), so ``within_band`` is
-    "light-weighted" only."""
+    "light-weighted" only.
+
+    Parameters
+    ----------
+    scene : Scene
+        A chart scene of several light groups.
+    progress : bool
+        Draw a bar over the bands.
+    log : callable or None
+        Told the Mitsuba variant chosen.
+    within_band : str
+        ``"light-weighted"`` (the only one allowed here).
+
+    Returns
+    -------
+    RadianceCube
+        ``(H, W, B)`` float32 band-averaged radiance, W·m⁻²·sr⁻¹·nm⁻¹.
+    """
     from spectracam.core.progress import bar
     from spectracam.scene.reference import chart_cells
 

@@ -29,6 +29,9 @@ positions, the seed :func:`texture_seed` for every band) to show the Monte Carlo
 """
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from spectracam.core.errors import SpectracamError
@@ -37,6 +40,9 @@ from spectracam.scene.reference import TargetReference
 from spectracam.core.spectra import band_average
 from spectracam.render.analytic import lights_metadata
 from spectracam.render.cube import RadianceCube
+
+if TYPE_CHECKING:
+    from spectracam.pipeline.scene_file import Scene
 
 __all__ = ["SAMPLERS", "TEXTURE_SEED_STREAM", "render_target_analytic", "render_target_mitsuba",
            "texture_seed"]
@@ -51,13 +57,35 @@ TEXTURE_SEED_STREAM = 34
 
 def texture_seed(seed: int) -> int:
     """The one 32-bit Mitsuba sampler seed of every band of a textured render from the scene's ``seed``
-    (its own stream of the seed sequence, apart from the sensor's noise streams)."""
+    (its own stream of the seed sequence, apart from the sensor's noise streams).
+
+    Parameters
+    ----------
+    seed : int
+        The scene's ``render.seed``.
+
+    Returns
+    -------
+    int
+        The sampler seed, 0 … 2³² − 1.
+    """
     return int(np.random.SeedSequence([seed, TEXTURE_SEED_STREAM]).generate_state(1)[0])
 
 
-def render_target_analytic(scene) -> RadianceCube:
+def render_target_analytic(scene: Scene) -> RadianceCube:
     """A textured target's radiance cube in closed form: each pixel the mean of its texels' ``E·S/π`` (with light
-    groups, each label's ``E_g·S/π`` under its group's light)."""
+    groups, each label's ``E_g·S/π`` under its group's light).
+
+    Parameters
+    ----------
+    scene : Scene
+        A scene with a textured target.
+
+    Returns
+    -------
+    RadianceCube
+        ``(H, W, B)`` float32 band-averaged radiance, W·m⁻²·sr⁻¹·nm⁻¹.
+    """
     ref = TargetReference.of(scene)
     cube = ref.pixel_mean(ref.radiance, np.float32)
     meta = {"renderer": "analytic", "variant": None, "samples_per_pixel": None, "seed": scene.render.seed,
@@ -65,7 +93,26 @@ def render_target_analytic(scene) -> RadianceCube:
     return RadianceCube(cube, np.asarray(scene.grid.centres_nm, float), meta)
 
 
-def render_target_mitsuba(scene, progress: bool = False, log=None, sampler: str = "texels") -> RadianceCube:
+def render_target_mitsuba(scene: Scene, progress: bool = False, log: Callable[[str], object] | None = None,
+                          sampler: str = "texels") -> RadianceCube:
+    """A textured target's radiance cube rendered by Mitsuba band by band, one sampler seed for every band.
+
+    Parameters
+    ----------
+    scene : Scene
+        A scene with a textured target.
+    progress : bool
+        Draw a bar over the bands.
+    log : callable or None
+        Receives one-line notices (the Mitsuba variant chosen).
+    sampler : str
+        ``"texels"``: one unjittered sample at each texel's centre; ``"independent"``: the scene's samples per pixel.
+
+    Returns
+    -------
+    RadianceCube
+        ``(H, W, B)`` float32 band-averaged radiance, W·m⁻²·sr⁻¹·nm⁻¹, with the render's metadata.
+    """
     from spectracam.render.mitsuba import (POINTS_PER_BAND, band_scene, load_scene, open_variant, render_bands,
                                            render_metadata)
 

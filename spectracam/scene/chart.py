@@ -58,7 +58,18 @@ class ChartSpec(Spec):
 
 
 def patch_names_and_data(dataset: str) -> list[tuple[str, np.ndarray, np.ndarray]]:
-    """``[(name, wavelengths_nm, reflectance)]`` for the 24 patches, from colour-science."""
+    """``[(name, wavelengths_nm, reflectance)]`` for the 24 patches, from colour-science.
+
+    Parameters
+    ----------
+    dataset : str
+        A key of colour-science's ``SDS_COLOURCHECKERS``.
+
+    Returns
+    -------
+    list of (str, ndarray, ndarray)
+        Each patch's name, its measured wavelengths (nm) and reflectances (0…1), in the standard order.
+    """
     import colour
 
     sds = colour.SDS_COLOURCHECKERS[dataset]
@@ -71,17 +82,51 @@ def patch_names_and_data(dataset: str) -> list[tuple[str, np.ndarray, np.ndarray
 
 
 def dataset_range_nm(dataset: str) -> tuple[float, float]:
+    """The wavelengths a chart dataset's reflectances are measured over.
+
+    Parameters
+    ----------
+    dataset : str
+        A key of colour-science's ``SDS_COLOURCHECKERS``.
+
+    Returns
+    -------
+    tuple of float
+        The first patch's first and last measured wavelength, nm.
+    """
     wl = patch_names_and_data(dataset)[0][1]
     return float(wl[0]), float(wl[-1])
 
 
 def patch_reflectances(chart: ChartSpec) -> list[tuple[str, Spectrum]]:
-    """The 24 reflectance spectra, piecewise-linear between the measured samples."""
+    """The 24 reflectance spectra, piecewise-linear between the measured samples.
+
+    Parameters
+    ----------
+    chart : ChartSpec
+        The chart (its ``dataset``).
+
+    Returns
+    -------
+    list of (str, Spectrum)
+        Each patch's name and its reflectance as a function of wavelength in nm (zero outside the data).
+    """
     return [(n, tabulated(wl, r)) for n, wl, r in patch_names_and_data(chart.dataset)]
 
 
 def patch_rectangles_mm(chart: ChartSpec) -> np.ndarray:
-    """``(24, 4)`` rectangles ``x0, x1, y0, y1`` (mm, chart plane), standard patch order."""
+    """``(24, 4)`` rectangles ``x0, x1, y0, y1`` (mm, chart plane), standard patch order.
+
+    Parameters
+    ----------
+    chart : ChartSpec
+        The chart's geometry (patch size, gap, border, mm), centred on the origin, y up.
+
+    Returns
+    -------
+    ndarray
+        ``(24, 4)`` float64, mm.
+    """
     bw, bh = chart.board_size_mm
     pitch = chart.patch_size_mm + chart.gap_mm
     rects = []
@@ -103,6 +148,21 @@ class View:
 
     @classmethod
     def fit(cls, chart: ChartSpec, width_px: int, height_px: int) -> "View":
+        """The view of an image of ``width_px`` × ``height_px`` pixels with the whole board fitted in it.
+
+        Parameters
+        ----------
+        chart : ChartSpec
+            The chart (its board size, mm).
+        width_px, height_px : int
+            The image's size, pixels.
+
+        Returns
+        -------
+        View
+            Square pixels of ``max(board width / width_px, board height / height_px)`` mm: the board fills the
+            image along its tighter axis.
+        """
         bw, bh = chart.board_size_mm
         return cls(width_px, height_px, max(bw / width_px, bh / height_px))
 
@@ -127,6 +187,18 @@ def patch_coverage(chart: ChartSpec, view: View) -> tuple[np.ndarray, np.ndarray
 
     The fraction of pixel (i, j) covered by patch p is ``cy[p, i] * cx[p, j]`` (axis-aligned
     rectangles), which is also the expected value of a box-filtered Monte Carlo render.
+
+    Parameters
+    ----------
+    chart : ChartSpec
+        The chart's geometry.
+    view : View
+        The pixels on the chart plane.
+
+    Returns
+    -------
+    cy, cx : ndarray
+        ``(24, H)`` and ``(24, W)`` float64 fractions of each row's and column's pixel extent inside each patch.
     """
     xe, ye = view.pixel_edges_mm()
     rects = patch_rectangles_mm(chart)
@@ -141,6 +213,18 @@ def patch_boxes(chart: ChartSpec, width_px: int, height_px: int) -> list[tuple[s
 
     Later stages score patches on these pixels only, away from edges where pixels mix materials.
     Slices are views: a patch statistic never copies the image.
+
+    Parameters
+    ----------
+    chart : ChartSpec
+        The chart (its geometry and ``mask_margin``, a fraction of the patch side).
+    width_px, height_px : int
+        The image's size, pixels.
+
+    Returns
+    -------
+    list of (slice, slice)
+        24 ``(rows, cols)`` slices in the standard patch order; an empty pair where no pixel fits.
     """
     view = View.fit(chart, width_px, height_px)
     xe, ye = view.pixel_edges_mm()
@@ -157,7 +241,20 @@ def patch_boxes(chart: ChartSpec, width_px: int, height_px: int) -> list[tuple[s
 
 
 def patch_masks(chart: ChartSpec, width_px: int, height_px: int) -> np.ndarray:
-    """``(24, H, W)`` boolean masks of the pixels of :func:`patch_boxes`."""
+    """``(24, H, W)`` boolean masks of the pixels of :func:`patch_boxes`.
+
+    Parameters
+    ----------
+    chart : ChartSpec
+        The chart.
+    width_px, height_px : int
+        The image's size, pixels.
+
+    Returns
+    -------
+    ndarray
+        ``(24, height_px, width_px)`` bool, True on each patch's scored pixels.
+    """
     masks = np.zeros((ROWS * COLUMNS, height_px, width_px), dtype=bool)
     for p, box in enumerate(patch_boxes(chart, width_px, height_px)):
         masks[(p, *box)] = True
@@ -165,5 +262,18 @@ def patch_masks(chart: ChartSpec, width_px: int, height_px: int) -> np.ndarray:
 
 
 def patch_means(image: np.ndarray, boxes: list[tuple[slice, slice]]) -> np.ndarray:
-    """``(24, ...)`` float64 mean of each patch's pixels of an ``(H, W, ...)`` image."""
+    """``(24, ...)`` float64 mean of each patch's pixels of an ``(H, W, ...)`` image.
+
+    Parameters
+    ----------
+    image : ndarray
+        ``(H, W, ...)``, any trailing axes (bands, channels).
+    boxes : list of (slice, slice)
+        The patches' pixels (:func:`patch_boxes`).
+
+    Returns
+    -------
+    ndarray
+        ``(len(boxes), ...)`` float64 means, in the image's unit.
+    """
     return np.stack([image[r, c].mean(axis=(0, 1), dtype=np.float64) for r, c in boxes])

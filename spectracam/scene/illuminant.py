@@ -8,6 +8,7 @@ Both integrals run over the CIE 1931 range, 360–830 nm, at 1 nm.
 from __future__ import annotations
 
 import math
+from collections.abc import Collection
 from dataclasses import dataclass
 
 import numpy as np
@@ -15,7 +16,8 @@ import numpy as np
 from spectracam.core.errors import ConfigError
 from spectracam.core.registry import Registry
 from spectracam.core.spec import Spec, _is_number
-from spectracam.core.spectra import K_M_LM_PER_W, Spectrum, cie_1931_cmfs, planck_radiance, tabulated
+from spectracam.core.spectra import (K_M_LM_PER_W, Spectrum, WavelengthGrid, cie_1931_cmfs, planck_radiance,
+                                     tabulated)
 
 __all__ = ["ILLUMINANTS", "MIN_SPD_SAMPLES", "TEMPERATURE_RANGE_K", "TYPE_KEYS", "IlluminantSpec",
            "irradiance_scale", "relative_spd", "spectral_irradiance", "switched_table",
@@ -121,9 +123,25 @@ class IlluminantSpec(Spec):
         return d
 
     @classmethod
-    def from_dict(cls, data, source=None, base=None):
+    def from_dict(cls, data: object, source: str | None = None,
+                  base: IlluminantSpec | None = None) -> IlluminantSpec:
         """The TOML table: ``type``, ``temperature_K`` or ``name``, and ``white_luminance_cd_m2`` or
-        ``illuminance_lux`` (= π × the luminance).  Keys not given keep ``base``'s values."""
+        ``illuminance_lux`` (= π × the luminance).  Keys not given keep ``base``'s values.
+
+        Parameters
+        ----------
+        data : object
+            The ``[illuminant]`` table; another ``type`` than ``base``'s keeps only its level.
+        source : str or None
+            Where the table came from, for the error.
+        base : IlluminantSpec or None
+            The illuminant whose values fill the keys not given; None: the default.
+
+        Returns
+        -------
+        IlluminantSpec
+            The validated illuminant.
+        """
         if not isinstance(data, dict):
             raise ConfigError("illuminant", data, "must be a table", source)
         d = dict(data)
@@ -159,7 +177,7 @@ TYPE_KEYS = {"blackbody": ("temperature_K",), "cie": ("name",), "measured": ("na
                                                                             "file")}
 
 
-def switched_table(table: dict, key: str, value, kept=frozenset()) -> dict:
+def switched_table(table: dict, key: str, value: object, kept: Collection[str] = frozenset()) -> dict:
     """The ``[illuminant]`` table with ``key`` (``type``, or ``file``: a measured SPD) set to ``value`` by
     the override path.  A new type (or a new SPD file) drops the keys of the type the table had — those
     the user did not set in the same overrides (``kept``) — so ``--set illuminant.file=spd.csv`` works on
@@ -169,6 +187,22 @@ def switched_table(table: dict, key: str, value, kept=frozenset()) -> dict:
     {'type': 'measured', 'white_luminance_cd_m2': 50.0, 'file': 'spd.csv'}
     >>> switched_table({"type": "cie", "name": "D65"}, "type", "blackbody", {"temperature_K"})
     {'type': 'blackbody'}
+
+    Parameters
+    ----------
+    table : dict
+        The ``[illuminant]`` table as it stands (not changed).
+    key : str
+        ``"type"`` or ``"file"``.
+    value : object
+        The new type, or the measured SPD's file.
+    kept : collection of str
+        Keys the same overrides set, kept even when the type changes.
+
+    Returns
+    -------
+    dict
+        The new table.
     """
     t = dict(table)
     new_type = "measured" if key == "file" else value
@@ -182,12 +216,37 @@ def switched_table(table: dict, key: str, value, kept=frozenset()) -> dict:
 
 
 def relative_spd(spec: IlluminantSpec) -> Spectrum:
-    """The illuminant's spectral shape (arbitrary scale)."""
+    """The illuminant's spectral shape (arbitrary scale).
+
+    Parameters
+    ----------
+    spec : IlluminantSpec
+        The illuminant (its ``kind`` picks the shape from :data:`ILLUMINANTS`).
+
+    Returns
+    -------
+    Spectrum
+        The relative SPD as a function of wavelength in nm.
+    """
     return ILLUMINANTS[spec.kind](spec)
 
 
 def irradiance_scale(spec: IlluminantSpec) -> float:
-    """Factor k turning the relative SPD S(λ) into spectral irradiance E(λ) = k·S(λ), W·m⁻²·nm⁻¹."""
+    """Factor k turning the relative SPD S(λ) into spectral irradiance E(λ) = k·S(λ), W·m⁻²·nm⁻¹.
+
+    k makes a perfect white diffuser, of radiance E/π, have the luminance ``white_luminance_cd_m2``
+    (683 lm/W × ∫ E/π · ȳ dλ over the CIE 1931 2° observer, 1-nm steps).
+
+    Parameters
+    ----------
+    spec : IlluminantSpec
+        The illuminant (its shape and its level).
+
+    Returns
+    -------
+    float
+        k, W·m⁻²·nm⁻¹ per unit of the relative SPD.
+    """
     wl, cmfs = cie_1931_cmfs()  # 1 nm steps
     white_radiance_per_k = relative_spd(spec)(wl) / np.pi
     lum_per_k = K_M_LM_PER_W * np.trapezoid(white_radiance_per_k * cmfs[:, 1], wl)
@@ -226,9 +285,22 @@ def spectral_irradiance(spec: IlluminantSpec) -> Spectrum:
     return lambda lam: k * shape(lam)
 
 
-def white_diffuser_radiance(spec: IlluminantSpec, grid) -> np.ndarray:
+def white_diffuser_radiance(spec: IlluminantSpec, grid: WavelengthGrid) -> np.ndarray:
     """Band-averaged radiance ``(B,)`` of a perfect white (Lambertian, reflectance 1) diffuser facing
-    the illuminant, ``E/π``, W·m⁻²·sr⁻¹·nm⁻¹ on ``grid`` (its luminance is ``white_luminance_cd_m2``)."""
+    the illuminant, ``E/π``, W·m⁻²·sr⁻¹·nm⁻¹ on ``grid`` (its luminance is ``white_luminance_cd_m2``).
+
+    Parameters
+    ----------
+    spec : IlluminantSpec
+        The illuminant, at its absolute level.
+    grid : WavelengthGrid
+        The bands.
+
+    Returns
+    -------
+    ndarray
+        ``(B,)`` float64 radiance, W·m⁻²·sr⁻¹·nm⁻¹, each the band's mean.
+    """
     from spectracam.core.spectra import band_average
 
     E = spectral_irradiance(spec)

@@ -31,6 +31,7 @@ renders each region under its own light.  The shipped scenes ``scenes/hdr_*.toml
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -73,8 +74,23 @@ class LightGroup(Spec):
         return {"name": self.name, "illuminant": self.illuminant.to_dict()}
 
     @classmethod
-    def from_dict(cls, data, source=None, base=None):
-        """A ``[[lights]]`` table: ``name`` and ``illuminant`` (an ``[illuminant]`` table, over ``base``'s)."""
+    def from_dict(cls, data: object, source: str | None = None, base: LightGroup | None = None) -> LightGroup:
+        """A ``[[lights]]`` table: ``name`` and ``illuminant`` (an ``[illuminant]`` table, over ``base``'s).
+
+        Parameters
+        ----------
+        data : object
+            The table; only ``name`` and ``illuminant`` are allowed.
+        source : str or None
+            Where the table came from, for the error.
+        base : LightGroup or None
+            The group whose name and illuminant fill what is not given; None: the default.
+
+        Returns
+        -------
+        LightGroup
+            The validated group.
+        """
         if not isinstance(data, dict):
             raise ConfigError("lights", data, "must be a table with name and illuminant, e.g. { name = 'sun', "
                               "illuminant = { type = 'cie', name = 'D50', illuminance_lux = 100000 } }", source)
@@ -93,7 +109,7 @@ def _prefixed(e: ConfigError, i: int) -> ConfigError:
     return ConfigError(f"lights[{i}].{name}" if name != "lights" else f"lights[{i}]", e.value, e.allowed, e.source)
 
 
-def parse_lights(data, source: str | None = None) -> tuple[LightGroup, ...]:
+def parse_lights(data: object, source: str | None = None) -> tuple[LightGroup, ...]:
     """The ``[[lights]]`` array of tables as light groups.
 
     Parameters
@@ -133,15 +149,43 @@ def parse_lights(data, source: str | None = None) -> tuple[LightGroup, ...]:
     return tuple(out)
 
 
-def brightest(lights) -> int:
-    """Index of the group with the largest white luminance (the first on ties): the scene's metering light."""
+def brightest(lights: Sequence[LightGroup]) -> int:
+    """Index of the group with the largest white luminance (the first on ties): the scene's metering light.
+
+    Parameters
+    ----------
+    lights : sequence of LightGroup
+        The scene's light groups.
+
+    Returns
+    -------
+    int
+        The index; 0 when there are none.
+    """
     levels = [g.white_luminance_cd_m2 for g in lights]
     return int(np.argmax(levels)) if levels else 0
 
 
 def cell_columns(n: int, width_px: int, height_px: int, board_mm: tuple[float, float], columns: int = 0) -> int:
     """Columns of the grid of ``n`` chart cells: ``columns`` if given, else the count (1 … n) that makes a chart
-    of ``board_mm`` (width, height) fitted in its cell largest, the fewest cells on ties."""
+    of ``board_mm`` (width, height) fitted in its cell largest, the fewest cells on ties.
+
+    Parameters
+    ----------
+    n : int
+        How many cells (one per light group).
+    width_px, height_px : int
+        The image's size, pixels.
+    board_mm : tuple of float
+        The chart board's width and height, mm.
+    columns : int
+        The columns asked for (at most ``n`` are used); 0: choose.
+
+    Returns
+    -------
+    int
+        The number of columns.
+    """
     if columns:
         return min(columns, n)
     bw, bh = board_mm
@@ -156,7 +200,22 @@ def cell_columns(n: int, width_px: int, height_px: int, board_mm: tuple[float, f
 
 def cell_slices(n: int, width_px: int, height_px: int, columns: int) -> list[tuple[slice, slice]]:
     """``(rows, cols)`` pixel slices of ``n`` cells on a grid ``columns`` across, row by row from the top left;
-    cell edges at ``W·j // columns`` and ``H·i // rows`` (the cells tile the image)."""
+    cell edges at ``W·j // columns`` and ``H·i // rows`` (the cells tile the image).
+
+    Parameters
+    ----------
+    n : int
+        How many cells.
+    width_px, height_px : int
+        The image's size, pixels.
+    columns : int
+        The grid's columns (:func:`cell_columns`).
+
+    Returns
+    -------
+    list of (slice, slice)
+        ``n`` pairs of row and column slices.
+    """
     rows = -(-n // columns)
     xe = [width_px * j // columns for j in range(columns + 1)]
     ye = [height_px * i // rows for i in range(rows + 1)]

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
@@ -18,6 +18,11 @@ from spectracam.scene.chart import WHITE_PATCH, ChartSpec, patch_boxes, patch_re
 from spectracam.scene.illuminant import IlluminantSpec, spectral_irradiance
 from spectracam.scene.reflectances import load as load_library
 from spectracam.core.spectra import WavelengthGrid, band_average, band_sample_points, cie_1931_cmfs
+
+if TYPE_CHECKING:
+    from numpy.typing import DTypeLike
+
+    from spectracam.pipeline.scene_file import Scene
 
 __all__ = ["LIBRARY_CHUNK", "LIBRARY_POINTS_PER_BAND", "TARGET_ROWS", "XYZ_STEP_NM", "ChartCell", "ChartReference",
            "LibraryColours", "RatedCamera", "TargetReference", "chart_cells", "colorimetry", "library_colours",
@@ -35,7 +40,20 @@ class RatedCamera(Protocol):
     capture: object
 
     def photo_electron_rates(self, radiance: np.ndarray, grid: WavelengthGrid) -> np.ndarray:
-        """``(…, N)`` photo-electron rates, e⁻/s, of band-averaged radiance ``(…, B)`` on ``grid``."""
+        """``(…, N)`` photo-electron rates, e⁻/s, of band-averaged radiance ``(…, B)`` on ``grid``.
+
+        Parameters
+        ----------
+        radiance : ndarray
+            ``(…, B)`` band-averaged spectral radiance, W·m⁻²·sr⁻¹·nm⁻¹.
+        grid : WavelengthGrid
+            The bands.
+
+        Returns
+        -------
+        ndarray
+            ``(…, N)`` e⁻/s per pixel, one per channel.
+        """
 
 
 #: Wavelength step of the reference colorimetry, nm: fine enough that the XYZ of every patch is
@@ -43,9 +61,29 @@ class RatedCamera(Protocol):
 XYZ_STEP_NM = 0.1
 
 
-def material_radiance(chart: ChartSpec, illuminant: IlluminantSpec, grid: WavelengthGrid):
+def material_radiance(chart: ChartSpec, illuminant: IlluminantSpec,
+                      grid: WavelengthGrid) -> tuple[list[str], np.ndarray, np.ndarray]:
     """``(names, patches (24, B), surround (B,))``: band-averaged radiance of each patch and of the
-    surround, W·m⁻²·sr⁻¹·nm⁻¹, ``L(λ) = E(λ)·S(λ)/π`` for a Lambertian surface facing the light."""
+    surround, W·m⁻²·sr⁻¹·nm⁻¹, ``L(λ) = E(λ)·S(λ)/π`` for a Lambertian surface facing the light.
+
+    Parameters
+    ----------
+    chart : ChartSpec
+        The chart (its reflectances and the surround's reflectance).
+    illuminant : IlluminantSpec
+        The light, at its absolute level.
+    grid : WavelengthGrid
+        The bands.
+
+    Returns
+    -------
+    names : list of str
+        The 24 patch names.
+    patches : ndarray
+        ``(24, B)`` float64, W·m⁻²·sr⁻¹·nm⁻¹.
+    surround : ndarray
+        ``(B,)`` float64, W·m⁻²·sr⁻¹·nm⁻¹.
+    """
     E = spectral_irradiance(illuminant)
     names, rows = [], []
     for name, rho in patch_reflectances(chart):
@@ -84,11 +122,22 @@ class ChartReference:
         return _local_reference(self, rows.start, rows.stop, cols.start, cols.stop)
 
     @classmethod
-    def of(cls, scene) -> "ChartReference":
+    def of(cls, scene: Scene) -> "ChartReference":
         """The reference of a scene (memoised on chart, light, grid and image: sweeps and noise
         trials score the same scene many times).  A chart scene of several light groups
         (:mod:`spectracam.scene.lights`) has one chart per group: this is the brightest group's
-        (:func:`chart_cells`), boxes in image pixels — what the exposure is metered on and scored by default."""
+        (:func:`chart_cells`), boxes in image pixels — what the exposure is metered on and scored by default.
+
+        Parameters
+        ----------
+        scene : Scene
+            The scene (its chart, illuminant, light groups, wavelength grid and image size).
+
+        Returns
+        -------
+        ChartReference
+            The chart's reference (shared: do not change it).
+        """
         lights = getattr(scene, "lights", ())
         if len(lights) > 1 and not scene.target.textured:
             from spectracam.scene.lights import brightest
@@ -98,7 +147,18 @@ class ChartReference:
 
     def lit_by(self, illuminant: IlluminantSpec) -> "ChartReference":
         """The same chart, grid and image under another light (memoised as :meth:`of`): the DNG's
-        calibrations under CIE A and D65."""
+        calibrations under CIE A and D65.
+
+        Parameters
+        ----------
+        illuminant : IlluminantSpec
+            The other light.
+
+        Returns
+        -------
+        ChartReference
+            The chart's reference under it.
+        """
         return _reference(self.chart, illuminant, self.grid, self.width_px, self.height_px)
 
     @property
@@ -108,7 +168,18 @@ class ChartReference:
 
     def patch_rates(self, camera: RatedCamera) -> np.ndarray:
         """Noise-free photo-electron rates ``(24, N)`` (e⁻/s) of the patches for a camera: the input of
-        the colour-conversion fit (paper 3.5) and of the DNG matrices."""
+        the colour-conversion fit (paper 3.5) and of the DNG matrices.
+
+        Parameters
+        ----------
+        camera : RatedCamera
+            The camera (memoised on its optics, filters, sensor and architecture).
+
+        Returns
+        -------
+        ndarray
+            ``(24, N)`` float64, e⁻/s, N the camera's channels.
+        """
         key = (camera.optics, camera.filters, camera.sensor, camera.capture.architecture)
         if key not in self._rates:
             chart = self.patch_radiance[None].astype(np.float32)
@@ -117,7 +188,18 @@ class ChartReference:
 
     def matches(self, scene: dict) -> str | None:
         """``None`` if a recorded scene (a dict) has this chart, light and grid, else the first table
-        that differs."""
+        that differs.
+
+        Parameters
+        ----------
+        scene : dict
+            A scene as recorded in an output's metadata (its ``chart``, ``illuminant`` and ``wavelengths`` tables).
+
+        Returns
+        -------
+        str or None
+            ``"chart"``, ``"illuminant"`` or ``"wavelengths"``; None when all three match.
+        """
         mine = {"chart": self.chart.to_dict(), "illuminant": self.illuminant.to_dict(),
                 "wavelengths": {"centres_nm": list(self.grid.centres_nm)}}
         for table, value in mine.items():
@@ -128,19 +210,46 @@ class ChartReference:
 
 def observer_grid(lo_nm: float, hi_nm: float) -> tuple[np.ndarray, np.ndarray]:
     """``(λ (n,), x̄ȳz̄ (n, 3))``: the CIE 1931 observer on the reference colorimetry's grid over
-    ``[lo_nm, hi_nm]`` (:data:`XYZ_STEP_NM`), shared by the chart and any other reflectances."""
+    ``[lo_nm, hi_nm]`` (:data:`XYZ_STEP_NM`), shared by the chart and any other reflectances.
+
+    Parameters
+    ----------
+    lo_nm, hi_nm : float
+        The range, nm.
+
+    Returns
+    -------
+    lam, xyz_bar : ndarray
+        ``(n,)`` wavelengths, nm, and ``(n, 3)`` colour-matching functions interpolated linearly on them.
+    """
     lam = np.linspace(lo_nm, hi_nm, int(round((hi_nm - lo_nm) / XYZ_STEP_NM)) + 1)
     wl, cmfs = cie_1931_cmfs()
     return lam, np.stack([np.interp(lam, wl, cmfs[:, k]) for k in range(3)], axis=-1)
 
 
-def colorimetry(chart: ChartSpec, illuminant: IlluminantSpec, lo_nm: float, hi_nm: float):
+def colorimetry(chart: ChartSpec, illuminant: IlluminantSpec, lo_nm: float,
+                hi_nm: float) -> tuple[np.ndarray, np.ndarray]:
     """``(patch XYZ (24, 3), white XYZ (3,))`` of the chart over ``[lo_nm, hi_nm]``: the CIE 1931
     integrals ``∫(E·S/π)·x̄ȳz̄ dλ / ∫(E/π)·ȳ dλ``, numerator and denominator over the same range, so
     a perfect white diffuser has Y = 1 exactly (the white's Y = 1) — the scene's colour as the
     camera sees it (it sees only the scene's range), by the trapezoid rule at :data:`XYZ_STEP_NM`,
     independent of the bands.  (Before issue 17 the white was integrated over 360–830 nm, so a
-    perfect white read Y = 0.9989–0.9996 on a 400–700 nm scene.)"""
+    perfect white read Y = 0.9989–0.9996 on a 400–700 nm scene.)
+
+    Parameters
+    ----------
+    chart : ChartSpec
+        The chart (its reflectances).
+    illuminant : IlluminantSpec
+        The light.
+    lo_nm, hi_nm : float
+        The range integrated over, nm (the scene's).
+
+    Returns
+    -------
+    patches, white : ndarray
+        ``(24, 3)`` and ``(3,)`` float64 XYZ, relative to the white's Y.
+    """
     lam, xyz_bar = observer_grid(lo_nm, hi_nm)
     white_radiance = spectral_irradiance(illuminant)(lam) / np.pi
     rho = np.stack([r(lam) for _, r in patch_reflectances(chart)])  # (24, n)
@@ -186,7 +295,7 @@ class ChartCell:
         return self.illuminant.white_luminance_cd_m2
 
 
-def chart_cells(scene) -> list[ChartCell]:
+def chart_cells(scene: Scene) -> list[ChartCell]:
     """The charts of a chart scene, one per light group, in the order of ``[[lights]]``.
 
     Parameters
@@ -248,12 +357,22 @@ def _chart_cells(chart, lights, grid, width_px, height_px, columns) -> tuple[Cha
     return tuple(cells)
 
 
-def light_map(scene) -> np.ndarray:
+def light_map(scene: Scene) -> np.ndarray:
     """``(H, W)`` int32: the light group that lights each pixel (its index in ``scene.lights``).
 
     A chart scene: the group of the pixel's cell (-1 in unlit cells left over in the grid's last row).  A
     textured target: the group lighting most of the pixel's texels (the lowest index on ties).  Without light
     groups: 0 everywhere.
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene.
+
+    Returns
+    -------
+    ndarray
+        ``(H, W)`` int32 group indices.
     """
     W, H = scene.image.width, scene.image.height
     K = len(scene.lights)
@@ -291,7 +410,24 @@ class LibraryColours:
 
 @lru_cache(maxsize=16)
 def library_colours(library: str, illuminant: IlluminantSpec, grid: WavelengthGrid) -> LibraryColours:
-    """Band radiance and CIE 1931 XYZ of every sample of ``library`` under ``illuminant`` (memoised)."""
+    """Band radiance and CIE 1931 XYZ of every sample of ``library`` under ``illuminant`` (memoised).
+
+    Parameters
+    ----------
+    library : str
+        A reflectance library's name or ``file:PATH`` (:func:`spectracam.scene.reflectances.load`); it must cover
+        the grid's range.
+    illuminant : IlluminantSpec
+        The light, at its absolute level.
+    grid : WavelengthGrid
+        The bands.
+
+    Returns
+    -------
+    LibraryColours
+        ``(n, B)`` radiance (W·m⁻²·sr⁻¹·nm⁻¹) and ``(n, 3)`` XYZ with Y = 1 for a perfect white diffuser (shared:
+        do not change it).
+    """
     lo, hi = float(grid.edges_nm[0]), float(grid.edges_nm[-1])
     rset = load_library(library)
     rset.check_covers(lo, hi)
@@ -340,7 +476,19 @@ class TargetReference:
     groups: np.ndarray | None = None   # (n + 1,) int32, each label's light group; None without light groups
 
     @classmethod
-    def of(cls, scene) -> "TargetReference":
+    def of(cls, scene: Scene) -> "TargetReference":
+        """The reference of a scene's target (memoised on target, light, grid, image, surround and light groups).
+
+        Parameters
+        ----------
+        scene : Scene
+            The scene.
+
+        Returns
+        -------
+        TargetReference
+            Its texel labels, the samples' radiance and colours (shared: do not change it).
+        """
         return _target_reference(scene.target, scene.illuminant, scene.grid, scene.image.width, scene.image.height,
                                  scene.chart.surround_reflectance, getattr(scene, "lights", ()))
 
@@ -353,9 +501,22 @@ class TargetReference:
         h, w = self.labels.shape
         return h // self.supersampling, w // self.supersampling
 
-    def pixel_mean(self, table: np.ndarray, dtype=np.float64) -> np.ndarray:
+    def pixel_mean(self, table: np.ndarray, dtype: DTypeLike = np.float64) -> np.ndarray:
         """``(H, W, k)``: each pixel's mean of ``table[label]`` (``table`` ``(n + 1, k)``) over its
-        s × s texels — the exact area-weighted mix, which a box-filtered render of the target converges to."""
+        s × s texels — the exact area-weighted mix, which a box-filtered render of the target converges to.
+
+        Parameters
+        ----------
+        table : ndarray
+            ``(n + 1, k)``: a row per sample, the surround's last (radiance per band, XYZ ...).
+        dtype : DTypeLike
+            The type to average in and return.
+
+        Returns
+        -------
+        ndarray
+            ``(H, W, k)`` of ``dtype``, in the table's unit.
+        """
         s = self.supersampling
         H, W = self.shape_px
         table = np.asarray(table, dtype)

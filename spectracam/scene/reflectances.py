@@ -77,7 +77,20 @@ class ReflectanceSet:
 
     def at(self, lam_nm: np.ndarray, rows: slice = slice(None)) -> np.ndarray:
         """``(n, len(lam))`` reflectances of the samples ``rows``, linear between the measured
-        wavelengths (the set must cover ``lam``: see :func:`check_covers`)."""
+        wavelengths (the set must cover ``lam``: see :func:`check_covers`).
+
+        Parameters
+        ----------
+        lam_nm : ndarray
+            Wavelengths, nm.
+        rows : slice
+            Which samples.
+
+        Returns
+        -------
+        ndarray
+            ``(n, len(lam_nm))`` reflectances, 0…1.
+        """
         lam = np.asarray(lam_nm, float)
         j = np.clip(np.searchsorted(self.wavelengths_nm, lam) - 1, 0, self.wavelengths_nm.size - 2)
         w0, w1 = self.wavelengths_nm[j], self.wavelengths_nm[j + 1]
@@ -86,6 +99,15 @@ class ReflectanceSet:
         return v[:, j] * (1 - t) + v[:, j + 1] * t
 
     def check_covers(self, lo_nm: float, hi_nm: float, what: str = "held_out") -> None:
+        """Refuse (a one-line error naming ``what``) a set not measured over all of ``[lo_nm, hi_nm]``.
+
+        Parameters
+        ----------
+        lo_nm, hi_nm : float
+            The range the scene needs, nm.
+        what : str
+            The field that named the set.
+        """
         w = self.wavelengths_nm
         if w[0] > lo_nm + 1e-9 or w[-1] < hi_nm - 1e-9:
             raise SpectracamError(f"{what} = {self.name!r}: measured over {w[0]:g}-{w[-1]:g} nm, the scene needs "
@@ -142,7 +164,18 @@ def _luxpy_table(name: str, filename: str, key: str | None = None) -> Reflectanc
 
 
 def read_csv(path: str | Path) -> ReflectanceSet:
-    """:func:`_read_csv`, read once per version of the file (every sweep cell validates its scene)."""
+    """:func:`_read_csv`, read once per version of the file (every sweep cell validates its scene).
+
+    Parameters
+    ----------
+    path : str or Path
+        A CSV of spectra: ``wavelength_nm``, then one column per sample.
+
+    Returns
+    -------
+    ReflectanceSet
+        The samples, named after the file.
+    """
     from spectracam.core.files import regular_file
 
     regular_file(path, "reflectances file")
@@ -186,7 +219,15 @@ LUXPY_LIBRARIES = ("munsell1269", "tm30_4880", "capbone100k")
 
 
 def check_available(name: str, what: str = "held_out") -> None:
-    """Refuse, before any work, a library that cannot be read here (a missing file, luxpy absent)."""
+    """Refuse, before any work, a library that cannot be read here (a missing file, luxpy absent).
+
+    Parameters
+    ----------
+    name : str
+        A library name or ``file:PATH`` (a CSV, read and checked now).
+    what : str
+        The field that named it, for the error.
+    """
     if name.startswith("file:"):
         from spectracam.core.files import regular_file
 
@@ -227,7 +268,22 @@ def _load_named(name: str) -> ReflectanceSet:
 
 
 def load(name: str, what: str = "held_out", base_dir: Path | None = None) -> ReflectanceSet:
-    """A library by name (:data:`LIBRARIES`) or ``file:PATH`` (relative to ``base_dir``)."""
+    """A library by name (:data:`LIBRARIES`) or ``file:PATH`` (relative to ``base_dir``).
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`LIBRARIES` or ``file:PATH``.
+    what : str
+        The field that named it, for the error.
+    base_dir : Path or None
+        The directory a relative ``file:`` path is taken from; None: the working directory.
+
+    Returns
+    -------
+    ReflectanceSet
+        The samples (read once per process).
+    """
     if not isinstance(name, str):
         raise ConfigError(what, name, "a library name (" + ", ".join(LIBRARIES) + ") or 'file:PATH'")
     if name.startswith("file:"):

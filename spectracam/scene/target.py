@@ -140,10 +140,28 @@ class TargetSpec(Spec):
         return self.kind != "chart"
 
     def texel_shape(self, width_px: int, height_px: int) -> tuple[int, int]:
-        """``(rows, columns)`` of the texel grid."""
+        """``(rows, columns)`` of the texel grid.
+
+        Parameters
+        ----------
+        width_px, height_px : int
+            The image's size, pixels.
+
+        Returns
+        -------
+        tuple of int
+            ``(height_px·s, width_px·s)``, s the supersampling.
+        """
         return height_px * self.supersampling, width_px * self.supersampling
 
     def check_size(self, width_px: int, height_px: int) -> None:
+        """Refuse a textured target of more than :data:`MAX_TEXELS` texels at this image size.
+
+        Parameters
+        ----------
+        width_px, height_px : int
+            The image's size, pixels.
+        """
         h, w = self.texel_shape(width_px, height_px)
         if self.textured and h * w > MAX_TEXELS:
             raise ConfigError("target.supersampling", self.supersampling,
@@ -152,7 +170,18 @@ class TargetSpec(Spec):
 
 
 def photo_path(photo: str) -> Path:
-    """The file of a shipped photograph or of ``file:PATH``."""
+    """The file of a shipped photograph or of ``file:PATH``.
+
+    Parameters
+    ----------
+    photo : str
+        A key of :data:`SHIPPED_PHOTOS`, or ``file:PATH``.
+
+    Returns
+    -------
+    Path
+        The image file.
+    """
     if photo in SHIPPED_PHOTOS:
         from importlib.resources import files
 
@@ -161,7 +190,20 @@ def photo_path(photo: str) -> Path:
 
 
 def file_sha256(path: Path, what: str) -> str:
-    """The file's SHA-256, read once per version of the file (a scene is validated several times a run)."""
+    """The file's SHA-256, read once per version of the file (a scene is validated several times a run).
+
+    Parameters
+    ----------
+    path : Path
+        The file.
+    what : str
+        The field that named it, for the error.
+
+    Returns
+    -------
+    str
+        The hex digest.
+    """
     from spectracam.core.files import regular_file
 
     regular_file(path, what)
@@ -178,7 +220,20 @@ def _sha256(path: str, mtime_ns: int, size: int) -> str:
 
 
 def resolve_target_files(table: dict, base_dir: Path) -> dict:
-    """A ``[target]`` table with its ``file:`` paths made absolute against the scene file's directory."""
+    """A ``[target]`` table with its ``file:`` paths made absolute against the scene file's directory.
+
+    Parameters
+    ----------
+    table : dict
+        The ``[target]`` table (not changed); its ``library`` and ``photo`` may be ``file:`` paths.
+    base_dir : Path
+        The scene file's directory.
+
+    Returns
+    -------
+    dict
+        A copy with relative ``file:`` paths resolved.
+    """
     t = dict(table)
     for key in ("library", "photo"):
         v = t.get(key)
@@ -213,7 +268,22 @@ def _samples_layout(spec: TargetSpec, n: int, shape: tuple[int, int]) -> np.ndar
 
 
 def power_law(u: np.ndarray, lo: float, hi: float, a: float) -> np.ndarray:
-    """Radii of density ∝ ``r^-a`` on ``[lo, hi]`` from uniforms ``u`` in [0, 1) (the inverse CDF)."""
+    """Radii of density ∝ ``r^-a`` on ``[lo, hi]`` from uniforms ``u`` in [0, 1) (the inverse CDF).
+
+    Parameters
+    ----------
+    u : ndarray
+        Uniform draws in [0, 1).
+    lo, hi : float
+        The range of radii (> 0), in the caller's unit.
+    a : float
+        The exponent (1: log-uniform).
+
+    Returns
+    -------
+    ndarray
+        Radii, the shape of ``u``.
+    """
     if abs(a - 1.0) < 1e-12:
         return lo * (hi / lo) ** u
     return (lo ** (1 - a) + u * (hi ** (1 - a) - lo ** (1 - a))) ** (1 / (1 - a))
@@ -421,7 +491,24 @@ def _photo_layout(spec: TargetSpec, shape: tuple[int, int], library_lab: np.ndar
 def texel_labels(spec: TargetSpec, width_px: int, height_px: int, n_samples: int,
                  library_lab: np.ndarray | None = None) -> np.ndarray:
     """The label image ``(H·s, W·s)`` int32, read-only: a library index per texel, ``n_samples`` for
-    the surround.  ``library_lab`` (``photo`` only): the samples' CIELAB ``(n, 3)`` under D65."""
+    the surround.  ``library_lab`` (``photo`` only): the samples' CIELAB ``(n, 3)`` under D65.
+
+    Parameters
+    ----------
+    spec : TargetSpec
+        The target (its kind, supersampling and seed).
+    width_px, height_px : int
+        The image's size, pixels.
+    n_samples : int
+        The library's size.
+    library_lab : ndarray or None
+        ``(n_samples, 3)`` CIELAB of the samples; a ``photo`` target needs it.
+
+    Returns
+    -------
+    ndarray
+        ``(height_px·s, width_px·s)`` int32, read-only.
+    """
     spec.check_size(width_px, height_px)
     shape = spec.texel_shape(width_px, height_px)
     labels = TARGET_KINDS[spec.kind](spec, shape, n_samples, library_lab)
