@@ -198,7 +198,8 @@ def capture_time_s(arch: Architecture, times_s: np.ndarray, sensor: SensorSpec) 
     return arch.capture_time_s(times_s)
 
 
-def capture(cube: RadianceCube | ChannelPlanes, camera: CameraSpec, seed: int, metering_box: tuple[slice, slice] | None = None, *,
+def capture(cube: RadianceCube | ChannelPlanes, camera: CameraSpec, seed: int,
+            metering_box: tuple[slice, slice] | None = None, *,
             white_radiance: np.ndarray | None = None, metering: dict | None = None,
             time_limit_s: float | None = None) -> RawCapture:
     """Capture a :class:`~spectracam.render.RadianceCube` with ``camera``, the exposure metered first (paper 4.5).

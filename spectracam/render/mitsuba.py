@@ -521,15 +521,14 @@ def render_mitsuba(scene: Scene, progress: bool = False, log: Callable[[str], ob
     if len(scene.lights) > 1:
         return render_lights_mitsuba(scene, progress, log, within_band) if weights is None else _no_planes(scene)
     mi, variant, reason, ref_width = open_variant(scene, log)
-    grid = scene.grid
     mi_scene, params = load_scene(mi, build_scene(mi, scene, ref_width))
     E = spectral_irradiance(scene.illuminant)
     reflectances = patch_reflectances(scene.chart)
-    lam = band_sample_points(grid, POINTS_PER_BAND)  # (B, N+1), for "sampled"
-    light_band = band_average(E, grid)  # ⟨E⟩ per band (B,)
+    lam = band_sample_points(scene.grid, POINTS_PER_BAND)  # (B, N+1), for "sampled"
+    light_band = band_average(E, scene.grid)  # ⟨E⟩ per band (B,)
     # light-weighted band-average reflectances ⟨E·S⟩/⟨E⟩ (module docstring); 0 where the light is 0
     with np.errstate(invalid="ignore", divide="ignore"):
-        rho_band = [np.nan_to_num(band_average(lambda lam, rho=rho: E(lam) * rho(lam), grid) / light_band)
+        rho_band = [np.nan_to_num(band_average(lambda lam, rho=rho: E(lam) * rho(lam), scene.grid) / light_band)
                     for _, rho in reflectances]
     Float = type(params["board.bsdf.reflectance.values"])  # mi.Float, or a buffer type in scalar variants
     params["board.bsdf.reflectance.values"] = Float(np.full(POINTS_PER_BAND + 1, scene.chart.surround_reflectance))
@@ -550,8 +549,9 @@ def render_mitsuba(scene: Scene, progress: bool = False, log: Callable[[str], ob
     meta = render_metadata(mi, variant, reason, scene.render.samples_per_pixel, scene.render.seed, within_band,
                            **lights_metadata(scene))
     if weights is None:
-        return RadianceCube(out, np.asarray(grid.centres_nm, float), meta)
-    return ChannelPlanes(np.moveaxis(out, 0, -1).copy(), np.asarray(grid.centres_nm, float), np.asarray(weights, float), meta)
+        return RadianceCube(out, np.asarray(scene.grid.centres_nm, float), meta)
+    return ChannelPlanes(np.moveaxis(out, 0, -1).copy(), np.asarray(scene.grid.centres_nm, float),
+                         np.asarray(weights, float), meta)
 
 
 def build_lights_scene(mi: ModuleType, scene: Scene, cells: list[ChartCell], width_nm: float) -> dict:
