@@ -190,8 +190,10 @@ def camera_rates(raw: RawCapture, processing: ProcessingSpec, reference: ChartRe
 
 def channel_stats(raw: RawCapture, boxes) -> tuple[np.ndarray, np.ndarray]:
     """Mean and std ``(24, N)`` of the recorded (dark-subtracted) electrons of each channel's own
-    pixels in each box (for a mosaic: every site of the channel in the tile, both greens of a Bayer)."""
-    e, _ = recorded_electrons(raw)
+    pixels in each box (for a mosaic: every site of the channel in the tile, both greens of a Bayer).
+    The electrons of each box only (:func:`recorded_electrons`' values there): no full-size image is made."""
+    s = raw.camera.sensor
+    dark = s.dark_rate_e_per_s * np.asarray(raw.exposure_times_s)
     n = len(raw.layout.channels)
     means, stds = np.zeros((len(boxes), n)), np.zeros((len(boxes), n))
     mosaic = isinstance(raw.layout, MosaicLayout)
@@ -200,14 +202,15 @@ def channel_stats(raw: RawCapture, boxes) -> tuple[np.ndarray, np.ndarray]:
         sites = raw.layout.sites()
     for p, (r, c) in enumerate(boxes):
         if mosaic:
+            e = adc_inverse(raw.digital[r, c], s) - dark[0]
             for k in range(n):
-                pix = np.concatenate([e[r, c][(dy - r.start) % th::th, (dx - c.start) % tw::tw].ravel()
+                pix = np.concatenate([e[(dy - r.start) % th::th, (dx - c.start) % tw::tw].ravel()
                                       for dy, dx, kk in sites if kk == k])
                 means[p, k], stds[p, k] = pix.mean(), pix.std()
                 if pix.max() == pix.min():   # one code everywhere (a coarse ADC): no noise, not rounding's 1e-13
                     stds[p, k] = 0.0
         else:
-            block = e[:, r, c].reshape(n, -1)
+            block = (adc_inverse(raw.digital[:, r, c], s) - dark[:, None, None]).reshape(n, -1)
             means[p], stds[p] = block.mean(axis=1), block.std(axis=1)
             stds[p][block.max(axis=1) == block.min(axis=1)] = 0.0
     return means, stds
@@ -412,8 +415,10 @@ def chart_truth_xyz(reference: ChartReference, rows: slice, cols: slice) -> np.n
 
 
 #: Pixels of the chart's S-CIELAB filtered at once: a band of rows (with the kernel's reach above and below) at a
-#: time, so a 12-Mpx chart never holds a full-size opponent image; a 640×480 chart is one band.
-SCIELAB_CHUNK_PIXELS = 1 << 20
+#: time, so a 12-Mpx chart never holds a full-size opponent image; a 640×480 chart is one band.  2¹⁹ (was 2²⁰): the
+#: band's float64 temporaries were a 12-Mpx score's peak (0.16 of the cube above what the score holds, against 0.11
+#: now; issue 38's 1.5 × the cube), for about 15 % more rows filtered (the reach either side of each band).
+SCIELAB_CHUNK_PIXELS = 1 << 19
 
 
 def _scored_mask(reference: ChartReference) -> np.ndarray:
@@ -550,6 +555,7 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
     de_map = np.full((h, w), np.nan, np.float32)
     patches, de2000, sc_map = _patch_scores(raw, reference, processing, rgb, M, colours, de_map)
     summary = _chart_summary(raw, patches, de_map, de2000, sc_map, wb)
+    del sc_map   # not kept: freed before the rendering's float32 copy below, the score's last full-size allocation
     parameters = _score_parameters(raw, processing, delta_e_reference, M)
     training, held_out = _held_out_blocks(raw, reference, processing, M, patches)
     return ChartScore(summary, tuple(patches), parameters, rgb.astype(np.float32), de_map, training, held_out, wb)
