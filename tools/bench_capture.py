@@ -16,7 +16,7 @@ float32 cube (target <= 1.5x): tracemalloc's peak (every NumPy allocation; numba
 internal buffers are not traced) and the resident-set high-water mark (VmHWM) above the resident set
 once spectracam is loaded.  It also prints the score's time against the capture's, for the scene's first
 score (its truth's S-CIELAB computed) and for another capture of it (the truth memoised, as for every later
-capture of a scene; issue 38's target: <= 2).
+capture of a scene; issue 38's target: <= 2), and the score's parts on another capture, each timed alone.
 ``--all-fpn`` also switches on PRNU, DSNU and column FPN (the paper has none).
 """
 from __future__ import annotations
@@ -118,6 +118,36 @@ def memory_run(width: int, height: int, all_fpn: bool) -> dict:
     t0 = time.perf_counter()
     score(raw, scene)
     out["score_again_s"] = time.perf_counter() - t0
+    out["stages_s"] = score_stages(raw, scene)
+    return out
+
+
+def score_stages(raw, scene) -> dict:
+    """Seconds of the score's parts on one capture (the truth memoised), each timed alone: the issue's fused chain
+    (developing: demosaicking, conversion; the per-pixel ΔE*ab and CIEDE2000 of every box; the patches' channel
+    statistics) and S-CIELAB (the eye's filters over the chart), which the rest of the score's time is."""
+    import numpy as np
+
+    import spectracam.evaluation.score as S
+    from spectracam.scene.reference import ChartReference
+
+    ref, proc = ChartReference.of(scene), scene.processing
+    M_disp = S.display_rgb_to_xyz(proc.display)
+    out = {}
+    t0 = time.perf_counter()
+    rgb, M, _ = S.developed_rgb(raw, ref, proc)
+    out["develop (demosaic, white balance, conversion)"] = time.perf_counter() - t0
+    colours = S._chart_colours(ref, ref.patch_rates(raw.camera), M, M_disp, "scene")
+    t0 = time.perf_counter()
+    S._box_delta_es(rgb, ref.boxes, M_disp, colours.display_white, colours.against, proc.delta_e,
+                    np.full(rgb.shape[:2], np.nan, np.float32))
+    out["per-pixel ΔE*ab and CIEDE2000 of the boxes"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    S.channel_stats(raw, ref.boxes)
+    out["channel statistics"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    S.chart_scielab_map(rgb, ref, proc)
+    out["S-CIELAB"] = time.perf_counter() - t0
     return out
 
 
@@ -191,6 +221,12 @@ def main() -> None:
             print(f"  score / capture: {m['score_s'] / m['capture_s']:.1f} (the scene's first score, its truth's "
                   f"S-CIELAB included), {m['score_again_s'] / m['capture_s']:.1f} (another capture of it, "
                   f"{m['score_again_s']:.1f} s; the truth memoised)")
+            stages = m["stages_s"]
+            print("  the score's parts on another capture, each / capture: " + "; ".join(
+                f"{k} {v:.2f} s = {v / m['capture_s']:.1f}" for k, v in stages.items()))
+            fused = sum(v for k, v in stages.items() if k != "S-CIELAB")
+            print(f"  the fused chain alone (develop, box ΔE, channel statistics): {fused:.2f} s = "
+                  f"{fused / m['capture_s']:.1f} × the capture; with S-CIELAB {fused + stages['S-CIELAB']:.2f} s")
             if m["rss_total"] is not None:
                 print(f"  resident-set peak above the loaded baseline (VmHWM): {m['rss_to_capture'] / c:.2f}x "
                       f"render + capture, {m['rss_total'] / c:.2f}x with the score (target <= 1.5x)")
