@@ -321,8 +321,9 @@ def _data_uri(path: Path) -> str:
     return f"data:{mime};base64," + base64.b64encode(path.read_bytes()).decode()
 
 
-def markdown_html(path: Path) -> str:
-    """report.md as HTML, its local images embedded."""
+def markdown_html(path: Path, embedded: set | None = None) -> str:
+    """report.md as HTML, its local images embedded (each one's resolved path added to ``embedded``, where given:
+    the figures section does not carry them a second time)."""
     import re
 
     import markdown
@@ -332,6 +333,8 @@ def markdown_html(path: Path) -> str:
     def inline(m):
         target = (path.parent / html.unescape(m.group(2))).resolve()
         ok = target.is_file() and path.parent.resolve() in target.parents
+        if ok and embedded is not None:
+            embedded.add(target)
         return f'{m.group(1)}{_data_uri(target) if ok else m.group(2)}"'
 
     return re.sub(r'(<img[^>]*src=")([^":]+)"', inline, body)
@@ -345,9 +348,15 @@ def table_html(path: Path) -> str:
     return frame.head(TABLE_ROWS).to_html(index=False, float_format=lambda v: f"{v:.4g}", border=0) + more
 
 
-def _figures_html(c: Contents) -> str:
+def _figures_html(c: Contents, shown: set = frozenset()) -> str:
+    """Every figure, embedded up to :data:`EMBED_BYTES` (later ones linked) — but those a report.md above shows
+    already (``shown``, resolved paths), named only: a page carried each of them twice (issue 39: pages under 10 MB)."""
     parts, embedded, folder, linked = [], 0, None, False
-    for p in c.figures:
+    again = [p for p in c.figures if p.resolve() in shown]
+    if again:
+        parts.append("<p class=note>shown in the report above: " + ", ".join(
+            html.escape(str(p.relative_to(c.directory))) for p in again) + "</p>")
+    for p in (p for p in c.figures if p.resolve() not in shown):
         rel = p.relative_to(c.directory)
         if rel.parent != folder:
             folder = rel.parent
@@ -376,7 +385,8 @@ def _missing_spectra(cases: list[Case]) -> list[str]:
     if not bare:
         return []
     return [f"<p class=missing><b>No spectrum in the probe for {len(bare)} of {len(cases)} cases:</b> they carry no "
-            "radiance.exr (a paper run writes it with <code>--save-cubes</code>), so their scene colours are the chart "
+            "radiance.exr (a paper run writes it with <code>--save-cubes</code>; architectures and design write their captures "
+            "only), so their scene colours are the chart "
             "reference's patch colours, inside the patches only.</p>"]
 
 
@@ -389,7 +399,7 @@ def build_page(c: Contents, cases: list[Case]) -> str:
     body = [f"<h1>{html.escape(title)}</h1>",
             f"<p class=note>written by spectracam {__version__} from {html.escape(str(c.directory))}; "
             "see docs/metrics.md for every score's definition</p>"]
-    script = ""
+    script, shown = "", set()
     body += _missing_spectra(cases)
     if cases:
         script, div = components(interactive(cases))
@@ -416,14 +426,14 @@ def build_page(c: Contents, cases: list[Case]) -> str:
             if table:
                 body += [f"<h2>patches ({html.escape(str(p.relative_to(c.directory)))})</h2>", table]
     for p in c.markdown:
-        body += [f"<h2>{html.escape(str(p.relative_to(c.directory)))}</h2>", markdown_html(p)]
+        body += [f"<h2>{html.escape(str(p.relative_to(c.directory)))}</h2>", markdown_html(p, shown)]
     for p in c.tables:
         try:
             body += [f"<h2>{html.escape(str(p.relative_to(c.directory)))}</h2>", table_html(p)]
         except Exception as e:  # noqa: BLE001 - a damaged table is named on the page, not fatal
             body.append(f"<p class=note>{html.escape(str(p.name))}: not readable ({html.escape(str(e))[:200]})</p>")
     if c.figures:
-        body += ["<h2>figures and per-case images</h2>", _figures_html(c)]
+        body += ["<h2>figures and per-case images</h2>", _figures_html(c, shown)]
     for p in c.json_files:
         text = p.read_text(errors="replace")
         more = "" if len(text) <= JSON_CHARS else f"\n… ({len(text) - JSON_CHARS} more characters in the file)"
