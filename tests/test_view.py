@@ -4,6 +4,7 @@ data checked against the files by a second reader (OpenImageIO)."""
 import io
 import json
 import os
+import re
 import time
 from pathlib import Path
 
@@ -70,9 +71,9 @@ def open_page(driver, directory: Path) -> list:
     """Load DIR/index.html from file:// and wait for Bokeh; the console's errors (none expected)."""
     driver.get_log("browser")  # drop earlier pages' entries
     driver.get((directory / "index.html").as_uri())
-    for _ in range(200):
+    for _ in range(400):   # Bokeh has started and page.js has inflated the cases' data
         if driver.execute_script("return !!(window.Bokeh && Bokeh.documents.length && window.spectracam && "
-                                 "Bokeh.documents[0].get_model_by_name('probe_info'))"):
+                                 "Bokeh.documents[0].get_model_by_name('probe_info') && window.spectracam.loaded)"):
             break
         time.sleep(0.05)
     else:
@@ -223,6 +224,23 @@ def test_paper_page_switches_cases_and_probes_digital_numbers(outputs, browser):
     assert last["spectrum"] is None  # no radiance.exr in a paper case
     page = (d / "index.html").read_text()
     assert "fig4.png" in page and "<table" in page  # figures and report.md's tables
+    # issue 39: under 10 MB (10.7 MB before: 160 × 120 quick cases; a 640 × 480 paper page went 22.9 → 4.8 MB), each
+    # figure carried once, and the rendered L*a*b* and ΔE*ab page.js computes from rendered.exr's RGB are the Python's
+    assert (d / "index.html").stat().st_size < 10_000_000 and len(contents.figures) == 3
+    import base64
+
+    for fig in contents.figures:   # report.md shows them: not a second time in the figures section
+        b64 = base64.b64encode(fig.read_bytes()).decode()   # a piece of its middle: PNG headers repeat
+        refs = sum(len(re.findall(r"!\[[^\]]*\]\(" + re.escape(os.path.relpath(fig, m.parent)) + r"\)", m.read_text()))
+                   for m in contents.markdown)   # a report.md may show a figure twice
+        assert page.count(b64[len(b64) // 2:len(b64) // 2 + 400]) == max(1, refs), fig
+    case = load_case(names[i], None, d / names[i] / "raw.exr", d / names[i] / "rendered.exr", 1 / len(names))
+    data = browser.execute_script(f"return window.spectracam.data({i})")
+    lab = np.array(data["rendered_lab"], np.float32).reshape(case.rendered_lab.shape)
+    assert np.abs(lab - case.rendered_lab).max() < 1e-3
+    error = np.array([np.nan if v is None else v for v in data["error"]], float)
+    want = case.images["error"].reshape(-1)
+    assert np.array_equal(np.isnan(error), np.isnan(want)) and np.nanmax(np.abs(error - want)) < 1e-3
 
 
 @pytest.mark.parametrize("name, figures", [("spatial", 1), ("motion", 1)])
@@ -246,7 +264,13 @@ def test_spatial_and_motion_pages(outputs, browser, name, figures):
     M = display_rgb_to_xyz(display)
     assert last["rendered_lab"] == pytest.approx(xyz_to_lab(rgb @ M.T, M.sum(axis=1)).tolist(), abs=1e-3)
     page = (d / "index.html").read_text()
-    assert page.count("<figure>") >= len(contents.figures) and "data:image/png;base64," in page
+    import base64
+
+    for fig in contents.figures:   # every figure embedded exactly once (report.md's not again below it, issue 39)
+        b64 = base64.b64encode(fig.read_bytes()).decode()   # a piece of its middle: PNG headers repeat
+        refs = sum(len(re.findall(r"!\[[^\]]*\]\(" + re.escape(os.path.relpath(fig, m.parent)) + r"\)", m.read_text()))
+                   for m in contents.markdown)   # a report.md may show a figure twice
+        assert page.count(b64[len(b64) // 2:len(b64) // 2 + 400]) == max(1, refs), fig
 
 
 def test_page_is_self_contained(outputs):
@@ -321,6 +345,21 @@ def test_a_640x480_page_probes_r_g_and_b_in_the_browser(tmp_path, browser):
             assert len(shown) == 1 and shown[0][1] == raw.digital[p["y"], p["x"]]
             seen.add(shown[0][0])
     assert seen == {"R", "G", "B"}
+    # a region and a row profile of the strided raw panel: every s-th pixel of the file, each channel on its own sites
+    r = browser.execute_script(f"return window.spectracam.region('raw', 101.0, {h - 203.0}, 352.0, {h - 398.0})")
+    (x0, x1), (y0, y1) = r["x"], r["y"]
+    assert x0 % s == 0 and y0 % s == 0 and r["pixels"] == ((x1 - x0) // s + 1) * ((y1 - y0) // s + 1) > 100
+    block = raw.digital[y0:y1 + 1:s, x0:x1 + 1:s].astype(np.float64)
+    index = raw.layout.channel_index(raw.digital.shape)[y0:y1 + 1:s, x0:x1 + 1:s]
+    for j, c in enumerate(r["channels"]):
+        v = block[index == j]
+        assert c["n"] == v.size > 10 and c["mean"] == pytest.approx(v.mean(), rel=1e-9)
+        assert c["sd"] == pytest.approx(v.std(ddof=1), rel=1e-9)
+    p = browser.execute_script(f"return window.spectracam.profile('raw', 0, {h - 250.0}, 640, {h - 250.0})")
+    row = p["y"][0]
+    assert row % s == 0 and p["x"] == list(range(0, 640, s))[:len(p["x"])] and len(p["x"]) == -(-640 // s)
+    got = np.array([[np.nan if v is None else v for v in vals] for vals in p["values"]])
+    assert np.array_equal(np.nanmax(got, axis=0), raw.digital[row, ::s])
 
 
 def test_what_cannot_be_shown_is_one_line(tmp_path):
@@ -343,3 +382,196 @@ def test_what_cannot_be_shown_is_one_line(tmp_path):
     with pytest.raises(SpectracamError, match=r"^file = .*raw\.exr"):  # one line, naming the file
         write_view(tmp_path / "bad")
     assert not (tmp_path / "bad" / "index.html").exists()
+
+
+def raw_dn_oiio(path: Path) -> np.ndarray:
+    """raw.exr's digital numbers by OpenImageIO: the stored (DN − spectracamDnOffset) / spectracamDnScale, undone
+    (whole numbers: an 8-bit ADC's)."""
+    oiio = pytest.importorskip("OpenImageIO")
+    inp = oiio.ImageInput.open(str(path))
+    spec = inp.spec()
+    scale, offset = float(spec.getattribute("spectracamDnScale")), float(spec.getattribute("spectracamDnOffset"))
+    pixels = inp.read_image("float")
+    inp.close()
+    return np.rint(pixels[..., 0].astype(np.float64) * scale + offset)
+
+
+def _drag(driver, x0, y0, x1, y1):
+    from selenium.webdriver.common.actions.action_builder import ActionBuilder
+
+    actions = ActionBuilder(driver)
+    actions.pointer_action.move_to_location(int(x0), int(y0)).pointer_down().move_to_location(
+        int((x0 + x1) / 2), int((y0 + y1) / 2)).move_to_location(int(x1), int(y1)).pointer_up()
+    actions.perform()
+    time.sleep(0.3)
+
+
+def _csv_rows(text: str) -> tuple[list, list]:
+    lines = text.strip().split("\n")
+    return lines[0].split(","), [[float(v) if v else np.nan for v in ln.split(",")] for ln in lines[1:]]
+
+
+def test_line_profiles_are_the_files_values(outputs, browser):
+    """Issue 39: a click on an image draws the profile along its row (or column, or a line between two clicks):
+    raw — each CFA channel's digital numbers on its own pixels only; rendered — rendered.exr's R, G, B; scene — the
+    radiance of the band nearest 550 nm; each equal to OpenImageIO's read of the file, and the same as a CSV."""
+    from spectracam.io.exr import read_raw_exr
+
+    d = outputs / "simulate"
+    write_view(d)
+    rects = check_page(browser, d, 4)
+    raw = raw_dn_oiio(d / "raw.exr")
+    capture = read_raw_exr(d / "raw.exr")
+    assert np.array_equal(raw, capture.digital)   # the second reader agrees with spectracam's
+    index = capture.layout.channel_index(capture.digital.shape)
+    x, y, w, h = rects[1]                                   # the raw panel, clicked: its row (the default mode)
+    click(browser, x + w / 2, y + h / 2)
+    p = browser.execute_script("return window.spectracam.lastProfile")
+    assert p["role"] == "raw" and p["stride"] == 1 and p["channels"] == ["R", "G", "B"]
+    row = p["y"][0]
+    assert p["x"] == list(range(160)) and set(p["y"]) == {row} and p["distance_px"] == list(range(160))
+    for j, values in enumerate(p["values"]):                # each channel on its own sites only, the file's numbers
+        mine = index[row] == j
+        got = np.array([np.nan if v is None else v for v in values])
+        assert np.array_equal(got[mine], raw[row, mine]) and np.isnan(got[~mine]).all()
+    assert mine.any() and (~mine).any()
+    header, cells = _csv_rows(browser.execute_script("return window.spectracam.profileCsv()"))
+    assert header == ["x_px", "y_px", "distance_px", "R_DN", "G_DN", "B_DN"] and len(cells) == 160
+    cells = np.array(cells)
+    assert np.array_equal(cells[:, 0], np.arange(160)) and (cells[:, 1] == row).all()
+    for j in range(3):
+        mine = index[row] == j
+        assert np.array_equal(cells[mine, 3 + j], raw[row, mine]) and np.isnan(cells[~mine, 3 + j]).all()
+    text = browser.execute_script("return Bokeh.documents[0].get_model_by_name('profile_info').text")
+    assert "profile as CSV" in text and 'download="profile_raw_' in text
+    drawn = browser.execute_script("return Bokeh.documents[0].get_model_by_name('profile_lines').data")
+    assert drawn["label"] == ["R", "G", "B"] and sum(len(v) for v in drawn["ys"]) == 160
+    # the rendered panel, by column
+    browser.execute_script("Bokeh.documents[0].get_model_by_name('profile_mode').active = 1")
+    x, y, w, h = rects[2]
+    click(browser, x + w / 3, y + h / 2)
+    p = browser.execute_script("return window.spectracam.lastProfile")
+    rendered, names = read_oiio(d / "rendered.exr")
+    col = p["x"][0]
+    assert p["role"] == "rendered" and p["y"] == list(range(120)) and set(p["x"]) == {col}
+    want = rendered[:, col, [names.index(c) for c in "RGB"]]
+    assert np.array_equal(np.asarray(p["values"], np.float32), want.T.astype(np.float32))
+    header, cells = _csv_rows(browser.execute_script("return window.spectracam.profileCsv()"))
+    assert header[3:] == ["R_display_linear", "G_display_linear", "B_display_linear"]
+    assert np.array_equal(np.array(cells, np.float32)[:, 3:], want.astype(np.float32))
+    # the scene panel, a line between two clicks: the radiance of the band nearest 550 nm
+    browser.execute_script("Bokeh.documents[0].get_model_by_name('profile_mode').active = 2")
+    x, y, w, h = rects[0]
+    click(browser, x + 0.2 * w, y + 0.3 * h)
+    assert browser.execute_script("return window.spectracam.lastProfile")["role"] == "rendered"  # one click: no line
+    click(browser, x + 0.7 * w, y + 0.8 * h)
+    p = browser.execute_script("return window.spectracam.lastProfile")
+    pixels, names = read_oiio(d / "radiance.exr")
+    bands = {float(n.split(".", 1)[1].rstrip("nm").replace(",", ".")): i for i, n in enumerate(names)
+             if n.startswith("S0.")}
+    nm = min(bands, key=lambda b: abs(b - 550))
+    assert p["role"] == "scene" and p["channels"] == [f"L({nm:g} nm)"]
+    xs, ys = np.array(p["x"]), np.array(p["y"])
+    assert len(xs) == max(abs(xs[-1] - xs[0]), abs(ys[-1] - ys[0])) + 1 > 20     # one sample per pixel of the line
+    assert np.all(np.abs(np.diff(xs)) <= 1) and np.all(np.abs(np.diff(ys)) <= 1) and xs[-1] > xs[0] and ys[-1] > ys[0]
+    assert np.array_equal(np.asarray(p["values"][0], np.float32), pixels[ys, xs, bands[nm]].astype(np.float32))
+    browser.execute_script("Bokeh.documents[0].get_model_by_name('profile_mode').active = 0")
+
+
+def test_a_regions_mean_and_sigma_per_channel(outputs, browser):
+    """Issue 39: a box dragged with the box-select tool gives per channel the pixels, mean and sample σ (ddof = 1) of
+    the kept pixels whose centres it holds — raw: each CFA channel on its own sites — as numpy computes them on
+    OpenImageIO's read of the files (to 1e-9 relative: both in double)."""
+    from spectracam.io.exr import read_raw_exr
+
+    d = outputs / "simulate"
+    write_view(d)
+    rects = check_page(browser, d, 4)
+    browser.execute_script("Bokeh.documents[0].get_model_by_name('figure_raw').toolbar.tools"
+                           ".filter(t => t.type === 'BoxSelectTool').forEach(t => t.active = true)")
+    x, y, w, h = rects[1]
+    _drag(browser, x + 0.3 * w, y + 0.3 * h, x + 0.6 * w, y + 0.7 * h)
+    r = browser.execute_script("return window.spectracam.lastRegion")
+    assert r is not None and r["role"] == "raw" and r["stride"] == 1
+    (x0, x1), (y0, y1) = r["x"], r["y"]
+    assert 10 < x1 - x0 < 100 and 10 < y1 - y0 < 100 and r["pixels"] == (x1 - x0 + 1) * (y1 - y0 + 1)
+    raw = raw_dn_oiio(d / "raw.exr")
+    capture = read_raw_exr(d / "raw.exr")
+    index = capture.layout.channel_index(capture.digital.shape)[y0:y1 + 1, x0:x1 + 1]
+    block = raw[y0:y1 + 1, x0:x1 + 1]
+    assert [c["name"] for c in r["channels"]] == ["R", "G", "B"]
+    for j, c in enumerate(r["channels"]):
+        v = block[index == j]
+        assert c["n"] == v.size > 50
+        assert c["mean"] == pytest.approx(v.mean(), rel=1e-9) and c["sd"] == pytest.approx(v.std(ddof=1), rel=1e-9)
+    text = browser.execute_script("return Bokeh.documents[0].get_model_by_name('region_info').text")
+    assert "σ (sample, n − 1)" in text and f"{r['channels'][0]['mean']:.5f}" in text
+    mark = browser.execute_script("return Bokeh.documents[0].get_model_by_name('region_mark').data")
+    assert mark["left"] == [x0] and mark["right"] == [x1 + 1] and mark["top"] == [120 - y0]
+    # the rendered panel's R, G, B over every pixel of the region (data coordinates: y up)
+    r = browser.execute_script("return window.spectracam.region('rendered', 20.2, 30.7, 75.9, 101.1)")
+    rendered, names = read_oiio(d / "rendered.exr")
+    # centres x + 0.5 in [20.2, 75.9): x 20…75; files' y = 120 − data y: centres in [18.9, 89.3): y 19…88
+    assert r["x"] == [20, 75] and r["y"] == [19, 88]
+    block = rendered[19:89, 20:76][..., [names.index(c) for c in "RGB"]].reshape(-1, 3).astype(np.float64)
+    for j, c in enumerate(r["channels"]):
+        assert c["n"] == 56 * 70 and c["mean"] == pytest.approx(block[:, j].mean(), rel=1e-9)
+        assert c["sd"] == pytest.approx(block[:, j].std(ddof=1), rel=1e-9)
+
+
+def test_architectures_and_design_pages_show_each_designs_images_and_curves(tmp_path, browser):
+    """Issue 39: ``architectures`` and ``design`` pages had "0 cases": each now writes every design's first capture
+    (cases/<design>/raw.exr, rendered.exr; not in results.json, whose numbers stay), so the page shows each design's raw
+    and rendered images, ΔE*ab map and responsivities — a designed camera's own curves, as curves.csv holds them."""
+    import csv
+
+    from spectracam.cli import main
+    from spectracam.experiments.architectures.experiment import (ArchitecturesRun, designs, run_architectures,
+                                                                write_architectures_outputs)
+    from spectracam.experiments.options import default_experiment
+    from spectracam.experiments.paper.experiment import load_experiment
+    from spectracam.io.exr import read_raw_exr
+
+    arch = tmp_path / "architectures"
+    run = ArchitecturesRun(load_experiment(default_experiment(), ()), quick=True, seeds=1, light_factors=(1.0,),
+                           natural_scenes=())
+    write_architectures_outputs(arch, run_architectures(run, renderer="analytic", use_cache=False, spacetime=False),
+                                "test")
+    assert "_shots" not in json.loads((arch / "results.json").read_text())
+    contents = find_contents(arch)
+    assert contents.kind == "architectures" and len(contents.cases) == len(designs()) >= 12
+    write_view(arch)
+    check_page(browser, arch, 3)
+    names = [n for n, _ in contents.cases]
+    for design in ("cfa/single", "rgbw/single", "prism/optimal"):
+        i = names.index("cases/" + design.replace("/", "-"))
+        assert browser.execute_script(f"return window.spectracam.select({i})")
+        data = browser.execute_script(f"return window.spectracam.data({i})")
+        capture = read_raw_exr(arch / names[i] / "raw.exr")
+        assert data["design"] == design and data["channels"] == list(capture.layout.channels)
+        p = browser.execute_script("return window.spectracam.probe(40.5, 60.5)")
+        got = np.array([np.nan if v is None else v for v in p["dn"]])
+        if capture.digital.ndim == 3:   # planes: every channel at every pixel
+            assert np.array_equal(got, capture.digital[:, p["y"], p["x"]])
+        else:                           # a mosaic: its pixel's own channel only
+            k = capture.layout.channel_index(capture.digital.shape)[p["y"], p["x"]]
+            assert got[k] == capture.digital[p["y"], p["x"]] and np.isnan(np.delete(got, k)).all()
+    # design: each optimised design's curves on its page are curves.csv's (6 significant digits there)
+    des = tmp_path / "design"
+    r = CliRunner().invoke(main, ["design", "design.toml", "-o", str(des), "--quick", "--quiet", "--set",
+                                  "renderer=analytic", "--set", "max_iterations=4"])
+    assert r.exit_code == 0, r.output
+    contents = find_contents(des)
+    assert contents.kind == "design" and [n for n, _ in contents.cases] == [
+        "cases/cfa-single", "cases/fsc-split", "cases/prism-optimal"]
+    write_view(des)
+    check_page(browser, des, 3)
+    with open(des / "curves.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    for i, (name, _) in enumerate(contents.cases):
+        data = browser.execute_script(f"return window.spectracam.data({i})")
+        assert data["wavelengths_nm"] == pytest.approx([float(r["wavelength_nm"]) for r in rows])
+        for ch in "RGB":
+            want = [float(r[f"{data['design']}:optimised:{ch}"]) for r in rows]
+            assert np.allclose(data["responsivities"][ch], want, rtol=2e-5, atol=1e-9), (name, ch)
+    assert "_shot" not in json.dumps(json.loads((des / "results.json").read_text())["designs"])

@@ -45,9 +45,12 @@ class Case:
     spectra: np.ndarray | None = None                # (h, w, B) W·m⁻²·sr⁻¹·nm⁻¹
     wavelengths_nm: list = field(default_factory=list)
     dn: np.ndarray | None = None                     # (h, w, N) digital numbers (NaN: not recorded)
+    dn_channel: np.ndarray | None = None             # (h, w) uint8: a mosaic's channel at each kept pixel
     channels: list = field(default_factory=list)
     scene_lab: np.ndarray | None = None
     rendered_lab: np.ndarray | None = None
+    rendered_rgb: np.ndarray | None = None           # (h, w, 3) float32 linear display RGB, rendered.exr's values
+    display_to_xyz: list | None = None               # 3 × 3: display RGB → XYZ (white Y = 1), rendered L*a*b*'s
     responsivities: dict = field(default_factory=dict)  # channel → (B,) e⁻/photon; "QE × IR cut" too
     notes: list = field(default_factory=list)
     design: str = ""
@@ -152,6 +155,7 @@ def _raw(case: Case, path: Path, grid):
         dn = np.asarray(raw.digital, np.float32)[::s, ::s]
         h, w = raw.digital.shape
         index = layout.channel_index((h, w))[::s, ::s]
+        case.dn_channel = index.astype(np.uint8)
         case.dn = np.full(dn.shape + (len(channels),), np.nan, np.float32)
         np.put_along_axis(case.dn, index[..., None], dn[..., None], axis=-1)
         picture = colours[index] * (dn / top)[..., None]
@@ -185,8 +189,10 @@ def _rendered(case: Case, path: Path):
     params = json.loads(attrs.get("spectracamParameters", "{}"))
     display = (params.get("processing") or {}).get("display", "crt")
     s = case.stride
-    rgb = np.stack([channels[c][::s, ::s] for c in "RGB"], axis=-1).astype(np.float64)
+    case.rendered_rgb = np.stack([np.asarray(channels[c][::s, ::s], np.float32) for c in "RGB"], axis=-1)
+    rgb = case.rendered_rgb.astype(np.float64)
     M = display_rgb_to_xyz(display)
+    case.display_to_xyz = M.tolist()
     xyz = rgb @ M.T
     case.rendered_lab = xyz_to_lab(xyz, M.sum(axis=1)).astype(np.float32)
     tone = (params.get("processing") or {}).get("tone_curve", "srgb")

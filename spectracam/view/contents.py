@@ -39,7 +39,7 @@ def _kind_of(d: Path, results: dict | None) -> str:
     if results and isinstance(results.get("experiment"), str):
         return results["experiment"]
     for kind, marker in (("paper", "fig4.png"), ("spatial", "mtf.png"), ("motion", "breakup_scielab.png"),
-                         ("architectures", "architectures.png"), ("design", "design_curves.png"),
+                         ("architectures", "architectures.png"), ("design", "curves.png"),
                          ("consistency", "consistency.png"), ("sweep", "results.parquet"),
                          ("emva", "emva.json")):
         if marker in names:

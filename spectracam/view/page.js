@@ -1,27 +1,121 @@
-// spectracam view: the pixel probe and the case selector of index.html (spectracam/view/page.py).
-// Each case's per-pixel data sit in <script type="application/json" id="case-N"> as base64 float32
-// (little-endian) arrays of every stride-th pixel, top row first; the Bokeh models are found by name.
+// spectracam view: the pixel probe, the line profile, the region statistics and the case selector of index.html
+// (spectracam/view/page.py).  Each case's per-pixel data sit in <script type="application/json" id="case-N">, every
+// array losslessly packed (page.py: packed): zlib's deflate of its little-endian bytes (float32, uint8 or uint16),
+// perhaps regrouped by byte position, base64 — inflated here by the browser's own DecompressionStream into the very
+// values the files hold, every stride-th pixel, top row first.  The Bokeh models are found by name.
 (function () {
   "use strict";
   const decoded = {};
+  const TYPES = {f4: [Float32Array, 4], u1: [Uint8Array, 1], u2: [Uint16Array, 2]};
+  const ROLES = ["scene", "raw", "rendered", "error"];
+  const RGB_COLOURS = ["#e6261a", "#1acc26", "#264dff"];
 
-  function b64floats(text) {
+  async function inflate(text) {
     const bin = atob(text);
     const bytes = new Uint8Array(bin.length);
     for (let i = 0; i < bin.length; i++) bytes[i] = bin.charCodeAt(i);
-    return new Float32Array(bytes.buffer);
+    const stream = new Blob([bytes]).stream().pipeThrough(new DecompressionStream("deflate"));
+    return new Uint8Array(await new Response(stream).arrayBuffer());
   }
 
-  function caseData(i) {
-    if (decoded[i]) return decoded[i];
+  // A packed array (page.py: packed) back to its typed array, flat, C order.
+  async function unpack(p) {
+    if (!p) return null;
+    const bytes = await inflate(p.data);
+    const [Type, size] = TYPES[p.dtype];
+    let out = bytes;
+    if (p.shuffle && size > 1) {
+      const n = bytes.length / size;
+      out = new Uint8Array(bytes.length);
+      for (let b = 0; b < size; b++) {
+        for (let i = 0; i < n; i++) out[i * size + b] = bytes[b * n + i];
+      }
+    }
+    return new Type(out.buffer, out.byteOffset, out.length / size);
+  }
+
+  // CIE 1976 L*a*b* of XYZ relative to a white (as spectracam.core.cielab.xyz_to_lab), float64.
+  function lab(x, y, z, w) {
+    const f = (t) => t > 216 / 24389 ? Math.cbrt(t) : (24389 / 27 * t + 16) / 116;
+    const fx = f(x / w[0]), fy = f(y / w[1]), fz = f(z / w[2]);
+    return [116 * fy - 16, 500 * (fx - fy), 200 * (fy - fz)];
+  }
+
+  // (rows, cols, 3) uint8, top row first -> (rows * cols) uint32 RGBA, bottom row first (Bokeh draws row 0 at y = 0).
+  function rgbaBottomUp(rgb, rows, cols) {
+    if (!rgb) return null;
+    const out = new Uint8Array(rows * cols * 4);
+    for (let r = 0; r < rows; r++) {
+      const from = r * cols * 3, to = (rows - 1 - r) * cols * 4;
+      for (let k = 0; k < cols; k++) {
+        out[to + 4 * k] = rgb[from + 3 * k];
+        out[to + 4 * k + 1] = rgb[from + 3 * k + 1];
+        out[to + 4 * k + 2] = rgb[from + 3 * k + 2];
+        out[to + 4 * k + 3] = 255;
+      }
+    }
+    return new Uint32Array(out.buffer);
+  }
+
+  function bottomUp(values, rows, cols) {
+    const out = new Float32Array(rows * cols);
+    for (let r = 0; r < rows; r++) out.set(values.subarray(r * cols, (r + 1) * cols), (rows - 1 - r) * cols);
+    return out;
+  }
+
+  // Rendered L*a*b* (the display's XYZ of rendered.exr's RGB, white = the display's) and ΔE*ab against the scene's.
+  function colorimetry(c) {
+    const n = c.rows * c.cols;
+    c.rendered_lab = null;
+    c.error = null;
+    if (!c.rendered_rgb || !c.display_to_xyz) return;
+    const M = c.display_to_xyz, w = M.map((row) => row[0] + row[1] + row[2]);
+    c.rendered_lab = new Float32Array(3 * n);
+    for (let k = 0; k < n; k++) {
+      const r = c.rendered_rgb[3 * k], g = c.rendered_rgb[3 * k + 1], b = c.rendered_rgb[3 * k + 2];
+      const v = lab(M[0][0] * r + M[0][1] * g + M[0][2] * b, M[1][0] * r + M[1][1] * g + M[1][2] * b,
+                    M[2][0] * r + M[2][1] * g + M[2][2] * b, w);
+      c.rendered_lab.set(v, 3 * k);
+    }
+    if (!c.scene_lab) return;
+    c.error = new Float32Array(n);
+    for (let k = 0; k < n; k++) {
+      let s = 0;
+      for (let j = 0; j < 3; j++) s += (c.rendered_lab[3 * k + j] - c.scene_lab[3 * k + j]) ** 2;
+      c.error[k] = Math.sqrt(s);
+    }
+  }
+
+  async function decodeCase(i) {
     const el = document.getElementById("case-" + i);
     if (!el) return null;
     const c = JSON.parse(el.textContent);
-    for (const key of ["spectra", "dn", "scene_lab", "rendered_lab", "error"]) {
-      c[key] = c[key] ? b64floats(c[key]) : null;
+    const a = {};
+    for (const [key, p] of Object.entries(c.arrays)) a[key] = await unpack(p);
+    delete c.arrays;
+    const n = c.rows * c.cols, N = c.channels.length;
+    c.spectra = a.spectra;
+    c.scene_lab = a.scene_lab;
+    c.rendered_rgb = a.rendered_rgb;
+    c.dn = null;
+    if (a.dn) {   // N digital numbers a pixel, NaN where a mosaic's pixel records another channel
+      c.dn = new Float32Array(n * N);
+      if (a.dn_channel) {
+        c.dn.fill(NaN);
+        for (let k = 0; k < n; k++) c.dn[k * N + a.dn_channel[k]] = a.dn[k];
+      } else {
+        c.dn.set(a.dn);
+      }
     }
-    decoded[i] = c;
+    colorimetry(c);
+    c.pictures = {scene: rgbaBottomUp(a.image_scene, c.rows, c.cols), raw: rgbaBottomUp(a.image_raw, c.rows, c.cols),
+                  rendered: rgbaBottomUp(a.image_rendered, c.rows, c.cols),
+                  error: c.error ? bottomUp(c.error, c.rows, c.cols) : null};
     return c;
+  }
+
+  function caseData(i) {
+    return decoded[i] || null;
   }
 
   function model(name) {
@@ -33,6 +127,10 @@
     return null;
   }
 
+  function ndarray(values, shape) {
+    return window.Bokeh.require("core/util/ndarray").ndarray(values, {shape: shape});
+  }
+
   function fmt(x, digits) {
     return (x === null || x === undefined || Number.isNaN(x)) ? "–" : x.toFixed(digits);
   }
@@ -41,12 +139,78 @@
     return arr ? Array.from(arr.subarray(index * n, index * n + n)) : null;
   }
 
+  function nearestBand(c, nm) {
+    let best = 0;
+    c.wavelengths_nm.forEach((w, i) => { if (Math.abs(w - nm) < Math.abs(c.wavelengths_nm[best] - nm)) best = i; });
+    return best;
+  }
+
+  // The channels a profile or a region of the panel `role` reports: name, CSV column, colour and value at kept pixel k.
+  //   scene: the radiance of the band nearest the probe's read-out wavelength (550 nm), radiance.exr's own float32
+  //          values in W·m⁻²·sr⁻¹·nm⁻¹ — an engineer checks a scene against the physics, not the 8-bit sRGB preview,
+  //          which is tone-mapped, clipped and quantised; without radiance.exr, the scene's L*, a*, b*;
+  //   raw: each channel's digital numbers, in its channel's colour (a mosaic: only that channel's pixels);
+  //   rendered: rendered.exr's linear display R, G, B;  error: ΔE*ab.
+  function channelsOf(c, role) {
+    if (role === "scene" && c.spectra) {
+      const b = nearestBand(c, spectracam.wavelength_nm), w = c.wavelengths_nm[b];
+      return [{name: `L(${w} nm)`, column: `radiance_${w}nm_W_m2_sr_nm`, colour: "#222222",
+               value: (k) => c.spectra[k * c.bands + b]}];
+    }
+    if (role === "scene" || (role === "error" && !c.error)) {
+      return c.scene_lab ? ["L*", "a*", "b*"].map((name, j) => ({name: name, column: ["L", "a", "b"][j] + "_star",
+        colour: RGB_COLOURS[j], value: (k) => c.scene_lab[3 * k + j]})) : [];
+    }
+    if (role === "raw") {
+      const N = c.channels.length;
+      return c.dn ? c.channels.map((ch, j) => ({name: ch, column: `${ch}_DN`, colour: c.colours[ch] || "#444444",
+                                                value: (k) => c.dn[k * N + j]})) : [];
+    }
+    if (role === "rendered") {
+      return c.rendered_rgb ? ["R", "G", "B"].map((ch, j) => ({name: ch, column: `${ch}_display_linear`,
+        colour: RGB_COLOURS[j], value: (k) => c.rendered_rgb[3 * k + j]})) : [];
+    }
+    return [{name: "ΔE*ab", column: "delta_E_ab", colour: "#222222", value: (k) => c.error[k]}];
+  }
+
+  // The kept pixel (col, row) under data coordinates (x, y) (x right, y up, pixels of the files), clamped to the image.
+  function keptPixel(c, x, y) {
+    const clamp = (v, n) => Math.min(n - 1, Math.max(0, v));
+    return [clamp(Math.floor(x / c.stride), c.cols), clamp(Math.floor((c.height - y) / c.stride), c.rows)];
+  }
+
+  function meanSd(values) {
+    const v = values.filter((x) => !Number.isNaN(x));
+    const n = v.length;
+    if (!n) return [0, NaN, NaN];
+    const mean = v.reduce((s, x) => s + x, 0) / n;
+    const sd = n > 1 ? Math.sqrt(v.reduce((s, x) => s + (x - mean) ** 2, 0) / (n - 1)) : NaN;
+    return [n, mean, sd];
+  }
+
+  function csvCell(v) {
+    return Number.isNaN(v) || v === null || v === undefined ? "" : String(v);
+  }
+
   const spectracam = {
     current: 0,
     pinned: false,
     last: null,
+    loaded: false,
+    lastProfile: null,
+    lastRegion: null,
+    lineStart: null,
+    wavelength_nm: 550,
     caseCount: function () { return document.querySelectorAll("script[id^=case-]").length; },
     data: caseData,
+
+    // Inflate every case's data, then show the first.
+    start: async function () {
+      const n = this.caseCount();
+      for (let i = 0; i < n; i++) decoded[i] = await decodeCase(i);
+      this.loaded = true;
+      this.select(0);
+    },
 
     // The probe at data coordinates (x, y) of the linked image figures (x right, y up, pixel units
     // of the full-size files): the kept pixel under it, its spectrum, digital numbers and CIELAB.
@@ -63,6 +227,7 @@
         spectrum: slice(c.spectra, k, c.bands),
         channels: c.channels, dn: slice(c.dn, k, c.channels.length),
         scene_lab: slice(c.scene_lab, k, 3), rendered_lab: slice(c.rendered_lab, k, 3),
+        rendered_rgb: slice(c.rendered_rgb, k, 3),
         delta_e: c.error ? c.error[k] : null,
         patch: patchAt(c, col * s, row * s),
       };
@@ -83,7 +248,7 @@
       if (mark) mark.data = {x: [p.x + p.stride / 2], y: [c.height - p.y - p.stride / 2]};
       const info = model("probe_info");
       if (!info) return;
-      const lab = (v) => v ? `${fmt(v[0], 2)}, ${fmt(v[1], 2)}, ${fmt(v[2], 2)}` : "–";
+      const lab3 = (v) => v ? `${fmt(v[0], 2)}, ${fmt(v[1], 2)}, ${fmt(v[2], 2)}` : "–";
       const dn = p.dn ? p.channels.map((ch, i) => Number.isNaN(p.dn[i]) ? "" : `${ch} ${fmt(p.dn[i], 0)}`)
                           .filter((t) => t).join(", ") : "–";
       const csv = p.spectrum ? `<a download="spectrum_${p.x}_${p.y}.csv" href="data:text/csv;charset=utf-8,` +
@@ -92,8 +257,8 @@
         `<tr><th>pixel (x, y)</th><td>${p.x}, ${p.y}</td></tr>` +
         `<tr><th>patch</th><td>${p.patch || "–"}</td></tr>` +
         `<tr><th>digital numbers</th><td>${dn}</td></tr>` +
-        `<tr><th>scene L*, a*, b*</th><td>${lab(p.scene_lab)}</td></tr>` +
-        `<tr><th>rendered L*, a*, b*</th><td>${lab(p.rendered_lab)}</td></tr>` +
+        `<tr><th>scene L*, a*, b*</th><td>${lab3(p.scene_lab)}</td></tr>` +
+        `<tr><th>rendered L*, a*, b*</th><td>${lab3(p.rendered_lab)}</td></tr>` +
         `<tr><th>ΔE*ab</th><td>${fmt(p.delta_e, 2)}</td></tr>` +
         `<tr><th>radiance at 550 nm</th><td>${p.spectrum ? fmt(interp(c.wavelengths_nm, p.spectrum, 550), 5) + " W·m⁻²·sr⁻¹·nm⁻¹" : "– (no radiance.exr)"}</td></tr></table>` + csv;
     },
@@ -107,16 +272,134 @@
       return lines.join("\n") + "\n";
     },
 
+    // A click on panel `role` at (x, y): the profile along its row or column, or (third mode) a line from the
+    // previous click to this one.
+    tapped: function (role, x, y) {
+      const c = caseData(this.current);
+      if (!c) return null;
+      const mode = model("profile_mode") ? model("profile_mode").active : 0;
+      if (mode === 0) return this.profile(role, 0, y, c.cols * c.stride - 1e-6, y);
+      if (mode === 1) return this.profile(role, x, c.height, x, c.height - c.rows * c.stride + 1e-6);
+      if (!this.lineStart || this.lineStart.role !== role) {
+        this.lineStart = {role: role, x: x, y: y};
+        const info = model("profile_info");
+        if (info) info.text = "<i>click the line's end</i>";
+        return null;
+      }
+      const s = this.lineStart;
+      this.lineStart = null;
+      return this.profile(role, s.x, s.y, x, y);
+    },
+
+    // The values of panel `role`'s channels (channelsOf) at the kept pixels along the line from data coordinates
+    // (x0, y0) to (x1, y1): one sample per kept pixel along its longer axis (a digital differential analyser).
+    profile: function (role, x0, y0, x1, y1) {
+      const c = caseData(this.current);
+      if (!c) return null;
+      const s = c.stride, [c0, r0] = keptPixel(c, x0, y0), [c1, r1] = keptPixel(c, x1, y1);
+      const steps = Math.max(Math.abs(c1 - c0), Math.abs(r1 - r0));
+      const xs = [], ys = [], distance = [], ks = [];
+      for (let t = 0; t <= steps; t++) {
+        const col = steps ? Math.round(c0 + (c1 - c0) * t / steps) : c0;
+        const row = steps ? Math.round(r0 + (r1 - r0) * t / steps) : r0;
+        xs.push(col * s); ys.push(row * s); ks.push(row * c.cols + col);
+        distance.push(Math.hypot((col - c0) * s, (row - r0) * s));
+      }
+      const chans = channelsOf(c, role);
+      const out = {case: c.name, role: role, stride: s, x: xs, y: ys, distance_px: distance,
+                   channels: chans.map((ch) => ch.name), columns: chans.map((ch) => ch.column),
+                   values: chans.map((ch) => ks.map((k) => ch.value(k)))};
+      this.lastProfile = out;
+      this.showProfile(out, c, chans);
+      return out;
+    },
+
+    showProfile: function (p, c, chans) {
+      const lines = model("profile_lines"), points = model("profile_points");
+      const keep = (j) => p.distance_px.map((d, i) => [d, p.values[j][i]]).filter((v) => !Number.isNaN(v[1]));
+      if (lines) {
+        lines.data = {xs: chans.map((_, j) => keep(j).map((v) => v[0])), ys: chans.map((_, j) => keep(j).map((v) => v[1])),
+                      color: chans.map((ch) => ch.colour), label: chans.map((ch) => ch.name)};
+      }
+      if (points) {
+        const all = chans.flatMap((ch, j) => keep(j).map((v) => [v[0], v[1], ch.colour]));
+        points.data = {x: all.map((v) => v[0]), y: all.map((v) => v[1]), color: all.map((v) => v[2])};
+      }
+      const finite = p.values.flat().filter((v) => !Number.isNaN(v));
+      const xr = model("profile_x"), yr = model("profile_y"), n = p.x.length;
+      if (xr) { xr.start = 0; xr.end = Math.max(1, p.distance_px[n - 1]); }
+      if (yr && finite.length) {
+        const lo = Math.min(...finite), hi = Math.max(...finite), pad = 0.05 * (hi - lo || Math.abs(hi) || 1);
+        yr.start = lo - pad; yr.end = hi + pad;
+      }
+      const mark = model("profile_mark");
+      if (mark) mark.data = {x: [p.x[0] + p.stride / 2, p.x[n - 1] + p.stride / 2],
+                             y: [c.height - p.y[0] - p.stride / 2, c.height - p.y[n - 1] - p.stride / 2]};
+      const fig = model("figure_profile");
+      if (fig && fig.title) fig.title.text = `line profile: ${p.role} panel, (${p.x[0]}, ${p.y[0]}) → ` +
+        `(${p.x[n - 1]}, ${p.y[n - 1]}), ${n} kept pixels`;
+      const info = model("profile_info");
+      if (info) info.text = `profile of the ${p.role} panel: ${p.channels.join(", ")} — ` +
+        `<a download="profile_${p.role}_${p.x[0]}_${p.y[0]}_${p.x[n - 1]}_${p.y[n - 1]}.csv" ` +
+        `href="data:text/csv;charset=utf-8,${encodeURIComponent(this.profileCsv(p))}">profile as CSV</a>`;
+    },
+
+    // The profile as CSV: one header row (the files' pixel x, y, the distance, each channel with its unit), one kept
+    // pixel a line; an empty cell where a mosaic's pixel records another channel.
+    profileCsv: function (p) {
+      p = p || this.lastProfile;
+      if (!p) return "";
+      const lines = [["x_px", "y_px", "distance_px", ...p.columns].join(",")];
+      p.x.forEach((x, i) => lines.push([x, p.y[i], p.distance_px[i], ...p.values.map((v) => csvCell(v[i]))].join(",")));
+      return lines.join("\n") + "\n";
+    },
+
+    // The kept pixels of panel `role` whose centres lie in the rectangle of data coordinates (x0, y0)–(x1, y1): per
+    // channel the number of pixels that record it, their mean and sample standard deviation (ddof = 1).
+    region: function (role, x0, y0, x1, y1) {
+      const c = caseData(this.current);
+      if (!c) return null;
+      const s = c.stride;
+      const xa = Math.min(x0, x1), xb = Math.max(x0, x1);
+      const ya = c.height - Math.max(y0, y1), yb = c.height - Math.min(y0, y1);   // the files' y, down
+      const colA = Math.max(0, Math.ceil((xa - s / 2) / s)), colB = Math.min(c.cols - 1, Math.ceil((xb - s / 2) / s) - 1);
+      const rowA = Math.max(0, Math.ceil((ya - s / 2) / s)), rowB = Math.min(c.rows - 1, Math.ceil((yb - s / 2) / s) - 1);
+      const ks = [];
+      for (let r = rowA; r <= rowB; r++) for (let k = colA; k <= colB; k++) ks.push(r * c.cols + k);
+      const chans = channelsOf(c, role);
+      const stats = chans.map((ch) => { const [n, mean, sd] = meanSd(ks.map((k) => ch.value(k)));
+                                        return {name: ch.name, n: n, mean: mean, sd: sd}; });
+      const out = {case: c.name, role: role, stride: s, cols: [colA, colB], rows: [rowA, rowB],
+                   x: [colA * s, colB * s], y: [rowA * s, rowB * s], pixels: ks.length, channels: stats};
+      this.lastRegion = out;
+      const box = model("region_mark");
+      if (box) box.data = ks.length ? {left: [colA * s], right: [(colB + 1) * s], top: [c.height - rowA * s],
+                                       bottom: [c.height - (rowB + 1) * s]} : {left: [], right: [], top: [], bottom: []};
+      const info = model("region_info");
+      if (info) info.text = `<b>region of the ${role} panel</b>: x ${colA * s}–${colB * s}, y ${rowA * s}–${rowB * s} ` +
+        `(${ks.length} kept pixels)<table class="probe"><tr><th>channel</th><th>pixels</th><th>mean</th>` +
+        `<th>σ (sample, n − 1)</th></tr>` + stats.map((st) => `<tr><td>${st.name}</td><td>${st.n}</td>` +
+        `<td>${fmt(st.mean, 5)}</td><td>${fmt(st.sd, 5)}</td></tr>`).join("") + "</table>";
+      return out;
+    },
+
     // Show case i: its images in the linked figures, its camera's responsivities.
     select: function (i) {
       const c = caseData(i);
       if (!c) return false;
       this.current = i;
+      this.lineStart = null;
       const sel = model("case_select");
       if (sel && sel.value !== String(i)) sel.value = String(i);
-      for (const role of ["scene", "raw", "rendered", "error"]) {
-        const src = model("image_" + role), from = model("case_" + i + "_" + role);
-        if (src && from) src.data = Object.assign({}, from.data);
+      const s = c.stride;
+      for (const role of ROLES) {
+        const src = model("image_" + role);
+        if (!src) continue;
+        const img = c.pictures[role];
+        src.data = img ? {image: [ndarray(img, [c.rows, c.cols])], x: [0], y: [c.height - c.rows * s],
+                          dw: [c.cols * s], dh: [c.rows * s]}
+                       : {image: [ndarray(role === "error" ? new Float32Array([NaN]) : new Uint32Array(1), [1, 1])],
+                          x: [0], y: [0], dw: [c.width], dh: [c.height]};
       }
       const xr = model("image_x"), yr = model("image_y");
       if (xr && yr) { xr.start = 0; xr.end = c.width; yr.start = 0; yr.end = c.height; }

@@ -59,7 +59,7 @@ from spectracam.evaluation.usability import NO_USABLE_IMAGE, UsabilitySpec
 
 __all__ = ["LIGHT_FACTORS", "NATURAL_SCENES", "SEEDS", "WINNER_METRICS", "ArchitecturesResult", "ArchitecturesRun",
            "case", "designs", "developed_case", "judge", "natural_case", "restamped", "run_architectures",
-           "run_natural", "time_limit_s", "winners", "write_architectures_outputs"]
+           "run_natural", "time_limit_s", "winners", "write_architectures_outputs", "write_shots"]
 
 #: Light levels, as fractions of the paper's (its calibrated white luminance).
 LIGHT_FACTORS = (1.0, 0.1, 0.01)
@@ -151,9 +151,11 @@ def time_limit_s(scene) -> float:
                                                                     cam.capture.white_fill)))
 
 
-def case(scene, cube, design: str, seeds, limit_s: float | None = None) -> dict:
+def case(scene, cube, design: str, seeds, limit_s: float | None = None, keep: dict | None = None) -> dict:
     """One design under one light and level, over ``seeds``: a results row.  ``limit_s``: the longest
-    capture allowed (module docstring); the exposures metered on the white patch are scaled down to it."""
+    capture allowed (module docstring); the exposures metered on the white patch are scaled down to it.  ``keep``:
+    where given, ``keep[design]`` = the first seed's ``(raw, score)`` (the page's images of the design; the row is
+    the same either way)."""
     from spectracam.scene.chart import WHITE_PATCH
     from spectracam.sensor.exposure import exposure_times_s
 
@@ -174,6 +176,8 @@ def case(scene, cube, design: str, seeds, limit_s: float | None = None) -> dict:
     for seed in seeds:
         raw = capture(cube, camera, seed, white_radiance=white / scale, metering=metering)
         scores.append(score(raw, reference, scene.processing))
+        if keep is not None and design not in keep:
+            keep[design] = (raw, scores[0])
     s0 = scores[0]
     row = {"design": design, "time_limited": scale < 1.0, "architecture": camera.capture.architecture, "exposure": camera.capture.exposure,
            "channels": "".join(raw.layout.channels) if all(len(c) == 1 for c in raw.layout.channels)
@@ -216,11 +220,13 @@ class _ArchitecturesKeys(TypedDict):
     rows: list[dict]
     winners: list[dict]
     timings_s: dict[str, float]
+    _shots: dict
 
 
 class ArchitecturesResult(_ArchitecturesKeys, total=False):
     """What :func:`run_architectures` returns, results.json's keys but ``command``: a row per design × light ×
-    level on the chart and what wins (the base's keys, always there); ``natural`` with ``run.natural_scenes``;
+    level on the chart and what wins (the base's keys, always there; ``_shots``, each design's first capture at the
+    paper's light for its page, the writer keeps out of results.json); ``natural`` with ``run.natural_scenes``;
     ``space``, ``time`` and ``spacetime_winners`` with ``spacetime``."""
 
     natural: dict
@@ -243,7 +249,8 @@ def run_architectures(run: ArchitecturesRun, renderer: str = "mitsuba", use_cach
     seed0 = exp.base.render.seed
     seeds = [seed0 + i for i in range(run.seeds)]
     t0 = time.perf_counter()
-    rows = _chart_rows(run, level, seeds, renderer, use_cache, step, log, progress)
+    shots: dict = {}
+    rows = _chart_rows(run, level, seeds, renderer, use_cache, step, log, progress, shots)
     t_chart = time.perf_counter() - t0
     extra = {}
     if run.natural_scenes:
@@ -263,7 +270,7 @@ def run_architectures(run: ArchitecturesRun, renderer: str = "mitsuba", use_cach
         extra["spacetime_winners"] = spacetime_winners(extra["space"], extra["time"])
     return {"parameters": _run_parameters(run, renderer, level, seeds),
             "rows": rows, "winners": winners(rows), **extra,
-            "timings_s": {"chart": t_chart, "total": time.perf_counter() - t0}}
+            "timings_s": {"chart": t_chart, "total": time.perf_counter() - t0}, "_shots": shots}
 
 
 #: The clock a sub-run (spatial, motion) stamps its own lines with, ``[  12.3 s] `` from its own start.
@@ -283,8 +290,9 @@ def restamped(step):
 
 
 def _chart_rows(run: ArchitecturesRun, level: float, seeds: list, renderer: str, use_cache: bool, step, log,
-                progress: bool) -> list[dict]:
-    """Every design under each light at each level on the chart (:func:`case`), judged: the results' rows."""
+                progress: bool, shots: dict | None = None) -> list[dict]:
+    """Every design under each light at each level on the chart (:func:`case`), judged: the results' rows;
+    ``shots``: filled with each design's first capture under the first light at the paper's level (:func:`case`)."""
     from spectracam.io.cache import cached_render
     from spectracam.core.progress import bar
     from spectracam.render import render
@@ -303,7 +311,8 @@ def _chart_rows(run: ArchitecturesRun, level: float, seeds: list, renderer: str,
             for factor in run.light_factors:
                 sc, cb = scaled(scene, cube, factor)
                 for design in designs():
-                    row = case(sc, cb, design, seeds, None if factor == 1.0 else limit)
+                    first = factor == 1.0 and light == next(iter(scenes))
+                    row = case(sc, cb, design, seeds, None if factor == 1.0 else limit, shots if first else None)
                     rows.append({"illuminant": light, "light_factor": factor,
                                  "white_luminance_cd_m2": level * factor, **row, **judge(row, run.usability)})
                     cases.update(1)
@@ -439,7 +448,9 @@ def run_natural(run: ArchitecturesRun, level: float, renderer: str, seeds, log=N
 
 
 def write_architectures_outputs(out_dir: str | Path, results: dict, command: str, step=lambda msg: None) -> list:
-    """results.json, report.md and the figures (architectures.png/.svg, responsivities.png/.svg)."""
+    """results.json, report.md and the figures (architectures.png/.svg, responsivities.png/.svg); and each
+    design's first capture at the paper's light (``_shots``, not in results.json): ``cases/<architecture>-<scheme>/``
+    raw.exr and rendered.exr, the images of its page (``spectracam view``)."""
     import json
 
     from spectracam.core.files import atomic_write
@@ -447,7 +458,8 @@ def write_architectures_outputs(out_dir: str | Path, results: dict, command: str
     from spectracam.experiments.architectures.report import figure_comparison, figure_responsivities, figure_spacetime, report_markdown
 
     out = Path(out_dir)
-    results = {**results, "command": command}
+    shots = results.get("_shots") or {}
+    results = {**{k: v for k, v in results.items() if k != "_shots"}, "command": command}
     paths = save_figure(figure_comparison(results), out / "architectures.png", out / "architectures.svg")
     paths += save_figure(figure_responsivities(results), out / "responsivities.png", out / "responsivities.svg")
     if "space" in results:
@@ -455,6 +467,20 @@ def write_architectures_outputs(out_dir: str | Path, results: dict, command: str
                              out / "architectures_spacetime.svg")
     paths.append(atomic_write(out / "results.json", json.dumps(results, indent=1, allow_nan=False).encode()))
     paths.append(atomic_write(out / "report.md", report_markdown(results, command).encode()))
+    paths += write_shots(out / "cases", shots)
     step(f"wrote {out}/results.json, report.md, architectures.png/.svg, responsivities.png/.svg"
-         + (", architectures_spacetime.png/.svg" if "space" in results else ""))
+         + (", architectures_spacetime.png/.svg" if "space" in results else "")
+         + (f", cases/ with {len(shots)} designs' raw.exr and rendered.exr" if shots else ""))
+    return paths
+
+
+def write_shots(directory: Path, shots: dict) -> list:
+    """``directory/<design with - for />/raw.exr`` and ``rendered.exr`` of each ``design → (raw, score)``."""
+    from spectracam.io.exr import write_raw_exr
+    from spectracam.io.report import write_rendered_exr
+
+    paths = []
+    for design, (raw, result) in shots.items():
+        d = Path(directory) / design.replace("/", "-")
+        paths += [write_raw_exr(d / "raw.exr", raw), write_rendered_exr(d / "rendered.exr", result)]
     return paths

@@ -208,12 +208,14 @@ def figure_comparison(results: dict):
 def write_design_outputs(out_dir, results: dict, command: str, step=lambda m: None) -> list:
     """Every file of a design run (the module)."""
     from spectracam.core.files import atomic_write, json_default
+    from spectracam.experiments.architectures.experiment import write_shots
     from spectracam.io.plots import save_figure
 
     out = Path(out_dir)
     grid = results["_grid"]
     public = {**{k: v for k, v in results.items() if k != "_grid"}, "command": command,
-              "designs": {k: {kk: vv for kk, vv in v.items() if kk != "_cameras"} for k, v in results["designs"].items()},
+              "designs": {k: {kk: vv for kk, vv in v.items() if kk not in ("_cameras", "_shot")}
+                          for k, v in results["designs"].items()},
               "comparison": table_rows(results)}
     paths = [atomic_write(out / "results.json", json.dumps(public, indent=1, allow_nan=False,
                                                            default=json_default).encode())]
@@ -229,6 +231,8 @@ def write_design_outputs(out_dir, results: dict, command: str, step=lambda m: No
                       ("comparison", figure_comparison(results))):
         fig.text(0.005, -0.01, command, fontsize=5, color="0.45", va="top")   # where it came from, below everything
         paths += save_figure(fig, out / f"{name}.png", out / f"{name}.svg")
+    shots = {k: v["_shot"] for k, v in results["designs"].items() if v.get("_shot") is not None}
+    paths += write_shots(out / "cases", shots)   # each optimised design's first Monte Carlo capture: its page's images
     step(f"wrote {out}/results.json, report.md, curves.csv (+ curves.json), curves, convergence and comparison "
-         ".png/.svg")
+         ".png/.svg" + (f", cases/ with {len(shots)} designs' raw.exr and rendered.exr" if shots else ""))
     return paths

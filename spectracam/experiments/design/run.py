@@ -133,11 +133,12 @@ def predicted(problem: DesignProblem, x=None, camera=None, scores=None) -> dict:
     return out
 
 
-def monte_carlo(camera, cubes: dict, processing, seeds: int, base_seed: int = 0) -> dict:
+def monte_carlo(camera, cubes: dict, processing, seeds: int, base_seed: int = 0, keep: list | None = None) -> dict:
     """Chart ΔE*ab and SNR of ``camera`` through the real capture → score pipeline, ``seeds`` captures per light
     (seeds ``base_seed … base_seed + seeds − 1``): per light the mean and the spread over seeds, and their mean;
     the chart's measured S-CIELAB the same way (``s_cielab``, ``s_cielab_std``: the score's
-    ``ChartSummary.s_cielab_mean``, where the score has it)."""
+    ``ChartSummary.s_cielab_mean``, where the score has it).  ``keep``: where given, the first capture (first light,
+    first seed) is appended as ``(raw, score)`` — the design's page images; the numbers are the same either way."""
     from spectracam.experiments.paper.experiment import design_case
 
     by_light, per_seed, sc_seed = {}, [], []
@@ -145,6 +146,8 @@ def monte_carlo(camera, cubes: dict, processing, seeds: int, base_seed: int = 0)
         des, snrs, scs = [], [], []
         for k in range(seeds):
             c = design_case(cube, scene, camera, processing, camera.design, base_seed + k)
+            if keep is not None and not keep:
+                keep.append((c["raw"], c["score"]))
             des.append(c["delta_e"])
             snrs.append(c["snr_db"])
             scs.append(getattr(c["score"].summary, "s_cielab_mean", None))
@@ -205,7 +208,8 @@ def design_one(problem: DesignProblem, spec: DesignSpec, cubes: dict, log=lambda
     entry["predicted_delta_e"] = p_opt
     entry["held_out_delta_e"] = p_opt["held_out"]
     t1 = time.perf_counter()
-    entry["monte_carlo_delta_e"] = monte_carlo(designed, cubes, problem.processing, spec.seeds)
+    shot: list = []
+    entry["monte_carlo_delta_e"] = monte_carlo(designed, cubes, problem.processing, spec.seeds, keep=shot)
     developed = None
     if spec.developed:   # the same cameras developed by a camera that finds its own white (issue 33)
         from spectracam.pipeline import camera_processing
@@ -235,6 +239,7 @@ def design_one(problem: DesignProblem, spec: DesignSpec, cubes: dict, log=lambda
                               "grid": g["grid"]}
     entry["verify_s"] = time.perf_counter() - t1
     entry["_cameras"] = {"optimised": designed, "paper": paper}
+    entry["_shot"] = shot[0] if shot else None
     return entry
 
 
@@ -252,9 +257,10 @@ def render_cubes(st: Setup, log=lambda m: None) -> dict:
 
 
 class DesignResult(TypedDict):
-    """What :func:`run_design` returns: each design's entry by name (its cameras under ``_cameras``), the time and
-    the bands' grid (``_grid``).  The writer drops ``_grid`` and ``_cameras`` and adds ``command`` and
-    ``comparison`` (:func:`spectracam.experiments.design.report.table_rows`) to make results.json."""
+    """What :func:`run_design` returns: each design's entry by name (its cameras under ``_cameras``, its first Monte
+    Carlo capture under ``_shot``: raw, score), the time and the bands' grid (``_grid``).  The writer drops ``_grid``,
+    ``_cameras`` and ``_shot`` (the shot written as ``cases/<design>/raw.exr`` and ``rendered.exr``) and adds
+    ``command`` and ``comparison`` (:func:`spectracam.experiments.design.report.table_rows`) to make results.json."""
 
     parameters: dict
     designs: dict[str, dict]
