@@ -157,3 +157,51 @@ def test_simulate_channel_planes_writes_the_capture_and_no_spectral_cube(tmp_pat
                                 "optics.relative_illumination='cos4'"], capture_output=True, text=True)
     assert bad.returncode != 0 and len(bad.stderr.strip().splitlines()) == 1 and "channel planes" in bad.stderr
     assert not (tmp_path / "bad").exists() or not any((tmp_path / "bad").iterdir())
+
+
+@pytest.fixture(scope="module")
+def radiance_file(tmp_path_factory):
+    """A spectracam radiance.exr (analytic, 160×120) and a copy of it that records no scene (another tool's)."""
+    from spectracam.io.exr import read_exr, write_exr, write_radiance_exr
+
+    d = tmp_path_factory.mktemp("planes-capture")
+    write_radiance_exr(d / "radiance.exr", render(small_scene(), "analytic"))
+    channels, attrs = read_exr(d / "radiance.exr")    # the same pixels without the spectracam* attributes
+    write_exr(d / "foreign.exr", channels, {k: v for k, v in attrs.items()
+                                            if k in ("spectralLayoutVersion", "emissiveUnits")})
+    return d
+
+
+def test_the_files_bands_unstacked_are_the_cubes(radiance_file):
+    from spectracam.io.exr import read_radiance_bands, read_radiance_exr
+
+    cube, _ = read_radiance_exr(radiance_file / "radiance.exr")
+    wl, bands, meta, _ = read_radiance_bands(radiance_file / "radiance.exr")
+    assert np.array_equal(np.stack(bands, axis=-1), cube.radiance) and np.array_equal(wl, cube.wavelengths_nm)
+    assert meta["scene"] == cube.metadata["scene"]
+
+
+def test_capture_channel_planes_is_the_capture_of_the_cube(radiance_file, tmp_path):
+    from spectracam.io.exr import read_raw_exr
+
+    run = [sys.executable, "-m", "spectracam", "capture", str(radiance_file / "radiance.exr"), "--quiet"]
+    a = subprocess.run(run + ["-o", str(tmp_path / "cube")], capture_output=True, text=True)
+    b = subprocess.run(run + ["-o", str(tmp_path / "planes"), "--channel-planes"], capture_output=True, text=True)
+    assert a.returncode == 0 and b.returncode == 0, b.stderr
+    ra, rb = read_raw_exr(tmp_path / "cube" / "raw.exr"), read_raw_exr(tmp_path / "planes" / "raw.exr")
+    np.testing.assert_allclose(rb.exposure_times_s, ra.exposure_times_s, rtol=1e-6)
+    assert (ra.digital != rb.digital).mean() < 1e-3 and np.abs(ra.digital - rb.digital).max() <= 1
+    assert (tmp_path / "planes" / "raw.dng").exists()
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--white", "brightest"], "white = 'brightest'"),
+    (["--set", "optics.relative_illumination='cos4'"], "optics.relative_illumination = 'cos4'"),
+])
+def test_capture_channel_planes_refuses_in_one_line(radiance_file, tmp_path, extra, message):
+    run = [sys.executable, "-m", "spectracam", "capture", "--channel-planes", "--quiet", "-o", str(tmp_path / "o")]
+    r = subprocess.run(run + [str(radiance_file / "radiance.exr"), *extra], capture_output=True, text=True)
+    assert r.returncode != 0 and len(r.stderr.strip().splitlines()) == 1 and message in r.stderr, r.stderr
+    assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
+    r = subprocess.run(run + [str(radiance_file / "foreign.exr")], capture_output=True, text=True)
+    assert r.returncode != 0 and "records no spectracam scene" in r.stderr and len(r.stderr.strip().splitlines()) == 1

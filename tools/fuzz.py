@@ -1218,8 +1218,9 @@ def case_field(rng, d: Path):
 
 
 def case_channel_planes(rng, d: Path):
-    """Issue 38: ``simulate --channel-planes`` on good chart scenes (analytic, Mitsuba, another design) under a full
-    disk, SIGTERM or a memory limit, and on what it refuses (a textured target, light groups, a bad value beside it)."""
+    """Issue 38: ``simulate --channel-planes`` and ``capture --channel-planes`` on good chart scenes (analytic, Mitsuba,
+    another design) under a full disk, SIGTERM or a memory limit, and on what they refuse (a textured target, light
+    groups, an off-axis field, another white, a file that is not a spectracam radiance, a bad value beside it)."""
     text, _ = _lights_scene(rng)
     (d / "hdr.toml").write_text(text)
     sim = ["simulate", "s.toml", "-o", "out", "--quiet", "--channel-planes"]
@@ -1233,9 +1234,14 @@ def case_channel_planes(rng, d: Path):
         (sim + ["--renderer", "analytic", "--set", f"image.width={rng.choice(['0', '-1', 'nan'])}"], True),
         (sim + ["--renderer", "analytic", "--set", "optics.relative_illumination='cos4'"], True),
         (sim + ["--channel-planes=yes"], True),
+        (["capture", "r/radiance.exr", "-o", "out", "--quiet", "--channel-planes"], False),
+        (["capture", "r/radiance.exr", "-o", "out", "--quiet", "--channel-planes", "--arch", "stacked"], False),
+        (["capture", "r/radiance.exr", "-o", "out", "--quiet", "--channel-planes", "--white",
+          rng.choice(["brightest", "0,0,8,8", "100"])], True),
+        (["capture", rng.choice(["s.toml", "nosuch.exr", "r"]), "-o", "out", "--quiet", "--channel-planes"], True),
     ]
     cmd, bad = rng.choice(cases)
-    if not bad and rng.random() < 0.25:   # 6000 x 4500: the planes' run needs ~6.3 GiB, above a 4 GiB limit
+    if not bad and cmd[0] == "simulate" and rng.random() < 0.25:   # 6000 x 4500: ~7.5 GiB, above a 4 GiB limit
         return cmd + ["--set", "image.width=6000", "--set", "image.height=4500"], False, \
             f"memory limit 4 GiB: {' '.join(cmd)}", {"address_space": 4 * 2**30}
     return _with_fault(rng, cmd, bad)

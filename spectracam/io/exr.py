@@ -33,7 +33,7 @@ __all__ = ["EMISSIVE_UNITS", "PREVIEW_NOTE", "SPECTRAL_CHANNEL", "SPECTRAL_LAYOU
            "attribute_number", "check_raw_attributes", "describe", "dn_scale_offset", "double",
            "emissive_scale", "json_object_attribute", "layout_from_dict", "layout_to_dict",
            "parse_spectral_channel", "preview_rgb", "radiance_attributes", "raw_attributes",
-           "raw_channel_names", "read_exr", "read_exr_header", "read_radiance_exr", "read_raw_exr",
+           "raw_channel_names", "read_exr", "read_exr_header", "read_radiance_bands", "read_radiance_exr", "read_raw_exr",
            "spectral_channel_name", "write_exr", "write_radiance_exr", "write_raw_exr"]
 
 SPECTRAL_CHANNEL = re.compile(r"^S0\.(\d+(?:,\d+)?)nm$")
@@ -273,19 +273,53 @@ def read_radiance_exr(path: str | Path, units: str | None = None) -> tuple[Radia
     ----------
     .. [Fichet2021] see docs/references.md
     """
+    wavelengths, bands, meta, attrs = read_radiance_bands(path, units)
+    cube = RadianceCube(np.stack(bands, axis=-1), wavelengths, meta)
+    del bands
+    return cube.check(str(path)), attrs
+
+
+def read_radiance_bands(path: str | Path, units: str | None = None) -> tuple[np.ndarray, list, dict, dict]:
+    """A spectral EXR's bands one plane each, not stacked into a cube (:func:`read_radiance_exr` stacks them; a
+    reader that integrates them band by band, such as ``capture --channel-planes``, holds the file's planes only).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+    units : str, optional
+        As :func:`read_radiance_exr`.
+
+    Returns
+    -------
+    wavelengths : ndarray
+        ``(B,)`` band centres, nm, increasing.
+    bands : list of ndarray
+        ``B`` planes ``(H, W)`` float32, W·m⁻²·sr⁻¹·nm⁻¹ (not yet checked finite and ≥ 0).
+    metadata : dict
+        The recorded render parameters and ``"scene"``, as a cube's.
+    attributes : dict
+        The file's header attributes.
+
+    Raises
+    ------
+    SpectracamError
+        As :func:`read_radiance_exr`, but for the radiance's values.
+    """
     channels, attrs = read_exr(path)
-    bands = sorted((w, n) for n in channels if (w := parse_spectral_channel(n)) is not None)
-    if not bands:
+    names = sorted((w, n) for n in channels if (w := parse_spectral_channel(n)) is not None)
+    if not names:
         raise SpectracamError(f"file = {str(path)!r}: has no spectral channels S0.<λ>nm; not a spectral EXR")
     scale = emissive_scale(attrs.get("emissiveUnits", units), str(path))
-    cube = np.stack([channels[n] for _, n in bands], axis=-1).astype(np.float32, copy=False)  # half floats too
-    if scale != 1.0:
-        cube = (cube * np.float32(scale)).astype(np.float32)
+    bands = []
+    for _, n in names:   # each band float32 (half floats too), scaled in float32 as the stacked cube was
+        band = channels.pop(n).astype(np.float32, copy=False)
+        bands.append(band if scale == 1.0 else (band * np.float32(scale)).astype(np.float32))
     meta = json_object_attribute(attrs, "spectracamRender", str(path)) or {}
     scene = json_object_attribute(attrs, "spectracamScene", str(path))
     if scene is not None:
         meta["scene"] = scene
-    return RadianceCube(cube, np.array([w for w, _ in bands]), meta).check(str(path)), attrs
+    return np.array([w for w, _ in names]), bands, meta, attrs
 
 
 def describe(path: str | Path) -> str:

@@ -24,8 +24,9 @@ from spectracam.sensor import SensorSpec
 
 __all__ = ["BOTH_WAYS_FIELDS", "MEMORY_PER_CUBE", "MEMORY_PER_PIXEL_PLANES", "RADIANCE_MATCH_TOLERANCE",
            "STAND_IN_SCENE", "Scene", "both_ways", "camera_processing", "capture", "capture_spectral_image",
-           "check_bytes", "check_cube_matches", "check_memory", "check_planes_match", "memory_available", "render",
-           "render_planes", "scene_of", "score", "score_row", "simulate", "stand_in_scene"]
+           "check_bytes", "check_cube_matches", "check_memory", "check_planes_match", "check_planes_white",
+           "integrate_planes", "memory_available", "render", "render_planes", "scene_of", "score", "score_row",
+           "simulate", "stand_in_scene"]
 
 
 def scene_of(obj, what: str = "cube") -> Scene:
@@ -95,17 +96,34 @@ def capture(cube: RadianceCube | ChannelPlanes, camera: CameraSpec | None = None
                          metering=white.to_dict())
 
 
+def check_planes_white(white) -> None:
+    """Refuse, in one line, a white other than the chart's white patch for channel planes: any other white (the
+    brightest neutral, a region, a luminance) is found in the spectra, which the planes no longer hold.
+
+    Parameters
+    ----------
+    white : str, WhiteSpec or None
+        As :func:`capture`'s ``white`` (None: the white patch).
+
+    Raises
+    ------
+    SpectracamError
+        A white that is not the patch, named by its kind.
+    """
+    from spectracam.sensor.metering import parse_white
+
+    if white is not None and (kind := parse_white(white, "white").kind) != "patch":
+        raise SpectracamError(f"white = {kind!r}: channel planes are metered on the chart's white patch only "
+                              "('patch'); capture the radiance cube to meter another white")
+
+
 def _capture_planes(planes: ChannelPlanes, camera, seed, scene, sensor, design, white) -> RawCapture:
     """:func:`capture` of channel planes: the scene they record (or ``scene``), checked against them; the camera
     as for a cube (the stage refuses one they were not rendered for); metered on the chart's white patch only
     (any other white is found in the spectra, which the planes no longer hold)."""
     scene = scene or scene_of(planes, "channel planes")
     check_planes_match(planes, scene)
-    from spectracam.sensor.metering import parse_white
-
-    if white is not None and parse_white(white, "white").kind != "patch":
-        raise SpectracamError(f"white = {white!r}: channel planes are metered on the chart's white patch only "
-                              "('patch'); capture the radiance cube to meter another white")
+    check_planes_white(white)
     camera = _capturing_camera(camera or scene.camera, scene, sensor, design)
     seed = scene.render.seed if seed is None else seed
     return capture_stage(planes, camera, seed, ChartReference.of(scene).white_box)
@@ -449,6 +467,53 @@ def render_planes(scene: Scene, renderer: str = "mitsuba", progress: bool = Fals
     planes.metadata["channel_planes"] = {"channels": list(camera.architecture().layout.channels),
                                          "camera": camera.to_dict(), "units": "e-/s (photo-electron rates)"}
     return planes
+
+
+def integrate_planes(wavelengths_nm: np.ndarray, bands: list, metadata: dict, camera: CameraSpec,
+                     source: str = "radiance") -> ChannelPlanes:
+    """A spectral image's bands integrated one at a time into ``camera``'s channel planes (``capture
+    --channel-planes``: the file's bands are never stacked into a cube), as :func:`render_planes` integrates them as
+    they are rendered: ``planes[k] += weights[b, k] · L_b`` in float32, in band order.
+
+    Parameters
+    ----------
+    wavelengths_nm : ndarray
+        ``(B,)`` band centres, nm (:func:`spectracam.io.exr.read_radiance_bands`).
+    bands : list of ndarray
+        ``B`` planes ``(H, W)`` float32 radiance, W·m⁻²·sr⁻¹·nm⁻¹; each is checked finite and ≥ 0 as it is added.
+    metadata : dict
+        What the file recorded (its ``"scene"``), kept on the planes.
+    camera : CameraSpec
+        The camera whose band weights integrate them (:func:`check_planes_capturable` first).
+    source : str
+        The file's name, for the error lines.
+
+    Returns
+    -------
+    ChannelPlanes
+        ``(H, W, N)`` float32 photo-electron rates, e⁻/s.
+
+    Raises
+    ------
+    SpectracamError
+        A camera whose planes cannot stand for the spectrum, or a band that is not finite and ≥ 0 (named).
+    """
+    from spectracam.camera import band_weights
+    from spectracam.camera.capture import check_planes_capturable
+    from spectracam.core.spectra import WavelengthGrid
+
+    check_planes_capturable(camera)
+    wl = np.asarray(wavelengths_nm, float)
+    w = band_weights(camera, WavelengthGrid(wl))
+    planes = np.zeros((w.shape[1], *bands[0].shape), np.float32)
+    for b, band in enumerate(bands):
+        lo, hi = band.min(initial=0.0), band.max(initial=0.0)
+        if not (np.isfinite(lo) and np.isfinite(hi) and lo >= 0):
+            raise SpectracamError(f"{source}: radiance is not finite or negative in band {wl[b]:g} nm; a radiance is "
+                                  "finite and ≥ 0")
+        for k in range(planes.shape[0]):
+            planes[k] += w[b, k] * band
+    return ChannelPlanes(np.moveaxis(planes, 0, -1).copy(), wl, w.astype(np.float64), dict(metadata))
 
 
 def simulate(scene: Scene, renderer: str = "mitsuba", seed: int | None = None, channel_planes: bool = False):

@@ -55,34 +55,30 @@ def render_cmd(scene_file: Path, out_dir: Path, renderer: str, sets, quiet: bool
                    "scene illuminant.")
 @click.option("--units", default=None, metavar="UNIT",
               help="Radiance unit of a spectral EXR that states none (emissiveUnits), e.g. W.m^-2.sr^-1 (per nm).")
+@click.option("--channel-planes", is_flag=True,
+              help="Integrate the file's bands one at a time into the camera's channel planes, never stacking them "
+                   "into a cube (a spectracam chart scene of one light, metered on its white patch).")
 @set_option
 @quiet_option
 @view_option
-def capture_cmd(radiance_file: Path, out_dir: Path, arch, exposure, config_file, seed, white, units, sets, quiet):
+def capture_cmd(radiance_file: Path, out_dir: Path, arch, exposure, config_file, seed, white, units, channel_planes,
+                sets, quiet):
     """Capture a spectral RADIANCE_FILE (spectracam's, or a Fichet-layout EXR from any tool) with a simulated
     sensor; write DIR/raw.exr and DIR/raw.dng."""
-    from spectracam.io.exr import read_radiance_exr
     from spectracam.sensor.metering import parse_white
-    from spectracam.pipeline import capture, capture_spectral_image, check_cube_matches, stand_in_scene
+    from spectracam.pipeline import capture, capture_spectral_image
 
     white_spec = parse_white(white) if white is not None else None  # checked before the file is read
-    cube, _ = read_radiance_exr(radiance_file, units)  # checked as it is read
     log = progress_log(quiet)
     flags = flag_overrides(arch=arch, exposure=exposure)
-    recorded = "scene" in cube.metadata
-    if recorded:
-        scene = scene_from(cube.metadata["scene"], str(radiance_file), config_file, flags, sets)
-        check_cube_matches(cube, scene, str(radiance_file))
-    else:  # a spectral image from another tool: the stand-in scene holds the camera and the conversion's chart
-        from spectracam.pipeline import STAND_IN_SCENE
+    if channel_planes:
+        from spectracam.pipeline import check_planes_white
 
-        data = scene_from(dict(STAND_IN_SCENE), str(radiance_file), config_file, flags, sets).to_dict()
-        data.pop("wavelengths")  # the image's own bands
-        cube, scene = stand_in_scene(cube, data, str(radiance_file))
-        if "bands_dropped_outside_nm" in cube.metadata:
-            lo, hi = cube.metadata["bands_dropped_outside_nm"]
-            log(f"{radiance_file}: bands outside {lo:g}–{hi:g} nm dropped (the chart the conversion is fitted on has "
-                "no reflectance data there)")
+        check_planes_white(white_spec)   # before the file is read
+        cube, scene = _planes_of(radiance_file, units, config_file, flags, sets)
+        recorded = True
+    else:
+        cube, scene, recorded = _cube_of(radiance_file, units, config_file, flags, sets, log)
     check_writable(out_dir)
     raw = capture(cube, seed=seed, scene=scene, white=white_spec) if recorded else \
         capture_spectral_image(cube, scene, seed, white_spec)
@@ -95,6 +91,52 @@ def capture_cmd(radiance_file: Path, out_dir: Path, arch, exposure, config_file,
     times = ", ".join(f"{c} {1e3 * t:.2f} ms" for c, t in zip(raw.layout.channels, raw.exposure_times_s))
     log(f"{raw.design}: exposures {times}; capture time {1e3 * raw.capture_time_s:.2f} ms")
     log("wrote " + ", ".join(map(str, paths)))
+
+
+def _cube_of(radiance_file: Path, units, config_file, flags, sets, log):
+    """``(cube, scene, recorded)`` of a spectral EXR: its own scene (checked against its pixels) or, for a file from
+    another tool, the stand-in scene and the cube's bands inside the chart's data."""
+    from spectracam.io.exr import read_radiance_exr
+    from spectracam.pipeline import STAND_IN_SCENE, check_cube_matches, stand_in_scene
+
+    cube, _ = read_radiance_exr(radiance_file, units)  # checked as it is read
+    if "scene" in cube.metadata:
+        scene = scene_from(cube.metadata["scene"], str(radiance_file), config_file, flags, sets)
+        check_cube_matches(cube, scene, str(radiance_file))
+        return cube, scene, True
+    # a spectral image from another tool: the stand-in scene holds the camera and the conversion's chart
+    data = scene_from(dict(STAND_IN_SCENE), str(radiance_file), config_file, flags, sets).to_dict()
+    data.pop("wavelengths")  # the image's own bands
+    cube, scene = stand_in_scene(cube, data, str(radiance_file))
+    if "bands_dropped_outside_nm" in cube.metadata:
+        lo, hi = cube.metadata["bands_dropped_outside_nm"]
+        log(f"{radiance_file}: bands outside {lo:g}–{hi:g} nm dropped (the chart the conversion is fitted on has "
+            "no reflectance data there)")
+    return cube, scene, False
+
+
+def _planes_of(radiance_file: Path, units, config_file, flags, sets):
+    """``(channel planes, scene)`` of a spectracam spectral EXR: its bands integrated one at a time into the scene
+    camera's channel planes (:func:`spectracam.pipeline.integrate_planes`), checked against its scene."""
+    from spectracam.io.exr import read_radiance_bands
+    from spectracam.pipeline import check_planes_match, integrate_planes
+
+    wavelengths, bands, meta, _ = read_radiance_bands(radiance_file, units)
+    if "scene" not in meta:
+        raise SpectracamError(f"file = {str(radiance_file)!r}: records no spectracam scene; --channel-planes "
+                              "integrates a spectracam chart scene's radiance (capture a file from another tool "
+                              "without it)")
+    scene = scene_from(meta["scene"], str(radiance_file), config_file, flags, sets)
+    if scene.target.textured or len(scene.lights) > 1:
+        raise SpectracamError(f"file = {str(radiance_file)!r}: --channel-planes captures a chart scene of one light; "
+                              "capture this file without it")
+    if len(wavelengths) != len(scene.grid):
+        raise SpectracamError(f"{radiance_file}: {len(wavelengths)} bands, but its scene's grid has "
+                              f"{len(scene.grid)}")
+    planes = integrate_planes(wavelengths, bands, meta, scene.camera, str(radiance_file))
+    del bands
+    check_planes_match(planes, scene, str(radiance_file))
+    return planes, scene
 
 
 @click.command("score", short_help="Render a raw capture on a display and score it.")
