@@ -153,6 +153,7 @@ def test_simulate_channel_planes_writes_the_capture_and_no_spectral_cube(tmp_pat
 
     raw = read_raw_exr(tmp_path / "planes" / "raw.exr")
     assert raw.digital.shape == (120, 160) and raw.scene is not None
+    assert raw.rates == "channel planes" and read_raw_exr(tmp_path / "cube" / "raw.exr").rates == "cube"
     bad = subprocess.run(run + ["-o", str(tmp_path / "bad"), "--channel-planes", "--set",
                                 "optics.relative_illumination='cos4'"], capture_output=True, text=True)
     assert bad.returncode != 0 and len(bad.stderr.strip().splitlines()) == 1 and "channel planes" in bad.stderr
@@ -205,3 +206,22 @@ def test_capture_channel_planes_refuses_in_one_line(radiance_file, tmp_path, ext
     assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
     r = subprocess.run(run + [str(radiance_file / "foreign.exr")], capture_output=True, text=True)
     assert r.returncode != 0 and "records no spectracam scene" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_a_capture_records_what_its_rates_came_from(tmp_path):
+    """raw.exr says a capture of channel planes is one (its recorded parameters reproduce it through the same path);
+    a cube's file carries no new attribute; a damaged value is refused in one line."""
+    from spectracam.core.errors import SpectracamError
+    from spectracam.io.exr import read_exr, read_raw_exr, write_exr, write_raw_exr
+
+    scene = small_scene()
+    a, b = capture(render(scene, "analytic"), scene=scene), capture(render_planes(scene, "analytic"), scene=scene)
+    assert (a.rates, b.rates) == ("cube", "channel planes")
+    write_raw_exr(tmp_path / "a.exr", a)
+    write_raw_exr(tmp_path / "b.exr", b)
+    assert "spectracamRates" not in read_exr(tmp_path / "a.exr")[1]
+    assert read_raw_exr(tmp_path / "b.exr").rates == "channel planes"
+    channels, attrs = read_exr(tmp_path / "b.exr")
+    write_exr(tmp_path / "c.exr", channels, {**attrs, "spectracamRates": "guessed"})
+    with pytest.raises(SpectracamError, match="spectracamRates = 'guessed'"):
+        read_raw_exr(tmp_path / "c.exr")

@@ -52,6 +52,10 @@ class RawCapture:
     scene: dict | None = None
     #: How the white was metered when not on a chart scene's white patch (spectracam.sensor.metering).
     metering: dict | None = None
+    #: What the rates were computed from: ``"cube"`` (the band cube through the camera's band weights, in the sensor's
+    #: pass) or ``"channel planes"`` (:class:`~spectracam.render.ChannelPlanes`: the same rates summed over the bands
+    #: beforehand, so a pixel on a quantisation step's edge may land one DN apart).
+    rates: str = "cube"
 
     @property
     def design(self) -> str:
@@ -257,4 +261,5 @@ def capture(cube: RadianceCube | ChannelPlanes, camera: CameraSpec, seed: int,
     return RawCapture(digital=digital, expected_e=expected, exposure_times_s=times,
                       capture_time_s=capture_time_s(arch, times, camera.sensor), layout=arch.layout, camera=camera,
                       seed=seed,
-                      metered_rate_e_per_s=white_rate, scene=cube.metadata.get("scene"), metering=metering)
+                      metered_rate_e_per_s=white_rate, scene=cube.metadata.get("scene"), metering=metering,
+                      rates="channel planes" if isinstance(cube, ChannelPlanes) else "cube")

@@ -446,6 +446,8 @@ def raw_attributes(raw: RawCapture) -> dict:
         attrs["spectracamScene"] = json.dumps(raw.scene, sort_keys=True)
     if raw.metering is not None:
         attrs["spectracamMetering"] = json.dumps(raw.metering, sort_keys=True)
+    if raw.rates != "cube":   # a capture of channel planes (issue 38) says so; a cube's files are as before
+        attrs["spectracamRates"] = raw.rates
     return attrs
 
 
@@ -583,6 +585,9 @@ def read_raw_exr(path: str | Path) -> RawCapture:
         seed = int(attrs["spectracamSeed"])
         scene = json.loads(attrs["spectracamScene"]) if "spectracamScene" in attrs else None
         metering = json.loads(attrs["spectracamMetering"]) if "spectracamMetering" in attrs else None
+        rates = attrs.get("spectracamRates", "cube")
+        if rates not in ("cube", "channel planes"):
+            raise ValueError(f"spectracamRates = {str(rates)[:40]!r}, not 'cube' or 'channel planes'")
     except (KeyError, TypeError, ValueError) as e:
         raise SpectracamError(f"file = {src!r}: a raw capture's attribute is missing or damaged ({e})") from None
     camera = CameraSpec.from_dict(cam, source=src)
@@ -601,4 +606,4 @@ def read_raw_exr(path: str | Path) -> RawCapture:
     except (KeyError, TypeError, ValueError) as e:
         raise SpectracamError(f"file = {src!r}: spectracamDnScale/spectracamDnOffset are damaged ({e})") from None
     return RawCapture(digital=digital, expected_e=None, exposure_times_s=times, capture_time_s=capture_time,
-                      layout=layout, camera=camera, seed=seed, scene=scene, metering=metering)
+                      layout=layout, camera=camera, seed=seed, scene=scene, metering=metering, rates=rates)

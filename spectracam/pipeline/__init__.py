@@ -528,8 +528,9 @@ def simulate(scene: Scene, renderer: str = "mitsuba", seed: int | None = None, c
     seed : int, optional
         The capture's noise seed (default: the scene's).
     channel_planes : bool
-        Render into the scene camera's channel planes (:func:`render_planes`) instead of the radiance cube: the
-        same capture for a tenth of the memory (30 bands, 3 channels); a chart scene of one light.
+        Render into the scene camera's channel planes (:func:`render_planes`) instead of the radiance cube: the same
+        capture (within float32 rounding) without the cube's memory (the render and capture in about a sixth of it;
+        the score's own images are the same); a chart scene of one light.
 
     Returns
     -------
