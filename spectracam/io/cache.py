@@ -12,11 +12,17 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from spectracam._version import __version__
 from spectracam.io.exr import read_radiance_exr, write_radiance_exr
 from spectracam.render import render
+
+if TYPE_CHECKING:
+    from spectracam.pipeline.scene_file import Scene
+    from spectracam.render.cube import RadianceCube
 
 __all__ = ["RENDER_METHOD", "RENDER_TABLES", "TEXTURED_RENDER_METHOD", "cache_dir", "cached_render",
            "pixel_checksum", "render_key"]
@@ -41,7 +47,24 @@ def cache_dir() -> Path:
     return base / "spectracam" / "renders"
 
 
-def render_key(scene, renderer: str) -> tuple[str, dict]:
+def render_key(scene: Scene, renderer: str) -> tuple[str, dict]:
+    """The cache key of a scene rendered by a renderer, and what it was computed from.
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene; its render-relevant tables (:data:`RENDER_TABLES`, and ``target`` when textured) are keyed.
+    renderer : str
+        The renderer's registered name (``"mitsuba"``, ``"analytic"``).
+
+    Returns
+    -------
+    key : str
+        The first 32 hexadecimal digits of the SHA-256 of ``ident`` as sorted JSON.
+    ident : dict
+        What the key identifies: the scene's tables, the renderer, the render method (:data:`RENDER_METHOD` or
+        :data:`TEXTURED_RENDER_METHOD`) and the spectracam and Mitsuba versions (Mitsuba's only for its renderer).
+    """
     import mitsuba
 
     d = scene.to_dict()
@@ -53,15 +76,49 @@ def render_key(scene, renderer: str) -> tuple[str, dict]:
     return hashlib.sha256(text.encode()).hexdigest()[:32], ident
 
 
-def pixel_checksum(cube) -> str:
-    """SHA-256 of a cube's float32 pixel data."""
+def pixel_checksum(cube: RadianceCube) -> str:
+    """SHA-256 of a cube's float32 pixel data.
+
+    Parameters
+    ----------
+    cube : RadianceCube
+        The cube; its ``(H, W, B)`` radiance is hashed as contiguous float32.
+
+    Returns
+    -------
+    str
+        The hexadecimal SHA-256 digest (64 digits).
+    """
     import numpy as np
 
     return hashlib.sha256(np.ascontiguousarray(cube.radiance, dtype=np.float32).tobytes()).hexdigest()
 
 
-def cached_render(scene, renderer: str = "mitsuba", progress: bool = False, log=None, directory: Path | None = None):
-    """``(cube, hit)``: the cached cube for this scene and renderer, or a fresh render stored for next time."""
+def cached_render(scene: Scene, renderer: str = "mitsuba", progress: bool = False,
+                  log: Callable[[str], object] | None = None,
+                  directory: Path | None = None) -> tuple[RadianceCube, bool]:
+    """``(cube, hit)``: the cached cube for this scene and renderer, or a fresh render stored for next time.
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene to render.
+    renderer : str
+        The renderer's registered name.
+    progress : bool
+        Show the renderer's progress bar on a miss.
+    log : callable or None
+        Receives a line when an entry does not match or the cache cannot be written.
+    directory : Path or None
+        The cache's folder; ``None``: :func:`cache_dir`.
+
+    Returns
+    -------
+    cube : RadianceCube
+        The ``(H, W, B)`` radiance, W·m⁻²·sr⁻¹·nm⁻¹, with the scene in its metadata.
+    hit : bool
+        Whether it was served from the cache.
+    """
     from spectracam.core.files import atomic_write
 
     key, ident = render_key(scene, renderer)

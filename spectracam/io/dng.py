@@ -111,6 +111,7 @@ import io
 import json
 import struct
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -120,6 +121,12 @@ from spectracam.camera.capture import RawCapture
 from spectracam.core.errors import SpectracamError
 from spectracam.processing.calibration import D50_XYZ, constrained_lstsq, white_neutral  # D50: the DNG SDK's normalisation
 from spectracam.core.files import atomic_write
+
+if TYPE_CHECKING:
+    import datetime
+
+    from spectracam.camera import CameraSpec
+    from spectracam.scene.reference import ChartReference
 
 __all__ = ["CALIBRATION_ILLUMINANTS", "DNG_MAX_BITS", "EXIF_DATETIME", "ISO_SATURATION_CONSTANT", "MAKE",
            "as_shot_neutral", "calibration_reference", "camera_model", "camera_patches", "camera_to_xyz_matrix",
@@ -139,33 +146,96 @@ ISO_SATURATION_CONSTANT = 78.0
 
 
 def camera_model(raw: RawCapture) -> str:
-    """The Model tag: ``"simulated cfa/single sensor"``."""
+    """The Model tag: ``"simulated cfa/single sensor"``.
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture (its design).
+
+    Returns
+    -------
+    str
+        ``"simulated <architecture>/<exposure> sensor"``.
+    """
     return f"simulated {raw.design} sensor"
 
 
-def white_radiance(reference) -> np.ndarray:
-    """Band-averaged radiance ``(B,)`` of a perfect white diffuser under the scene illuminant, E/π."""
+def white_radiance(reference: ChartReference) -> np.ndarray:
+    """Band-averaged radiance ``(B,)`` of a perfect white diffuser under the scene illuminant, E/π.
+
+    Parameters
+    ----------
+    reference : ChartReference
+        The chart reference of the scene (its illuminant, grid and patches).
+
+    Returns
+    -------
+    ndarray
+        ``(B,)`` W·m⁻²·sr⁻¹·nm⁻¹.
+    """
     from spectracam.scene.illuminant import white_diffuser_radiance
 
     return white_diffuser_radiance(reference.illuminant, reference.grid)
 
 
-def white_rates(camera, reference) -> np.ndarray:
+def white_rates(camera: CameraSpec, reference: ChartReference) -> np.ndarray:
     """Noise-free photo-electron rates ``(N,)`` (e⁻/s) of a perfect white diffuser under the scene
-    illuminant (no dark charge): :func:`spectracam.processing.calibration.white_neutral`."""
+    illuminant (no dark charge): :func:`spectracam.processing.calibration.white_neutral`.
+
+    Parameters
+    ----------
+    camera : CameraSpec
+        The camera (responsivities, optics, pixel area).
+    reference : ChartReference
+        The chart reference of the scene (its illuminant, grid and patches).
+
+    Returns
+    -------
+    ndarray
+        ``(N,)`` photo-electron rates, e⁻/s, one per channel.
+    """
     return white_neutral(reference.illuminant, reference.grid, camera)
 
 
-def camera_white(raw: RawCapture, reference) -> np.ndarray:
+def camera_white(raw: RawCapture, reference: ChartReference) -> np.ndarray:
     """Expected photo-electrons ``(3,)`` of each channel for a perfect white diffuser with the
-    capture's exposure times: the camera's response to the scene white."""
+    capture's exposure times: the camera's response to the scene white.
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture (its camera and per-channel exposure times, s).
+    reference : ChartReference
+        The chart reference of the scene (its illuminant, grid and patches).
+
+    Returns
+    -------
+    ndarray
+        ``(N,)`` expected photo-electrons, e⁻, one per channel.
+    """
     return white_rates(raw.camera, reference) * np.asarray(raw.exposure_times_s, float)
 
 
-def as_shot_neutral(raw: RawCapture, reference, neutral_rates: np.ndarray | None = None) -> np.ndarray:
+def as_shot_neutral(raw: RawCapture, reference: ChartReference, neutral_rates: np.ndarray | None = None) -> np.ndarray:
     """DNG ``AsShotNeutral``: :func:`camera_white` (the oracle's: the true white) normalised to a maximum of 1, or,
     given the camera's own estimate ``neutral_rates`` (e⁻/s, any scale; :func:`spectracam.processing.develop`),
-    that estimate with the capture's exposure times, normalised the same way."""
+    that estimate with the capture's exposure times, normalised the same way.
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture (its camera and per-channel exposure times, s).
+    reference : ChartReference
+        The chart reference of the scene (its illuminant, grid and patches).
+    neutral_rates : ndarray, optional
+        ``(N,)`` the camera's estimate of the white's rates, e⁻/s (any scale); None: the oracle's.
+
+    Returns
+    -------
+    ndarray
+        ``(N,)`` the neutral, its maximum 1.
+    """
     if neutral_rates is None:
         w = camera_white(raw, reference)
     else:
@@ -173,49 +243,125 @@ def as_shot_neutral(raw: RawCapture, reference, neutral_rates: np.ndarray | None
     return w / w.max()
 
 
-def forward_matrices(raw: RawCapture, reference) -> list[np.ndarray]:
+def forward_matrices(raw: RawCapture, reference: ChartReference) -> list[np.ndarray]:
     """``[ForwardMatrix1, ForwardMatrix2]`` (3×N, DNG orientation: XYZ_D50 = FM·balanced camera) under CIE A and
     D65: :func:`spectracam.processing.calibration.dual_illuminant_matrices` with Bradford adaptation to D50 (the
     DNG SDK's), each mapping the balanced neutral (1, …, 1) onto D50's white exactly.  The balanced camera space
-    (camera / neutral) is the same for rates and for the file's exposures, so the rates' fit is the file's."""
+    (camera / neutral) is the same for rates and for the file's exposures, so the rates' fit is the file's.
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture (its camera and per-channel exposure times, s).
+    reference : ChartReference
+        The chart reference of the scene (its illuminant, grid and patches).
+
+    Returns
+    -------
+    list of ndarray
+        Two ``(3, N)`` matrices, under CIE A and under D65.
+    """
     from spectracam.processing.calibration import dual_illuminant_matrices
 
     dual = dual_illuminant_matrices(reference, raw.camera, "bradford")
     return [np.ascontiguousarray(fm.T) for fm in dual.forward_matrices]
 
 
-def calibration_reference(reference, name: str):
+def calibration_reference(reference: ChartReference, name: str) -> ChartReference:
     """The chart reference of the same chart, wavelength grid, image and level under the CIE illuminant ``name``
-    (a key of colour-science's ``SDS_ILLUMINANTS``: "A", "D65"); memoised, as :meth:`ChartReference.of` is."""
+    (a key of colour-science's ``SDS_ILLUMINANTS``: "A", "D65"); memoised, as :meth:`ChartReference.of` is.
+
+    Parameters
+    ----------
+    reference : ChartReference
+        The chart reference of the scene (its illuminant, grid and patches).
+    name : str
+        The CIE illuminant.
+
+    Returns
+    -------
+    ChartReference
+        The same chart lit by that illuminant at the same white luminance.
+    """
     from spectracam.scene.illuminant import IlluminantSpec
 
     return reference.lit_by(IlluminantSpec(kind="cie", temperature_K=None, name=name,
                                            white_luminance_cd_m2=reference.illuminant.white_luminance_cd_m2))
 
 
-def camera_patches(raw: RawCapture, reference) -> np.ndarray:
+def camera_patches(raw: RawCapture, reference: ChartReference) -> np.ndarray:
     """Expected photo-electrons ``(24, N)`` of the chart's patches under the reference's illuminant with the
-    capture's per-channel exposure times: the camera's raw values of the chart, noise-free."""
+    capture's per-channel exposure times: the camera's raw values of the chart, noise-free.
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture (its camera and per-channel exposure times, s).
+    reference : ChartReference
+        The chart reference of the scene (its illuminant, grid and patches).
+
+    Returns
+    -------
+    ndarray
+        ``(24, N)`` expected photo-electrons, e⁻.
+    """
     return reference.patch_rates(raw.camera) * np.asarray(raw.exposure_times_s, float)[None, :]
 
 
-def camera_to_xyz_matrix(raw: RawCapture, reference) -> np.ndarray:
+def camera_to_xyz_matrix(raw: RawCapture, reference: ChartReference) -> np.ndarray:
     """3×3 ``B`` with ``XYZ ≈ B·camera`` under the reference's illuminant: least squares over the chart
     reference's 24 patches (camera = expected photo-electrons with the capture's exposure times), the camera's
-    white mapped exactly onto the illuminant's white (Y = 1)."""
+    white mapped exactly onto the illuminant's white (Y = 1).
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture (its camera and per-channel exposure times, s).
+    reference : ChartReference
+        The chart reference of the scene (its illuminant, grid and patches).
+
+    Returns
+    -------
+    ndarray
+        ``(3, 3)`` ``B`` (camera electrons → CIE 1931 XYZ, the white at Y = 1).
+    """
     return constrained_lstsq(camera_patches(raw, reference), reference.patch_xyz, camera_white(raw, reference),
                              reference.white_xyz).T
 
 
 def normalise_color_matrix(M: np.ndarray) -> np.ndarray:
-    """``M`` scaled as the DNG SDK's ``NormalizeColorMatrix`` does: the largest camera value of D50's white is 1."""
+    """``M`` scaled as the DNG SDK's ``NormalizeColorMatrix`` does: the largest camera value of D50's white is 1.
+
+    Parameters
+    ----------
+    M : ndarray
+        ``(N, 3)`` XYZ → camera matrix.
+
+    Returns
+    -------
+    ndarray
+        ``(N, 3)`` ``M`` divided by the largest element of ``M·XYZ_D50``.
+    """
     return M / (M @ D50_XYZ).max()
 
 
-def xyz_to_camera_matrix(raw: RawCapture, reference) -> np.ndarray:
+def xyz_to_camera_matrix(raw: RawCapture, reference: ChartReference) -> np.ndarray:
     """XYZ → camera under the reference's illuminant: the inverse of :func:`camera_to_xyz_matrix` (so the
     illuminant's white maps onto the camera's white), scaled by :func:`normalise_color_matrix`.  With other than
-    three channels (N×3: no inverse) the least-squares fit from the patches' XYZ to the camera, white preserved."""
+    three channels (N×3: no inverse) the least-squares fit from the patches' XYZ to the camera, white preserved.
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture (its camera and per-channel exposure times, s).
+    reference : ChartReference
+        The chart reference of the scene (its illuminant, grid and patches).
+
+    Returns
+    -------
+    ndarray
+        ``(N, 3)`` XYZ → camera, normalised.
+    """
     if len(raw.layout.channels) == 3:
         M = np.linalg.inv(camera_to_xyz_matrix(raw, reference))
     else:
@@ -224,14 +370,27 @@ def xyz_to_camera_matrix(raw: RawCapture, reference) -> np.ndarray:
     return normalise_color_matrix(M)
 
 
-def color_matrices(raw: RawCapture, reference) -> list[tuple[int, np.ndarray]]:
+def color_matrices(raw: RawCapture, reference: ChartReference) -> list[tuple[int, np.ndarray]]:
     """``[(17, ColorMatrix1), (21, ColorMatrix2)]``: :func:`xyz_to_camera_matrix` under CIE A and under D65
-    (:data:`CALIBRATION_ILLUMINANTS`), each fitted on the chart lit by that illuminant."""
+    (:data:`CALIBRATION_ILLUMINANTS`), each fitted on the chart lit by that illuminant.
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture (its camera and per-channel exposure times, s).
+    reference : ChartReference
+        The chart reference of the scene (its illuminant, grid and patches).
+
+    Returns
+    -------
+    list of tuple of (int, ndarray)
+        ``(EXIF LightSource code, (N, 3) ColorMatrix)`` for CIE A and D65.
+    """
     return [(code, xyz_to_camera_matrix(raw, calibration_reference(reference, name)))
             for name, code in CALIBRATION_ILLUMINANTS]
 
 
-def saturation_exposure_lux_s(raw: RawCapture, reference) -> float:
+def saturation_exposure_lux_s(raw: RawCapture, reference: ChartReference) -> float:
     """ISO 12232 ``H_sat``: the focal-plane luminous exposure, lux·s, at which the first channel clips
     for a neutral (illuminant-coloured) object, with the exposure time written as ``ExposureTime``
     (the capture time).
@@ -242,7 +401,20 @@ def saturation_exposure_lux_s(raw: RawCapture, reference) -> float:
     that first clips is ``L_sat = L_w·min_k (q_sat − i_d·t_k)/(w_k·t_k)``.  The focal-plane
     illuminance of a luminance L is ``E_v = k_v·L`` with ``k_v`` the lens's image-irradiance factor
     (``π/(4N²)`` paraxial, ``π/(1 + 4N²)`` exact) times its transmittance, averaged over the white's
-    spectrum weighted by ȳ(λ)."""
+    spectrum weighted by ȳ(λ).
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture (its camera and per-channel exposure times, s).
+    reference : ChartReference
+        The chart reference of the scene (its illuminant, grid and patches).
+
+    Returns
+    -------
+    float
+        ``H_sat``, lux·s.
+    """
     from spectracam.optics import radiance_to_photon_irradiance
     from spectracam.core.spectra import cmf_band_weights, energy_to_photons
 
@@ -259,10 +431,23 @@ def saturation_exposure_lux_s(raw: RawCapture, reference) -> float:
     return k_v * l_sat * float(raw.capture_time_s)
 
 
-def saturation_iso(raw: RawCapture, reference) -> float:
+def saturation_iso(raw: RawCapture, reference: ChartReference) -> float:
     """ISO 12232 saturation-based speed ``S_sat = 78 / H_sat`` (:func:`saturation_exposure_lux_s`)
     for the capture's exposure: with the white metered to full scale it is
-    ``78 / (k_v·L_white patch·t)``, e.g. ``78·4N² / (π·L·t)`` for the paraxial lens."""
+    ``78 / (k_v·L_white patch·t)``, e.g. ``78·4N² / (π·L·t)`` for the paraxial lens.
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture (its camera and per-channel exposure times, s).
+    reference : ChartReference
+        The chart reference of the scene (its illuminant, grid and patches).
+
+    Returns
+    -------
+    float
+        ``S_sat`` (unrounded; the Exif tag holds it rounded, 1–65535).
+    """
     return ISO_SATURATION_CONSTANT / saturation_exposure_lux_s(raw, reference)
 
 
@@ -360,7 +545,22 @@ def dng_image(raw: RawCapture) -> tuple[np.ndarray, MosaicLayout | PlanesLayout,
     recorded; a three-channel mosaic of a wider tile (Quad Bayer) remosaicked to RGGB Bayer, as phones
     write theirs (:func:`spectracam.processing.color.remosaic_to_bayer`); a four-channel mosaic of a wider tile
     (RGBW) as LinearRaw of its channels interpolated by :func:`spectracam.processing.color.periodic_bilinear`.
-    ``note`` says which, for the file's description; raw.exr always holds the mosaic as recorded."""
+    ``note`` says which, for the file's description; raw.exr always holds the mosaic as recorded.
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture as recorded.
+
+    Returns
+    -------
+    digital : ndarray
+        ``(H, W)`` for a mosaic, ``(N, H, W)`` for planes; DN.
+    layout : MosaicLayout or PlanesLayout
+        The layout of ``digital``.
+    note : str or None
+        What was changed from the recording; None when nothing.
+    """
     layout = raw.layout
     if isinstance(layout, PlanesLayout) or layout.tile_shape == (2, 2):
         return np.asarray(raw.digital), layout, None
@@ -375,19 +575,52 @@ def dng_image(raw: RawCapture) -> tuple[np.ndarray, MosaicLayout | PlanesLayout,
                                                   f"{', '.join(layout.channels)} (bilinear, periodic)"
 
 
-def linear_raw_pedestal(raw: RawCapture, layout=None) -> int:
+def linear_raw_pedestal(raw: RawCapture, layout: MosaicLayout | PlanesLayout | None = None) -> int:
     """Digital numbers subtracted from the pixels of the DNG (then clipped at 0): for LinearRaw the pedestal's
     whole DN (darktable does not subtract a LinearRaw ``BlackLevel``; see the module docstring), for a CFA
-    mosaic 0.  ``layout``: the layout the DNG holds (default the capture's)."""
+    mosaic 0.  ``layout``: the layout the DNG holds (default the capture's).
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture (its sensor's black level, DN).
+    layout : MosaicLayout or PlanesLayout, optional
+        The layout the DNG holds.
+
+    Returns
+    -------
+    int
+        The pedestal subtracted, DN.
+    """
     layout = layout or raw.layout
     return 0 if isinstance(layout, MosaicLayout) else int(np.floor(raw.camera.sensor.black_level_dn))
 
 
-def dng_levels(raw: RawCapture, layout=None, mid_step: bool = False) -> tuple[int, float, int]:
+def dng_levels(raw: RawCapture, layout: MosaicLayout | PlanesLayout | None = None,
+               mid_step: bool = False) -> tuple[int, float, int]:
     """``(pedestal subtracted from the pixels, BlackLevel, WhiteLevel)`` of the DNG: a CFA mosaic ``(0, b,
     2ⁿ − 1)``; LinearRaw ``(⌊b⌋, b − ⌊b⌋, 2ⁿ − 1 − ⌊b⌋)`` (BlackLevel 0 for a whole-DN pedestal).  With
     ``mid_step`` the levels are in the LinearizationTable's half-DN units (value 2·pixel + 1): BlackLevel doubled,
-    WhiteLevel 2·top + 1."""
+    WhiteLevel 2·top + 1.
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture (its ADC bits and black level).
+    layout : MosaicLayout or PlanesLayout, optional
+        The layout the DNG holds (default the capture's).
+    mid_step : bool
+        Give the levels in the LinearizationTable's half-DN units.
+
+    Returns
+    -------
+    pedestal : int
+        DN subtracted from the pixels.
+    black_level : float
+        The ``BlackLevel`` tag.
+    white_level : int
+        The ``WhiteLevel`` tag.
+    """
     bits, b = raw.camera.sensor.adc_bits, raw.camera.sensor.black_level_dn
     offset = linear_raw_pedestal(raw, layout)
     black, top = b - offset, 2**bits - 1 - offset
@@ -396,11 +629,28 @@ def dng_levels(raw: RawCapture, layout=None, mid_step: bool = False) -> tuple[in
     return offset, black, top
 
 
-def dng_tags(raw: RawCapture, reference=None, mid_step: bool = False, layout=None,
-             neutral_rates: np.ndarray | None = None) -> list:
-    """The tifffile ``extratags`` of a capture's DNG (see the module docstring and :func:`write_dng`);
-    ``layout``: the layout the DNG holds (:func:`dng_image`; default the capture's); ``neutral_rates``: the camera's
-    own estimate of the white for ``AsShotNeutral`` (default: the oracle's)."""
+def dng_tags(raw: RawCapture, reference: ChartReference | None = None, mid_step: bool = False,
+             layout: MosaicLayout | PlanesLayout | None = None, neutral_rates: np.ndarray | None = None) -> list:
+    """The tifffile ``extratags`` of a capture's DNG (see the module docstring and :func:`write_dng`).
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture.
+    reference : ChartReference, optional
+        With the chart: ColorMatrix1/2, ForwardMatrix1/2, AsShotNeutral and the calibration illuminants too.
+    mid_step : bool
+        Add the LinearizationTable (levels in half-DN units, :func:`dng_levels`).
+    layout : MosaicLayout or PlanesLayout, optional
+        The layout the DNG holds (:func:`dng_image`); default the capture's.
+    neutral_rates : ndarray, optional
+        The camera's own estimate of the white for ``AsShotNeutral``, e⁻/s; default the oracle's.
+
+    Returns
+    -------
+    list of tuple
+        ``(tag, TIFF type, count, value, writeonce)`` per tag.
+    """
     layout = layout or raw.layout
     bits = raw.camera.sensor.adc_bits
     _, black, white = dng_levels(raw, layout, mid_step)
@@ -441,9 +691,25 @@ def dng_tags(raw: RawCapture, reference=None, mid_step: bool = False, layout=Non
     return tags
 
 
-def exif_entries(raw: RawCapture, reference=None, stamp=None) -> list[tuple[int, str, tuple]]:
+def exif_entries(raw: RawCapture, reference: ChartReference | None = None,
+                 stamp: datetime.datetime | None = None) -> list[tuple[int, str, tuple]]:
     """The Exif IFD: ExposureTime, FNumber, ISOSpeedRatings + SensitivityType 3 (ISO speed), ExifVersion, and with
-    ``stamp`` (a UTC datetime) DateTimeOriginal, DateTimeDigitized and their OffsetTime "+00:00"."""
+    ``stamp`` (a UTC datetime) DateTimeOriginal, DateTimeDigitized and their OffsetTime "+00:00".
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture (its capture time, s, and f-number).
+    reference : ChartReference, optional
+        With the chart: the ISO speed (:func:`saturation_iso`) too.
+    stamp : datetime.datetime, optional
+        The capture's date and time, UTC (:func:`capture_datetime`).
+
+    Returns
+    -------
+    list of tuple of (int, str, tuple)
+        ``(tag, TIFF type, values)`` per entry.
+    """
     entries = [(33434, "RATIONAL", _exposure_rational(float(raw.capture_time_s))),
                (33437, "RATIONAL", _rational([raw.camera.optics.f_number])),
                (36864, "UNDEFINED", tuple(b"0230"))]
@@ -481,7 +747,7 @@ def _check_dng_form(raw: RawCapture, mid_step: bool) -> None:
                               "have no DNG form (a DNG has three or four colour planes); the capture is in raw.exr")
 
 
-def write_dng(path: str | Path, raw: RawCapture, reference=None, mid_step: bool = False,
+def write_dng(path: str | Path, raw: RawCapture, reference: ChartReference | None = None, mid_step: bool = False,
               neutral_rates: np.ndarray | None = None) -> Path:
     """Write a capture as DNG (temp file, then rename): a CFA mosaic, or LinearRaw for three or four planes.
 
@@ -539,7 +805,7 @@ def write_dng(path: str | Path, raw: RawCapture, reference=None, mid_step: bool 
 EXIF_DATETIME = "%Y:%m:%d %H:%M:%S"
 
 
-def capture_datetime():
+def capture_datetime() -> datetime.datetime:
     """When the DNG's capture was taken, UTC: the time it is written, or ``SOURCE_DATE_EPOCH`` (seconds since 1970,
     the reproducible-builds convention) where that is set, so that a file can be made byte for byte again.  Without
     a date LibRaw and the developers that use it show 1 January 1970."""

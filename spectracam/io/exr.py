@@ -17,6 +17,7 @@ import re
 import sys
 import types
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -28,6 +29,9 @@ from spectracam.core.errors import ConfigError, SpectracamError
 from spectracam.render import RadianceCube
 from spectracam.core.spectra import K_M_LM_PER_W, WavelengthGrid, cmf_band_weights
 from spectracam.core.files import atomic_write
+
+if TYPE_CHECKING:
+    from spectracam.sensor import SensorSpec
 
 __all__ = ["EMISSIVE_UNITS", "PREVIEW_NOTE", "SPECTRAL_CHANNEL", "SPECTRAL_LAYOUT_VERSION",
            "attribute_number", "check_raw_attributes", "describe", "dn_scale_offset", "double",
@@ -45,23 +49,69 @@ PREVIEW_NOTE = ("R,G,B: linear sRGB (ITU-R BT.709 primaries) of the CIE 1931 XYZ
 
 
 def spectral_channel_name(wavelength_nm: float) -> str:
+    """The channel name of a band in Fichet 2021's spectral layout: ``S0.<λ>nm``, six decimals after a comma.
+
+    Parameters
+    ----------
+    wavelength_nm : float
+        The band's centre wavelength, nm.
+
+    Returns
+    -------
+    str
+        E.g. ``"S0.550,000000nm"`` for 550 nm.
+    """
     return "S0." + f"{wavelength_nm:.6f}".replace(".", ",") + "nm"
 
 
 def parse_spectral_channel(name: str) -> float | None:
+    """The wavelength a spectral channel's name gives (:data:`SPECTRAL_CHANNEL`), None for any other channel.
+
+    Parameters
+    ----------
+    name : str
+        An EXR channel name, e.g. ``"S0.550,000000nm"`` or ``"R"``.
+
+    Returns
+    -------
+    float or None
+        The wavelength, nm; None when the name is not ``S0.<λ>nm``.
+    """
     m = SPECTRAL_CHANNEL.match(name)
     return float(m.group(1).replace(",", ".")) if m else None
 
 
 def double(x: float) -> np.ndarray:
     """A value the OpenEXR binding writes as a ``double`` attribute (a Python float becomes a 32-bit
-    ``float``); reading gives it back as the same one-element array."""
+    ``float``); reading gives it back as the same one-element array.
+
+    Parameters
+    ----------
+    x : float
+        The number.
+
+    Returns
+    -------
+    ndarray
+        ``(1,)`` float64.
+    """
     return np.array([float(x)], dtype=np.float64)
 
 
-def attribute_number(value) -> float:
+def attribute_number(value: str | float | np.ndarray) -> float:
     """A numeric attribute as a Python float, whether typed (float, double, one-element array) or,
-    in files written before the attributes were typed, JSON text."""
+    in files written before the attributes were typed, JSON text.
+
+    Parameters
+    ----------
+    value : str, float or ndarray
+        The attribute as the OpenEXR binding reads it.
+
+    Returns
+    -------
+    float
+        Its (first) number.
+    """
     if isinstance(value, str):
         value = json.loads(value)
     return float(np.asarray(value, dtype=np.float64).reshape(-1)[0])
@@ -71,7 +121,27 @@ def json_object_attribute(attrs: dict, name: str, src: str) -> dict | None:
     """A header attribute that holds a JSON object (``spectracamScene``, ``spectracamRender``,
     ``spectracamCamera``, ``spectracamMetering``) as a dict, None when absent; text that is not JSON, or
     JSON that is not an object (``'[1, 2, 3]'``, a number, a string), is a damaged file: one line naming
-    the attribute, never a TypeError where the scene is rebuilt from it."""
+    the attribute, never a TypeError where the scene is rebuilt from it.
+
+    Parameters
+    ----------
+    attrs : dict
+        The file's header attributes.
+    name : str
+        The attribute's name.
+    src : str
+        The file, as the error names it.
+
+    Returns
+    -------
+    dict or None
+        The parsed object; None when the file has no such attribute.
+
+    Raises
+    ------
+    SpectracamError
+        The attribute is not JSON, or not a JSON object.
+    """
     if name not in attrs:
         return None
     value = attrs[name]
@@ -92,7 +162,24 @@ def write_exr(path: str | Path, channels: dict[str, np.ndarray], attributes: dic
     not at all (temp + rename).
     A dict becomes JSON text; every other value is written as the OpenEXR binding types it (str →
     string, int → int, float → float, :func:`double` → double, float64 (3,) → v3d, float32 (3, 3) →
-    m33f, an 8-tuple under ``chromaticities`` → chromaticities)."""
+    m33f, an 8-tuple under ``chromaticities`` → chromaticities).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file to write.
+    channels : dict of str to ndarray
+        Channel name → ``(H, W)`` pixels (any float dtype; converted, contiguous).
+    attributes : dict
+        Header attributes, typed as above.
+    half : bool
+        Store the pixels as float16 instead of float32.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     import OpenEXR
 
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
@@ -104,7 +191,26 @@ def write_exr(path: str | Path, channels: dict[str, np.ndarray], attributes: dic
 
 
 def read_exr(path: str | Path) -> tuple[dict[str, np.ndarray], dict]:
-    """All channels (name → (H, W) array) and header attributes of a single-part EXR file."""
+    """All channels (name → (H, W) array) and header attributes of a single-part EXR file.
+
+    Parameters
+    ----------
+    path : str or Path
+        A regular file.
+
+    Returns
+    -------
+    channels : dict of str to ndarray
+        Channel name → ``(H, W)`` pixels, in the file's type (float16 or float32).
+    attributes : dict
+        The header attributes as the OpenEXR binding reads them.
+
+    Raises
+    ------
+    SpectracamError
+        Not a regular file, or not a readable OpenEXR file (one line; a readable file's library warnings still
+        reach stderr).
+    """
     import OpenEXR
 
     from spectracam.core.files import regular_file
@@ -124,7 +230,23 @@ def read_exr(path: str | Path) -> tuple[dict[str, np.ndarray], dict]:
 
 
 def read_exr_header(path: str | Path) -> dict:
-    """The header attributes of a single-part EXR file, without its pixels (``dataWindow``: ((x0, y0), (x1, y1)))."""
+    """The header attributes of a single-part EXR file, without its pixels (``dataWindow``: ((x0, y0), (x1, y1))).
+
+    Parameters
+    ----------
+    path : str or Path
+        A regular file.
+
+    Returns
+    -------
+    dict
+        The header attributes.
+
+    Raises
+    ------
+    SpectracamError
+        Not a regular file, or not a readable OpenEXR file.
+    """
     import OpenEXR
 
     from spectracam.core.files import regular_file
@@ -162,7 +284,22 @@ def _library_output_held():
 
 
 def preview_rgb(radiance: np.ndarray, grid: WavelengthGrid, white_luminance_cd_m2: float) -> np.ndarray:
-    """Linear sRGB preview ``(H, W, 3)``; see :data:`PREVIEW_NOTE`."""
+    """Linear sRGB preview ``(H, W, 3)``; see :data:`PREVIEW_NOTE`.
+
+    Parameters
+    ----------
+    radiance : ndarray
+        ``(H, W, B)`` band-averaged spectral radiance, W·m⁻²·sr⁻¹·nm⁻¹.
+    grid : WavelengthGrid
+        The bands (their CIE 1931 colour-matching weights integrate the radiance to XYZ).
+    white_luminance_cd_m2 : float
+        The luminance of a perfect white diffuser under the scene illuminant, cd·m⁻²: it maps to Y = 1.
+
+    Returns
+    -------
+    ndarray
+        ``(H, W, 3)`` linear sRGB (ITU-R BT.709 primaries), unclipped.
+    """
     import colour
 
     xyz = np.tensordot(radiance, cmf_band_weights(grid), axes=([-1], [0])) * (K_M_LM_PER_W / white_luminance_cd_m2)
@@ -171,7 +308,20 @@ def preview_rgb(radiance: np.ndarray, grid: WavelengthGrid, white_luminance_cd_m
 
 
 def radiance_attributes(cube: RadianceCube) -> dict:
-    """The spectral layout's attributes and everything that made the cube (its scene included)."""
+    """The spectral layout's attributes and everything that made the cube (its scene included).
+
+    Parameters
+    ----------
+    cube : RadianceCube
+        A cube recording its scene (``cube.metadata["scene"]``) and render metadata.
+
+    Returns
+    -------
+    dict
+        The header attributes :func:`write_radiance_exr` writes: ``spectralLayoutVersion``, ``emissiveUnits`` and
+        the ``spectracam*`` attributes (renderer, variant, samples per pixel, seed, scene and render as JSON, the
+        preview note).
+    """
     meta = {k: v for k, v in cube.metadata.items() if k != "scene"}
     scene = cube.metadata["scene"]
     return {
@@ -228,10 +378,28 @@ _EMISSIVE_PREFIX = {"": 1.0, "k": 1e3, "m": 1e-3, "u": 1e-6, "µ": 1e-6, "n": 1e
 _EMISSIVE_UNITS = re.compile(r"^\s*(k|m|u|µ|n)?W\s*\.\s*m\^-2\s*\.\s*sr\^-1\s*$")
 
 
-def emissive_scale(units, source: str) -> float:
+def emissive_scale(units: object, source: str) -> float:
     """Factor turning a spectral EXR's emissive values into W·m⁻²·sr⁻¹·nm⁻¹, from its ``emissiveUnits``
     (Fichet 2021: ``W.m^-2.sr^-1``, per nm implied; an SI prefix on the watt is accepted).  Anything else
-    — photon units, a relative scale, no unit at all — cannot be converted: one line."""
+    — photon units, a relative scale, no unit at all — cannot be converted: one line.
+
+    Parameters
+    ----------
+    units : object
+        The ``emissiveUnits`` attribute (or the ``--units`` given for a file without one); None when absent.
+    source : str
+        The file, as the error names it.
+
+    Returns
+    -------
+    float
+        1 for ``W.m^-2.sr^-1``; 10³, 10⁻³, 10⁻⁶ or 10⁻⁹ for a k, m, µ (u) or n prefix.
+
+    Raises
+    ------
+    SpectracamError
+        A unit that is not spectral radiance, or none.
+    """
     m = _EMISSIVE_UNITS.match(units) if isinstance(units, str) else None
     if m is None:
         what = "has no emissiveUnits attribute" if units is None else f"emissiveUnits = {units!r}"
@@ -323,7 +491,19 @@ def read_radiance_bands(path: str | Path, units: str | None = None) -> tuple[np.
 
 
 def describe(path: str | Path) -> str:
-    """What a person wants to know about an EXR file: size, channels, recorded parameters, statistics."""
+    """What a person wants to know about an EXR file: size, channels, recorded parameters, statistics.
+
+    Parameters
+    ----------
+    path : str or Path
+        An EXR file (any, not only spectracam's).
+
+    Returns
+    -------
+    str
+        Lines: the size and channel count, every non-standard attribute (JSON sorted, numbers as numbers), each
+        channel's min, mean and max (spectral bands first, by wavelength), and the other parts of a multi-part file.
+    """
     channels, attrs = read_exr(path)
     (x0, y0), (x1, y1) = attrs["dataWindow"]
     lines = [f"{path}", f"  size: {x1 - x0 + 1} x {y1 - y0 + 1} pixels, {len(channels)} channels"]
@@ -371,8 +551,25 @@ def _other_parts(path) -> list[str]:
     return out
 
 
-def layout_to_dict(layout) -> dict:
-    """The layout as JSON; ``channels`` only when they are not R, G, B (files before issue 20 had none)."""
+def layout_to_dict(layout: MosaicLayout | PlanesLayout) -> dict:
+    """The layout as JSON; ``channels`` only when they are not R, G, B (files before issue 20 had none).
+
+    Parameters
+    ----------
+    layout : MosaicLayout or PlanesLayout
+        The capture's layout.
+
+    Returns
+    -------
+    dict
+        ``{"kind": "mosaic", "tile", "pattern"}`` or ``{"kind": "planes", "planes", "description"}``, with
+        ``"channels"`` when not R, G, B.
+
+    Raises
+    ------
+    SpectracamError
+        Another kind of layout (it has no raw EXR form).
+    """
     channels = getattr(layout, "channels", ("R", "G", "B"))
     extra = {} if channels == ("R", "G", "B") else {"channels": list(channels)}
     if isinstance(layout, MosaicLayout):
@@ -383,7 +580,27 @@ def layout_to_dict(layout) -> dict:
                           "register its writer before writing it")  # never written as something it is not
 
 
-def layout_from_dict(d: dict, source: str):
+def layout_from_dict(d: dict, source: str) -> MosaicLayout | PlanesLayout:
+    """The layout a raw EXR's ``spectracamLayout`` records (:func:`layout_to_dict`'s inverse), checked.
+
+    Parameters
+    ----------
+    d : dict
+        The parsed ``spectracamLayout`` attribute.
+    source : str
+        The file, as the error names it.
+
+    Returns
+    -------
+    MosaicLayout or PlanesLayout
+        The layout (R, G, B channels when ``d`` names none).
+
+    Raises
+    ------
+    SpectracamError
+        Not a layout spectracam wrote: a missing field, a tile index outside the channels, or a pattern that
+        contradicts the tile.
+    """
     try:
         channels = tuple(str(c) for c in d.get("channels", ("R", "G", "B")))
         if d["kind"] == "mosaic":
@@ -401,20 +618,59 @@ def layout_from_dict(d: dict, source: str):
     raise SpectracamError(f"file = {source!r}: spectracamLayout = {d!r} is not a layout spectracam wrote")
 
 
-def raw_channel_names(layout) -> list[str]:
-    """One channel "Y" for a mosaic (viewers show it as a grey mosaic), else one per plane, by name."""
+def raw_channel_names(layout: MosaicLayout | PlanesLayout) -> list[str]:
+    """One channel "Y" for a mosaic (viewers show it as a grey mosaic), else one per plane, by name.
+
+    Parameters
+    ----------
+    layout : MosaicLayout or PlanesLayout
+        The capture's layout.
+
+    Returns
+    -------
+    list of str
+        ``["Y"]`` for a mosaic, else the layout's channel names (``["R", "G", "B"]``, …).
+    """
     return ["Y"] if isinstance(layout, MosaicLayout) else list(layout.channels)
 
 
-def dn_scale_offset(sensor) -> tuple[float, float]:
+def dn_scale_offset(sensor: SensorSpec) -> tuple[float, float]:
     """``(scale, offset)`` of a raw EXR's pixels: ``value = (DN − offset)/scale`` with offset = the black
     level and scale = ``2ⁿ − 1 − black level``, so black reads 0 and the top code 1.0 in any EXR viewer;
-    both are float32 numbers (the attributes' type), used as such to write and to read."""
+    both are float32 numbers (the attributes' type), used as such to write and to read.
+
+    Parameters
+    ----------
+    sensor : SensorSpec
+        The sensor (its ADC bits and black level, DN).
+
+    Returns
+    -------
+    scale : float
+        ``2ⁿ − 1 −`` black level, DN.
+    offset : float
+        The black level, DN.
+    """
     black = float(np.float32(sensor.black_level_dn))
     return float(np.float32(2**sensor.adc_bits - 1 - black)), black
 
 
 def raw_attributes(raw: RawCapture) -> dict:
+    """The header attributes of a raw EXR: every parameter that produced the capture (see :func:`write_raw_exr`).
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture.
+
+    Returns
+    -------
+    dict
+        The ``spectracam*`` attributes: the pixel scale and offset (:func:`dn_scale_offset`), ADC bits,
+        architecture, exposure scheme, layout, exposure times and capture time (s), the camera as JSON, the ADC's
+        full swing (V = g·q_max, paper 3.4), the seed, the CFA pattern or the frames, and the scene and metering
+        when known.
+    """
     cam = raw.camera
     scale, offset = dn_scale_offset(cam.sensor)
     attrs = {
@@ -512,12 +768,34 @@ def _digital_numbers(values: np.ndarray, attrs: dict, camera: CameraSpec) -> np.
     return dn.astype(np.float32)
 
 
-def check_raw_attributes(attrs: dict, camera: CameraSpec, layout, times: np.ndarray, capture_time: float,
+def check_raw_attributes(attrs: dict, camera: CameraSpec, layout: MosaicLayout | PlanesLayout, times: np.ndarray,
+                         capture_time: float,
                          src: str) -> None:
     """Every redundant attribute of a raw EXR must agree with the recorded camera: the pixel scale and
     offset, the ADC's bits, the architecture and exposure scheme, the CFA pattern; the exposure times
     must be finite and > 0 and give the recorded capture time.  A damaged or edited file is refused
-    in one line instead of being scored as something else."""
+    in one line instead of being scored as something else.
+
+    Parameters
+    ----------
+    attrs : dict
+        The file's header attributes.
+    camera : CameraSpec
+        The camera the file records.
+    layout : MosaicLayout or PlanesLayout
+        The layout the file records.
+    times : ndarray
+        The recorded exposure time per channel, s.
+    capture_time : float
+        The recorded capture time, s.
+    src : str
+        The file, as the error names it.
+
+    Raises
+    ------
+    SpectracamError
+        An attribute that disagrees or is damaged.
+    """
     def refuse(name, value, why):
         raise SpectracamError(f"file = {src!r}: {name} = {value!r} {why}; the file is damaged or was edited")
 

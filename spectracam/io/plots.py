@@ -3,10 +3,15 @@ from __future__ import annotations
 
 import io
 from pathlib import Path
+from types import ModuleType
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from spectracam.core.files import atomic_write
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = ["FIGURE_DPI", "OKABE_ITO", "palette", "pyplot", "save_figure", "srgb_image"]
 
@@ -19,11 +24,22 @@ OKABE_ITO = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "
 
 
 def palette(n: int) -> list[str]:
-    """``n`` colours: :data:`OKABE_ITO` in order, repeated past eight (tell such lines apart by their markers)."""
+    """``n`` colours: :data:`OKABE_ITO` in order, repeated past eight (tell such lines apart by their markers).
+
+    Parameters
+    ----------
+    n : int
+        How many colours.
+
+    Returns
+    -------
+    list of str
+        ``n`` hexadecimal colours, ``"#RRGGBB"``.
+    """
     return [OKABE_ITO[i % len(OKABE_ITO)] for i in range(n)]
 
 
-def pyplot():
+def pyplot() -> ModuleType:
     """matplotlib.pyplot on the Agg backend (no display needed); SVG text is written as text
     (``svg.fonttype = "none"``: selectable, searchable, editable), not as glyph paths."""
     import matplotlib
@@ -38,10 +54,27 @@ def pyplot():
     return plt
 
 
-def save_figure(fig, *paths: str | Path, dpi: int | None = None, tight: bool = True) -> list[Path] | Path:
+def save_figure(fig: Figure, *paths: str | Path, dpi: int | None = None, tight: bool = True) -> list[Path] | Path:
     """Save a figure in the format of each path's suffix (png, svg), atomically, then close it: PNGs at ``dpi``
     (default :data:`FIGURE_DPI`; a lower one only for a picture shown at its own pixel size, such as motion's
-    per-case maps).  Returns the path, or the list of paths when several are given."""
+    per-case maps).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure; closed afterwards, also when a save fails.
+    *paths : str or Path
+        Where to write it; each suffix (``.png``, ``.svg``, ``.pdf``) names the format.
+    dpi : int or None
+        Dots per inch of raster formats; ``None``: :data:`FIGURE_DPI`.
+    tight : bool
+        Crop to the drawn content (``bbox_inches="tight"``).
+
+    Returns
+    -------
+    Path or list of Path
+        The path written, or the list of them when several are given.
+    """
     dpi = FIGURE_DPI if dpi is None else dpi
     plt = pyplot()
     out = []
@@ -56,7 +89,23 @@ def save_figure(fig, *paths: str | Path, dpi: int | None = None, tight: bool = T
 
 
 def srgb_image(xyz: np.ndarray, display_white: np.ndarray) -> np.ndarray:
-    """sRGB (0–1, encoded) of display-relative XYZ: the display white shown as D65 white."""
+    """sRGB (0–1, encoded) of display-relative XYZ: the display white shown as D65 white.
+
+    The white is adapted to D65 by the Bradford transform (von Kries form), then IEC 61966-2-1's sRGB primaries
+    and encoding; values outside the gamut are clipped.
+
+    Parameters
+    ----------
+    xyz : ndarray
+        ``(..., 3)`` CIE 1931 XYZ on the display's scale (its white, at Y = 1, shows as sRGB white).
+    display_white : ndarray
+        ``(3,)`` XYZ of the display white.
+
+    Returns
+    -------
+    ndarray
+        ``(..., 3)`` encoded sRGB in 0–1.
+    """
     import colour
 
     d65 = np.asarray(colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"])

@@ -6,6 +6,7 @@ import csv
 import io
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -15,6 +16,11 @@ from spectracam.evaluation.score import ChartScore
 from spectracam.io.exr import write_exr
 from spectracam.core.files import atomic_write
 from spectracam.io.plots import save_figure
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from spectracam.evaluation.target_score import TargetScore
 
 __all__ = ["DELTA_E_VMAX", "REC709_CHROMATICITIES", "delta_e_figure", "display_chromaticities", "report_csv",
            "srgb_preview", "target_csv", "write_display_exr", "write_figure_json_markdown", "write_png",
@@ -28,7 +34,18 @@ REC709_CHROMATICITIES = (0.64, 0.33, 0.30, 0.60, 0.15, 0.06, 0.3127, 0.3290)
 def display_chromaticities(display: str) -> tuple[float, ...]:
     """The OpenEXR ``chromaticities`` of a display's linear RGB: the xy of its red, green and blue
     primaries and of its white (R = G = B = 1); Rec. 709/D65 for "srgb", computed from the display's
-    RGB → XYZ matrix for any other (the CRT's phosphors)."""
+    RGB → XYZ matrix for any other (the CRT's phosphors).
+
+    Parameters
+    ----------
+    display : str
+        A registered display (``"srgb"``, ``"crt"``, …).
+
+    Returns
+    -------
+    tuple of float
+        ``(x_R, y_R, x_G, y_G, x_B, y_B, x_W, y_W)``, CIE 1931 xy.
+    """
     if display == "srgb":
         return REC709_CHROMATICITIES
     M = display_rgb_to_xyz(display)
@@ -42,7 +59,24 @@ def srgb_preview(rendered_rgb: np.ndarray, display: str, adapt_white: bool = Tru
     display's white to sRGB's D65, so that what is neutral on the display looks neutral on an sRGB
     screen) → linear sRGB, through ``tone_curve`` (:mod:`spectracam.processing.tone`; ``srgb``: clipped),
     sRGB-encoded.  ``adapt_white=False`` shows the display's colours as they are (the CRT's white, x, y = 0.289,
-    0.313, about 8300 K, stays bluish)."""
+    0.313, about 8300 K, stays bluish).
+
+    Parameters
+    ----------
+    rendered_rgb : ndarray
+        ``(H, W, 3)`` linear RGB of the display, its white at 1.
+    display : str
+        The registered display whose RGB it is.
+    adapt_white : bool
+        Adapt the display's white to D65 (Bradford).
+    tone_curve : str
+        A registered tone curve.
+
+    Returns
+    -------
+    ndarray
+        ``(H, W, 3)`` uint8, sRGB-encoded (IEC 61966-2-1).
+    """
     import colour
 
     from spectracam.processing.tone import tone_map
@@ -58,7 +92,20 @@ def srgb_preview(rendered_rgb: np.ndarray, display: str, adapt_white: bool = Tru
 
 
 def write_png(path: Path, rgb8: np.ndarray) -> Path:
-    """An 8-bit image as PNG."""
+    """An 8-bit image as PNG.
+
+    Parameters
+    ----------
+    path : Path
+        The file to write (temp file, then rename).
+    rgb8 : ndarray
+        ``(H, W, 3)`` uint8 (or ``(H, W, 4)`` with alpha).
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     from spectracam.io.plots import pyplot
 
     plt = pyplot()
@@ -71,11 +118,26 @@ def write_png(path: Path, rgb8: np.ndarray) -> Path:
 DELTA_E_VMAX = 20.0
 
 
-def delta_e_figure(delta_e_map: np.ndarray, title: str, vmax: float | None = DELTA_E_VMAX):
+def delta_e_figure(delta_e_map: np.ndarray, title: str, vmax: float | None = DELTA_E_VMAX) -> Figure:
     """The per-pixel ΔE map inside the patch masks (grey where nothing is scored), with a colour bar
     as tall as the image beside it.  ``vmax``: the top of the scale (default a fixed 0–20 so that maps
     compare across cases; values above it show the top colour, the bar's arrow); ``None``: the map's
-    own 99th percentile (at least 10)."""
+    own 99th percentile (at least 10).
+
+    Parameters
+    ----------
+    delta_e_map : ndarray
+        ``(H, W)`` ΔE*ab per pixel, NaN outside the patch masks.
+    title : str
+        The figure's title.
+    vmax : float or None
+        The top of the colour scale, ΔE*ab; None: from the map.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure, not yet saved (:func:`~spectracam.io.plots.save_figure`).
+    """
     from mpl_toolkits.axes_grid1 import make_axes_locatable
 
     from spectracam.io.plots import pyplot
@@ -106,12 +168,41 @@ def _num(x) -> str:
 def write_rendered_exr(path: str | Path, result: ChartScore) -> Path:
     """The displayed image (linear display RGB) with every parameter of the score that made it, in
     half floats (11-bit mantissa: 5e-4 relative, below what a display shows; the numbers are in
-    report.json), half the size of float32."""
+    report.json), half the size of float32.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file to write.
+    result : ChartScore
+        The score (its rendered RGB and parameters).
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     return write_display_exr(path, result.rendered_rgb, result.parameters)
 
 
 def write_display_exr(path: str | Path, rgb: np.ndarray, params: dict) -> Path:
-    """Linear display RGB ``(H, W, 3)`` in half floats with the parameters that made it."""
+    """Linear display RGB ``(H, W, 3)`` in half floats with the parameters that made it.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file to write.
+    rgb : ndarray
+        ``(H, W, 3)`` linear RGB of the display, its white at 1.
+    params : dict
+        The score's parameters; ``params["processing"]["display"]`` gives the ``chromaticities`` attribute,
+        ``params["seed"]`` the seed.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     display = params["processing"]["display"]
     attrs = {"spectracamVersion": __version__, "spectracamKind": "rendered",
              "spectracamUnits": f"linear RGB of the display ({display}), white = 1",
@@ -121,10 +212,35 @@ def write_display_exr(path: str | Path, rgb: np.ndarray, params: dict) -> Path:
     return write_exr(path, {"R": rgb[..., 0], "G": rgb[..., 1], "B": rgb[..., 2]}, attrs, half=True)
 
 
-def write_figure_json_markdown(out_dir, stem: str, figure, json_name: str, result: dict, command: str,
-                               md_name: str, markdown: str) -> list[Path]:
+def write_figure_json_markdown(out_dir: str | Path, stem: str, figure: Figure, json_name: str, result: dict,
+                               command: str, md_name: str, markdown: str) -> list[Path]:
     """An experiment's three outputs, each written atomically: ``stem``.png/.svg of ``figure``, ``json_name`` (the
-    result with the command that made it, strict JSON) and ``md_name``."""
+    result with the command that made it, strict JSON) and ``md_name``.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+        The experiment's output folder.
+    stem : str
+        The figure's file name without suffix.
+    figure : matplotlib.figure.Figure
+        The figure (closed once saved).
+    json_name : str
+        The JSON file's name.
+    result : dict
+        The result; ``command`` is added to it.
+    command : str
+        The command line that made it.
+    md_name : str
+        The Markdown file's name.
+    markdown : str
+        The Markdown text.
+
+    Returns
+    -------
+    list of Path
+        The PNG, the SVG, the JSON and the Markdown file.
+    """
     out = Path(out_dir)
     paths = save_figure(figure, out / f"{stem}.png", out / f"{stem}.svg")
     paths.append(atomic_write(out / json_name,
@@ -134,7 +250,19 @@ def write_figure_json_markdown(out_dir, stem: str, figure, json_name: str, resul
 
 
 def report_csv(result: ChartScore) -> bytes:
-    """One row per patch and a chart-average row."""
+    """One row per patch and a chart-average row.
+
+    Parameters
+    ----------
+    result : ChartScore
+        The chart's score.
+
+    Returns
+    -------
+    bytes
+        UTF-8 CSV: CIELAB of scene and rendering, ΔE*ab (mean, of the mean, conversion) and SNR per channel and
+        combined, dB (``inf`` when noise-free).
+    """
     buf = io.StringIO()
     wr = csv.writer(buf)
     wr.writerow(["patch", "name", "scene_L", "scene_a", "scene_b", "rendered_L", "rendered_a", "rendered_b",
@@ -154,7 +282,24 @@ def report_csv(result: ChartScore) -> bytes:
 def write_score_outputs(out_dir: str | Path, result: ChartScore, adapt_white: bool = True,
                         vmax: float | None = DELTA_E_VMAX) -> list[Path]:
     """rendered.exr, rendered.png, delta_e.png, report.json and report.csv in ``out_dir``;
-    ``adapt_white`` and ``vmax``: see :func:`srgb_preview` and :func:`delta_e_figure`."""
+    ``adapt_white`` and ``vmax``: see :func:`srgb_preview` and :func:`delta_e_figure`.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+        The folder to write into.
+    result : ChartScore
+        The chart's score.
+    adapt_white : bool
+        For the PNG preview.
+    vmax : float or None
+        The ΔE map's top, ΔE*ab.
+
+    Returns
+    -------
+    list of Path
+        The files written, in that order.
+    """
     out = Path(out_dir)
     params = result.parameters
     display = params["processing"]["display"]
@@ -172,8 +317,19 @@ def write_score_outputs(out_dir: str | Path, result: ChartScore, adapt_white: bo
     return paths
 
 
-def target_csv(result) -> bytes:
-    """One row per scored sample of a textured target (interior pixels), then the per-pixel summary."""
+def target_csv(result: TargetScore) -> bytes:
+    """One row per scored sample of a textured target (interior pixels), then the per-pixel summary.
+
+    Parameters
+    ----------
+    result : TargetScore
+        The target's score.
+
+    Returns
+    -------
+    bytes
+        UTF-8 CSV: per sample its pixels, CIELAB of scene and rendering and ΔE*ab; then the per-pixel mean ΔE*ab.
+    """
     buf = io.StringIO()
     wr = csv.writer(buf)
     wr.writerow(["sample", "name", "pixels", "scene_L", "scene_a", "scene_b", "rendered_L", "rendered_a",
@@ -186,9 +342,24 @@ def target_csv(result) -> bytes:
     return buf.getvalue().encode()
 
 
-def write_target_outputs(out_dir: str | Path, result, adapt_white: bool = True) -> list[Path]:
+def write_target_outputs(out_dir: str | Path, result: TargetScore, adapt_white: bool = True) -> list[Path]:
     """A textured target's score (:class:`~spectracam.evaluation.target_score.TargetScore`): rendered.exr/.png,
-    delta_e.png and s_cielab.png (per pixel, fixed 0–20 scale), report.json and report.csv."""
+    delta_e.png and s_cielab.png (per pixel, fixed 0–20 scale), report.json and report.csv.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+        The folder to write into.
+    result : TargetScore
+        The target's score.
+    adapt_white : bool
+        For the PNG preview (:func:`srgb_preview`).
+
+    Returns
+    -------
+    list of Path
+        The files written, in that order.
+    """
     out = Path(out_dir)
     params = result.parameters
     display = params["processing"]["display"]
