@@ -32,7 +32,6 @@ from mkdocs_hooks import public_modules  # noqa: E402
 #: Being changed in another branch when the sections were written (evaluation/score.py, core/cielab.py,
 #: evaluation/scielab*.py, processing/, core/parallel.py, pipeline/, view/, sensor/): left to it.
 NOT_YET_ELSEWHERE = [
-    "spectracam.processing.calibration", "spectracam.processing.shading", "spectracam.processing.white_balance",
     "spectracam.sensor", "spectracam.sensor.angle", "spectracam.sensor.exposure", "spectracam.sensor.kernels",
     "spectracam.sensor.metering", "spectracam.sensor.readout", "spectracam.sensor.temperature", "spectracam.view",
     "spectracam.view.cases", "spectracam.view.contents", "spectracam.view.page",
