@@ -17,9 +17,14 @@ the identity.
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from spectracam.core.errors import ConfigError
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 __all__ = ["N_DYE", "N_EFF_COATING", "N_PRISM_GLASS", "coating_cutoff_nm", "coating_shift_factor",
            "dye_internal_angle_deg", "dye_path_factor", "dye_transmittance", "prism_incidence_deg", "shift_curve",
@@ -49,7 +54,7 @@ def _index(n: float, name: str, lo: float = 1.0) -> float:
     return float(n)
 
 
-def coating_shift_factor(aoi_deg, n_eff: float = N_EFF_COATING, n0: float = 1.0) -> np.ndarray:
+def coating_shift_factor(aoi_deg: ArrayLike, n_eff: float = N_EFF_COATING, n0: float = 1.0) -> np.ndarray:
     """The factor ``λ(θ)/λ₀`` by which a dichroic coating's features move with the angle of incidence.
 
     Parameters
@@ -78,7 +83,8 @@ def coating_shift_factor(aoi_deg, n_eff: float = N_EFF_COATING, n0: float = 1.0)
     return np.sqrt(1.0 - s**2)
 
 
-def coating_cutoff_nm(cutoff_nm, aoi_deg, n_eff: float = N_EFF_COATING, n0: float = 1.0) -> np.ndarray:
+def coating_cutoff_nm(cutoff_nm: ArrayLike, aoi_deg: ArrayLike, n_eff: float = N_EFF_COATING,
+                      n0: float = 1.0) -> np.ndarray:
     """A dichroic coating's cut-off (or any feature) at an angle of incidence.
 
     Parameters
@@ -102,8 +108,8 @@ def coating_cutoff_nm(cutoff_nm, aoi_deg, n_eff: float = N_EFF_COATING, n0: floa
     return np.asarray(cutoff_nm, dtype=np.float64) * coating_shift_factor(aoi_deg, n_eff, n0)
 
 
-def shift_curve(wavelengths_nm, transmittance, aoi_deg, n_eff: float = N_EFF_COATING, n0: float = 1.0,
-                design_aoi_deg: float = 0.0) -> np.ndarray:
+def shift_curve(wavelengths_nm: ArrayLike, transmittance: ArrayLike, aoi_deg: ArrayLike, n_eff: float = N_EFF_COATING,
+                n0: float = 1.0, design_aoi_deg: float = 0.0) -> np.ndarray:
     """A dichroic filter's transmittance at another angle of incidence: the whole curve scaled in wavelength.
 
     Parameters
@@ -143,7 +149,7 @@ def shift_curve(wavelengths_nm, transmittance, aoi_deg, n_eff: float = N_EFF_COA
     return np.where(same, t, out)
 
 
-def tilted_incidence_deg(tilt_deg, field_x_deg, field_y_deg=0.0) -> np.ndarray:
+def tilted_incidence_deg(tilt_deg: ArrayLike, field_x_deg: ArrayLike, field_y_deg: ArrayLike = 0.0) -> np.ndarray:
     """The angle of incidence on a filter tilted about the y axis, for rays at field angles (x, y).
 
     Parameters
@@ -171,8 +177,8 @@ def tilted_incidence_deg(tilt_deg, field_x_deg, field_y_deg=0.0) -> np.ndarray:
     return np.degrees(np.arccos(np.clip(cos_theta, -1.0, 1.0)))
 
 
-def wheel_filter_curve(wavelengths_nm, transmittance, tilt_deg: float, field_x_deg, field_y_deg=0.0,
-                       n_eff: float = N_EFF_COATING) -> np.ndarray:
+def wheel_filter_curve(wavelengths_nm: ArrayLike, transmittance: ArrayLike, tilt_deg: float, field_x_deg: ArrayLike,
+                       field_y_deg: ArrayLike = 0.0, n_eff: float = N_EFF_COATING) -> np.ndarray:
     """A field-sequential wheel's interference filter, tilted by τ, seen by rays at field angles (x, y).
 
     Parameters
@@ -199,7 +205,8 @@ def wheel_filter_curve(wavelengths_nm, transmittance, tilt_deg: float, field_x_d
     return shift_curve(wavelengths_nm, transmittance, aoi, n_eff)
 
 
-def prism_incidence_deg(field_deg, coating_aoi_deg: float = 0.0, n_glass: float = N_PRISM_GLASS) -> np.ndarray:
+def prism_incidence_deg(field_deg: ArrayLike, coating_aoi_deg: float = 0.0,
+                        n_glass: float = N_PRISM_GLASS) -> np.ndarray:
     """The angle of incidence on a beam splitter inside a prism, in the glass, for a ray at a field angle.
 
     Parameters
@@ -227,7 +234,7 @@ def prism_incidence_deg(field_deg, coating_aoi_deg: float = 0.0, n_glass: float 
     return float(coating_aoi_deg) + np.degrees(np.arcsin(np.sin(np.radians(phi)) / n_glass))
 
 
-def dye_internal_angle_deg(aoi_deg, n_dye: float = N_DYE, n0: float = 1.0) -> np.ndarray:
+def dye_internal_angle_deg(aoi_deg: ArrayLike, n_dye: float = N_DYE, n0: float = 1.0) -> np.ndarray:
     """The angle of a ray inside a CFA's dye layer (Snell; the layers above are parallel, so n·sinθ is kept).
 
     Parameters
@@ -256,7 +263,7 @@ def dye_internal_angle_deg(aoi_deg, n_dye: float = N_DYE, n0: float = 1.0) -> np
     return np.degrees(np.arcsin(s))
 
 
-def dye_path_factor(aoi_deg, n_dye: float = N_DYE, n0: float = 1.0) -> np.ndarray:
+def dye_path_factor(aoi_deg: ArrayLike, n_dye: float = N_DYE, n0: float = 1.0) -> np.ndarray:
     """How much longer the oblique path through a dye layer is: ``1/cos θ_i``.
 
     Parameters
@@ -278,7 +285,7 @@ def dye_path_factor(aoi_deg, n_dye: float = N_DYE, n0: float = 1.0) -> np.ndarra
     return 1.0 / np.cos(np.radians(dye_internal_angle_deg(aoi_deg, n_dye, n0)))
 
 
-def dye_transmittance(transmittance, aoi_deg, n_dye: float = N_DYE, n0: float = 1.0) -> np.ndarray:
+def dye_transmittance(transmittance: ArrayLike, aoi_deg: ArrayLike, n_dye: float = N_DYE, n0: float = 1.0) -> np.ndarray:
     """A CFA dye's transmittance at an angle of incidence (Beer–Lambert along the longer path).
 
     Parameters

@@ -24,12 +24,17 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from spectracam.core.errors import ConfigError
 from spectracam.core.spectra import PLANCK_H_J_S, SPEED_OF_LIGHT_M_S
+
+if TYPE_CHECKING:
+    from spectracam.architecture.filters import FilterSpec
 
 __all__ = ["CAMERAS", "CAMERA_UNITS", "ELEMENTARY_CHARGE_C", "FROM_FILE", "PEAK_TOLERANCE",
            "PUBLISHED_MATRICES", "SINGULAR_CONDITION", "CameraCurves", "PublishedMatrix", "camera_curves_of",
@@ -59,7 +64,18 @@ class PublishedMatrix:
         return np.asarray(self.xyz_to_camera, float).reshape(3, 3)
 
     def neutral(self, white_xyz: np.ndarray) -> np.ndarray:
-        """The raw response ``M·XYZ`` to a neutral of chromaticity ``white_xyz``, G = 1."""
+        """The raw response ``M·XYZ`` to a neutral of chromaticity ``white_xyz``, G = 1.
+
+        Parameters
+        ----------
+        white_xyz : ndarray
+            ``(3,)`` CIE 1931 XYZ of the neutral (any scale).
+
+        Returns
+        -------
+        ndarray
+            ``(3,)`` the raw R, G, B response, G = 1.
+        """
         n = self.matrix @ np.asarray(white_xyz, float)
         return n / n[1]
 
@@ -159,7 +175,18 @@ CAMERAS = tuple(_LIBRARY)
 
 @lru_cache(maxsize=None)
 def library_curves(name: str) -> CameraCurves:
-    """The shipped camera ``name`` as published (gains not yet restored)."""
+    """The shipped camera ``name`` as published (gains not yet restored).
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`CAMERAS`.
+
+    Returns
+    -------
+    CameraCurves
+        Its curves in the ``"relative"`` unit (per unit energy), with source and normalisation.
+    """
     loader, source, norm, matrix, per_channel = _LIBRARY[name]
     wl, v = loader()
     return CameraCurves(name, wl, v, "relative", source, norm, matrix, per_channel)
@@ -178,9 +205,25 @@ def d65_white_xyz() -> np.ndarray:
     return xyz / xyz[1]
 
 
-def d65_response(wl: np.ndarray, values: np.ndarray, reflectance=None) -> np.ndarray:
+def d65_response(wl: np.ndarray, values: np.ndarray,
+                 reflectance: Callable[[np.ndarray], np.ndarray] | None = None) -> np.ndarray:
     """Raw response ``∫S_k·ρ·E_D65 dλ`` (energy sensitivities ``values`` on ``wl``) to a surface of
-    reflectance ``ρ`` (a spectrum; default a perfect white) under CIE D65, at 1 nm, G = 1."""
+    reflectance ``ρ`` (a spectrum; default a perfect white) under CIE D65, at 1 nm, G = 1.
+
+    Parameters
+    ----------
+    wl : ndarray
+        ``(n,)`` wavelengths, nm, increasing.
+    values : ndarray
+        ``(n, 3)`` energy sensitivities R, G, B.
+    reflectance : callable, optional
+        ρ(λ nm) → reflectance; None: a perfect white.
+
+    Returns
+    -------
+    ndarray
+        ``(3,)`` R, G, B response, G = 1.
+    """
     import colour
 
     sd = colour.SDS_ILLUMINANTS["D65"]
@@ -194,7 +237,23 @@ def d65_response(wl: np.ndarray, values: np.ndarray, reflectance=None) -> np.nda
 @lru_cache(maxsize=None)
 def restored_gains(name: str) -> np.ndarray:
     """Per-channel gains ``(3,)`` (G = 1) that give a per-channel-normalised camera the D65 neutral its
-    published matrix implies (module docstring); ones for a camera published with its gains."""
+    published matrix implies (module docstring); ones for a camera published with its gains.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`CAMERAS`.
+
+    Returns
+    -------
+    ndarray
+        ``(3,)`` gains, G = 1.
+
+    Raises
+    ------
+    ConfigError
+        A per-channel-normalised camera without a published matrix.
+    """
     c = library_curves(name)
     if not c.per_channel:
         return np.ones(3)
@@ -207,7 +266,20 @@ def restored_gains(name: str) -> np.ndarray:
 
 def energy_sensitivities(name: str) -> tuple[np.ndarray, np.ndarray]:
     """``(wavelengths_nm, (n, 3))``: a shipped camera's relative energy sensitivities with its true
-    (restored) gains, G's peak 1."""
+    (restored) gains, G's peak 1.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`CAMERAS`.
+
+    Returns
+    -------
+    wavelengths_nm : ndarray
+        ``(n,)``, nm.
+    values : ndarray
+        ``(n, 3)`` relative energy sensitivities R, G, B.
+    """
     c = library_curves(name)
     v = c.values * restored_gains(name)[None, :]
     return c.wavelengths_nm, v / v[:, 1].max()
@@ -215,7 +287,24 @@ def energy_sensitivities(name: str) -> tuple[np.ndarray, np.ndarray]:
 
 def to_electrons_per_photon(wl_nm: np.ndarray, values: np.ndarray, unit: str, qe_peak: float) -> np.ndarray:
     """``(n, 3)`` responsivities in electrons per photon from curves in ``unit`` (module docstring);
-    relative curves are scaled to a peak of ``qe_peak`` over all channels."""
+    relative curves are scaled to a peak of ``qe_peak`` over all channels.
+
+    Parameters
+    ----------
+    wl_nm : ndarray
+        ``(n,)`` wavelengths, nm.
+    values : ndarray
+        ``(n, 3)`` the curves.
+    unit : str
+        One of ``CAMERA_UNITS``: ``"relative"`` (per unit energy), ``"A/W"`` or ``"electrons_per_photon"``.
+    qe_peak : float
+        The largest quantum efficiency of relative curves, electrons per photon.
+
+    Returns
+    -------
+    ndarray
+        ``(n, 3)`` electrons per photon.
+    """
     lam = np.asarray(wl_nm, float)[:, None]
     if unit == "electrons_per_photon":
         return np.asarray(values, float)
@@ -232,15 +321,41 @@ PEAK_TOLERANCE = 1e-3
 
 def peak_normalised(values: np.ndarray) -> bool:
     """True when the three channels of ``(n, 3)`` curves share one peak value (to 1, 100 … one by one):
-    their relative gains were thrown away (module docstring)."""
+    their relative gains were thrown away (module docstring).
+
+    Parameters
+    ----------
+    values : ndarray
+        ``(n, 3)`` curves.
+
+    Returns
+    -------
+    bool
+        Whether the peaks agree within :data:`PEAK_TOLERANCE`.
+    """
     peaks = np.asarray(values, float).max(axis=0)
     return bool(peaks.max() > 0 and (peaks.max() - peaks.min()) <= PEAK_TOLERANCE * peaks.max())
 
 
-def file_gains(spec, wl_nm: np.ndarray, values: np.ndarray) -> np.ndarray:
+def file_gains(spec: FilterSpec, wl_nm: np.ndarray, values: np.ndarray) -> np.ndarray:
     """``(3,)`` multipliers of a ``filters.camera_file``'s R, G, B columns: ``camera_gains`` as given; else, for
     relative curves normalised per channel, the gains that give the D65 neutral of ``camera_xyz_to_camera``
-    (as :func:`restored_gains` does for shipped cameras); else ones (the curves keep their gains)."""
+    (as :func:`restored_gains` does for shipped cameras); else ones (the curves keep their gains).
+
+    Parameters
+    ----------
+    spec : FilterSpec
+        The ``[filters]`` table (``camera_gains``, ``camera_xyz_to_camera``, ``camera_unit``, ``camera_gains_kept``).
+    wl_nm : ndarray
+        ``(n,)`` the file's wavelengths, nm.
+    values : ndarray
+        ``(n, 3)`` the file's R, G, B curves.
+
+    Returns
+    -------
+    ndarray
+        ``(3,)`` multipliers.
+    """
     if spec.camera_gains:
         return np.asarray(spec.camera_gains, float)
     if (spec.camera_xyz_to_camera and spec.camera_unit == "relative" and not spec.camera_gains_kept
@@ -257,7 +372,20 @@ SINGULAR_CONDITION = 1e12
 def channel_condition(wl_nm: np.ndarray, values: np.ndarray) -> float:
     """Condition number of ``(n, 3)`` curves resampled at 1 nm over their range, each channel scaled to a sum of
     1 (white-balanced on an equal-energy white): how much a colour conversion must amplify noise in its worst
-    direction against its best (∞ for identical or all-zero channels; the shipped cameras 1.9–11)."""
+    direction against its best (∞ for identical or all-zero channels; the shipped cameras 1.9–11).
+
+    Parameters
+    ----------
+    wl_nm : ndarray
+        ``(n,)`` wavelengths, nm, increasing.
+    values : ndarray
+        ``(n, 3)`` curves.
+
+    Returns
+    -------
+    float
+        The 2-norm condition number; ∞ beyond :data:`SINGULAR_CONDITION`.
+    """
     wl = np.asarray(wl_nm, float)
     lam = np.arange(wl[0], wl[-1] + 0.5, 1.0) if wl[-1] - wl[0] >= 2 else wl
     q = np.stack([np.interp(lam, wl, np.asarray(values, float)[:, k]) for k in range(3)], axis=1)
@@ -269,9 +397,25 @@ def channel_condition(wl_nm: np.ndarray, values: np.ndarray) -> float:
     return kappa if np.isfinite(kappa) and kappa < SINGULAR_CONDITION else float("inf")
 
 
-def camera_curves_of(spec) -> tuple[np.ndarray, np.ndarray, str]:
+def camera_curves_of(spec: FilterSpec) -> tuple[np.ndarray, np.ndarray, str]:
     """``(wavelengths_nm, (n, 3) electrons per photon, what)`` of a filter spec's camera (a file's curves
-    times :func:`file_gains`)."""
+    times :func:`file_gains`).
+
+    Parameters
+    ----------
+    spec : FilterSpec
+        The ``[filters]`` table: ``camera`` (a shipped one, or ``"file"`` with ``camera_curve_nm``/``camera_curve``)
+        and ``qe_peak``.
+
+    Returns
+    -------
+    wavelengths_nm : ndarray
+        ``(n,)``, nm.
+    responsivities : ndarray
+        ``(n, 3)`` R, G, B, electrons per photon.
+    what : str
+        The field errors name: ``"filters.camera"`` or ``"filters.camera_file"``.
+    """
     if spec.camera == FROM_FILE:
         wl = np.asarray(spec.camera_curve_nm, float)
         v = np.asarray(spec.camera_curve, float)
@@ -281,18 +425,48 @@ def camera_curves_of(spec) -> tuple[np.ndarray, np.ndarray, str]:
     return wl, to_electrons_per_photon(wl, v, "relative", spec.qe_peak), "filters.camera"
 
 
-def check_covers(spec, wl_nm: np.ndarray, lo_nm: float, hi_nm: float, what: str) -> None:
-    """Refuse curves that do not cover the scene's wavelength range (zero outside would be a guess)."""
+def check_covers(spec: FilterSpec, wl_nm: np.ndarray, lo_nm: float, hi_nm: float, what: str) -> None:
+    """Refuse curves that do not cover the scene's wavelength range (zero outside would be a guess).
+
+    Parameters
+    ----------
+    spec : FilterSpec
+        The ``[filters]`` table (its camera's name for the error).
+    wl_nm : ndarray
+        The curves' wavelengths, nm, increasing.
+    lo_nm, hi_nm : float
+        The scene's bands' span, nm.
+    what : str
+        The field the error names.
+
+    Raises
+    ------
+    ConfigError
+        The curves start above ``lo_nm`` or end below ``hi_nm``.
+    """
     if wl_nm[0] > lo_nm + 1e-9 or wl_nm[-1] < hi_nm - 1e-9:
         value = spec.camera if what == "filters.camera" else f"{wl_nm[0]:g}–{wl_nm[-1]:g} nm"
         raise ConfigError(what, value, f"its curves cover {wl_nm[0]:g}–{wl_nm[-1]:g} nm but the scene's bands span "
                           f"{lo_nm:g}–{hi_nm:g} nm; narrow [wavelengths] (start_nm/stop_nm) to the curves' range")
 
 
-def load_camera_csv(path, what: str = "filters.camera_file") -> tuple[tuple, tuple]:
+def load_camera_csv(path: str | Path, what: str = "filters.camera_file") -> tuple[tuple, tuple]:
     """``(wavelengths_nm, rows of (R, G, B))`` from a CSV: a header row is allowed, ``#`` comments,
     comma- or whitespace-separated; exactly four columns (wavelength in nm, then R, G, B).  Every
-    number is checked: finite, non-negative, increasing wavelengths, at least 2 rows."""
+    number is checked: finite, non-negative, increasing wavelengths, at least 2 rows (else a ConfigError).
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV file.
+    what : str
+        The field errors name.
+
+    Returns
+    -------
+    tuple of (tuple of float, tuple of tuple of float)
+        The wavelengths, nm, increasing; ``(R, G, B)`` per wavelength, ≥ 0, in the file's unit.
+    """
     from spectracam.core.files import regular_file
 
     p = regular_file(path, what)

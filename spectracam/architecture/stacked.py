@@ -50,6 +50,9 @@ SNR and the per-pixel ΔE show it.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from spectracam.architecture.base import ARCHITECTURES, Architecture, PlanesLayout
@@ -57,13 +60,31 @@ from spectracam.core.spectra import band_average
 from spectracam.architecture.layers import (LAYER_COUNTS, MAX_CONDITION, MIN_WHITE_FRACTION, check_layers,  # noqa: F401
                                            layer_diagnostics, layer_names, layer_qe, stacked_cut)
 
+if TYPE_CHECKING:
+    from spectracam.architecture.filters import FilterSpec
+    from spectracam.camera import CameraSpec
+    from spectracam.core.spectra import WavelengthGrid
+    from spectracam.sensor import SensorSpec
+    from spectracam.sensor.kernels import SpectralRates
+
 __all__ = ["LAYER_COUNTS", "MAX_CONDITION", "MIN_WHITE_FRACTION", "StackedPhotodiodes", "check_layers",
            "layer_diagnostics", "layer_names", "layer_qe", "stacked_cut"]
 
 
 @ARCHITECTURES.register("stacked")
 class StackedPhotodiodes(Architecture):
-    """Photodiodes stacked in each pixel, exposed together (module docstring)."""
+    """Photodiodes stacked in each pixel, exposed together (module docstring).
+
+    Parameters
+    ----------
+    cfa_pattern : str
+        Unused by the layers (no mosaic); kept as every architecture takes it.
+    fixed_pattern : str
+        As :class:`~spectracam.architecture.base.Architecture`'s; ``"physical"``: each layer's photodiode its own.
+    layers : int
+        The number of photodiodes in the stack, 3 or 4 (:data:`LAYER_COUNTS`; :meth:`configure` sets it from the
+        camera's depths).
+    """
 
     name = "stacked"
     independent_exposures = False
@@ -82,15 +103,39 @@ class StackedPhotodiodes(Architecture):
     primaries = None
 
     @staticmethod
-    def depths_um(filters) -> tuple[float, ...]:
+    def depths_um(filters: FilterSpec) -> tuple[float, ...]:
         """The window boundaries below the surface, µm, as a camera gives them: ``filters.stacked_depths_um`` of
         the scene file (a dead layer, then the bottom of each layer from the top; validated with the filters,
-        :func:`~spectracam.architecture.layers.check_layers`)."""
+        :func:`~spectracam.architecture.layers.check_layers`).
+
+        Parameters
+        ----------
+        filters : FilterSpec
+            The ``[filters]`` table.
+
+        Returns
+        -------
+        tuple of float
+            ``(z_0, z_1, …, z_n)``, µm, increasing: the dead layer's bottom, then each layer's, the top layer first.
+        """
         return tuple(filters.stacked_depths_um)
 
     @staticmethod
-    def with_depths(filters, depths_um):
-        """``filters`` with other window boundaries (validated as a scene file's)."""
+    def with_depths(filters: FilterSpec, depths_um: Sequence[float]) -> FilterSpec:
+        """``filters`` with other window boundaries (validated as a scene file's).
+
+        Parameters
+        ----------
+        filters : FilterSpec
+            The ``[filters]`` table.
+        depths_um : sequence of float
+            The new boundaries, µm (as :meth:`depths_um` gives them).
+
+        Returns
+        -------
+        FilterSpec
+            A copy with ``stacked_depths_um`` replaced.
+        """
         return filters.replace(stacked_depths_um=tuple(float(v) for v in depths_um))
 
     @classmethod
@@ -98,11 +143,24 @@ class StackedPhotodiodes(Architecture):
         """The filter design varies the window boundaries (:meth:`depths_um`), not filters."""
         return "depths"
 
-    def configure(self, camera) -> "StackedPhotodiodes":
+    def configure(self, camera: CameraSpec) -> "StackedPhotodiodes":
         return type(self)(self.cfa_pattern, self.fixed_pattern, len(self.depths_um(camera.filters)) - 1)
 
-    def responsivities(self, filters, grid) -> np.ndarray:
-        """``(n, B)`` band-averaged layer QE × IR cuts (400 points a band)."""
+    def responsivities(self, filters: FilterSpec, grid: WavelengthGrid) -> np.ndarray:
+        """``(n, B)`` band-averaged layer QE × IR cuts (400 points a band).
+
+        Parameters
+        ----------
+        filters : FilterSpec
+            The ``[filters]`` table: the depths and the IR cuts.
+        grid : WavelengthGrid
+            The bands.
+
+        Returns
+        -------
+        ndarray
+            ``(n, B)`` electrons per photon, the bottom layer first.
+        """
         cut = stacked_cut(filters)
         depths = self.depths_um(filters)
 
@@ -111,9 +169,10 @@ class StackedPhotodiodes(Architecture):
 
         return np.stack([band_average(layer(k), grid, 400) for k in range(len(depths) - 1)])
 
-    def capture_time_s(self, times_s):
+    def capture_time_s(self, times_s: np.ndarray) -> float:
         return float(times_s[0])
 
-    def record(self, rates, times_s, sensor, seed):
+    def record(self, rates: np.ndarray | SpectralRates, times_s: np.ndarray, sensor: SensorSpec,
+               seed: int) -> tuple[np.ndarray, np.ndarray]:
         return self.record_planes(rates, times_s, sensor, seed,
                                  self.channel_patterns(sensor, rates.shape[:2], seed, drawn=False))

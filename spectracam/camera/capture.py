@@ -260,6 +260,5 @@ def capture(cube: RadianceCube | ChannelPlanes, camera: CameraSpec, seed: int,
     digital, expected = arch.record(rates, times, camera.sensor, seed)
     return RawCapture(digital=digital, expected_e=expected, exposure_times_s=times,
                       capture_time_s=capture_time_s(arch, times, camera.sensor), layout=arch.layout, camera=camera,
-                      seed=seed,
-                      metered_rate_e_per_s=white_rate, scene=cube.metadata.get("scene"), metering=metering,
+                      seed=seed, metered_rate_e_per_s=white_rate, scene=cube.metadata.get("scene"), metering=metering,
                       rates="channel planes" if isinstance(cube, ChannelPlanes) else "cube")

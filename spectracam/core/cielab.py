@@ -5,9 +5,14 @@ rendering.  ΔE*ab (CIE 1976) is the default, CIEDE2000 an option.
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from spectracam.core.registry import Registry
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 __all__ = ["DELTA_E_CODES", "DELTA_E_METHODS", "FUSED_MIN_COLOURS", "SNR_COMBINATIONS", "combine_snr_db", "delta_e",
            "lab_white", "rgb_to_lab", "snr_db", "xyz_to_lab"]
@@ -73,10 +78,22 @@ def _kernels():
     return _STATE["module"]
 
 
-def lab_white(white_xyz) -> np.ndarray:
+def lab_white(white_xyz: ArrayLike) -> np.ndarray:
     """The white as colour-science's ``XYZ_to_Lab`` takes it: its chromaticity ``x, y`` (``XYZ_to_xy``) back to
     XYZ with Y = 1 (``xyY_to_XYZ``: ``x·Y/y``, ``(1 − x − y)·Y/y``), the same operations in the same order.
 
+    Parameters
+    ----------
+    white_xyz : array_like
+        ``(3,)`` CIE 1931 XYZ of the white, any scale.
+
+    Returns
+    -------
+    ndarray
+        ``(3,)`` XYZ of the same chromaticity with Y = 1.
+
+    Examples
+    --------
     >>> lab_white([0.5, 2.0, 1.5]).tolist()
     [0.25, 1.0, 0.75]
     """
@@ -92,6 +109,22 @@ def rgb_to_lab(rgb: np.ndarray, matrix: np.ndarray, white_xyz: np.ndarray) -> np
     ``xyz_to_lab(rgb @ matrix.T, white_xyz)`` gives, in one compiled pass without the XYZ image where numba is
     available (on every core from :data:`FUSED_MIN_COLOURS` colours).
 
+    Parameters
+    ----------
+    rgb : ndarray
+        ``(..., 3)`` linear RGB.
+    matrix : ndarray
+        ``(3, 3)`` RGB → CIE 1931 XYZ.
+    white_xyz : ndarray
+        ``(3,)`` XYZ of the reference white (CIELAB's X_n, Y_n, Z_n, CIE 15:2004).
+
+    Returns
+    -------
+    ndarray
+        ``(..., 3)`` float64 L*, a*, b*.
+
+    Examples
+    --------
     >>> rgb_to_lab(np.ones((1, 3)), np.eye(3), np.ones(3)).round(6).tolist()
     [[100.0, 0.0, 0.0]]
     """

@@ -4,6 +4,11 @@ they write depends on its index alone, so the bands decide only who computes wha
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from concurrent.futures import ThreadPoolExecutor
 
 __all__ = ["fused_enabled", "njit_cached", "pool", "run_bands", "threads"]
 
@@ -21,7 +26,7 @@ def threads() -> int:
     return max(1, int(os.environ.get("SPECTRACAM_THREADS") or os.cpu_count() or 1))
 
 
-def pool():
+def pool() -> ThreadPoolExecutor:
     """The kernels' thread pool; a new one in a forked child (the parent's threads are not there)."""
     if _STATE.get("pool_pid") != os.getpid():
         from concurrent.futures import ThreadPoolExecutor
@@ -32,9 +37,22 @@ def pool():
     return _STATE["pool"]
 
 
-def run_bands(fn, n: int, args_for, parts: int | None = None) -> None:
+def run_bands(fn: Callable[..., object], n: int, args_for: Callable[[int, int], tuple],
+              parts: int | None = None) -> None:
     """``fn(*args_for(start, stop))`` over ``[0, n)`` split into ``parts`` bands (default: one per thread), each
-    on the pool; returns when all are done and raises the first band's exception."""
+    on the pool; returns when all are done and raises the first band's exception.
+
+    Parameters
+    ----------
+    fn : callable
+        The kernel (it releases the GIL and writes its band of the output).
+    n : int
+        The length of the index range.
+    args_for : callable
+        ``(start, stop)`` → the arguments of ``fn`` for that band.
+    parts : int or None
+        The number of bands; None: :func:`threads`; 1 runs in the calling thread.
+    """
     parts = max(1, min(parts or threads(), n))
     if parts == 1:
         fn(*args_for(0, n))
@@ -44,8 +62,19 @@ def run_bands(fn, n: int, args_for, parts: int | None = None) -> None:
         f.result()
 
 
-def njit_cached(**kw):
-    """``numba.njit(cache=True, **kw)``, or without the on-disk cache where no cache directory can be used."""
+def njit_cached(**kw: Any) -> Callable[[Callable], Callable]:
+    """``numba.njit(cache=True, **kw)``, or without the on-disk cache where no cache directory can be used.
+
+    Parameters
+    ----------
+    **kw : Any
+        numba.njit's options (``parallel``, ``fastmath``, ``nogil``, …).
+
+    Returns
+    -------
+    callable
+        A decorator compiling a function with them.
+    """
     import numba as nb
 
     def deco(fn):

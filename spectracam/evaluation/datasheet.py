@@ -22,12 +22,15 @@ References
 """
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
 from spectracam.core.errors import ConfigError
 from spectracam.evaluation.emva1288 import SATURATED_FRACTION_TARGET, pair_statistics
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 __all__ = ["ISO12232_NOISE_CONSTANT", "OPPONENT_FROM_XYZ", "PLATEAU_TOLERANCE", "SMI_PATCHES", "VISUAL_NOISE_WEIGHTS", "SmiResult",
            "csf_chrominance", "csf_luminance", "dynamic_range", "iso_speed", "saturation_signal", "series_statistics",
@@ -78,7 +81,7 @@ def series_statistics(bright_e: np.ndarray, dark_e: np.ndarray) -> tuple[np.ndar
     return stats[:, 0] - mu_dark, stats[:, 1]
 
 
-def snr_crossing(signal, snr, level: float) -> float | None:
+def snr_crossing(signal: ArrayLike, snr: ArrayLike, level: float) -> float | None:
     """The signal at which the SNR first rises through ``level``, interpolated linearly in log–log; None if never.
 
     Parameters
@@ -108,12 +111,21 @@ def snr_crossing(signal, snr, level: float) -> float | None:
     return float(np.exp(lx[0] + t * (lx[1] - lx[0])))
 
 
-def saturation_signal(signal, top_fraction, var) -> tuple[float, str]:
+def saturation_signal(signal: ArrayLike, top_fraction: ArrayLike, var: ArrayLike) -> tuple[float, str]:
     """The saturation signal μ_sat: where 0.15 % of the pixels show the top output value (EMVA 1288 Release 4,
     sections 2.7 and 6.5; log-interpolated between the steps around it); else, when the mean signal has stopped
     rising (a read-out whose clipped pixels sit below its top output value: the last two steps within 1 %), the
     onset of that plateau, where the temporal variance peaks; else where the temporal variance peaks (Release 3.1's
     definition).
+
+    Parameters
+    ----------
+    signal : array_like
+        ``(n,)`` mean signal of each step, increasing (e⁻ or DN).
+    top_fraction : array_like
+        ``(n,)`` fraction of the pixels at the top output value in each step.
+    var : array_like
+        ``(n,)`` temporal variance of each step.
 
     Returns
     -------
@@ -138,6 +150,22 @@ def saturation_signal(signal, top_fraction, var) -> tuple[float, str]:
 def dynamic_range(mu_sat: float, mu_min: float | None) -> tuple[float | None, float | None]:
     """DR = μ_sat/μ_min (EMVA 1288 eq. 28; *General*: μ_min where the SNR curve reaches 1), and in dB, 20·log10.
 
+    Parameters
+    ----------
+    mu_sat : float
+        The saturation signal μ_sat (:func:`saturation_signal`).
+    mu_min : float or None
+        The signal where the SNR reaches 1 (:func:`snr_crossing`), same unit; None when never reached.
+
+    Returns
+    -------
+    ratio : float or None
+        μ_sat/μ_min; None without a μ_min > 0.
+    db : float or None
+        20·log10 of it, dB.
+
+    Examples
+    --------
     >>> dynamic_range(1000.0, 10.0)
     (100.0, 40.0)
     """
@@ -147,7 +175,7 @@ def dynamic_range(mu_sat: float, mu_min: float | None) -> tuple[float | None, fl
     return ratio, float(20.0 * np.log10(ratio))
 
 
-def snr_model_linear(mu_e, read_noise_e: float, dark_e: float, gain_dn_per_e: float | None) -> np.ndarray:
+def snr_model_linear(mu_e: ArrayLike, read_noise_e: float, dark_e: float, gain_dn_per_e: float | None) -> np.ndarray:
     """The SNR of a linear sensor, ``μ_e / sqrt(μ_e + μ_d + σ_r² + σ_q²/K²)`` (EMVA 1288 *Linear*, section 2.5;
     σ_q² = 1/12 DN², none when ``gain_dn_per_e`` is None: no quantiser).
 
@@ -175,6 +203,20 @@ def iso_speed(constant: float, exposure_lux_s: float | None) -> float | None:
     """An ISO 12232 speed, ``constant / H`` with H the focal-plane exposure in lux·s: S_sat = 78/H_sat,
     S_noise40 = 10/H_SNR40, S_noise10 = 10/H_SNR10.
 
+    Parameters
+    ----------
+    constant : float
+        78 (:data:`~spectracam.io.dng.ISO_SATURATION_CONSTANT`, S_sat) or 10 (:data:`ISO12232_NOISE_CONSTANT`).
+    exposure_lux_s : float or None
+        The focal-plane exposure H, lux·s; None when not reached.
+
+    Returns
+    -------
+    float or None
+        The speed; None without an exposure > 0.
+
+    Examples
+    --------
     >>> iso_speed(78.0, 0.78)
     100.0
     """
@@ -220,10 +262,35 @@ def _lab(xyz, white):
     return xyz_to_lab(xyz, white)
 
 
-def smi_fit(camera, xyz, camera_white, xyz_white, fit: str = "delta_e") -> np.ndarray:
+def smi_fit(camera: np.ndarray, xyz: np.ndarray, camera_white: np.ndarray, xyz_white: np.ndarray,
+            fit: str = "delta_e") -> np.ndarray:
     """The white-preserving N×3 matrix of the SMI: ``"least_squares"`` (:func:`white_preserving_fit`) or
     ``"delta_e"`` — the one minimising the mean ΔE*ab, found from the least-squares one (Nelder–Mead over the
-    matrices that keep the white: M = M_ls + B·Qᵀ, Q an orthonormal basis of the directions w·Q = 0)."""
+    matrices that keep the white: M = M_ls + B·Qᵀ, Q an orthonormal basis of the directions w·Q = 0).
+
+    Parameters
+    ----------
+    camera : ndarray
+        ``(n, N)`` camera responses of the patches.
+    xyz : ndarray
+        ``(n, 3)`` their CIE XYZ.
+    camera_white : ndarray
+        ``(N,)`` the perfect white's camera response.
+    xyz_white : ndarray
+        ``(3,)`` its XYZ (also CIELAB's white).
+    fit : str
+        ``"delta_e"`` or ``"least_squares"``.
+
+    Returns
+    -------
+    ndarray
+        ``(N, 3)`` M with ``camera·M ≈ xyz`` and ``camera_white·M = xyz_white``.
+
+    Raises
+    ------
+    ConfigError
+        Another ``fit``.
+    """
     M0 = white_preserving_fit(camera, xyz, camera_white, xyz_white)
     if fit == "least_squares":
         return M0
@@ -254,7 +321,8 @@ class SmiResult(NamedTuple):
     matrix: np.ndarray
 
 
-def sensitivity_metamerism_index(responsivities: np.ndarray, wavelengths_nm, illuminant, reflectances,
+def sensitivity_metamerism_index(responsivities: np.ndarray, wavelengths_nm: ArrayLike, illuminant: ArrayLike,
+                                 reflectances: np.ndarray,
                                  cmfs: np.ndarray, fit: str = "delta_e") -> SmiResult:
     """ISO 17321-1's sensitivity metamerism index, SMI = 100 − 5.5·mean ΔE*ab.
 
@@ -303,18 +371,42 @@ def sensitivity_metamerism_index(responsivities: np.ndarray, wavelengths_nm, ill
 # ISO 15739: visual noise
 
 
-def csf_luminance(f_cpd) -> np.ndarray:
+def csf_luminance(f_cpd: ArrayLike) -> np.ndarray:
     """The luminance CSF, ``0.63·f^0.616·exp(−0.085·f)`` (Movshon & Kiorpes, as Johnson & Fairchild use it),
-    normalised to a peak of 1 (at f = 0.616/0.085 = 7.25 cycles/degree); 0 at f = 0 (the mean is kept apart)."""
+    normalised to a peak of 1 (at f = 0.616/0.085 = 7.25 cycles/degree); 0 at f = 0 (the mean is kept apart).
+
+    Parameters
+    ----------
+    f_cpd : array_like
+        Spatial frequency, cycles per degree.
+
+    Returns
+    -------
+    ndarray
+        The sensitivity, same shape, peak 1.
+    """
     f = np.asarray(f_cpd, float)
     peak = 0.63 * (0.616 / 0.085) ** 0.616 * np.exp(-0.616)
     return 0.63 * f**0.616 * np.exp(-0.085 * f) / peak
 
 
-def csf_chrominance(f_cpd, channel: int) -> np.ndarray:
+def csf_chrominance(f_cpd: ArrayLike, channel: int) -> np.ndarray:
     """The chromatic CSFs of Johnson & Fairchild (sums of two exponentials), 1 at f = 0:
     channel 1 (red–green) ``91.228·e^(−0.0003·f^2.803) + 74.907·e^(−0.0038·f^2.601)``, channel 2 (yellow–blue)
-    ``5.623·e^(−0.00001·f^3.4066) + 41.9363·e^(−0.083·f^1.3684)``, each over its value at 0."""
+    ``5.623·e^(−0.00001·f^3.4066) + 41.9363·e^(−0.083·f^1.3684)``, each over its value at 0.
+
+    Parameters
+    ----------
+    f_cpd : array_like
+        Spatial frequency, cycles per degree.
+    channel : int
+        1 (red–green) or 2 (yellow–blue), of :data:`OPPONENT_FROM_XYZ`.
+
+    Returns
+    -------
+    ndarray
+        The sensitivity, same shape, 1 at f = 0.
+    """
     a1, b1, c1, a2, b2, c2 = {1: (91.228, 0.0003, 2.803, 74.907, 0.0038, 2.601),
                               2: (5.623, 0.00001, 3.4066, 41.9363, 0.083, 1.3684)}[channel]
     f = np.asarray(f_cpd, float)
@@ -336,7 +428,7 @@ def _filtered_xyz(xyz: np.ndarray, samples_per_degree: float) -> np.ndarray:
     return np.maximum(out @ np.linalg.inv(OPPONENT_FROM_XYZ).T, 0.0)
 
 
-def visual_noise(xyz: np.ndarray, white_xyz, samples_per_degree: float) -> dict:
+def visual_noise(xyz: np.ndarray, white_xyz: ArrayLike, samples_per_degree: float) -> dict:
     """ISO 15739 visual noise of a uniform patch: ``VN = σ_L* + 0.852·σ_u* + 0.323·σ_v*`` of its CSF-filtered image.
 
     The patch's XYZ goes to the opponent channels (:data:`OPPONENT_FROM_XYZ`), each is filtered by its CSF

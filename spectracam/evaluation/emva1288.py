@@ -70,11 +70,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from statistics import NormalDist
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
 from spectracam.core.errors import ConfigError
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 __all__ = ["DARK_VARIANCE_FLOOR_DN2", "LINEARITY_FIT_RANGE", "LINEARITY_METHODS", "PLANCK_H_J_S",
            "RESULT_KEYS", "SATURATED_FRACTION_TARGET", "SATURATED_FRACTION_WINDOW", "SATURATION_METHODS",
@@ -235,10 +238,25 @@ class EmvaSeries:
         return int(self.mu_p.size)
 
 
-def photons_per_pixel(irradiance_W_m2, exposure_time_s, pixel_area_um2: float, wavelength_nm: float):
+def photons_per_pixel(irradiance_W_m2: ArrayLike, exposure_time_s: ArrayLike, pixel_area_um2: float,
+                      wavelength_nm: float) -> np.ndarray:
     """Mean number of photons on one pixel, μ_p = A·E·t_exp·λ/(h·c) (eq. 4).
 
-    ``irradiance_W_m2`` (W/m²) and ``exposure_time_s`` (s) broadcast; A in µm², λ in nm.
+    Parameters
+    ----------
+    irradiance_W_m2 : array_like
+        Irradiance E on the sensor, W/m² (broadcasts with ``exposure_time_s``).
+    exposure_time_s : array_like
+        Exposure time t_exp, s.
+    pixel_area_um2 : float
+        Pixel area A, µm².
+    wavelength_nm : float
+        The light's wavelength λ (monochromatic), nm.
+
+    Returns
+    -------
+    ndarray
+        μ_p, photons (float64, the broadcast shape).
     """
     A = pixel_area_um2 * 1e-12
     lam = wavelength_nm * 1e-9
@@ -251,13 +269,25 @@ def photons_per_pixel(irradiance_W_m2, exposure_time_s, pixel_area_um2: float, w
 # --------------------------------------------------------------------------------------------------
 
 
-def pair_statistics(frame_a, frame_b) -> tuple[float, float]:
+def pair_statistics(frame_a: ArrayLike, frame_b: ArrayLike) -> tuple[float, float]:
     """Mean and temporal variance from two frames taken under the same conditions.
 
     μ_y = ½(μ[A] + μ[B]) (eq. 16) and
     σ²_y = 1/(2MN)·Σ(y_A − y_B)² − ½(μ[A] − μ[B])² (eq. 18; the correction by the difference of the
     two frames' means is new in Release 4).  The difference removes every fixed pattern, so σ²_y is
-    the purely temporal variance.  Returns ``(mu_y, var_y)`` in DN and DN².
+    the purely temporal variance.
+
+    Parameters
+    ----------
+    frame_a, frame_b : array_like
+        ``(M, N)`` the two frames, DN (or any linear unit).
+
+    Returns
+    -------
+    mu_y : float
+        The mean, in the frames' unit (DN).
+    var_y : float
+        The temporal variance, that unit squared (DN²).
     """
     a = np.asarray(frame_a, dtype=np.float64)
     b = np.asarray(frame_b, dtype=np.float64)
@@ -272,7 +302,22 @@ def temporal_dark_noise(var_y_dark_DN2: float, K: float) -> tuple[float, bool, f
 
     When σ²_y.dark < 0.24 DN² the quantisation noise dominates and the standard gives only the upper
     limit σ_d < 0.40/K (eq. 54): σ²_y.dark is then set to 0.24 DN² (√(0.24 − 1/12) = 0.396).
-    Returns ``(sigma_d_e, is_upper_limit, var_y_dark_used_DN2)``.
+
+    Parameters
+    ----------
+    var_y_dark_DN2 : float
+        The temporal dark variance σ²_y.dark, DN².
+    K : float
+        The system gain, DN/e⁻.
+
+    Returns
+    -------
+    sigma_d_e : float
+        σ_d, e⁻ rms.
+    is_upper_limit : bool
+        Whether it is eq. 54's upper limit.
+    var_y_dark_used_DN2 : float
+        The dark variance used, DN².
     """
     limited = var_y_dark_DN2 < DARK_VARIANCE_FLOOR_DN2
     v = DARK_VARIANCE_FLOOR_DN2 if limited else float(var_y_dark_DN2)
@@ -285,16 +330,48 @@ def sensitivity_threshold(eta: float, var_y_dark_DN2: float, K: float) -> float:
     Solving η·μ_p = √(σ²_d + σ²_q/K² + η·μ_p) (the SNR of eq. 21 set to 1) gives
     μ_p.min = (1/η)·(√(σ²_y.dark/K² + 1/4) + 1/2), since σ²_d + σ²_q/K² = σ²_y.dark/K².
     (Release 3.1 used the approximation (σ_y.dark/K + 1/2)/η.)
+
+    Parameters
+    ----------
+    eta : float
+        The quantum efficiency η, e⁻ per photon.
+    var_y_dark_DN2 : float
+        The temporal dark variance σ²_y.dark, DN² (as :func:`temporal_dark_noise` used it).
+    K : float
+        The system gain, DN/e⁻.
+
+    Returns
+    -------
+    float
+        μ_p.min, photons per pixel.
     """
     return (math.sqrt(var_y_dark_DN2 / K**2 + 0.25) + 0.5) / eta
 
 
-def linearity_fit(x, y):
+def linearity_fit(x: ArrayLike, y: ArrayLike) -> tuple[float, float, np.ndarray]:
     """The standard's linearity regression (section 6.9): y ≈ a0 + a1·x with relative weights.
 
     Minimises Σ((y − a0 − a1·x)/y)², i.e. a least-squares fit with weights 1/y², so every point
-    counts by its relative deviation.  Returns ``(a0, a1, deviation_percent)`` with
-    δ_y = 100·(y − (a0 + a1·x))/(a0 + a1·x).
+    counts by its relative deviation.
+
+    Parameters
+    ----------
+    x : array_like
+        ``(n,)`` the exposure of each step (photons per pixel, or anything proportional), n ≥ 3.
+    y : array_like
+        ``(n,)`` the dark-subtracted mean signal of each step, DN, all > 0.
+
+    Returns
+    -------
+    a0, a1 : float
+        The offset (DN) and the slope.
+    deviation_percent : ndarray
+        ``(n,)`` δ_y = 100·(y − (a0 + a1·x))/(a0 + a1·x), %.
+
+    Raises
+    ------
+    ConfigError
+        Shapes that differ, fewer than 3 points, or a signal ≤ 0.
     """
     x = np.asarray(x, dtype=np.float64)
     y = np.asarray(y, dtype=np.float64)
@@ -306,7 +383,7 @@ def linearity_fit(x, y):
     return float(a0), float(a1), 100.0 * (y - fit) / fit
 
 
-def spatial_statistics(stack) -> dict:
+def spatial_statistics(stack: ArrayLike) -> dict:
     """Spatial mean and variances of a stack of L frames (section 8; eqs. 35-42).
 
     ⟨y⟩ is the average of the L frames; σ²_y.stack the mean over pixels of the per-pixel temporal
@@ -314,7 +391,18 @@ def spatial_statistics(stack) -> dict:
     noise, which is subtracted: s²_y = s²_y.measured − σ²_y.stack/L.  Release 4 also splits s²_y into
     column, row and pixel parts: the variances of the column and row averages (minus their temporal
     parts σ²/(L·M), σ²/(L·N)) are s²_cav = s²_col + s²_pixel/M and s²_rav = s²_row + s²_pixel/N, and
-    s²_y = s²_col + s²_row + s²_pixel.  Returns a dict of these in DN and DN².
+    s²_y = s²_col + s²_row + s²_pixel.
+
+    Parameters
+    ----------
+    stack : array_like
+        ``(L, M, N)`` L frames, DN.
+
+    Returns
+    -------
+    dict
+        ``L``; ``mu_y`` (DN); ``var_y_stack``, ``s2_y_measured``, ``s2_y``, ``s2_y_col``, ``s2_y_row``,
+        ``s2_y_pixel`` (DN²).
     """
     s = np.asarray(stack)
     L, M, N = s.shape
@@ -728,45 +816,45 @@ def _clipped_variance(m, s2, c, nodes, weights, spread):
     return out
 
 
-def expected(
-    *,
-    gain_DN_per_e: float,
-    quantum_efficiency: float,
-    read_noise_e: float,
-    dark_current_e_per_s: float,
-    dsnu_e: float,
-    prnu_fraction: float,
-    full_well_e: float,
-    adc_bits: int,
-    black_level_DN: float,
-    series_photon_rate_per_s: float | None = None,
-    saturation: str = "pixel_fraction",
-) -> dict:
+def expected(*, gain_DN_per_e: float, quantum_efficiency: float, read_noise_e: float, dark_current_e_per_s: float,
+             dsnu_e: float, prnu_fraction: float, full_well_e: float, adc_bits: int, black_level_DN: float,
+             series_photon_rate_per_s: float | None = None, saturation: str = "pixel_fraction") -> dict:
     """The quantities of :func:`analyse` for an ideal linear camera, from its configured parameters.
 
-    The camera: photo-electrons Poisson with mean η·μ_p·(1 + PRNU pattern), dark electrons Poisson
-    with mean (dark current)·t_exp, charge clipped at ``full_well_e``, a per-pixel dark offset
-    (DSNU pattern, e⁻) and Gaussian read noise added on readout, then y = round(K·v + black level)
-    clipped to 0 … 2^bits − 1.  The patterns are Gaussian with the given standard deviations.
-
-    By the standard's definitions:
+    The camera: photo-electrons Poisson with mean η·μ_p·(1 + PRNU pattern), dark electrons Poisson with mean
+    (dark current)·t_exp, charge clipped at ``full_well_e``, a per-pixel dark offset (DSNU pattern, e⁻) and Gaussian
+    read noise added on readout, then y = round(K·v + black level) clipped to 0 … 2^bits − 1.  The patterns are
+    Gaussian with the given standard deviations.  By the standard's definitions:
 
     * K, η, the dark current, DSNU1288 (e⁻) and PRNU1288 (%) are the configured values.
-    * σ_d = read noise (the dark variance at zero exposure is K²σ²_read + 1/12 DN²; eq. 53), or the
-      upper limit 0.40/K when that variance is below 0.24 DN² (eq. 54).
-    * μ_e.sat (sections 2.7, 6.5), ``saturation="pixel_fraction"``: the photo-electrons at which
-      0.15 % of the pixels reach 2^bits − 1, i.e. μ_e + d + z·σ_tot = (2^bits − 1.5 − black)/K with
-      z = Φ⁻¹(1 − 0.0015) and σ²_tot = μ_e + d + σ²_read + (PRNU·μ_e)² + DSNU² (the temporal and the
-      fixed-pattern spread; d = dark electrons).  ``"variance_max"``: the μ_e at which the mean
-      temporal variance of the clipped signal peaks.  When the full well clips below the ADC's
-      range no pixel reaches the maximum code and, like :func:`analyse`, this falls back to
-      ``"variance_max"``.  The dark electrons d count only when ``series_photon_rate_per_s`` (photons
-      per pixel per second of a series that varies the exposure time) is given: d = dark current ·
-      μ_p/rate; otherwise d = 0 (irradiance varied at a short exposure time).
+    * σ_d = read noise (the dark variance at zero exposure is K²σ²_read + 1/12 DN²; eq. 53), or the upper limit
+      0.40/K when that variance is below 0.24 DN² (eq. 54).
+    * μ_e.sat (sections 2.7, 6.5), ``saturation="pixel_fraction"``: the photo-electrons at which 0.15 % of the
+      pixels reach 2^bits − 1, i.e. μ_e + d + z·σ_tot = (2^bits − 1.5 − black)/K with z = Φ⁻¹(1 − 0.0015) and
+      σ²_tot = μ_e + d + σ²_read + (PRNU·μ_e)² + DSNU² (the temporal and the fixed-pattern spread; d = dark
+      electrons).  ``"variance_max"``: the μ_e at which the mean temporal variance of the clipped signal peaks.
+      When the full well clips below the ADC's range no pixel reaches the maximum code and, like :func:`analyse`,
+      this falls back to ``"variance_max"``.
     * SNR_max = √μ_e.sat; μ_p.min from eq. 26; DR = μ_e.sat/(η·μ_p.min); both in dB.
     * Linearity error 0 %.
 
-    Returns the keys of :data:`RESULT_KEYS` and ``"details"``.
+    Parameters
+    ----------
+    gain_DN_per_e, quantum_efficiency, read_noise_e, dark_current_e_per_s, dsnu_e, prnu_fraction : float
+        K, DN/e⁻; η, e⁻ per photon; σ_read, e⁻ rms; dark current, e⁻/s; DSNU, e⁻ rms; PRNU, a fraction.
+    full_well_e, black_level_DN : float
+        The full well, e⁻; the black level, DN.
+    adc_bits : int
+        The ADC's resolution, bits.
+    series_photon_rate_per_s : float or None
+        Photons per pixel per second of a series varying the exposure time (d = dark current·μ_p/rate); None: d = 0.
+    saturation : str
+        ``"pixel_fraction"`` or ``"variance_max"``.
+
+    Returns
+    -------
+    dict
+        The keys of :data:`RESULT_KEYS` and ``"details"``.
     """
     K, eta = float(gain_DN_per_e), float(quantum_efficiency)
     _check_choice("saturation", saturation, SATURATION_METHODS)

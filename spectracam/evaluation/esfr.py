@@ -43,9 +43,12 @@ the Hamming window's (it falls as the square of the region's width).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 __all__ = ["ESFRResult", "NoEdge", "esfr"]
 
@@ -120,7 +123,7 @@ def _fit(rows: np.ndarray, loc: np.ndarray, order: int) -> np.ndarray:
     return np.polynomial.polynomial.polyfit(rows, loc, order)
 
 
-def esfr(image, *, fit_order: int = 1, oversampling: int = 4, derivative: str = "central",
+def esfr(image: ArrayLike, *, fit_order: int = 1, oversampling: int = 4, derivative: str = "central",
          correct_binning: bool = False, max_frequency_cy_per_px: float = 1.0) -> ESFRResult:
     """ISO 12233:2017 edge-based SFR (e-SFR) of a slanted edge.
 

@@ -33,7 +33,26 @@ HeldOutColours, held_out_colours = LibraryColours, library_colours
 
 def conversion_errors(colours: LibraryColours, camera: CameraSpec, grid: WavelengthGrid, conversion: np.ndarray,
                       processing: ProcessingSpec) -> np.ndarray:
-    """``(n,)`` ΔE of each sample through the fitted 3×3 ``conversion`` (see the module)."""
+    """``(n,)`` ΔE of each sample through the fitted 3×3 ``conversion`` (see the module).
+
+    Parameters
+    ----------
+    colours : LibraryColours
+        The library's samples under the light: their band-averaged radiance, W·m⁻²·sr⁻¹·nm⁻¹, and true XYZ.
+    camera : CameraSpec
+        The camera whose noise-free photo-electron rates (e⁻/s) are converted.
+    grid : WavelengthGrid
+        The bands of the radiance.
+    conversion : ndarray
+        ``(3, 3)`` the fitted conversion from rates to the display's linear RGB (paper 3.5).
+    processing : ProcessingSpec
+        Its display and ΔE formula (``delta_e``, CIE 1976 ΔE*ab by default).
+
+    Returns
+    -------
+    ndarray
+        ``(n,)`` ΔE per sample.
+    """
     rates = photo_electron_rates(colours.radiance.astype(np.float32), grid, camera).astype(np.float64)
     M_disp = display_rgb_to_xyz(processing.display)
     shown = xyz_to_lab(rates @ conversion @ M_disp.T, M_disp.sum(axis=1))
@@ -42,7 +61,20 @@ def conversion_errors(colours: LibraryColours, camera: CameraSpec, grid: Wavelen
 
 
 def summary(errors: np.ndarray, library: str) -> dict:
-    """The report's block: mean, 95th percentile and max ΔE, and the sample count."""
+    """The report's block: mean, 95th percentile and max ΔE, and the sample count.
+
+    Parameters
+    ----------
+    errors : ndarray
+        ``(n,)`` ΔE per sample (:func:`conversion_errors`).
+    library : str
+        The library's name, as reported.
+
+    Returns
+    -------
+    dict
+        ``library``, ``samples``, ``delta_e_mean``, ``delta_e_p95``, ``delta_e_max``.
+    """
     e = np.asarray(errors, float)
     return {"library": library, "samples": int(e.size), "delta_e_mean": float(e.mean()),
             "delta_e_p95": float(np.percentile(e, 95)), "delta_e_max": float(e.max())}
@@ -52,7 +84,28 @@ def held_out_block(library: str, illuminant: IlluminantSpec, grid: WavelengthGri
                    conversion: np.ndarray, processing: ProcessingSpec) -> dict:
     """:func:`summary` of ``library`` under the light, through a conversion fitted elsewhere.  Memoised per
     camera, light and conversion (the last :data:`HELD_OUT_MEMO` of them): every seed and noise step of a camera
-    under a light shares its conversion, so a paper run computes each once instead of once per case."""
+    under a light shares its conversion, so a paper run computes each once instead of once per case.
+
+    Parameters
+    ----------
+    library : str
+        A reflectance library of :mod:`spectracam.scene.reflectances` (e.g. the CIE 2017 99 samples).
+    illuminant : IlluminantSpec
+        The scene's light, at its absolute level.
+    grid : WavelengthGrid
+        The scene's bands.
+    camera : CameraSpec
+        The camera.
+    conversion : ndarray
+        ``(3, 3)`` the conversion fitted on the chart.
+    processing : ProcessingSpec
+        Its display and ΔE formula.
+
+    Returns
+    -------
+    dict
+        :func:`summary`'s block (a copy).
+    """
     conversion = np.asarray(conversion, float)
     key = (library, illuminant, grid, camera, conversion.shape, conversion.tobytes(), processing.display,
            processing.delta_e)

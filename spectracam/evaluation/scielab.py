@@ -38,6 +38,7 @@ References
 from __future__ import annotations
 
 from functools import lru_cache
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy import fft, ndimage
@@ -46,6 +47,9 @@ from spectracam.core.cielab import delta_e as _delta_e
 from spectracam.core.parallel import threads
 from spectracam.core.cielab import xyz_to_lab as _xyz_to_lab
 from spectracam.processing.color import samples_per_degree  # noqa: F401  (the viewing geometry is the display's)
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike, DTypeLike
 
 __all__ = ["SCIELAB_FILTERS", "XYZ_TO_OPPONENT", "XYZ_TO_OPPONENT_AS_PRINTED", "scielab", "scielab_filter",
            "scielab_filter_fft", "scielab_kernels"]
@@ -145,8 +149,8 @@ def scielab_kernels(samples_per_degree: float, support_deg: float = 1.0) -> tupl
     return tuple(out)
 
 
-def scielab_filter(xyz, samples_per_degree: float, *, support_deg: float = 1.0, boundary: str = "reflect",
-                   opponent_matrix=XYZ_TO_OPPONENT) -> np.ndarray:
+def scielab_filter(xyz: ArrayLike, samples_per_degree: float, *, support_deg: float = 1.0,
+                   boundary: str = "reflect", opponent_matrix: ArrayLike = XYZ_TO_OPPONENT) -> np.ndarray:
     """Spatially filter an XYZ image as S-CIELAB does: opponent space, per-channel kernels, back to XYZ.
 
     The kernels are sums of separable Gaussians, so the filtering is done exactly as a sum of row and
@@ -217,7 +221,7 @@ def _kernel_spectra(spd: float, shape: tuple[int, int], dtype: str) -> np.ndarra
     return out
 
 
-def scielab_filter_fft(xyz, samples_per_degree: float, dtype=np.float64) -> np.ndarray:
+def scielab_filter_fft(xyz: ArrayLike, samples_per_degree: float, dtype: DTypeLike = np.float64) -> np.ndarray:
     """:func:`scielab_filter` computed by FFT, in ``dtype``.
 
     The filter of :func:`scielab_filter` with a reflecting boundary, 1° support and the reference opponent matrix,
@@ -268,8 +272,9 @@ def scielab_filter_fft(xyz, samples_per_degree: float, dtype=np.float64) -> np.n
     return out.astype(float, copy=False) @ _OPPONENT_TO_XYZ.T
 
 
-def scielab(xyz1, xyz2, white_xyz, samples_per_degree: float, delta_e: str = "cie1976", *,
-            support_deg: float = 1.0, boundary: str = "reflect", opponent_matrix=XYZ_TO_OPPONENT) -> np.ndarray:
+def scielab(xyz1: ArrayLike, xyz2: ArrayLike, white_xyz: ArrayLike, samples_per_degree: float,
+            delta_e: str = "cie1976", *, support_deg: float = 1.0, boundary: str = "reflect",
+            opponent_matrix: ArrayLike = XYZ_TO_OPPONENT) -> np.ndarray:
     """S-CIELAB colour difference map between two XYZ images (Zhang & Wandell 1996/1997).
 
     Parameters

@@ -10,7 +10,8 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import NamedTuple
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
@@ -24,6 +25,9 @@ from spectracam.processing import develop, oracle_block
 from spectracam.processing.calibration import conversion_matrix, conversion_target_rgb  # noqa: F401  (the paper's 3.5)
 from spectracam.scene.reference import ChartReference
 from spectracam.sensor import adc_full_scale_dn, adc_inverse
+
+if TYPE_CHECKING:
+    from spectracam.scene.reference import TargetReference
 
 __all__ = ["DELTA_E_REFERENCES", "EXPOSURE_MATCH_TOLERANCE", "LAB_CHUNK_PIXELS", "SCIELAB_CHUNK_PIXELS",
            "SUMMARY_METRICS", "ChartScore", "ChartSummary", "PatchScore", "camera_rates", "channel_stats",
@@ -154,7 +158,21 @@ class ChartScore:
 
 
 def recorded_electrons(raw: RawCapture) -> tuple[np.ndarray, np.ndarray]:
-    """Dark-subtracted electrons in the capture's layout, and the dark charge subtracted per channel."""
+    """Dark-subtracted electrons in the capture's layout, and the dark charge subtracted per channel.
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture (its digital numbers, sensor and exposure times).
+
+    Returns
+    -------
+    electrons : ndarray
+        Photo-electrons (ADC inverted, dark charge subtracted), e⁻: ``(H, W)`` for a mosaic, ``(N, H, W)`` for
+        planes.
+    dark : ndarray
+        ``(N,)`` the dark charge subtracted per channel, e⁻ (dark rate × exposure time).
+    """
     s = raw.camera.sensor
     e = adc_inverse(raw.digital, s)
     dark = s.dark_rate_e_per_s * np.asarray(raw.exposure_times_s)
@@ -167,7 +185,22 @@ def camera_rates(raw: RawCapture, processing: ProcessingSpec, reference: ChartRe
     """``(H, W, N)`` photo-electrons per second per channel: lens shading corrected (``processing.shading``, on the
     raw channels before demosaicking, with tables calibrated for the camera on ``reference``'s wavelengths and picked
     by its light's colour temperature: :func:`spectracam.processing.shading.shading_gain_maps`), demosaicked and
-    exposure-normalised."""
+    exposure-normalised.
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture.
+    processing : ProcessingSpec
+        The colour processing (demosaicking, conversion, display, ΔE formula).
+    reference : ChartReference, optional
+        The chart the shading tables are calibrated on (needed when ``processing.shading`` is not ``"none"``).
+
+    Returns
+    -------
+    ndarray
+        ``(H, W, N)`` float, e⁻/s.
+    """
     e, _ = recorded_electrons(raw)
     if processing.shading != "none":
         from spectracam.processing.calibration import light_cct_K
@@ -188,10 +221,23 @@ def camera_rates(raw: RawCapture, processing: ProcessingSpec, reference: ChartRe
     return rgb
 
 
-def channel_stats(raw: RawCapture, boxes) -> tuple[np.ndarray, np.ndarray]:
+def channel_stats(raw: RawCapture, boxes: Sequence[tuple[slice, slice]]) -> tuple[np.ndarray, np.ndarray]:
     """Mean and std ``(24, N)`` of the recorded (dark-subtracted) electrons of each channel's own
     pixels in each box (for a mosaic: every site of the channel in the tile, both greens of a Bayer).
-    The electrons of each box only (:func:`recorded_electrons`' values there): no full-size image is made."""
+    The electrons of each box only (:func:`recorded_electrons`' values there): no full-size image is made.
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture.
+    boxes : sequence of (slice, slice)
+        ``(rows, cols)`` of each patch's scoring box, pixels.
+
+    Returns
+    -------
+    means, stds : ndarray
+        ``(n_boxes, N)`` mean and standard deviation, e⁻ (a std of 0 where every pixel holds one code).
+    """
     s = raw.camera.sensor
     dark = s.dark_rate_e_per_s * np.asarray(raw.exposure_times_s)
     n = len(raw.layout.channels)
@@ -218,7 +264,18 @@ def channel_stats(raw: RawCapture, boxes) -> tuple[np.ndarray, np.ndarray]:
 
 def check_raw(raw: RawCapture) -> None:
     """Refuse a capture that no sensor could have recorded: digital numbers that are not finite or lie
-    outside the ADC's codes, a layout that does not match the array, exposure times that are not > 0."""
+    outside the ADC's codes, a layout that does not match the array, exposure times that are not > 0.
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture.
+
+    Raises
+    ------
+    SpectracamError
+        One line naming what is impossible.
+    """
     s = raw.camera.sensor
     d = raw.digital
     want, n = (2 if isinstance(raw.layout, MosaicLayout) else 3), len(raw.layout.channels)
@@ -238,18 +295,56 @@ def check_raw(raw: RawCapture) -> None:
 
 def display_rgb(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec) -> tuple[np.ndarray, np.ndarray]:
     """``(rendered (H, W, 3) linear display RGB, conversion matrix)`` (:func:`developed_rgb` without its white-balance
-    block)."""
+    block).
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture.
+    reference : ChartReference
+        The chart the conversion is fitted on.
+    processing : ProcessingSpec
+        The colour processing (demosaicking, conversion, display, ΔE formula).
+
+    Returns
+    -------
+    rgb : ndarray
+        ``(H, W, 3)`` linear display RGB, white = 1.
+    matrix : ndarray
+        ``(N, 3)`` the conversion applied to the rates.
+    """
     rgb, M, _ = developed_rgb(raw, reference, processing)
     return rgb, M
 
 
 def developed_rgb(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec,
-                  target_reference=None) -> tuple[np.ndarray, np.ndarray, dict]:
+                  target_reference: TargetReference | None = None) -> tuple[np.ndarray, np.ndarray, dict]:
     """``(rendered (H, W, 3) linear display RGB, conversion matrix, white-balance block)``: demosaicked,
     exposure-normalised rates through the conversion — for the paper's camera (``processing.told_the_light``) the one
     fitted on ``reference`` under its own light (which need not be the captured scene: a spectral image from another
     tool is shown through the chart's conversion); for a camera that finds its own white, the matrix it develops from
-    this image (:func:`spectracam.processing.develop`)."""
+    this image (:func:`spectracam.processing.develop`).
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture.
+    reference : ChartReference
+        The chart the conversion is fitted on (or the camera calibrated on).
+    processing : ProcessingSpec
+        The colour processing (demosaicking, conversion, display, ΔE formula).
+    target_reference : TargetReference, optional
+        A textured target's truth, for the white-balance block's true neutral.
+
+    Returns
+    -------
+    rgb : ndarray
+        ``(H, W, 3)`` linear display RGB, white = 1 (clipped to 0–1 with ``processing.gamut_clip``).
+    matrix : ndarray
+        ``(N, 3)`` the conversion applied to the rates (e⁻/s → display RGB).
+    white_balance : dict
+        The neutral used, the true one and their angular errors.
+    """
     rgb = camera_rates(raw, processing, reference)
     if processing.told_the_light:
         M = conversion_matrix(reference, raw.camera, processing)
@@ -275,7 +370,20 @@ EXPOSURE_MATCH_TOLERANCE = 0.01
 def check_exposure_matches(raw: RawCapture, reference: ChartReference) -> None:
     """A capture metered on its chart's white patch must have the exposure times that patch gives for
     its camera: a recorded scene edited to another light or level, or a capture of other pixels, is
-    refused instead of being scored against the wrong truth."""
+    refused instead of being scored against the wrong truth.
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture.
+    reference : ChartReference
+        The chart whose white patch meters the exposure.
+
+    Raises
+    ------
+    SpectracamError
+        Exposure times other than those the white patch gives.
+    """
     from spectracam.scene.chart import WHITE_PATCH
     from spectracam.sensor.exposure import exposure_times_s
 
@@ -402,7 +510,20 @@ def chart_truth_xyz(reference: ChartReference, rows: slice, cols: slice) -> np.n
     """``(h, w, 3)`` CIE 1931 XYZ of the scene's pixels ``[rows, cols]`` under its light (the light's white has Y = 1):
     each patch's reference colour (``reference.patch_xyz``) over the part of the pixel it covers
     (:func:`spectracam.scene.chart.patch_coverage`, what a box-filtered render converges to), the surround's
-    (``chart.surround_reflectance`` × the white) over the rest."""
+    (``chart.surround_reflectance`` × the white) over the rest.
+
+    Parameters
+    ----------
+    reference : ChartReference
+        The chart under its light.
+    rows, cols : slice
+        The pixels, in the image.
+
+    Returns
+    -------
+    ndarray
+        ``(h, w, 3)`` XYZ.
+    """
     from spectracam.scene.chart import View, patch_coverage
 
     cy, cx = patch_coverage(reference.chart, View.fit(reference.chart, reference.width_px, reference.height_px))
@@ -487,7 +608,22 @@ def chart_scielab_map(rgb: np.ndarray, reference: ChartReference, processing: Pr
     image pixel per display pixel); then CIELAB against the display white and ΔE (``processing.delta_e``) per pixel.
     On a uniform area (wider than the filters' 1° support) it equals the per-pixel ΔE (with the default XYZ-scaling
     adaptation, exactly); noise is averaged as the eye averages it.  Separable Gaussians on the scored pixels'
-    bounding box and the filters' reach only, a band of rows at a time; no random numbers."""
+    bounding box and the filters' reach only, a band of rows at a time; no random numbers.
+
+    Parameters
+    ----------
+    rgb : ndarray
+        ``(H, W, 3)`` the rendering, linear display RGB (white = 1).
+    reference : ChartReference
+        The chart under its light (the truth and the scoring boxes).
+    processing : ProcessingSpec
+        The colour processing (demosaicking, conversion, display, ΔE formula).
+
+    Returns
+    -------
+    ndarray
+        ``(H, W)`` float32 S-CIELAB ΔE.
+    """
     if reference.cell is not None:   # one chart of several (a light group's): filtered on its own cell
         rows, cols = reference.cell
         out = np.full(rgb.shape[:2], np.nan, np.float32)

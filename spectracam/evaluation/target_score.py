@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
@@ -34,6 +34,9 @@ from spectracam.evaluation.heldout import summary as error_summary
 from spectracam.core.cielab import delta_e, xyz_to_lab
 from spectracam.scene.reference import ChartReference, TargetReference, library_colours
 from spectracam.evaluation.score import check_exposure_matches, check_raw, developed_rgb
+
+if TYPE_CHECKING:
+    from spectracam.scene.target import TargetSpec
 
 __all__ = ["CHART_LIBRARIES", "MIN_SAMPLE_PX", "SampleScore", "TargetScore", "score_target"]
 
@@ -101,9 +104,34 @@ def _stats(values: np.ndarray) -> tuple[float, float, float]:
     return float(values.mean()), float(np.percentile(values, 95)), float(values.max())
 
 
-def score_target(raw: RawCapture, chart: ChartReference, ref: TargetReference, target, processing: ProcessingSpec
+def score_target(raw: RawCapture, chart: ChartReference, ref: TargetReference, target: TargetSpec, processing: ProcessingSpec
                  ) -> TargetScore:
-    """Score a capture of a textured target (module docstring)."""
+    """Score a capture of a textured target (module docstring).
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture of the target.
+    chart : ChartReference
+        The ColorChecker under the scene's light: the conversion's training set and the metering white.
+    ref : TargetReference
+        The target's truth per pixel (the area-weighted mix of the samples each pixel's footprint shows).
+    target : TargetSpec
+        The target (its library, layout, viewing geometry and interior margin).
+    processing : ProcessingSpec
+        Demosaicking, conversion, display and ΔE formula.
+
+    Returns
+    -------
+    TargetScore
+        The training, held-out and per-sample blocks, and the rendered RGB, ΔE and S-CIELAB maps.
+
+    Raises
+    ------
+    SpectracamError
+        A capture that cannot be scored against this target (another size, target or scene, or exposure times
+        the chart's white patch does not meter).
+    """
     _check_target_capture(raw, chart, ref, target)
     M_disp = display_rgb_to_xyz(processing.display)
     rgb, M, wb = developed_rgb(raw, chart, processing, ref)

@@ -51,7 +51,22 @@ class UsabilitySpec(Spec):
         self.number("max_s_cielab_mean", 0.5, 1000.0)
 
     def judge(self, s_cielab_mean: float | None, snr_white_db: float | None) -> tuple[bool, str]:
-        """``(usable, reason)``: the reason names each failed threshold ("" when usable)."""
+        """``(usable, reason)``: the reason names each failed threshold ("" when usable).
+
+        Parameters
+        ----------
+        s_cielab_mean : float or None
+            The capture's mean S-CIELAB ΔE; None (undefined) fails.
+        snr_white_db : float or None
+            The white patch's SNR, dB; None (noise-free) passes.
+
+        Returns
+        -------
+        usable : bool
+            Whether every threshold is met.
+        reason : str
+            Each failed threshold, ``"; "``-separated.
+        """
         reasons = []
         if snr_white_db is not None and snr_white_db < self.min_white_snr_db:
             reasons.append(f"white-patch SNR {snr_white_db:.1f} dB < {self.min_white_snr_db:g} dB")

@@ -7,6 +7,9 @@ result; explicit arguments win over what is recorded.  The stage functions thems
 """
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from spectracam.camera import CameraSpec
@@ -22,6 +25,10 @@ from spectracam.evaluation.score import ChartScore
 from spectracam.evaluation.score import score as score_stage
 from spectracam.sensor import SensorSpec
 
+if TYPE_CHECKING:
+    from spectracam.evaluation.target_score import TargetScore
+    from spectracam.sensor.metering import WhiteSpec
+
 __all__ = ["BOTH_WAYS_FIELDS", "MEMORY_PER_CUBE", "MEMORY_PER_PIXEL_PLANES", "RADIANCE_MATCH_TOLERANCE",
            "STAND_IN_SCENE", "Scene", "both_ways", "camera_processing", "capture", "capture_spectral_image",
            "check_bytes", "check_cube_matches", "check_memory", "check_planes_match", "check_planes_white",
@@ -29,8 +36,26 @@ __all__ = ["BOTH_WAYS_FIELDS", "MEMORY_PER_CUBE", "MEMORY_PER_PIXEL_PLANES", "RA
            "simulate", "stand_in_scene"]
 
 
-def scene_of(obj, what: str = "cube") -> Scene:
-    """The scene a cube or capture records."""
+def scene_of(obj: RadianceCube | ChannelPlanes | RawCapture, what: str = "cube") -> Scene:
+    """The scene a cube or capture records.
+
+    Parameters
+    ----------
+    obj : RadianceCube, ChannelPlanes or RawCapture
+        What records it (a cube's or planes' ``metadata["scene"]``, a capture's ``scene``).
+    what : str
+        What ``obj`` is, as the error names it.
+
+    Returns
+    -------
+    Scene
+        The recorded scene, validated.
+
+    Raises
+    ------
+    SpectracamError
+        ``obj`` records no scene.
+    """
     recorded = obj.metadata.get("scene") if isinstance(obj, (RadianceCube, ChannelPlanes)) \
         else getattr(obj, "scene", None)
     if recorded is None:
@@ -41,7 +66,7 @@ def scene_of(obj, what: str = "cube") -> Scene:
 
 def capture(cube: RadianceCube | ChannelPlanes, camera: CameraSpec | None = None, seed: int | None = None, *,
             scene: Scene | None = None, sensor: SensorSpec | None = None, design: str | None = None,
-            white=None) -> RawCapture:
+            white: str | WhiteSpec | None = None) -> RawCapture:
     """Capture a cube: expose the camera's sensor to it and record digital numbers.
 
     Parameters
@@ -144,10 +169,29 @@ def _capturing_camera(camera: CameraSpec, scene: Scene | None, sensor, design) -
     return camera
 
 
-def capture_spectral_image(cube: RadianceCube, stand_in: Scene, seed: int | None = None, white=None) -> RawCapture:
+def capture_spectral_image(cube: RadianceCube, stand_in: Scene, seed: int | None = None,
+                           white: str | WhiteSpec | None = None) -> RawCapture:
     """Capture a spectral image that records no spectracam scene with ``stand_in``'s camera
     (:func:`stand_in_scene`), metered on ``white`` (default: the brightest neutral; there is no white
-    patch).  The capture records no scene: there is no chart truth to score."""
+    patch).  The capture records no scene: there is no chart truth to score.
+
+    Parameters
+    ----------
+    cube : RadianceCube
+        The spectral image, W·m⁻²·sr⁻¹·nm⁻¹ (its bands inside the chart's data, :func:`stand_in_scene`).
+    stand_in : Scene
+        The scene standing in for it: its camera and seed.
+    seed : int, optional
+        The capture's noise seed (default: ``stand_in``'s).
+    white : str or WhiteSpec, optional
+        What the exposure is metered on (:func:`spectracam.sensor.metering.parse_white`): ``"brightest"``, a
+        region ``X0,Y0,X1,Y1`` or a white luminance in cd/m²; not ``"patch"``.
+
+    Returns
+    -------
+    RawCapture
+        The capture, recording its metering and no scene.
+    """
     from spectracam.sensor.metering import metered_radiance, parse_white
 
     white = parse_white(white if white is not None else "brightest", "white")
@@ -166,7 +210,29 @@ def stand_in_scene(cube: RadianceCube, data: dict | None = None, source: str = "
     """``(cube, scene)`` for a spectral image that records no spectracam scene: the scene holds the
     camera and the chart-and-light the colour conversion and the DNG's matrices are fitted on
     (:data:`STAND_IN_SCENE`, i.e. the ColorChecker under D65, over ``data``); the cube keeps only the
-    bands inside the chart's reflectance data (the conversion knows nothing beyond them)."""
+    bands inside the chart's reflectance data (the conversion knows nothing beyond them).
+
+    Parameters
+    ----------
+    cube : RadianceCube
+        The spectral image.
+    data : dict, optional
+        Scene tables over :data:`STAND_IN_SCENE` (a camera, a chart, a light …).
+    source : str
+        What the scene came from, as errors name it.
+
+    Returns
+    -------
+    cube : RadianceCube
+        The image with only the bands inside the chart's reflectance data (the same object when all are).
+    scene : Scene
+        The stand-in scene, on the cube's wavelengths.
+
+    Raises
+    ------
+    SpectracamError
+        Fewer than two bands inside the chart's data.
+    """
     from spectracam.scene.chart import ChartSpec, dataset_range_nm
 
     merged = {**STAND_IN_SCENE, **(data or {})}
@@ -208,7 +274,24 @@ def check_cube_matches(cube: RadianceCube, scene: Scene, source: str = "cube", r
     """Refuse a cube whose bands or size contradict the scene it is captured as, or (``radiance``)
     whose pixels do: each patch's mean spectrum (on at most :data:`PATCH_CHECK_SAMPLES`² of its pixels) must be
     the chart reference's within
-    :data:`RADIANCE_MATCH_TOLERANCE` (another light, level, chart or unit shows here)."""
+    :data:`RADIANCE_MATCH_TOLERANCE` (another light, level, chart or unit shows here).
+
+    Parameters
+    ----------
+    cube : RadianceCube
+        The cube.
+    scene : Scene
+        The scene it is captured as.
+    source : str
+        The cube, as errors name it.
+    radiance : bool
+        Also check the patches' mean spectra (not only the size and bands).
+
+    Raises
+    ------
+    SpectracamError
+        A size, band or radiance that contradicts the scene.
+    """
     h, w, b = cube.radiance.shape
     if (w, h) != (scene.image.width, scene.image.height):
         raise SpectracamError(f"{source}: {w}x{h} pixels, but its scene says {scene.image.width}x{scene.image.height}")
@@ -251,7 +334,22 @@ def check_planes_match(planes: ChannelPlanes, scene: Scene, source: str = "chann
     """Refuse channel planes whose size, bands or pixels contradict ``scene``: each patch's mean (on at most
     :data:`PATCH_CHECK_SAMPLES`² of its pixels) must be the chart reference's radiance through the planes' weights
     within :data:`RADIANCE_MATCH_TOLERANCE` (rms over the channels, relative), as :func:`check_cube_matches` holds
-    a cube's spectra."""
+    a cube's spectra.
+
+    Parameters
+    ----------
+    planes : ChannelPlanes
+        The planes (their weights and photo-electron rates).
+    scene : Scene
+        The scene they are captured as (a chart scene).
+    source : str
+        The planes, as errors name them.
+
+    Raises
+    ------
+    SpectracamError
+        A size, band, weight or radiance that contradicts the scene, or a textured target.
+    """
     h, w, n = planes.planes.shape
     if (w, h) != (scene.image.width, scene.image.height):
         raise SpectracamError(f"{source}: {w}x{h} pixels, but its scene says {scene.image.width}x{scene.image.height}")
@@ -307,7 +405,22 @@ def memory_available() -> tuple[float | None, str]:
 
 def check_bytes(need: float, what: str, advice: str) -> None:
     """Refuse, before any work, a run that needs ``need`` bytes when this process may not have them;
-    ``what`` names the sizes that cost them, ``advice`` what to make smaller."""
+    ``what`` names the sizes that cost them, ``advice`` what to make smaller.
+
+    Parameters
+    ----------
+    need : float
+        The bytes the run needs.
+    what : str
+        What costs them (the error's first words).
+    advice : str
+        What to make smaller (the error's last words).
+
+    Raises
+    ------
+    SpectracamError
+        More than :func:`memory_available` gives.
+    """
     avail, why = memory_available()
     if avail is not None and need > avail:
         raise SpectracamError(f"{what}: needs about {need / 2**30:.1f} GiB, {avail / 2**30:.1f} GiB {why}; {advice}")
@@ -316,7 +429,24 @@ def check_bytes(need: float, what: str, advice: str) -> None:
 def check_memory(scene: Scene, copies: float = 1.0, what: str = "", channel_planes: bool = False) -> None:
     """Refuse, before any work, a scene whose cubes (``copies`` of them held at once) would not fit in
     the memory available to this process; with ``channel_planes`` (:func:`render_planes`), what a run that holds the
-    camera's planes instead of the cube needs (:data:`MEMORY_PER_PIXEL_PLANES`)."""
+    camera's planes instead of the cube needs (:data:`MEMORY_PER_PIXEL_PLANES`).
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene (its image size and bands).
+    copies : float
+        Cubes held at once (each :data:`MEMORY_PER_CUBE` float32 cubes at its peak).
+    what : str
+        Added to the error's description of the sizes.
+    channel_planes : bool
+        Size a run that holds the channel planes instead of the cube.
+
+    Raises
+    ------
+    SpectracamError
+        Not enough memory.
+    """
     px = scene.image.width * scene.image.height
     need = px * (MEMORY_PER_PIXEL_PLANES if channel_planes else len(scene.grid) * 4 * MEMORY_PER_CUBE) * copies
     check_bytes(need, f"image = {scene.image.width}x{scene.image.height} with {len(scene.grid)} bands{what}"
@@ -330,7 +460,7 @@ MEMORY_PER_PIXEL_PLANES = 300
 
 
 def score(raw: RawCapture, scene: Scene | None = None, processing: ProcessingSpec | None = None,
-          delta_e_reference: str = "scene"):
+          delta_e_reference: str = "scene") -> ChartScore | TargetScore:
     """Score a capture against its scene: render it on the display and measure its colour errors.
 
     Parameters
@@ -379,7 +509,8 @@ def score(raw: RawCapture, scene: Scene | None = None, processing: ProcessingSpe
     return score_stage(raw, ChartReference.of(scene), processing or scene.processing, delta_e_reference)
 
 
-def render(scene: Scene, renderer: str = "mitsuba", progress: bool = False, log=None) -> RadianceCube:
+def render(scene: Scene, renderer: str = "mitsuba", progress: bool = False,
+           log: Callable[[str], object] | None = None) -> RadianceCube:
     """Render ``scene`` into a radiance cube with a registered renderer (:func:`spectracam.render.render`).
 
     Its arguments are checked here, at the API's boundary.
@@ -420,7 +551,8 @@ def render(scene: Scene, renderer: str = "mitsuba", progress: bool = False, log=
     return render_stage(scene, renderer, progress=progress, log=log)
 
 
-def render_planes(scene: Scene, renderer: str = "mitsuba", progress: bool = False, log=None,
+def render_planes(scene: Scene, renderer: str = "mitsuba", progress: bool = False,
+                  log: Callable[[str], object] | None = None,
                   camera: CameraSpec | None = None) -> ChannelPlanes:
     """Render ``scene`` straight into one camera's channel planes: its photo-electron rates at every pixel, each band
     integrated as it is rendered, so the ``(H, W, B)`` cube is never held (issue 38; ``N/B`` of its memory).
@@ -516,7 +648,8 @@ def integrate_planes(wavelengths_nm: np.ndarray, bands: list, metadata: dict, ca
     return ChannelPlanes(np.moveaxis(planes, 0, -1).copy(), wl, w.astype(np.float64), dict(metadata))
 
 
-def simulate(scene: Scene, renderer: str = "mitsuba", seed: int | None = None, channel_planes: bool = False):
+def simulate(scene: Scene, renderer: str = "mitsuba", seed: int | None = None, channel_planes: bool = False
+             ) -> tuple[RadianceCube | ChannelPlanes, RawCapture, ChartScore | TargetScore]:
     """render → capture → score: ``(cube, raw, score)``.
 
     Parameters
@@ -559,10 +692,21 @@ BOTH_WAYS_FIELDS = ("delta_e_mean", "delta_e_p95", "delta_e2000_mean", "held_out
                     "awb_recovery_deg", "awb_reproduction_deg", "metered_exposure_ms", "s_cielab_mean", "s_cielab_p95")
 
 
-def score_row(result) -> dict:
+def score_row(result: ChartScore | TargetScore) -> dict:
     """The :data:`BOTH_WAYS_FIELDS` of a :class:`ChartScore` or a textured target's score (whose per-pixel scores are
     on colours the conversion was not fitted on); S-CIELAB beside the per-pixel ΔE in both (the chart's at
-    processing.viewing_distance_m, the target's at its own viewing geometry)."""
+    processing.viewing_distance_m, the target's at its own viewing geometry).
+
+    Parameters
+    ----------
+    result : ChartScore or TargetScore
+        A score.
+
+    Returns
+    -------
+    dict
+        The :data:`BOTH_WAYS_FIELDS`, ΔE*ab and S-CIELAB ΔE, degrees and ms (None where a field is not defined).
+    """
     if isinstance(result, ChartScore):
         c, held = result.summary, result.held_out or {}
         return {"delta_e_mean": c.delta_e_mean, "delta_e_p95": c.delta_e_p95, "delta_e2000_mean": c.delta_e2000_mean,
@@ -580,17 +724,48 @@ def score_row(result) -> dict:
 
 def camera_processing(processing: ProcessingSpec, camera: str) -> ProcessingSpec:
     """``processing`` as the named camera (spectracam.processing.CAMERAS) runs it: the scene's own chain when it is
-    that camera (its overridden steps kept), else that camera's steps."""
+    that camera (its overridden steps kept), else that camera's steps.
+
+    Parameters
+    ----------
+    processing : ProcessingSpec
+        The scene's processing.
+    camera : str
+        ``"oracle"`` or ``"developed"``.
+
+    Returns
+    -------
+    ProcessingSpec
+        ``processing`` itself, or a copy with the camera and its automatic white balance and calibration.
+    """
     if processing.camera == camera:
         return processing
     return processing.replace(camera=camera, white_balance="auto", calibration="auto")
 
 
-def both_ways(raw: RawCapture, scene: Scene, cube: RadianceCube | None = None, result=None) -> dict:
+def both_ways(raw: RawCapture, scene: Scene, cube: RadianceCube | None = None,
+              result: ChartScore | TargetScore | None = None) -> dict:
     """``{"oracle": row, "developed": row}`` (:func:`score_row`): the capture scored by the oracle camera and by the
     developed one.  With the ``cube``, each camera captures it with its own metering (same seed); without it (a raw
     file), both develop the same capture, metered as it was.  ``result``: the score of ``raw`` under the scene's own
-    processing, reused for its camera's row."""
+    processing, reused for its camera's row.
+
+    Parameters
+    ----------
+    raw : RawCapture
+        The capture.
+    scene : Scene
+        Its scene.
+    cube : RadianceCube, optional
+        The radiance, captured again by each camera with its own metering.
+    result : ChartScore or TargetScore, optional
+        The score already computed under the scene's own processing.
+
+    Returns
+    -------
+    dict
+        ``"oracle"`` and ``"developed"``: a :func:`score_row` each; ``"metering"``: how the captures were metered.
+    """
     out = {}
     for name in ("oracle", "developed"):
         processing = camera_processing(scene.processing, name)

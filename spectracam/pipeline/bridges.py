@@ -2,15 +2,22 @@
 and characterisation tools."""
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from spectracam.camera import CameraSpec, camera_responsivities
 from spectracam.core.spectra import WavelengthGrid
 
+if TYPE_CHECKING:
+    import colour
+
+    from spectracam.pipeline.scene_file import Scene
+
 __all__ = ["camera_sensitivities", "patch_spectra"]
 
 
-def patch_spectra(scene):
+def patch_spectra(scene: Scene) -> colour.MultiSpectralDistributions:
     """The chart's 24 patch radiances as a ``colour.MultiSpectralDistributions``.
 
     Parameters
@@ -51,7 +58,8 @@ def patch_spectra(scene):
                                              labels=list(ref.names), name=f"{scene.name}: patch radiance")
 
 
-def camera_sensitivities(camera: CameraSpec, grid: WavelengthGrid):
+def camera_sensitivities(camera: CameraSpec, grid: WavelengthGrid
+                         ) -> colour.characterisation.RGB_CameraSensitivities | colour.MultiSpectralDistributions:
     """The camera's responsivities R_k(λ) on ``grid`` as ``colour.characterisation.RGB_CameraSensitivities``.
 
     Parameters

@@ -6,6 +6,12 @@ architecture and the exposure scheme together.  VALUE is read as a TOML value (`
 ``true``, ``[490, 610]``, ``"text"``); a bare word is taken as a string.  Sweep axes use the same
 path engine, so a path that works in one place works in all.
 
+One assignment (:func:`apply_override`) changes a copy of the tables.  Where one element of a list the file
+leaves at its default is set, ``defaults()`` supplies that list.  A key that chooses what the rest of its table
+means (:data:`SWITCHES`: ``illuminant.type``, ``illuminant.file``) set to another kind drops the old kind's keys,
+except those of the paths in ``kept`` (set earlier by the same overrides).  ``source``, when given (it may be
+None), names the file in errors.
+
 >>> apply_overrides({"sensor": {"adc_bits": 8}}, ["sensor.adc_bits=12", "capture.design=fsc/optimal"])
 {'sensor': {'adc_bits': 12}, 'capture': {'architecture': 'fsc', 'exposure': 'optimal'}}
 """
@@ -30,8 +36,19 @@ DESIGN_PATH = "capture.design"
 SWITCHES = {"illuminant": ("type", "file")}
 
 
-def parse_value(text: str):
-    """A TOML value, or the text itself when it is a bare word."""
+def parse_value(text: str) -> object:
+    """A TOML value, or the text itself when it is a bare word.
+
+    Parameters
+    ----------
+    text : str
+        The text after ``=``.
+
+    Returns
+    -------
+    object
+        An int, float, bool, str, list, table or date as TOML reads it; else ``text``.
+    """
     try:
         return tomllib.loads(f"v = {text}")["v"]
     except tomllib.TOMLDecodeError:
@@ -39,7 +56,27 @@ def parse_value(text: str):
 
 
 def parse_assignment(text: str, source: str = "--set") -> tuple[str, object]:
-    """``"table.field[i]=VALUE"`` → ``(path, value)``."""
+    """``"table.field[i]=VALUE"`` → ``(path, value)``.
+
+    Parameters
+    ----------
+    text : str
+        ``PATH=VALUE``.
+    source : str
+        The option or file, as errors name it.
+
+    Returns
+    -------
+    path : str
+        The path (:data:`PATH`).
+    value : object
+        The value (:func:`parse_value`).
+
+    Raises
+    ------
+    ConfigError
+        No ``=``, or not a path.
+    """
     path, eq, value = text.partition("=")
     path = path.strip()
     if not eq or not PATH.match(path):
@@ -48,12 +85,21 @@ def parse_assignment(text: str, source: str = "--set") -> tuple[str, object]:
     return path, parse_value(value.strip())
 
 
-def apply_override(data: dict, path: str, value, defaults: Callable[[], dict] | None = None,
+def apply_override(data: dict, path: str, value: object, defaults: Callable[[], dict] | None = None,
                    source: str | None = None, kept: Iterable[str] = ()) -> dict:
-    """A copy of ``data`` with ``path`` set to ``value``.  ``defaults()`` supplies a list that the
-    file leaves at its default when one element of it is set.  A key that chooses what the rest of its
-    table means (:data:`SWITCHES`: ``illuminant.type``, ``illuminant.file``) set to another kind drops
-    the old kind's keys, except those named in ``kept`` (paths the same overrides set earlier)."""
+    """A copy of ``data`` (a file's tables) with ``path`` (:data:`PATH`) set to ``value`` (module docstring).
+
+    Parameters
+    ----------
+    data : dict
+    path, source : str
+    value : object
+    defaults : callable, optional
+    kept : iterable of str
+
+    Returns
+    -------
+    dict"""
     m = PATH.match(path) if isinstance(path, str) else None
     if not m:
         raise ConfigError(path, value, "not a path: use 'table.field', 'table.field[i]' or 'key'", source)
@@ -122,9 +168,26 @@ def _unrecorded_default(table: str, key: str):
     return list(f.default) if isinstance(f.default, tuple) else None
 
 
-def apply_overrides(data: dict, overrides: Iterable, defaults: Callable[[], dict] | None = None,
+def apply_overrides(data: dict, overrides: Iterable[str | tuple[str, object]], defaults: Callable[[], dict] | None = None,
                     source: str = "--set") -> dict:
-    """Apply ``overrides`` (``"path=value"`` strings or ``(path, value)`` pairs) in order."""
+    """Apply ``overrides`` (``"path=value"`` strings or ``(path, value)`` pairs) in order.
+
+    Parameters
+    ----------
+    data : dict
+        A file's tables (not changed).
+    overrides : iterable of str or (str, object)
+        The assignments.
+    defaults : callable, optional
+        As for :func:`apply_override`.
+    source : str
+        The option or file, as errors name it.
+
+    Returns
+    -------
+    dict
+        The changed copy.
+    """
     done: list[str] = []
     for o in overrides:
         path, value = parse_assignment(o, source) if isinstance(o, str) else o

@@ -11,6 +11,7 @@ out-of-range value raises :class:`ConfigError` naming the field, the value and w
 from __future__ import annotations
 
 import tomllib
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -62,7 +63,20 @@ class ImageSpec(Spec):
 
 
 def parse_grid(data: dict, source: str | None = None) -> WavelengthGrid:
-    """The ``[wavelengths]`` table: ``start_nm``/``stop_nm``/``step_nm`` or ``centres_nm``."""
+    """The ``[wavelengths]`` table: ``start_nm``/``stop_nm``/``step_nm`` or ``centres_nm`` (else a ConfigError).
+
+    Parameters
+    ----------
+    data : dict
+        The table: ``start_nm``, ``stop_nm``, ``step_nm`` (nm) or ``centres_nm`` (a list, nm).
+    source : str, optional
+        The file, as errors name it.
+
+    Returns
+    -------
+    WavelengthGrid
+        The bands.
+    """
     if not isinstance(data, dict):
         raise ConfigError("wavelengths", data, "must be a table", source)
     d = dict(data)
@@ -210,9 +224,29 @@ class Scene(Spec):
                 "render": self.render.to_dict(), **self.camera.to_dict(), "processing": self.processing.to_dict()}
 
     @classmethod
-    def from_dict(cls, data, source: str | None = None, base: "Scene | None" = None) -> "Scene":
+    def from_dict(cls, data: dict, source: str | None = None, base: "Scene | None" = None) -> "Scene":
         """Validate a parsed TOML/JSON dict and build a Scene; tables not given keep ``base``'s values
-        (default: the defaults)."""
+        (default: the defaults).
+
+        Parameters
+        ----------
+        data : dict
+            The scene's tables (``name`` and :data:`SCENE_TABLES`).
+        source : str, optional
+            The file, as errors name it.
+        base : Scene, optional
+            The scene whose tables the missing ones keep.
+
+        Returns
+        -------
+        Scene
+            The validated scene.
+
+        Raises
+        ------
+        ConfigError
+            An unknown table or a value that is not allowed (naming the field and the source).
+        """
         if not isinstance(data, dict):
             raise ConfigError("scene", data, "must be a table", source)
         base = base or cls()
@@ -279,7 +313,25 @@ def parse_scene(data: dict, source: str | None = None) -> Scene:
 
 
 def read_toml(path: str | Path, what: str) -> dict:
-    """Parse a TOML file; an unreadable or invalid file is one ConfigError naming ``what``."""
+    """Parse a TOML file; an unreadable or invalid file is one ConfigError naming ``what``.
+
+    Parameters
+    ----------
+    path : str or Path
+        A regular file.
+    what : str
+        The kind of file, as the error names it (``"scene file"``, ``"experiment file"``).
+
+    Returns
+    -------
+    dict
+        The parsed tables.
+
+    Raises
+    ------
+    ConfigError
+        Not a regular file, unreadable, not UTF-8 or not valid TOML.
+    """
     from spectracam.core.files import regular_file
 
     p = regular_file(path, what)
@@ -305,7 +357,20 @@ def resolve_curve_files(data: dict, base_dir: Path) -> dict:
     """Replace ``illuminant.file`` / ``filters.qe_file`` / ``optics.transmittance_file`` /
     ``filters.camera_file`` by the curves they hold, so the scene (and every file made from it) records
     the data, not a path (``type = "measured"``, ``qe = "data"``, respectively ``kind = "camera"`` and
-    ``camera = "file"``, are implied), and a target's files by absolute paths (:mod:`spectracam.scene.target`)."""
+    ``camera = "file"``, are implied), and a target's files by absolute paths (:mod:`spectracam.scene.target`).
+
+    Parameters
+    ----------
+    data : dict
+        The scene's tables (not changed).
+    base_dir : Path
+        The scene file's folder, which the file names are relative to.
+
+    Returns
+    -------
+    dict
+        A copy with the curves in place of the file names.
+    """
     from spectracam.architecture.filters import load_curve
 
     data = dict(data)
@@ -354,7 +419,7 @@ def _resolve_light_file(table, i: int, base_dir: Path):
         raise ConfigError(f"lights[{i}].{e.field}", e.value, e.allowed, e.source) from None
 
 
-def load_scene(path: str | Path, overrides=()) -> Scene:
+def load_scene(path: str | Path, overrides: Iterable[str | tuple[str, object]] = ()) -> Scene:
     """Read and validate a TOML scene file, with ``--set``-style overrides applied first.
 
     Parameters
@@ -395,9 +460,27 @@ def load_scene(path: str | Path, overrides=()) -> Scene:
     return parse_scene(resolve_curve_files(data, Path(path).parent), source=str(path))
 
 
-def experiment_base_scene(table: dict, directory: str | Path, overrides=(), source: str | None = None) -> Scene:
+def experiment_base_scene(table: dict, directory: str | Path, overrides: Iterable[str | tuple[str, object]] = (),
+                          source: str | None = None) -> Scene:
     """The scene an experiment file (``scenes/paper.toml``) builds on: its ``base_scene`` file (relative to
-    ``directory``) with its ``[scene.*]`` tables and then ``overrides`` applied."""
+    ``directory``) with its ``[scene.*]`` tables and then ``overrides`` applied.
+
+    Parameters
+    ----------
+    table : dict
+        The experiment file's tables (``base_scene``, ``[scene.*]``).
+    directory : str or Path
+        The experiment file's folder.
+    overrides : iterable of str or (str, object)
+        ``--set`` assignments, applied after the file's.
+    source : str, optional
+        The experiment file, as errors name it.
+
+    Returns
+    -------
+    Scene
+        The validated scene.
+    """
     base_name = table.get("base_scene", "blackbody_5000K.toml")
     if not isinstance(base_name, str):
         raise ConfigError("base_scene", base_name, "must be a path to a scene file", source)
@@ -416,7 +499,20 @@ def paper_scene() -> Scene:
 
 
 def load_camera_config(path: str | Path, base: CameraSpec | None = None) -> CameraSpec:
-    """Read a camera config file (the scene file's camera tables only), over ``base``."""
+    """Read a camera config file (the scene file's camera tables only), over ``base``.
+
+    Parameters
+    ----------
+    path : str or Path
+        The TOML file (``[sensor]``, ``[filters]``, ``[optics]``, ``[capture]``, … tables).
+    base : CameraSpec, optional
+        The camera whose tables the missing ones keep (default: the defaults).
+
+    Returns
+    -------
+    CameraSpec
+        The validated camera.
+    """
     return CameraSpec.from_dict(read_toml(path, "config file"), source=str(path), base=base)
 
 
@@ -433,7 +529,23 @@ def shipped_dir() -> Path | None:
 
 
 def shipped_scene_file(name: str) -> Path:
-    """A scene file shipped with spectracam (``spectracam/scenes/NAME``, or the checkout's ``scenes/``)."""
+    """A scene file shipped with spectracam (``spectracam/scenes/NAME``, or the checkout's ``scenes/``).
+
+    Parameters
+    ----------
+    name : str
+        The file's name, e.g. ``"paper.toml"``.
+
+    Returns
+    -------
+    Path
+        The file.
+
+    Raises
+    ------
+    ConfigError
+        No such file is shipped.
+    """
     root = shipped_dir()
     if root is None or not (root / name).is_file():
         raise ConfigError("scene", name, "not shipped with this installation")

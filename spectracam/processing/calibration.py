@@ -31,12 +31,22 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from spectracam.core.errors import SpectracamError
 from spectracam.processing.color import CONVERSION_RCOND, adaptation_matrix, display_rgb_to_xyz, fit_conversion
 from spectracam.processing.registries import CALIBRATIONS  # noqa: F401  (the calibrations register into it)
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+    from spectracam.camera import CameraSpec
+    from spectracam.core.spectra import WavelengthGrid
+    from spectracam.processing.color import ProcessingSpec
+    from spectracam.scene.illuminant import IlluminantSpec
+    from spectracam.scene.reference import ChartReference
 
 __all__ = ["CALIBRATIONS", "CALIBRATION_LIGHTS", "CCT_RANGE_K", "D50_XYZ", "NEUTRAL_XY_ITERATIONS",
            "NEUTRAL_XY_TOLERANCE", "Calibration", "DualIlluminant", "constrained_lstsq", "conversion_matrix",
@@ -64,8 +74,23 @@ class Calibration:
     true_neutral: np.ndarray
 
 
-def white_neutral(illuminant, grid, camera) -> np.ndarray:
-    """``(N,)`` the camera's noise-free rates (e⁻/s) for a perfect white diffuser under ``illuminant``."""
+def white_neutral(illuminant: IlluminantSpec, grid: WavelengthGrid, camera: CameraSpec) -> np.ndarray:
+    """``(N,)`` the camera's noise-free rates (e⁻/s) for a perfect white diffuser under ``illuminant``.
+
+    Parameters
+    ----------
+    illuminant : IlluminantSpec
+        The light, at its absolute level.
+    grid : WavelengthGrid
+        The bands.
+    camera : CameraSpec
+        The camera.
+
+    Returns
+    -------
+    ndarray
+        ``(N,)`` float64, e⁻/s.
+    """
     from spectracam.camera import photo_electron_rates
     from spectracam.scene.illuminant import white_diffuser_radiance
 
@@ -80,6 +105,24 @@ def constrained_lstsq(A: np.ndarray, B: np.ndarray, c: np.ndarray, d: np.ndarray
     conversion (columns at unit norm, singular values below ``CONVERSION_RCOND`` dropped: a W channel that is the
     sum of R, G and B leaves the plain solution undetermined).
 
+    Parameters
+    ----------
+    A : ndarray
+        ``(m, n)`` the inputs (one sample a row).
+    B : ndarray
+        ``(m, k)`` the targets.
+    c : ndarray
+        ``(n,)`` the constraint's row (e.g. the camera's white).
+    d : ndarray
+        ``(k,)`` what ``c·X`` must equal (e.g. the white's XYZ).
+
+    Returns
+    -------
+    ndarray
+        ``(n, k)`` X.
+
+    Examples
+    --------
     >>> A = np.eye(3); X = constrained_lstsq(A, np.eye(3), np.ones(3), np.array([1.0, 1.0, 1.0]))
     >>> np.allclose(np.ones(3) @ X, 1.0)
     True
@@ -109,22 +152,77 @@ class DualIlluminant:
     neutrals: tuple          # (N,), (N,) each light's white through the camera, e⁻/s
 
     def weight(self, cct_K: float) -> float:
-        """The weight of calibration 1 (CIE A) at ``cct_K``: linear in 1/CCT, clamped to [0, 1]."""
+        """The weight of calibration 1 (CIE A) at ``cct_K``: linear in 1/CCT, clamped to [0, 1].
+
+        Parameters
+        ----------
+        cct_K : float
+            The light's correlated colour temperature, K.
+
+        Returns
+        -------
+        float
+            In [0, 1]; 1 at CIE A's CCT and below, 0 at D65's and above.
+        """
         t1, t2 = self.cct_K
         w = (1.0 / cct_K - 1.0 / t2) / (1.0 / t1 - 1.0 / t2)
         return float(np.clip(w, 0.0, 1.0))
 
     def color_matrix(self, cct_K: float) -> np.ndarray:
+        """The ColorMatrix at ``cct_K``: the two interpolated element by element with :meth:`weight` (DNG 1.4).
+
+        Parameters
+        ----------
+        cct_K : float
+            The light's correlated colour temperature, K.
+
+        Returns
+        -------
+        ndarray
+            ``(3, N)`` XYZ → camera (row vectors: camera = XYZ·CM).
+        """
         w = self.weight(cct_K)
         return w * self.color_matrices[0] + (1 - w) * self.color_matrices[1]
 
     def forward_matrix(self, cct_K: float) -> np.ndarray:
+        """The ForwardMatrix at ``cct_K``, interpolated as :meth:`color_matrix`.
+
+        Parameters
+        ----------
+        cct_K : float
+            The light's correlated colour temperature, K.
+
+        Returns
+        -------
+        ndarray
+            ``(N, 3)`` white-balanced camera → XYZ under D50 (row vectors).
+        """
         w = self.weight(cct_K)
         return w * self.forward_matrices[0] + (1 - w) * self.forward_matrices[1]
 
     def neutral_to_xy(self, neutral: np.ndarray) -> tuple[np.ndarray, float, int]:
         """``(xy, CCT K, iterations)`` of the white whose interpolated ColorMatrix response is parallel to
-        ``neutral`` (the DNG SDK's search; module docstring)."""
+        ``neutral`` (the DNG SDK's search; module docstring).
+
+        Parameters
+        ----------
+        neutral : ndarray
+            ``(N,)`` the camera's neutral, any scale.
+
+        Returns
+        -------
+        xy : ndarray
+            ``(2,)`` CIE 1931 chromaticity.
+        cct_K : float
+            Its correlated colour temperature, K.
+        iterations : int
+            The search's iterations.
+
+        Raises
+        ------
+        SpectracamError
+            A neutral that maps to no chromaticity.
+        """
         xy = xyz_to_xy(D50_XYZ)
         n = np.asarray(neutral, float)
         for it in range(1, NEUTRAL_XY_ITERATIONS + 1):
@@ -141,7 +239,19 @@ class DualIlluminant:
         return xy, xy_to_cct(xy), it
 
 
-def xyz_to_xy(xyz) -> np.ndarray:
+def xyz_to_xy(xyz: ArrayLike) -> np.ndarray:
+    """CIE 1931 chromaticity ``x, y`` of a tristimulus value; NaN when its sum is not > 0.
+
+    Parameters
+    ----------
+    xyz : array_like
+        ``(3,)`` XYZ.
+
+    Returns
+    -------
+    ndarray
+        ``(2,)``.
+    """
     xyz = np.asarray(xyz, float)
     s = xyz.sum()
     return xyz[:2] / s if s > 0 else np.array([np.nan, np.nan])
@@ -151,9 +261,20 @@ def xyz_to_xy(xyz) -> np.ndarray:
 CCT_RANGE_K = (1667.0, 25000.0)
 
 
-def xy_to_cct(xy) -> float:
+def xy_to_cct(xy: ArrayLike) -> float:
     """Correlated colour temperature (K) of CIE 1931 xy by Robertson's method (1968), colour-science's, clamped to
-    :data:`CCT_RANGE_K` (a neutral far off the locus still gets a temperature, as in the DNG SDK)."""
+    :data:`CCT_RANGE_K` (a neutral far off the locus still gets a temperature, as in the DNG SDK).
+
+    Parameters
+    ----------
+    xy : array_like
+        ``(2,)`` CIE 1931 chromaticity.
+
+    Returns
+    -------
+    float
+        The CCT, K.
+    """
     import colour
 
     uv = colour.xy_to_UCS_uv(np.asarray(xy, float))
@@ -163,10 +284,21 @@ def xy_to_cct(xy) -> float:
     return float(np.clip(cct, *CCT_RANGE_K))
 
 
-def light_cct_K(illuminant) -> float:
+def light_cct_K(illuminant: IlluminantSpec) -> float:
     """The correlated colour temperature of a light (Robertson's method on its chromaticity,
     :func:`spectracam.processing.calibration.xy_to_cct`), K: the temperature the lens-shading ``"cct"`` correction (:mod:`spectracam.processing.shading`) picks its table by.
-    A camera estimates it from its white balance; here it is the light's own (the correction's best case)."""
+    A camera estimates it from its white balance; here it is the light's own (the correction's best case).
+
+    Parameters
+    ----------
+    illuminant : IlluminantSpec
+        The light (a blackbody's temperature is its own CCT).
+
+    Returns
+    -------
+    float
+        The CCT, K.
+    """
     if illuminant.kind == "blackbody":
         return float(illuminant.temperature_K)
     import colour
@@ -187,9 +319,24 @@ def _illuminant_cct(name: str) -> float:
 
 
 @lru_cache(maxsize=64)
-def dual_illuminant_matrices(reference, camera, adaptation: str) -> DualIlluminant:
+def dual_illuminant_matrices(reference: ChartReference, camera: CameraSpec, adaptation: str) -> DualIlluminant:
     """The ColorMatrix and ForwardMatrix of ``camera`` under each of :data:`CALIBRATION_LIGHTS`, fitted on the chart
-    of ``reference`` (memoised)."""
+    of ``reference`` (memoised).
+
+    Parameters
+    ----------
+    reference : ChartReference
+        The chart (its grid and white luminance).
+    camera : CameraSpec
+        The camera.
+    adaptation : str
+        The chromatic adaptation from each light's white to D50 (``"bradford"``, …).
+
+    Returns
+    -------
+    DualIlluminant
+        The CCTs, ColorMatrices, ForwardMatrices and neutrals (e⁻/s) under CIE A and D65.
+    """
     from spectracam.scene.illuminant import IlluminantSpec
 
     cms, fms, ns, ccts = [], [], [], []
@@ -209,23 +356,64 @@ def dual_illuminant_matrices(reference, camera, adaptation: str) -> DualIllumina
     return DualIlluminant(tuple(ccts), tuple(cms), tuple(fms), tuple(ns))
 
 
-def xyz_to_display_rgb(processing) -> tuple[np.ndarray, np.ndarray]:
-    """``(3×3 inverse display matrix, display white XYZ)``."""
+def xyz_to_display_rgb(processing: ProcessingSpec) -> tuple[np.ndarray, np.ndarray]:
+    """``(3×3 inverse display matrix, display white XYZ)``.
+
+    Parameters
+    ----------
+    processing : ProcessingSpec
+        Its display.
+
+    Returns
+    -------
+    to_rgb : ndarray
+        ``(3, 3)`` XYZ → linear display RGB.
+    white_xyz : ndarray
+        ``(3,)`` the display white's XYZ (Y = 1).
+    """
     M_disp = display_rgb_to_xyz(processing.display)
     return np.linalg.inv(M_disp), M_disp.sum(axis=1)
 
 
-def conversion_target_rgb(reference, processing) -> np.ndarray:
+def conversion_target_rgb(reference: ChartReference, processing: ProcessingSpec) -> np.ndarray:
     """``(24, 3)`` what the conversion aims at (paper 3.5): the display RGB that shows each patch's XYZ carried
-    from the light's white to the display's."""
+    from the light's white to the display's.
+
+    Parameters
+    ----------
+    reference : ChartReference
+        The chart under the scene's light (its patches' XYZ, the light's white Y = 1).
+    processing : ProcessingSpec
+        Its display and chromatic adaptation.
+
+    Returns
+    -------
+    ndarray
+        ``(24, 3)`` linear display RGB.
+    """
     M_disp = display_rgb_to_xyz(processing.display)
     to_display_xyz = adaptation_matrix(reference.white_xyz, M_disp.sum(axis=1), processing.adaptation)
     return reference.patch_xyz @ to_display_xyz.T @ np.linalg.inv(M_disp).T
 
 
-def conversion_matrix(reference, camera, processing) -> np.ndarray:
+def conversion_matrix(reference: ChartReference, camera: CameraSpec, processing: ProcessingSpec) -> np.ndarray:
     """The N×3 colour conversion (paper 3.5; 3×3 for three channels): least squares from the chart's noise-free
-    camera rates to :func:`conversion_target_rgb` — the paper's camera's, fitted under the scene's own light."""
+    camera rates to :func:`conversion_target_rgb` — the paper's camera's, fitted under the scene's own light.
+
+    Parameters
+    ----------
+    reference : ChartReference
+        The chart under the scene's light.
+    camera : CameraSpec
+        The camera (its noise-free patch rates, e⁻/s).
+    processing : ProcessingSpec
+        Its display and chromatic adaptation.
+
+    Returns
+    -------
+    ndarray
+        ``(N, 3)``, e⁻/s → linear display RGB.
+    """
     return fit_conversion(reference.patch_rates(camera), conversion_target_rgb(reference, processing))
 
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -20,6 +21,9 @@ from spectracam.core.cielab import DELTA_E_METHODS, SNR_COMBINATIONS
 from spectracam.core.registry import Registry
 from spectracam.core.spec import Spec
 from spectracam.processing.registries import CALIBRATIONS, CAMERAS, WHITE_BALANCE_METHODS
+
+if TYPE_CHECKING:
+    from spectracam.processing.shading import ShadingSpec
 
 __all__ = ["ADAPTATIONS", "CONVERSION_RCOND", "CRT_PRIMARIES", "DEMOSAIC_BAND_ROWS", "DEMOSAIC_MARGIN",
            "DEMOSAIC_METHODS", "DISPLAYS", "SCIELAB_SAMPLES_PER_DEGREE", "ProcessingSpec", "adaptation_matrix",
@@ -120,7 +124,7 @@ class ProcessingSpec(Spec):
                 from None
         object.__setattr__(self, "shading_temperatures_K", spec.calibration_temperatures_K)
 
-    def shading_spec(self):
+    def shading_spec(self) -> ShadingSpec:
         """The correction as a :class:`spectracam.processing.shading.ShadingSpec`."""
         from spectracam.processing.shading import ShadingSpec
 
@@ -233,6 +237,18 @@ def _crt() -> np.ndarray:
 def display_rgb_to_xyz(display: str) -> np.ndarray:
     """3×3 matrix from linear display RGB (white R=G=B=1) to CIE 1931 XYZ with the white's Y = 1.
 
+    Parameters
+    ----------
+    display : str
+        A registered display: ``"srgb"`` (IEC 61966-2-1) or ``"crt"`` (the paper's CRT phosphors, 3.5).
+
+    Returns
+    -------
+    ndarray
+        ``(3, 3)``; its columns are the primaries' XYZ.
+
+    Examples
+    --------
     >>> round(float(display_rgb_to_xyz("srgb").sum(axis=1)[1]), 6)
     1.0
     """
@@ -272,6 +288,20 @@ def _cat16(white_from, white_to):
 def adaptation_matrix(white_from: np.ndarray, white_to: np.ndarray, method: str) -> np.ndarray:
     """3×3 matrix carrying XYZ seen under ``white_from`` to the corresponding XYZ under ``white_to``.
 
+    Parameters
+    ----------
+    white_from, white_to : ndarray
+        ``(3,)`` CIE 1931 XYZ of the source and destination whites.
+    method : str
+        A registered chromatic adaptation: ``"xyz_scaling"``, ``"bradford"`` or ``"cat16"`` (von Kries forms).
+
+    Returns
+    -------
+    ndarray
+        ``(3, 3)`` M with ``XYZ_to = M·XYZ_from``.
+
+    Examples
+    --------
     >>> adaptation_matrix(np.array([1.0, 1.0, 0.5]), np.array([1.0, 1.0, 1.0]), "xyz_scaling").diagonal().tolist()
     [1.0, 1.0, 2.0]
     """
@@ -285,7 +315,20 @@ def periodic_bilinear(mosaic: np.ndarray, layout: MosaicLayout) -> np.ndarray:
     recorded; the image is mirrored at its edges (scipy's ``mirror``, which keeps the tile's phase).
     On a Bayer tile this is colour-demosaicing's bilinear inside the image (a test holds it to 1e-12);
     on the outermost pixels that one overshoots (scipy's ``reflect`` edge counts an edge site twice),
-    this one stays a weighted mean of samples."""
+    this one stays a weighted mean of samples.
+
+    Parameters
+    ----------
+    mosaic : ndarray
+        ``(H, W)`` the mosaic, one value per site (e⁻/s, DN or e⁻).
+    layout : MosaicLayout
+        Its tile.
+
+    Returns
+    -------
+    ndarray
+        ``(H, W, N)`` float, the channels in the layout's order.
+    """
     from scipy.ndimage import correlate1d
 
     th, tw = layout.tile_shape
@@ -313,7 +356,22 @@ def remosaic_to_bayer(mosaic: np.ndarray, layout: MosaicLayout) -> tuple[np.ndar
     """A three-channel mosaic of another tile (Quad Bayer's 4×4) as an RGGB Bayer mosaic: each Bayer
     site takes its channel from :func:`periodic_bilinear` (a site already of that channel keeps its
     sample); ``(mosaic, "RGGB")``.  The phones' own remosaic engines are proprietary; this one is
-    the plain interpolating kind."""
+    the plain interpolating kind.
+
+    Parameters
+    ----------
+    mosaic : ndarray
+        ``(H, W)`` the mosaic, one value per site (e⁻/s, DN or e⁻).
+    layout : MosaicLayout
+        Its tile.
+
+    Returns
+    -------
+    mosaic : ndarray
+        ``(H, W)`` the RGGB Bayer mosaic.
+    pattern : str
+        ``"RGGB"``.
+    """
     full = periodic_bilinear(mosaic, layout)
     bayer = MosaicLayout.bayer("RGGB")
     k = bayer.channel_index(mosaic.shape)
@@ -342,7 +400,20 @@ def _bayer(name: str, fn_name: str):
 
 def demosaic_applies(method: str, layout: MosaicLayout) -> bool:
     """Whether a registered demosaicking method takes a mosaic of this layout (the Bayer methods need
-    three channels; ``bilinear`` and ``patch`` take any)."""
+    three channels; ``bilinear`` and ``patch`` take any).
+
+    Parameters
+    ----------
+    method : str
+        A registered demosaicking method.
+    layout : MosaicLayout
+        The mosaic's tile.
+
+    Returns
+    -------
+    bool
+        Whether ``method`` can demosaic it.
+    """
     need = getattr(DEMOSAIC_METHODS[method], "channels", None)
     return need is None or need == len(layout.channels)
 
@@ -369,6 +440,20 @@ def tile_replicate(mosaic: np.ndarray, layout: MosaicLayout) -> np.ndarray:
     channel from pixels of that channel only, never interpolated across tiles, so inside a patch's
     mask no other surface leaks in.  Pixels of a partial tile at the right/bottom edge stay 0.
 
+    Parameters
+    ----------
+    mosaic : ndarray
+        ``(H, W)`` the mosaic, one value per site (e⁻/s, DN or e⁻).
+    layout : MosaicLayout
+        Its tile.
+
+    Returns
+    -------
+    ndarray
+        ``(H, W, N)``, the channels in the layout's order.
+
+    Examples
+    --------
     >>> tile_replicate(np.array([[1.0, 2.0], [4.0, 8.0]]), MosaicLayout.bayer("RGGB"))[0, 0].tolist()
     [1.0, 3.0, 8.0]
     """

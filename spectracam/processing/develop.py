@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -27,19 +28,51 @@ from spectracam.processing.white_balance import (Estimation, band_reflectance, e
                                                  recovery_error_deg, reproduction_error_deg, trained_correction,
                                                  training_camera, usable_pixels)
 
+if TYPE_CHECKING:
+    from spectracam.camera import CameraSpec
+    from spectracam.camera.capture import RawCapture
+    from spectracam.processing.color import ProcessingSpec
+    from spectracam.scene.reference import ChartReference, TargetReference
+
 __all__ = ["CAMERAS", "Development", "develop", "metered_camera", "metering_method", "oracle_block",
            "scored_reflectances", "training_camera"]
 
 
-def metering_method(camera, processing) -> str:
-    """``capture.metering`` with ``auto`` resolved by ``processing.camera``."""
+def metering_method(camera: CameraSpec, processing: ProcessingSpec) -> str:
+    """``capture.metering`` with ``auto`` resolved by ``processing.camera``.
+
+    Parameters
+    ----------
+    camera : CameraSpec
+        The camera (its ``capture.metering``).
+    processing : ProcessingSpec
+        The processing (its ``camera``: ``"oracle"`` or ``"developed"``).
+
+    Returns
+    -------
+    str
+        The metering method (``"patch"``, ``"brightest"``, …), never ``"auto"``.
+    """
     m = camera.capture.metering
     return CAMERAS[processing.camera]["metering"] if m == "auto" else m
 
 
-def metered_camera(camera, processing):
+def metered_camera(camera: CameraSpec, processing: ProcessingSpec) -> CameraSpec:
     """``camera`` with its metering resolved by ``processing.camera`` (the capture stage reads ``auto`` as the white
-    patch: whoever holds the processing resolves it)."""
+    patch: whoever holds the processing resolves it).
+
+    Parameters
+    ----------
+    camera : CameraSpec
+        The camera (its ``capture.metering``).
+    processing : ProcessingSpec
+        The processing (its ``camera``: ``"oracle"`` or ``"developed"``).
+
+    Returns
+    -------
+    CameraSpec
+        ``camera`` itself when nothing changes, else a copy.
+    """
     m = metering_method(camera, processing)
     return camera if m == camera.capture.metering else camera.replace(capture=camera.capture.replace(metering=m))
 
@@ -55,9 +88,22 @@ class Development:
     neutral: np.ndarray | None = None
 
 
-def scored_reflectances(reference, target_reference=None) -> tuple:
+def scored_reflectances(reference: ChartReference, target_reference: TargetReference | None = None) -> tuple:
     """The scored scene's colours as band reflectances ``(n, B)``, whatever the light (the trained estimator never
-    trains on them): the chart's patches, and a textured target's library."""
+    trains on them): the chart's patches, and a textured target's library.
+
+    Parameters
+    ----------
+    reference : ChartReference
+        The chart (its patches and bands).
+    target_reference : TargetReference, optional
+        A textured target (its reflectance library).
+
+    Returns
+    -------
+    tuple of ndarray
+        ``(24, B)`` the patches' band reflectances, then ``(n, B)`` the library's when there is a target.
+    """
     return _scored(reference.chart, reference.grid, None if target_reference is None else target_reference.library)
 
 
@@ -73,10 +119,35 @@ def _scored(chart, grid, library) -> tuple:
     return tuple(np.ascontiguousarray(a, np.float64) for a in out)
 
 
-def develop(image: np.ndarray, raw, reference, processing, target_reference=None) -> Development:
+def develop(image: np.ndarray, raw: RawCapture, reference: ChartReference, processing: ProcessingSpec,
+            target_reference: TargetReference | None = None) -> Development:
     """The developed camera's rendering matrix for the camera image ``(H, W, N)`` (e⁻/s; demosaicked,
     exposure-normalised) of ``raw``: estimate the neutral (``processing.white_balance``), calibrate by it
-    (``processing.calibration``), and show the metered white at display Y = 1."""
+    (``processing.calibration``), and show the metered white at display Y = 1.
+
+    Parameters
+    ----------
+    image : ndarray
+        ``(H, W, N)`` camera rates, e⁻/s.
+    raw : RawCapture
+        The capture (its camera, exposure times and metered white).
+    reference : ChartReference
+        The chart under the scene's light (the calibration's and the true neutral's).
+    processing : ProcessingSpec
+        The white balance, calibration and display.
+    target_reference : TargetReference, optional
+        A textured target, whose colours the trained estimator leaves out.
+
+    Returns
+    -------
+    Development
+        The ``(N, 3)`` matrix, the ``white_balance`` block and the estimated neutral.
+
+    Raises
+    ------
+    SpectracamError
+        The metered white renders at a luminance that is not > 0.
+    """
     camera = raw.camera
     true = white_neutral(reference.illuminant, reference.grid, camera)
     ctx = Estimation(image, usable_pixels(image, raw.exposure_times_s, camera.sensor), processing, camera,
@@ -101,8 +172,24 @@ def develop(image: np.ndarray, raw, reference, processing, target_reference=None
     return Development(M, block, estimate)
 
 
-def oracle_block(reference, camera, processing) -> dict:
-    """The ``white_balance`` block of the oracle chain: the true neutral, errors 0."""
+def oracle_block(reference: ChartReference, camera: CameraSpec, processing: ProcessingSpec) -> dict:
+    """The ``white_balance`` block of the oracle chain: the true neutral, errors 0.
+
+    Parameters
+    ----------
+    reference : ChartReference
+        The chart under the scene's light.
+    camera : CameraSpec
+        The camera.
+    processing : ProcessingSpec
+        The processing (not read: the oracle's block is the same for every one).
+
+    Returns
+    -------
+    dict
+        ``method``, ``calibration``, ``neutral`` and ``true_neutral`` (max 1), ``recovery_deg`` and
+        ``reproduction_deg`` (0).
+    """
     true = white_neutral(reference.illuminant, reference.grid, camera)
     n = (true / true.max()).tolist()
     return {"method": "oracle", "calibration": "scene_light", "neutral": n, "true_neutral": n,

@@ -30,11 +30,21 @@ import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from spectracam.core.errors import ConfigError, SpectracamError
 from spectracam.core.spec import Spec
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+    from spectracam.architecture.base import MosaicLayout, PlanesLayout
+    from spectracam.camera import CameraSpec
+    from spectracam.core.spectra import WavelengthGrid
+    from spectracam.processing.color import ProcessingSpec
+    from spectracam.scene.illuminant import IlluminantSpec
 
 __all__ = ["ALSC_CELLS", "DAYLIGHT_FROM_K", "LIBCAMERA_TUNING_DIRS", "PLACEMENTS", "SHADING_CORRECTIONS", "SHADING_METHODS",
            "AlscTuning", "ShadingSpec", "ShadingTables", "apply_gain_tables", "calibrate_gain_tables", "calibration_light",
@@ -141,7 +151,7 @@ def interpolation_matrix(n_px: int, n_nodes: int, placement: str = "corners") ->
     return m
 
 
-def interpolate_table(table, shape: tuple[int, int], placement: str = "corners") -> np.ndarray:
+def interpolate_table(table: ArrayLike, shape: tuple[int, int], placement: str = "corners") -> np.ndarray:
     """A coarse table ``(..., rows, columns)`` interpolated bilinearly to ``(..., H, W)``.
 
     Parameters
@@ -194,7 +204,7 @@ def _cell_means(plane: np.ndarray, rows: int, cols: int) -> np.ndarray:
     return np.array([[np.nanmean(plane[ey[r]:ey[r + 1], ex[c]:ex[c + 1]]) for c in range(cols)] for r in range(rows)])
 
 
-def channel_planes(mosaic, layout) -> np.ndarray:
+def channel_planes(mosaic: ArrayLike, layout: MosaicLayout) -> np.ndarray:
     """A mosaic's channels as full-size planes, each holding its own sites' values and NaN elsewhere (what a tuning
     tool reads of a raw flat field: no demosaicking, whose borders would enter the table).
 
@@ -214,7 +224,8 @@ def channel_planes(mosaic, layout) -> np.ndarray:
     return np.stack([np.where(channel == k, m, np.nan) for k in range(len(layout.channels))])
 
 
-def calibrate_gain_tables(flat, spec: ShadingSpec | None = None, layout=None) -> ShadingTables:
+def calibrate_gain_tables(flat: ArrayLike, spec: ShadingSpec | None = None,
+                          layout: MosaicLayout | None = None) -> ShadingTables:
     """Per-channel gain tables from a flat field: gain × flat = the channel's centre level.
 
     Parameters
@@ -271,7 +282,7 @@ def calibrate_gain_tables(flat, spec: ShadingSpec | None = None, layout=None) ->
     return ShadingTables(gains, placement)
 
 
-def apply_gain_tables(planes, tables: ShadingTables) -> np.ndarray:
+def apply_gain_tables(planes: ArrayLike, tables: ShadingTables) -> np.ndarray:
     """The planes ``(N, H, W)`` times their channels' interpolated gains.
 
     Parameters
@@ -330,7 +341,7 @@ def interpolate_tables_by_cct(tables_by_cct: dict, cct_K: float) -> ShadingTable
     return ShadingTables(a.gains * (1 - p) + b.gains * p, a.placement)
 
 
-def tile_planes(mosaic, layout) -> np.ndarray:
+def tile_planes(mosaic: ArrayLike, layout: MosaicLayout) -> np.ndarray:
     """A mosaic's channels at one value per tile: each channel's mean over its sites in the tile (both greens of a
     Bayer tile), ``(N, H // th, W // tw)`` (a partial last tile is left out).
 
@@ -354,7 +365,8 @@ def tile_planes(mosaic, layout) -> np.ndarray:
                      for k in range(len(layout.channels))])
 
 
-def residual_colour_shading(corrected, reference_channel: int = 1, layout=None) -> dict:
+def residual_colour_shading(corrected: ArrayLike, reference_channel: int = 1,
+                            layout: MosaicLayout | None = None) -> dict:
     """The shading a correction leaves: each channel and each colour ratio against its value at the centre.
 
     Parameters
@@ -478,7 +490,7 @@ def _by_cct(block: dict, key: str, path) -> dict:
     return dict(sorted(out.items()))
 
 
-def read_libcamera_alsc(path) -> AlscTuning:
+def read_libcamera_alsc(path: str | Path) -> AlscTuning:
     """Read the ``rpi.alsc`` block of a Raspberry Pi (libcamera) tuning file.
 
     Parameters
@@ -513,7 +525,7 @@ def read_libcamera_alsc(path) -> AlscTuning:
                       _by_cct(block, "calibrations_Cr", p), _by_cct(block, "calibrations_Cb", p))
 
 
-def table_figures(table) -> dict:
+def table_figures(table: ArrayLike) -> dict:
     """Corner and centre figures of a 12 × 16 (or any) gain table.
 
     Parameters
@@ -549,7 +561,7 @@ _GAIN_CACHE: dict = {}
 _GAIN_CACHE_SIZE = 4
 
 
-def calibration_light(cct_K: float, white_luminance_cd_m2: float = 100.0):
+def calibration_light(cct_K: float, white_luminance_cd_m2: float = 100.0) -> IlluminantSpec:
     """The flat field's light at a colour temperature: a blackbody below :data:`DAYLIGHT_FROM_K`, CIE daylight
     (the D series at that CCT, colour-science's ``sd_CIE_illuminant_D_series``) from it on.
 
@@ -583,7 +595,8 @@ def calibration_light(cct_K: float, white_luminance_cd_m2: float = 100.0):
                           values=tuple(max(float(v), 0.0) for v in sd.values), white_luminance_cd_m2=white_luminance_cd_m2)
 
 
-def flat_field(camera, grid, shape: tuple[int, int], illuminant) -> np.ndarray:
+def flat_field(camera: CameraSpec, grid: WavelengthGrid, shape: tuple[int, int],
+               illuminant: IlluminantSpec) -> np.ndarray:
     """The camera's noise-free raw image of a perfect white diffuser filling the field, photo-electrons per second.
 
     Every pixel sees the same radiance E(λ)/π; what it records is that times the lens's relative illumination
@@ -628,7 +641,8 @@ def _gain_key(camera, grid, shape, processing, cct_K) -> str:
                       default=str)
 
 
-def shading_gain_maps(camera, grid, shape: tuple[int, int], processing, cct_K: float | None = None) -> np.ndarray:
+def shading_gain_maps(camera: CameraSpec, grid: WavelengthGrid, shape: tuple[int, int], processing: ProcessingSpec,
+                      cct_K: float | None = None) -> np.ndarray:
     """The camera's lens-shading gains at every pixel, per channel: its tables calibrated on flat fields
     (:func:`flat_field`) under ``processing.shading_temperatures_K`` (:func:`calibration_light`), the one of the
     first (``"single"``) or the ones interpolated to ``cct_K`` (``"cct"``, :func:`interpolate_tables_by_cct`), each
@@ -669,7 +683,7 @@ def shading_gain_maps(camera, grid, shape: tuple[int, int], processing, cct_K: f
     return _GAIN_CACHE[key]
 
 
-def correct_shading(electrons: np.ndarray, layout, gains: np.ndarray) -> np.ndarray:
+def correct_shading(electrons: np.ndarray, layout: MosaicLayout | PlanesLayout, gains: np.ndarray) -> np.ndarray:
     """Raw electrons times their channel's gain, in place: a mosaic ``(H, W)`` pixel by pixel with its own channel's
     gain (before demosaicking, as an ISP's lens-shading block does), planes ``(N, H, W)`` plane by plane.
 

@@ -47,5 +47,18 @@ def _filmic(linear: np.ndarray) -> np.ndarray:
 
 
 def tone_map(linear: np.ndarray, curve: str = "srgb") -> np.ndarray:
-    """Values in [0, 1] of linear sRGB through the registered tone curve (the sRGB encoding follows)."""
+    """Values in [0, 1] of linear sRGB through the registered tone curve (the sRGB encoding follows).
+
+    Parameters
+    ----------
+    linear : ndarray
+        ``(..., 3)`` linear sRGB (white = 1; above 1 where highlights exceed it).
+    curve : str
+        A registered tone curve: ``"srgb"`` (clipped to [0, 1]) or ``"filmic"`` (Hable's curve).
+
+    Returns
+    -------
+    ndarray
+        Same shape, in [0, 1], still linear.
+    """
     return TONE_CURVES[curve](linear)

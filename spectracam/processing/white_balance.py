@@ -34,12 +34,23 @@ Errors (degrees), both against the true neutral ``e``:
 from __future__ import annotations
 
 from dataclasses import dataclass
+from collections.abc import Iterable
 from functools import lru_cache
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from spectracam.core.errors import SpectracamError
 from spectracam.processing.registries import WHITE_BALANCE_METHODS  # noqa: F401  (the estimators register into it)
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+    from spectracam.camera import CameraSpec
+    from spectracam.core.spectra import WavelengthGrid
+    from spectracam.scene.illuminant import IlluminantSpec
+    from spectracam.scene.reflectances import ReflectanceSet
+    from spectracam.sensor import SensorSpec
 
 __all__ = ["CLIP_SHARE", "EDGE_ORDERS", "EXCLUDE_RMS", "MOMENT_ORDERS", "TRAINING_EDGES_PER_SURFACE",
            "TRAINING_LIGHTS", "TRAINING_RIDGE", "TRAINING_SCENES_PER_LIGHT", "TRAINING_SEED", "TRAINING_SURFACES",
@@ -99,8 +110,23 @@ class Estimation:
         return np.maximum(px, 0.0)
 
 
-def usable_pixels(image: np.ndarray, exposure_times_s, sensor) -> np.ndarray:
-    """``(H, W)`` bool: finite in every channel and below :data:`CLIP_SHARE` of the full well in every channel."""
+def usable_pixels(image: np.ndarray, exposure_times_s: ArrayLike, sensor: SensorSpec) -> np.ndarray:
+    """``(H, W)`` bool: finite in every channel and below :data:`CLIP_SHARE` of the full well in every channel.
+
+    Parameters
+    ----------
+    image : ndarray
+        ``(H, W, N)`` camera rates, e⁻/s.
+    exposure_times_s : array_like
+        ``(N,)`` the channels' exposure times, s.
+    sensor : SensorSpec
+        The sensor (dark rate, e⁻/s, and full well q_max, e⁻).
+
+    Returns
+    -------
+    ndarray
+        ``(H, W)`` bool.
+    """
     t = np.asarray(exposure_times_s, float)
     charge = image * t + sensor.dark_rate_e_per_s * t
     return np.all(np.isfinite(image), axis=-1) & np.all(charge < CLIP_SHARE * sensor.q_max_e, axis=-1)
@@ -116,7 +142,20 @@ def _unit(v: np.ndarray) -> np.ndarray:
 
 
 def minkowski_mean(pixels: np.ndarray, p: float) -> np.ndarray:
-    """``(mean x^p)^(1/p)`` over the first axis (the shades-of-grey moment), stably for large p."""
+    """``(mean x^p)^(1/p)`` over the first axis (the shades-of-grey moment), stably for large p.
+
+    Parameters
+    ----------
+    pixels : ndarray
+        ``(n, N)`` values ≥ 0.
+    p : float
+        The order (1: the mean; large: towards the maximum).
+
+    Returns
+    -------
+    ndarray
+        ``(N,)``.
+    """
     x = np.asarray(pixels, float)
     top = x.max(axis=0)
     top = np.where(top > 0, top, 1.0)
@@ -159,7 +198,20 @@ def moment_features(pixels: np.ndarray, edges: np.ndarray) -> np.ndarray:
     moments of its pixels ``(n, N)``, their :data:`WHITE_PATCH_PERCENTILE` th percentile (the maximum) and the
     Minkowski moments of its edge magnitudes ``(m, N)``, each moment scaled to unit norm (so an image's pixel and edge
     moments, whose scales differ from a training scene's, enter by their directions; the training computes the same
-    for all its scenes at once, :func:`trained_correction`)."""
+    for all its scenes at once, :func:`trained_correction`).
+
+    Parameters
+    ----------
+    pixels : ndarray
+        ``(n, N)`` the usable pixels, e⁻/s.
+    edges : ndarray
+        ``(m, N)`` their edge magnitudes (:func:`edge_magnitudes`).
+
+    Returns
+    -------
+    ndarray
+        The features, one unit-norm group of N after another.
+    """
     x = np.maximum(np.asarray(pixels, float), 0.0)
     groups = [minkowski_mean(x, p) for p in MOMENT_ORDERS] + [np.percentile(x, WHITE_PATCH_PERCENTILE, axis=0)]
     groups += [minkowski_mean(edges, p) for p in EDGE_ORDERS]
@@ -168,7 +220,23 @@ def moment_features(pixels: np.ndarray, edges: np.ndarray) -> np.ndarray:
 
 def edge_magnitudes(ctx: Estimation) -> np.ndarray:
     """``(m, N)`` each channel's Gaussian-derivative gradient magnitude (σ = ``processing.white_balance_sigma_px``)
-    at the pixels whose 3×3 neighbourhood is usable (an edge into a clipped pixel is the well's, not the scene's)."""
+    at the pixels whose 3×3 neighbourhood is usable (an edge into a clipped pixel is the well's, not the scene's).
+
+    Parameters
+    ----------
+    ctx : Estimation
+        The image, its usable pixels and the processing.
+
+    Returns
+    -------
+    ndarray
+        ``(m, N)``, e⁻/s per pixel.
+
+    Raises
+    ------
+    SpectracamError
+        No usable pixel with usable neighbours.
+    """
     from scipy.ndimage import binary_erosion, gaussian_gradient_magnitude
 
     sigma = ctx.processing.white_balance_sigma_px
@@ -189,9 +257,20 @@ def _corrected_moments(ctx: Estimation) -> np.ndarray:
     return moment_features(ctx.pixels(), edge_magnitudes(ctx)) @ model.correction
 
 
-def training_camera(camera):
+def training_camera(camera: CameraSpec) -> CameraSpec:
     """The part of a camera its responses depend on (its exposure and metering do not change a neutral's
-    direction): one trained estimator serves every exposure scheme and metering of a sensor."""
+    direction): one trained estimator serves every exposure scheme and metering of a sensor.
+
+    Parameters
+    ----------
+    camera : CameraSpec
+        The camera.
+
+    Returns
+    -------
+    CameraSpec
+        A copy whose ``capture`` keeps only the architecture, CFA pattern and fixed-pattern choice.
+    """
     cap = camera.capture
     return camera.replace(capture=type(cap)(architecture=cap.architecture, cfa_pattern=cap.cfa_pattern,
                                             fixed_pattern=cap.fixed_pattern))
@@ -213,12 +292,23 @@ class TrainedCorrection:
                 "seed": TRAINING_SEED, "training_recovery_deg": self.training_recovery_deg}
 
 
-def exclusion_key(arrays) -> tuple:
-    """A hashable key for the scored reflectances (arrays by content)."""
+def exclusion_key(arrays: Iterable[np.ndarray]) -> tuple:
+    """A hashable key for the scored reflectances (arrays by content).
+
+    Parameters
+    ----------
+    arrays : iterable of ndarray
+        ``(n, B)`` band reflectances (:func:`spectracam.processing.develop.scored_reflectances`).
+
+    Returns
+    -------
+    tuple
+        ``(shape, float64 bytes)`` per array.
+    """
     return tuple((a.shape, np.ascontiguousarray(a, np.float64).tobytes()) for a in arrays)
 
 
-def training_lights():
+def training_lights() -> list[IlluminantSpec]:
     from spectracam.scene.illuminant import IlluminantSpec
 
     return [IlluminantSpec("blackbody", v, None, 100.0) if k == "blackbody" else IlluminantSpec("cie", None, v, 100.0)
@@ -226,9 +316,32 @@ def training_lights():
 
 
 @lru_cache(maxsize=32)
-def trained_correction(camera, grid, library: str, exclusion: tuple = ()) -> TrainedCorrection:
+def trained_correction(camera: CameraSpec, grid: WavelengthGrid, library: str,
+                       exclusion: tuple = ()) -> TrainedCorrection:
     """The corrected-moments correction for ``camera`` on ``grid``, trained on ``library`` under
-    :data:`TRAINING_LIGHTS` minus the scored colours ``exclusion`` (memoised)."""
+    :data:`TRAINING_LIGHTS` minus the scored colours ``exclusion`` (memoised).
+
+    Parameters
+    ----------
+    camera : CameraSpec
+        The camera (:func:`training_camera`'s part of it).
+    grid : WavelengthGrid
+        The bands.
+    library : str
+        The reflectance library trained on (``processing.white_balance_training``).
+    exclusion : tuple
+        :func:`exclusion_key` of the scored scene's colours.
+
+    Returns
+    -------
+    TrainedCorrection
+        The ``(F, N)`` correction (F features, :func:`moment_features`) and what it was trained on.
+
+    Raises
+    ------
+    SpectracamError
+        Fewer than the smallest Mondrian's surfaces remain after the exclusion.
+    """
     from spectracam.scene.reflectances import load
 
     rset = load(library, "processing.white_balance_training")
@@ -304,8 +417,21 @@ def _trained(camera, grid, library: str, kept: bytes) -> TrainedCorrection:
                               "p95": float(np.percentile(errs, 95))})
 
 
-def band_reflectance(rset, grid) -> np.ndarray:
-    """``(n, B)`` band-averaged reflectances of a set, vectorised over samples (20 points per band)."""
+def band_reflectance(rset: ReflectanceSet, grid: WavelengthGrid) -> np.ndarray:
+    """``(n, B)`` band-averaged reflectances of a set, vectorised over samples (20 points per band).
+
+    Parameters
+    ----------
+    rset : ReflectanceSet
+        The reflectances (its samples cover the grid).
+    grid : WavelengthGrid
+        The bands.
+
+    Returns
+    -------
+    ndarray
+        ``(n, B)`` reflectance, 0–1.
+    """
     from spectracam.core.spectra import band_sample_points
 
     lam = band_sample_points(grid, 20)                                  # (B, P + 1)
@@ -316,6 +442,20 @@ def band_reflectance(rset, grid) -> np.ndarray:
 def recovery_error_deg(estimate: np.ndarray, truth: np.ndarray) -> np.ndarray:
     """Angle in degrees between estimated and true neutrals (last axis; Hordley & Finlayson 2006).
 
+    Parameters
+    ----------
+    estimate : ndarray
+        ``(..., N)`` estimated neutrals, any scale.
+    truth : ndarray
+        ``(..., N)`` true neutrals, any scale.
+
+    Returns
+    -------
+    ndarray
+        ``(...)`` degrees.
+
+    Examples
+    --------
     >>> round(float(recovery_error_deg(np.array([1.0, 0.0, 0.0]), np.array([1.0, 1.0, 0.0]))), 6)
     45.0
     """
@@ -327,6 +467,20 @@ def recovery_error_deg(estimate: np.ndarray, truth: np.ndarray) -> np.ndarray:
 def reproduction_error_deg(estimate: np.ndarray, truth: np.ndarray) -> np.ndarray:
     """Angle in degrees between ``truth/estimate`` and the achromatic ``(1, …, 1)`` (Finlayson & Zakizadeh 2014).
 
+    Parameters
+    ----------
+    estimate : ndarray
+        ``(..., N)`` estimated neutrals, any scale.
+    truth : ndarray
+        ``(..., N)`` true neutrals, any scale.
+
+    Returns
+    -------
+    ndarray
+        ``(...)`` degrees.
+
+    Examples
+    --------
     >>> round(float(reproduction_error_deg(np.array([1.0, 1.0, 2.0]), np.array([1.0, 1.0, 1.0]))), 4)
     15.7932
     """
@@ -335,5 +489,21 @@ def reproduction_error_deg(estimate: np.ndarray, truth: np.ndarray) -> np.ndarra
 
 
 def estimate_neutral(ctx: Estimation) -> np.ndarray:
-    """The registered estimator ``ctx.processing.white_balance``'s neutral, unit norm."""
+    """The registered estimator ``ctx.processing.white_balance``'s neutral, unit norm.
+
+    Parameters
+    ----------
+    ctx : Estimation
+        The image, its usable pixels and the processing.
+
+    Returns
+    -------
+    ndarray
+        ``(N,)``, unit norm.
+
+    Raises
+    ------
+    SpectracamError
+        An estimate with no direction (every channel 0), or no usable pixel.
+    """
     return _unit(WHITE_BALANCE_METHODS[ctx.processing.white_balance_method](ctx))

@@ -39,12 +39,17 @@ References: see ``docs/references.md`` ([Agranov2003], [Catrysse2002], [Green200
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from spectracam.core.errors import ConfigError
 from spectracam.core.spec import Spec
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 __all__ = ["SPOT_SHAPES", "PixelAngleSpec", "angle_in_medium_deg", "apply_crosstalk", "crosstalk_kernel",
            "effective_responsivities", "identity_kernel", "microlens_acceptance", "microlens_shift_um",
@@ -128,7 +133,7 @@ def _positive(values, name: str, unit: str = "") -> np.ndarray:
     return a
 
 
-def angle_in_medium_deg(theta_deg, index) -> np.ndarray:
+def angle_in_medium_deg(theta_deg: ArrayLike, index: ArrayLike) -> np.ndarray:
     """The ray's angle inside a medium of refractive index ``index`` after entering from air (Snell's law).
 
     Parameters
@@ -151,7 +156,7 @@ def angle_in_medium_deg(theta_deg, index) -> np.ndarray:
     return np.degrees(np.arcsin(np.sin(t) / _positive(index, "index")))
 
 
-def microlens_shift_um(cra_deg, spec: PixelAngleSpec) -> np.ndarray:
+def microlens_shift_um(cra_deg: ArrayLike, spec: PixelAngleSpec) -> np.ndarray:
     """The microlens shift that cancels a chief-ray angle: ``stack height × tan θ_s(CRA)``, µm.
 
     Parameters
@@ -174,7 +179,7 @@ def microlens_shift_um(cra_deg, spec: PixelAngleSpec) -> np.ndarray:
     return spec.stack_height_um * np.tan(np.radians(angle_in_medium_deg(cra_deg, spec.stack_index)))
 
 
-def spot_sigma_um(wavelength_nm, spec: PixelAngleSpec, *, pixel_pitch_um: float,
+def spot_sigma_um(wavelength_nm: ArrayLike, spec: PixelAngleSpec, *, pixel_pitch_um: float,
                   f_number: float | None = None) -> np.ndarray:
     """Rms radius per axis of the microlens's spot on the photodiode, µm.
 
@@ -234,8 +239,9 @@ def _residual_um(theta_deg, spec: PixelAngleSpec, shift_um):
     return microlens_shift_um(theta_deg, spec) - np.asarray(shift_um, float)
 
 
-def microlens_acceptance(theta_deg, wavelength_nm, spec: PixelAngleSpec, *, pixel_pitch_um: float,
-                         f_number: float | None = None, shift_um=0.0, azimuth_deg=0.0) -> np.ndarray:
+def microlens_acceptance(theta_deg: ArrayLike, wavelength_nm: ArrayLike, spec: PixelAngleSpec, *,
+                         pixel_pitch_um: float, f_number: float | None = None, shift_um: ArrayLike = 0.0,
+                         azimuth_deg: ArrayLike = 0.0) -> np.ndarray:
     """Relative microlens acceptance: the fraction of the focused spot inside the photodiode's opening, over its
     value at normal incidence with no shift.
 
@@ -279,8 +285,21 @@ def microlens_acceptance(theta_deg, wavelength_nm, spec: PixelAngleSpec, *, pixe
     return np.broadcast_to(f / f0, (*shape, wl.size)).copy()
 
 
-def identity_kernel(shape=(), n_bands: int = 1) -> np.ndarray:
-    """The kernel of no crosstalk: ``(*shape, n_bands, 3, 3)`` with 1 at the centre, 0 elsewhere."""
+def identity_kernel(shape: Sequence[int] = (), n_bands: int = 1) -> np.ndarray:
+    """The kernel of no crosstalk: ``(*shape, n_bands, 3, 3)`` with 1 at the centre, 0 elsewhere.
+
+    Parameters
+    ----------
+    shape : sequence of int
+        The leading shape (e.g. a field's ``(H, W)``); ``()`` for one kernel.
+    n_bands : int
+        The number of wavelength bands.
+
+    Returns
+    -------
+    ndarray
+        ``(*shape, n_bands, 3, 3)`` float64.
+    """
     k = np.zeros((*tuple(shape), n_bands, 3, 3))
     k[..., 1, 1] = 1.0
     return k
@@ -388,9 +407,10 @@ def _electrical(g: _Geometry, depth_um: float, spec: PixelAngleSpec) -> np.ndarr
     return _depth_integral(weight, cells, depth_um, depth_um + thick, g.alpha)
 
 
-def crosstalk_kernel(theta_deg, wavelength_nm, alpha_per_um, n_silicon, spec: PixelAngleSpec, *,
-                     pixel_pitch_um: float, collection_depth_um: float, f_number: float | None = None,
-                     shift_um=0.0, azimuth_deg=0.0) -> np.ndarray:
+def crosstalk_kernel(theta_deg: ArrayLike, wavelength_nm: ArrayLike, alpha_per_um: ArrayLike, n_silicon: ArrayLike,
+                     spec: PixelAngleSpec, *, pixel_pitch_um: float, collection_depth_um: float,
+                     f_number: float | None = None, shift_um: ArrayLike = 0.0, azimuth_deg: ArrayLike = 0.0
+                     ) -> np.ndarray:
     """Where a pixel's photo-charge is collected: a 3×3 kernel per band.
 
     Parameters
@@ -443,9 +463,10 @@ def crosstalk_kernel(theta_deg, wavelength_nm, alpha_per_um, n_silicon, spec: Pi
     return np.broadcast_to(k, (*g.shape, n_bands, 3, 3)).copy()
 
 
-def pixel_angle_response(theta_deg, wavelength_nm, alpha_per_um, n_silicon, spec: PixelAngleSpec, *,
-                         pixel_pitch_um: float, collection_depth_um: float, f_number: float | None = None,
-                         shift_um=0.0, azimuth_deg=0.0) -> np.ndarray:
+def pixel_angle_response(theta_deg: ArrayLike, wavelength_nm: ArrayLike, alpha_per_um: ArrayLike,
+                         n_silicon: ArrayLike, spec: PixelAngleSpec, *, pixel_pitch_um: float,
+                         collection_depth_um: float, f_number: float | None = None, shift_um: ArrayLike = 0.0,
+                         azimuth_deg: ArrayLike = 0.0) -> np.ndarray:
     """Microlens acceptance times the crosstalk kernel: the whole per-band transfer of a pixel at angle θ.
 
     Parameters
@@ -470,7 +491,7 @@ def pixel_angle_response(theta_deg, wavelength_nm, alpha_per_um, n_silicon, spec
     return k if not spec.microlens else k * acc[..., None, None]
 
 
-def apply_crosstalk(charge_e, kernel) -> np.ndarray:
+def apply_crosstalk(charge_e: ArrayLike, kernel: ArrayLike) -> np.ndarray:
     """Spread a charge image by a crosstalk kernel; charge sent off the image is reflected back into its edge pixel.
 
     Parameters
@@ -506,7 +527,7 @@ def apply_crosstalk(charge_e, kernel) -> np.ndarray:
     return out[1:-1, 1:-1]
 
 
-def effective_responsivities(tile, responsivities, kernel) -> np.ndarray:
+def effective_responsivities(tile: ArrayLike, responsivities: ArrayLike, kernel: ArrayLike) -> np.ndarray:
     """What each site of a colour-filter mosaic records, with its neighbours' light leaking in (a locally uniform
     scene): ``R_eff[r, c] = Σ_ij R[tile[r − i + 1, c − j + 1]]·K[i, j]`` (indices modulo the tile).
 

@@ -15,11 +15,17 @@ full when its mean photo + dark charge on the white patch reaches ``white_fill·
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from spectracam.core.errors import SpectracamError
 from spectracam.core.registry import Registry
 from spectracam.sensor import SensorSpec
+
+if TYPE_CHECKING:
+    from spectracam.architecture.base import Architecture
 
 __all__ = ["EXPOSURE_SCHEMES", "METERED_SCHEMES", "MIN_PHOTO_SHARE", "exposure_times_s",
            "saturation_times_s"]
@@ -64,10 +70,32 @@ def _split(saturation_s, architecture, split=()):
 
 
 def saturation_times_s(white_rate_e_per_s: np.ndarray, sensor: SensorSpec, white_fill: float = 1.0,
-                       channels=("R", "G", "B")) -> np.ndarray:
+                       channels: Sequence[str] = ("R", "G", "B")) -> np.ndarray:
     """Time for each channel's mean photo + dark charge on the white patch to reach ``white_fill·q_max``, s.  A channel
     that receives no light, or whose well the dark current fills, has no meaningful exposure: one
-    clear error."""
+    clear error.
+
+    Parameters
+    ----------
+    white_rate_e_per_s : ndarray
+        ``(N,)`` each channel's mean photo-electron rate on the white patch, e⁻/s.
+    sensor : SensorSpec
+        The sensor (full well q_max, e⁻; dark rate, e⁻/s).
+    white_fill : float
+        The share of the full well the white's mean charge reaches.
+    channels : sequence of str
+        The channels' names, for the errors.
+
+    Returns
+    -------
+    ndarray
+        ``(N,)`` s.
+
+    Raises
+    ------
+    SpectracamError
+        A channel with no light, or one whose dark current outruns its light (:data:`MIN_PHOTO_SHARE`).
+    """
     white = np.asarray(white_rate_e_per_s, float)
     for k, w in zip(channels, white):
         if not np.isfinite(w) or w <= 0:
@@ -80,13 +108,35 @@ def saturation_times_s(white_rate_e_per_s: np.ndarray, sensor: SensorSpec, white
     return white_fill * sensor.q_max_e / (white + sensor.dark_rate_e_per_s)
 
 
-def exposure_times_s(scheme: str, white_rate_e_per_s: np.ndarray, sensor: SensorSpec, architecture,
-                     white_fill: float = 1.0, split=()) -> np.ndarray:
+def exposure_times_s(scheme: str, white_rate_e_per_s: np.ndarray, sensor: SensorSpec, architecture: Architecture,
+                     white_fill: float = 1.0, split: Sequence[float] = ()) -> np.ndarray:
     """Per-channel exposure times ``(N,)`` in seconds for the architecture under a scheme, metered so
     that the white's mean charge reaches ``white_fill`` of the full well — of the largest charge the sensor's
     read-out encodes (``headroom`` × the well, :mod:`spectracam.sensor.readout`): a high-dynamic-range read-out
     exposes longer, for the shadows, and keeps the white within its range.
 
+    Parameters
+    ----------
+    scheme : str
+        A registered scheme (:data:`EXPOSURE_SCHEMES`): ``"single"``, ``"optimal"``, ``"balanced"`` or ``"split"``.
+    white_rate_e_per_s : ndarray
+        ``(N,)`` each channel's mean photo-electron rate on the white patch, e⁻/s.
+    sensor : SensorSpec
+        The sensor (full well, dark rate, read-out).
+    architecture : Architecture
+        The architecture (its channels and capture time).
+    white_fill : float
+        The share of the full well the white's mean charge reaches (``capture.white_fill``).
+    split : sequence of float
+        The ``split`` scheme's shares, one per channel in (0, 1].
+
+    Returns
+    -------
+    ndarray
+        ``(N,)`` s.
+
+    Examples
+    --------
     >>> from spectracam.architecture.base import make_architecture
     >>> s = SensorSpec(q_max_e=100.0, dark_current=False)
     >>> exposure_times_s("balanced", [100.0, 200.0, 50.0], s, make_architecture("fsc")).round(4).tolist()

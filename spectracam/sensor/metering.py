@@ -15,12 +15,19 @@ white, so the user states one (``--white`` on the command line, ``white=`` in Py
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from spectracam.core.errors import ConfigError, SpectracamError
 from spectracam.core.registry import Registry
 from spectracam.core.spectra import cmf_band_weights
+
+if TYPE_CHECKING:
+    from spectracam.camera import CaptureSpec
+    from spectracam.core.spectra import WavelengthGrid
+    from spectracam.pipeline.scene_file import Scene
+    from spectracam.render.cube import RadianceCube
 
 __all__ = ["BRIGHTEST_SHARE", "METERING_METHODS", "METERING_STRIDE", "NEUTRAL_UV_TOLERANCE", "WhiteSpec",
            "metered_radiance", "metered_white_rates", "metering_record", "parse_white", "white_radiance_of"]
@@ -53,8 +60,26 @@ class WhiteSpec:
         return f"{self.luminance_cd_m2:g}" if self.kind == "level" else self.kind
 
 
-def parse_white(text, field: str = "--white") -> WhiteSpec:
-    """``patch``, ``brightest``, ``X0,Y0,X1,Y1`` or a luminance in cd/m² (module docstring)."""
+def parse_white(text: str | WhiteSpec, field: str = "--white") -> WhiteSpec:
+    """``patch``, ``brightest``, ``X0,Y0,X1,Y1`` or a luminance in cd/m² (module docstring).
+
+    Parameters
+    ----------
+    text : str or WhiteSpec
+        The option's text (a WhiteSpec is returned as it is).
+    field : str
+        The option or field, as errors name it.
+
+    Returns
+    -------
+    WhiteSpec
+        ``kind`` ``"patch"``, ``"brightest"``, ``"box"`` (pixels) or ``"level"`` (cd/m²).
+
+    Raises
+    ------
+    ConfigError
+        Anything else.
+    """
     if isinstance(text, WhiteSpec):
         return text
     allowed = "must be 'patch', 'brightest', a region X0,Y0,X1,Y1 (pixels) or a white luminance in cd/m² (> 0)"
@@ -87,16 +112,51 @@ def _uv(xyz: np.ndarray) -> np.ndarray:
         return np.stack([4 * xyz[..., 0] / d, 9 * xyz[..., 1] / d], axis=-1)
 
 
-def white_radiance_of(scene, grid, luminance_cd_m2: float) -> np.ndarray:
+def white_radiance_of(scene: Scene, grid: WavelengthGrid, luminance_cd_m2: float) -> np.ndarray:
     """Band-averaged radiance ``(B,)`` of a perfect white diffuser of the given luminance under the
-    scene's illuminant, on ``grid``."""
+    scene's illuminant, on ``grid``.
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene (its illuminant and the white luminance it is given at).
+    grid : WavelengthGrid
+        The bands.
+    luminance_cd_m2 : float
+        The white's luminance, cd/m².
+
+    Returns
+    -------
+    ndarray
+        ``(B,)`` W·m⁻²·sr⁻¹·nm⁻¹.
+    """
     from spectracam.scene.illuminant import white_diffuser_radiance
 
     return white_diffuser_radiance(scene.illuminant, grid) * (luminance_cd_m2 / scene.illuminant.white_luminance_cd_m2)
 
 
-def metered_radiance(cube, white: WhiteSpec, scene=None) -> np.ndarray:
-    """The mean band-averaged radiance ``(B,)`` of the white (module docstring) in ``cube``."""
+def metered_radiance(cube: RadianceCube, white: WhiteSpec, scene: Scene | None = None) -> np.ndarray:
+    """The mean band-averaged radiance ``(B,)`` of the white (module docstring) in ``cube``.
+
+    Parameters
+    ----------
+    cube : RadianceCube
+        The radiance, W·m⁻²·sr⁻¹·nm⁻¹.
+    white : WhiteSpec
+        How the white is found (:func:`parse_white`).
+    scene : Scene, optional
+        The scene (a chart's for ``patch``; its light for ``brightest`` and ``level``).
+
+    Returns
+    -------
+    ndarray
+        ``(B,)`` float64, W·m⁻²·sr⁻¹·nm⁻¹.
+
+    Raises
+    ------
+    SpectracamError
+        A patch without a chart scene, a region outside the image, or no neutral pixel (ConfigError for the region).
+    """
     r = cube.radiance
     h, w, _ = r.shape
     if white.kind == "patch":
@@ -163,16 +223,42 @@ def _percentile_metering(preview, spec):
     return np.percentile(preview.reshape(-1, preview.shape[-1]), spec.metering_percentile, axis=0).astype(np.float64)
 
 
-def metered_white_rates(radiance: np.ndarray, weights: np.ndarray, spec) -> np.ndarray:
+def metered_white_rates(radiance: np.ndarray, weights: np.ndarray, spec: CaptureSpec) -> np.ndarray:
     """``(N,)`` the implied white's rates by ``spec.metering`` on the preview of a radiance cube ``(H, W, B)``
-    through the camera's band weights ``(B, N)``."""
+    through the camera's band weights ``(B, N)``.
+
+    Parameters
+    ----------
+    radiance : ndarray
+        ``(H, W, B)`` band-averaged radiance, W·m⁻²·sr⁻¹·nm⁻¹.
+    weights : ndarray
+        ``(B, N)`` the camera's band weights (radiance → e⁻/s).
+    spec : CaptureSpec
+        The ``[capture]`` table (``metering`` and its target or percentile).
+
+    Returns
+    -------
+    ndarray
+        ``(N,)`` e⁻/s.
+    """
     preview = np.ascontiguousarray(radiance[::METERING_STRIDE, ::METERING_STRIDE])
     rates = preview.reshape(-1, preview.shape[-1]) @ weights
     return METERING_METHODS[spec.metering](rates.reshape(*preview.shape[:2], -1), spec)
 
 
-def metering_record(spec) -> dict:
-    """What a capture records of the camera's own metering."""
+def metering_record(spec: CaptureSpec) -> dict:
+    """What a capture records of the camera's own metering.
+
+    Parameters
+    ----------
+    spec : CaptureSpec
+        The ``[capture]`` table.
+
+    Returns
+    -------
+    dict
+        ``kind``, ``method``, ``preview_stride`` and the method's target or percentile.
+    """
     out = {"kind": "camera", "method": spec.metering, "preview_stride": METERING_STRIDE}
     if spec.metering == "average":
         out["target"] = spec.metering_target

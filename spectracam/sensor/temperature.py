@@ -40,7 +40,18 @@ VARSHNI_BETA_K = 636.0
 
 
 def silicon_band_gap_ev(T_K: float) -> float:
-    """Silicon's band gap at ``T_K`` kelvin, eV: ``E_g(0) − α T² / (T + β)`` (Varshni's form, Thurmond's constants)."""
+    """Silicon's band gap at ``T_K`` kelvin, eV: ``E_g(0) − α T² / (T + β)`` (Varshni's form, Thurmond's constants).
+
+    Parameters
+    ----------
+    T_K : float
+        Temperature, K.
+
+    Returns
+    -------
+    float
+        E_g, eV (1.124 at 300 K).
+    """
     return SILICON_GAP_0K_EV - VARSHNI_ALPHA_EV_PER_K * T_K**2 / (T_K + VARSHNI_BETA_K)
 
 
@@ -61,7 +72,20 @@ DARK_CURRENT_LAWS.register("diffusion", _activated(3.0, 1.0))
 
 def local_doubling_K(ref_K: float, law: str = "generation") -> float:
     """The temperature rise that doubles the dark current of ``law`` at ``ref_K``: ``ln 2 / (d ln I / dT)``, the
-    derivative taken by central differences of ±0.01 K (the law is smooth: the error is below 1e-6 K)."""
+    derivative taken by central differences of ±0.01 K (the law is smooth: the error is below 1e-6 K).
+
+    Parameters
+    ----------
+    ref_K : float
+        The reference temperature, K.
+    law : str
+        A registered law: ``"generation"``, ``"diffusion"`` or ``"doubling"``.
+
+    Returns
+    -------
+    float
+        The doubling temperature, K (8.3 K for the generation law at 25 °C).
+    """
     f, h = DARK_CURRENT_LAWS[law], 0.01
     return math.log(2.0) * 2 * h / math.log(f(ref_K + h, ref_K) / f(ref_K - h, ref_K))
 
@@ -74,7 +98,24 @@ def _doubling(T_K: float, ref_K: float, doubling_K: float | None = None) -> floa
 
 
 def dark_current_factor(law: str, temperature_C: float, reference_C: float, doubling_K: float | None = None) -> float:
-    """``I(T)/I(T_ref)`` of ``law``: exactly 1.0 at the reference temperature."""
+    """``I(T)/I(T_ref)`` of ``law``: exactly 1.0 at the reference temperature.
+
+    Parameters
+    ----------
+    law : str
+        A registered law: ``"generation"``, ``"diffusion"`` or ``"doubling"``.
+    temperature_C : float
+        The die's temperature, °C.
+    reference_C : float
+        The temperature the dark current is given at, °C.
+    doubling_K : float or None
+        The doubling law's T_d, K; None: the generation law's own at the reference.
+
+    Returns
+    -------
+    float
+        The factor on the reference dark current (∞ when it overflows).
+    """
     if temperature_C == reference_C:
         return 1.0
     try:
