@@ -121,7 +121,7 @@ def capture(cube: RadianceCube | ChannelPlanes, camera: CameraSpec | None = None
                          metering=white.to_dict())
 
 
-def check_planes_white(white) -> None:
+def check_planes_white(white: str | WhiteSpec | None) -> None:
     """Refuse, in one line, a white other than the chart's white patch for channel planes: any other white (the
     brightest neutral, a region, a luminance) is found in the spectra, which the planes no longer hold.
 
