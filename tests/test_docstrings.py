@@ -49,7 +49,7 @@ NOT_YET_REACHED = [
     "spectracam.experiments.field.measured", "spectracam.experiments.motion.cases",
     "spectracam.experiments.motion.experiment", "spectracam.experiments.motion.metrics",
     "spectracam.experiments.motion.motion", "spectracam.experiments.motion.render",
-    "spectracam.experiments.motion.report", "spectracam.experiments.motion.timing", "spectracam.experiments.options",
+    "spectracam.experiments.motion.report", "spectracam.experiments.motion.timing",
     "spectracam.experiments.paper.claims", "spectracam.experiments.paper.experiment",
     "spectracam.experiments.paper.figures", "spectracam.experiments.paper.report",
     "spectracam.experiments.simulate.outputs", "spectracam.experiments.spatial.capture",
