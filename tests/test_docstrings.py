@@ -50,8 +50,6 @@ NOT_YET_REACHED = [
     "spectracam.experiments.motion.experiment", "spectracam.experiments.motion.metrics",
     "spectracam.experiments.motion.motion", "spectracam.experiments.motion.render",
     "spectracam.experiments.motion.report", "spectracam.experiments.motion.timing",
-    "spectracam.experiments.paper.claims", "spectracam.experiments.paper.experiment",
-    "spectracam.experiments.paper.figures", "spectracam.experiments.paper.report",
     "spectracam.experiments.simulate.outputs", "spectracam.experiments.spatial.capture",
     "spectracam.experiments.spatial.experiment", "spectracam.experiments.spatial.geometry",
     "spectracam.experiments.spatial.optics", "spectracam.experiments.spatial.render",
