@@ -40,7 +40,7 @@ NOT_YET_REACHED = [
     "spectracam.experiments",
     "spectracam.experiments.architectures.report",
     "spectracam.experiments.consistency.experiment", "spectracam.experiments.datasheet.experiment",
-    "spectracam.experiments.datasheet.report", "spectracam.experiments.design.ad",
+    "spectracam.experiments.datasheet.report",
     "spectracam.experiments.design.model", "spectracam.experiments.design.optimise",
     "spectracam.experiments.design.problem", "spectracam.experiments.design.report",
     "spectracam.experiments.design.run", "spectracam.experiments.design.spec",
