@@ -44,7 +44,7 @@ NOT_YET_REACHED = [
     "spectracam.experiments.design.model",
     "spectracam.experiments.design.report",
     "spectracam.experiments.design.run",
-    "spectracam.experiments.design.variables", "spectracam.experiments.dynamic_range.experiment",
+    "spectracam.experiments.dynamic_range.experiment",
     "spectracam.experiments.emva.experiment", "spectracam.experiments.field.experiment",
     "spectracam.experiments.field.measured", "spectracam.experiments.motion.cases",
     "spectracam.experiments.motion.experiment", "spectracam.experiments.motion.metrics",
