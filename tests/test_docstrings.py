@@ -42,7 +42,7 @@ NOT_YET_REACHED = [
     "spectracam.experiments.consistency.experiment", "spectracam.experiments.datasheet.experiment",
     "spectracam.experiments.datasheet.report",
     "spectracam.experiments.design.model",
-    "spectracam.experiments.design.report",
+   
     "spectracam.experiments.design.run",
     "spectracam.experiments.dynamic_range.experiment",
     "spectracam.experiments.emva.experiment", "spectracam.experiments.field.experiment",
