@@ -38,10 +38,7 @@ NOT_YET_ELSEWHERE = [
 #: Not reached yet: the rest of the stages, io and the experiments.
 NOT_YET_REACHED = [
     "spectracam.experiments.architectures.report",
-    "spectracam.experiments.datasheet.experiment",
-    "spectracam.experiments.datasheet.report",
     "spectracam.experiments.design.model",
-   
     "spectracam.experiments.design.run",
     "spectracam.experiments.dynamic_range.experiment",
     "spectracam.experiments.emva.experiment", "spectracam.experiments.field.experiment",
