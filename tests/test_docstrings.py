@@ -47,7 +47,7 @@ NOT_YET_REACHED = [
     "spectracam.experiments.spatial.optics", "spectracam.experiments.spatial.render",
     "spectracam.experiments.spatial.report", "spectracam.experiments.spatial.score",
     "spectracam.experiments.spatial.targets", "spectracam.experiments.sweep.experiment",
-    "spectracam.experiments.sweep.plot", "spectracam.experiments.validate.experiment",
+    "spectracam.experiments.validate.experiment",
     "spectracam.experiments.validate.white_balance",
     "spectracam.experiments.white_balance.experiment",
 ]
