@@ -40,7 +40,6 @@ NOT_YET_REACHED = [
     "spectracam.experiments.architectures.report",
     "spectracam.experiments.design.model",
     "spectracam.experiments.design.run",
-    "spectracam.experiments.dynamic_range.experiment",
     "spectracam.experiments.motion.experiment", "spectracam.experiments.motion.metrics",
     "spectracam.experiments.motion.render",
     "spectracam.experiments.spatial.optics", "spectracam.experiments.spatial.render",
