@@ -42,7 +42,7 @@ NOT_YET_REACHED = [
     "spectracam.experiments.design.run",
     "spectracam.experiments.motion.experiment", "spectracam.experiments.motion.metrics",
     "spectracam.experiments.motion.render",
-    "spectracam.experiments.spatial.optics", "spectracam.experiments.spatial.render",
+    "spectracam.experiments.spatial.render",
     "spectracam.experiments.spatial.report", "spectracam.experiments.spatial.score",
     "spectracam.experiments.spatial.targets", "spectracam.experiments.sweep.experiment",
     "spectracam.experiments.validate.experiment",
