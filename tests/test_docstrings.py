@@ -45,7 +45,6 @@ NOT_YET_REACHED = [
     "spectracam.experiments.spatial.render",
     "spectracam.experiments.spatial.report", "spectracam.experiments.spatial.score",
     "spectracam.experiments.spatial.targets", "spectracam.experiments.sweep.experiment",
-    "spectracam.experiments.validate.experiment",
     "spectracam.experiments.validate.white_balance",
     "spectracam.experiments.white_balance.experiment",
 ]
