@@ -44,7 +44,7 @@ NOT_YET_REACHED = [
     "spectracam.experiments.motion.render",
     "spectracam.experiments.spatial.render",
     "spectracam.experiments.spatial.report", "spectracam.experiments.spatial.score",
-    "spectracam.experiments.spatial.targets", "spectracam.experiments.sweep.experiment",
+    "spectracam.experiments.spatial.targets",
     "spectracam.experiments.validate.white_balance",
     "spectracam.experiments.white_balance.experiment",
 ]
