@@ -35,30 +35,20 @@ NOT_YET_ELSEWHERE = [
     "spectracam.sensor", "spectracam.sensor.kernels", "spectracam.sensor.readout", "spectracam.view",
     "spectracam.view.cases", "spectracam.view.contents", "spectracam.view.page",
 ]
-#: Not reached yet: the rest of the stages, io and the experiments.
+#: Not reached yet: the rest of the experiments.  Five of these have one function left that cannot take its sections
+#: with a docstring edit alone: architectures.report's figure_spacetime, design.model's evaluate, design.run's
+#: design_one and spatial.render's render_mitsuba would pass 60 lines (tests/test_layout.py) unless split, and
+#: spatial.score's Metric.applies defaults to a lambda (neither annotations nor a docstring).
 NOT_YET_REACHED = [
-    "spectracam.experiments", "spectracam.experiments.architectures.experiment",
-    "spectracam.experiments.architectures.report", "spectracam.experiments.architectures.spacetime",
-    "spectracam.experiments.consistency.experiment", "spectracam.experiments.datasheet.experiment",
-    "spectracam.experiments.datasheet.report", "spectracam.experiments.design.ad",
-    "spectracam.experiments.design.model", "spectracam.experiments.design.optimise",
-    "spectracam.experiments.design.problem", "spectracam.experiments.design.report",
-    "spectracam.experiments.design.run", "spectracam.experiments.design.spec",
-    "spectracam.experiments.design.variables", "spectracam.experiments.dynamic_range.experiment",
-    "spectracam.experiments.emva.experiment", "spectracam.experiments.field.experiment",
-    "spectracam.experiments.field.measured", "spectracam.experiments.motion.cases",
+    "spectracam.experiments.architectures.report",
+    "spectracam.experiments.design.model",
+    "spectracam.experiments.design.run",
     "spectracam.experiments.motion.experiment", "spectracam.experiments.motion.metrics",
-    "spectracam.experiments.motion.motion", "spectracam.experiments.motion.render",
-    "spectracam.experiments.motion.report", "spectracam.experiments.motion.timing", "spectracam.experiments.options",
-    "spectracam.experiments.paper.claims", "spectracam.experiments.paper.experiment",
-    "spectracam.experiments.paper.figures", "spectracam.experiments.paper.report",
-    "spectracam.experiments.simulate.outputs", "spectracam.experiments.spatial.capture",
-    "spectracam.experiments.spatial.experiment", "spectracam.experiments.spatial.geometry",
-    "spectracam.experiments.spatial.optics", "spectracam.experiments.spatial.render",
+    "spectracam.experiments.motion.render",
+    "spectracam.experiments.spatial.render",
     "spectracam.experiments.spatial.report", "spectracam.experiments.spatial.score",
-    "spectracam.experiments.spatial.targets", "spectracam.experiments.sweep.experiment",
-    "spectracam.experiments.sweep.plot", "spectracam.experiments.validate.experiment",
-    "spectracam.experiments.validate.scene", "spectracam.experiments.validate.white_balance",
+    "spectracam.experiments.spatial.targets",
+    "spectracam.experiments.validate.white_balance",
     "spectracam.experiments.white_balance.experiment",
 ]
 NOT_YET = NOT_YET_ELSEWHERE + NOT_YET_REACHED

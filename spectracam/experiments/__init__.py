@@ -16,16 +16,31 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from importlib import import_module
+from typing import TYPE_CHECKING, Any
 
 from spectracam.core.registry import Registry
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
 
 __all__ = ["EXPERIMENTS", "Experiment", "experiment_names", "resolve"]
 
 
-def experiment_names(package: str):
+def experiment_names(package: str) -> Callable[[str], Any]:
     """A package face's ``__getattr__`` (PEP 562) that finds a name in the package's ``experiment`` module on
     first use: ``spectracam.experiments.paper.run_paper`` (the module's name before issue 35) stays valid,
-    and the command's start-up does not import the experiment before it runs."""
+    and the command's start-up does not import the experiment before it runs.
+
+    Parameters
+    ----------
+    package : str
+        The package's dotted name (``"spectracam.experiments.paper"``).
+
+    Returns
+    -------
+    callable
+        ``__getattr__(name)``: the attribute of ``PACKAGE.experiment``; AttributeError for a dunder name.
+    """
 
     def __getattr__(name: str):
         if name.startswith("__"):
@@ -35,8 +50,19 @@ def experiment_names(package: str):
     return __getattr__
 
 
-def resolve(ref: str):
-    """The object a ``"module:attr"`` reference names (as :attr:`spectracam.cli._Group.LAZY` does)."""
+def resolve(ref: str) -> Any:
+    """The object a ``"module:attr"`` reference names (as :attr:`spectracam.cli._Group.LAZY` does).
+
+    Parameters
+    ----------
+    ref : str
+        ``"module:attr"``.
+
+    Returns
+    -------
+    object
+        The attribute, its module imported now.
+    """
     module, _, attr = ref.partition(":")
     return getattr(import_module(module), attr)
 
@@ -81,8 +107,19 @@ class Experiment:
         out.update({f"other_commands[{i}]": c for i, c in enumerate(self.other_commands)})
         return out
 
-    def part(self, field: str):
-        """The object one part names, imported now (``EXPERIMENTS["emva"].part("run")`` is ``run_emva``)."""
+    def part(self, field: str) -> Any:
+        """The object one part names, imported now (``EXPERIMENTS["emva"].part("run")`` is ``run_emva``).
+
+        Parameters
+        ----------
+        field : str
+            A key of :meth:`refs` (``"run"``, ``"writer"``, ``"other_commands[0]"``, …).
+
+        Returns
+        -------
+        object
+            The class, function or click command.
+        """
         return resolve(self.refs()[field])
 
 

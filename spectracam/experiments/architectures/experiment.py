@@ -43,7 +43,7 @@ import re
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TypedDict
+from typing import TYPE_CHECKING, TypedDict
 
 import numpy as np
 
@@ -56,6 +56,12 @@ from spectracam.scene.reference import ChartReference
 from spectracam.evaluation.score import score
 from spectracam.experiments.paper.experiment import PaperExperiment, calibrated_luminance, quick_scene, scaled
 from spectracam.evaluation.usability import NO_USABLE_IMAGE, UsabilitySpec
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Sequence
+
+    from spectracam.pipeline.scene_file import Scene
+    from spectracam.render import RadianceCube
 
 __all__ = ["LIGHT_FACTORS", "NATURAL_SCENES", "SEEDS", "WINNER_METRICS", "ArchitecturesResult", "ArchitecturesRun",
            "case", "designs", "developed_case", "judge", "natural_case", "restamped", "run_architectures",
@@ -108,6 +114,19 @@ class ArchitecturesRun:
                               + ", ".join(NATURAL_SCENES))
 
     def scenes(self, level: float) -> dict:
+        """The two lights' scenes: the paper's error-budget illuminant (D65) and its warmest blackbody.
+
+        Parameters
+        ----------
+        level : float
+            The white diffuser's luminance, cd/m² (the paper's calibrated level).
+
+        Returns
+        -------
+        dict of str to Scene
+            ``"D65"`` and ``"3000 K"`` (the labels the rows carry) → the base scene under that light, at
+            :func:`~spectracam.experiments.paper.experiment.quick_scene`'s size with ``quick``.
+        """
         base = quick_scene(self.experiment.base, self.quick)
         warm = min(self.experiment.temperatures_K)
         return {self.experiment.budget_illuminant: base.replace(
@@ -140,8 +159,19 @@ def _seed_stats(scores: list, fields: tuple, prefix: str = "") -> dict:
     return row
 
 
-def time_limit_s(scene) -> float:
-    """The longest capture the dimmed cases allow: cfa/single's exposure on ``scene``'s white patch."""
+def time_limit_s(scene: Scene) -> float:
+    """The longest capture the dimmed cases allow: cfa/single's exposure on ``scene``'s white patch.
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene at the paper's level.
+
+    Returns
+    -------
+    float
+        cfa/single's capture time, s, with its single exposure metered on the white patch.
+    """
     from spectracam.scene.chart import WHITE_PATCH
     from spectracam.sensor.exposure import exposure_times_s
 
@@ -151,11 +181,29 @@ def time_limit_s(scene) -> float:
                                                                     cam.capture.white_fill)))
 
 
-def case(scene, cube, design: str, seeds, limit_s: float | None = None, keep: dict | None = None) -> dict:
+def case(scene: Scene, cube: RadianceCube, design: str, seeds: Sequence[int], limit_s: float | None = None,
+         keep: dict | None = None) -> dict:
     """One design under one light and level, over ``seeds``: a results row.  ``limit_s``: the longest
     capture allowed (module docstring); the exposures metered on the white patch are scaled down to it.  ``keep``:
     where given, ``keep[design]`` = the first seed's ``(raw, score)`` (the page's images of the design; the row is
-    the same either way)."""
+    the same either way).
+
+    Parameters
+    ----------
+    scene : Scene
+    cube : RadianceCube
+        The chart's render at this light and level.
+    design : str
+    seeds : sequence of int
+    limit_s : float or None
+        The longest capture, s; None: as metered.
+    keep : dict or None
+
+    Returns
+    -------
+    dict
+        The row: times (ms), seed means and spreads (``_sd``), the conversion's errors, :func:`developed_case`'s.
+    """
     from spectracam.scene.chart import WHITE_PATCH
     from spectracam.sensor.exposure import exposure_times_s
 
@@ -195,9 +243,29 @@ def case(scene, cube, design: str, seeds, limit_s: float | None = None, keep: di
     return row
 
 
-def developed_case(scene, cube, design: str, seeds, limit_s: float | None = None) -> dict:
+def developed_case(scene: Scene, cube: RadianceCube, design: str, seeds: Sequence[int],
+                   limit_s: float | None = None) -> dict:
     """The same case with the developed camera (issue 33): it meters a preview itself (shortened to ``limit_s`` when
-    dimmed), estimates its white and interpolates its calibration; ``developed_*`` fields."""
+    dimmed), estimates its white and interpolates its calibration; ``developed_*`` fields.
+
+    Parameters
+    ----------
+    scene : Scene
+    cube : RadianceCube
+        The chart's render at this light and level.
+    design : str
+        ``architecture/exposure``.
+    seeds : sequence of int
+        The noise seeds.
+    limit_s : float or None
+        The longest capture, s; None: as metered.
+
+    Returns
+    -------
+    dict
+        ``developed_capture_time_ms``, the seed means and spreads of ``developed_delta_e_mean``, ``…_p95``,
+        ``…_awb_recovery_deg`` and the rest, and ``developed_held_out_delta_e`` when the processing names a library.
+    """
     from spectracam.pipeline import camera_processing
     from spectracam.processing import metered_camera
 
@@ -236,10 +304,33 @@ class ArchitecturesResult(_ArchitecturesKeys, total=False):
 
 
 def run_architectures(run: ArchitecturesRun, renderer: str = "mitsuba", use_cache: bool = True,
-                      step=lambda msg: None, log=None, progress: bool = False,
-                      spacetime: bool = True) -> ArchitecturesResult:
+                      step: Callable[[str], object] = lambda msg: None, log: Callable[[str], object] | None = None,
+                      progress: bool = False, spacetime: bool = True) -> ArchitecturesResult:
     """Every design × light × level × seed (module docstring): ``results`` (rows and what wins); with
-    ``spacetime`` the spatial and motion comparisons too (``space``, ``time``)."""
+    ``spacetime`` the spatial and motion comparisons too (``space``, ``time``).
+
+    Parameters
+    ----------
+    run : ArchitecturesRun
+        What to compare.
+    renderer : str
+        ``"mitsuba"`` or ``"analytic"``.
+    use_cache : bool
+        Read and fill the render cache.
+    step : callable
+        ``step(line)`` per step done.
+    log : callable or None
+        The renderer's and sub-runs' notices (None: none).
+    progress : bool
+        Progress bars on a terminal.
+    spacetime : bool
+        Also run :func:`~.spacetime.run_space` and :func:`~.spacetime.run_time`.
+
+    Returns
+    -------
+    ArchitecturesResult
+        results.json's keys but ``command``, and ``_shots``.
+    """
     import time
 
     from spectracam.experiments.architectures.spacetime import run_space, run_time, spacetime_winners
@@ -277,10 +368,22 @@ def run_architectures(run: ArchitecturesRun, renderer: str = "mitsuba", use_cach
 _OWN_CLOCK = re.compile(r"^\[\s*[\d.]+ s\] ")
 
 
-def restamped(step):
+def restamped(step: Callable[[str], object]) -> Callable[[str], object]:
     """A log for the space and time sub-runs whose lines carry this run's clock (``step``) instead of their own,
     which restarts at 0 in each: the command's log reads as one clock (issue 39).
 
+    Parameters
+    ----------
+    step : callable
+        ``step(line)``, which stamps its own clock.
+
+    Returns
+    -------
+    callable
+        ``log(msg)``: ``msg`` without a leading ``[  12.3 s] ``, passed to ``step``.
+
+    Examples
+    --------
     >>> lines = []
     >>> restamped(lambda m: lines.append("[ 99.0 s] " + m))("[   1.5 s] 10 µm, f/1.4, edge: 8 designs scored")
     >>> lines
@@ -351,7 +454,21 @@ def _run_parameters(run: ArchitecturesRun, renderer: str, level: float, seeds: l
 
 def judge(row: dict, usability: UsabilitySpec) -> dict:
     """``usable``/``unusable_reason`` of a case (the oracle camera's, mean over seeds) and ``developed_usable``/
-    ``developed_unusable_reason`` (the developed camera's) by the rule of :mod:`.usability`."""
+    ``developed_unusable_reason`` (the developed camera's) by the rule of :mod:`.usability`.
+
+    Parameters
+    ----------
+    row : dict
+        A results row (:func:`case`).
+    usability : UsabilitySpec
+        The thresholds.
+
+    Returns
+    -------
+    dict
+        ``usable`` (bool) and ``unusable_reason`` (str, ``""`` when usable), and the ``developed_`` pair when the row
+        has the developed camera's fields.
+    """
     out = {}
     for prefix in ("", "developed_"):
         if f"{prefix}delta_e_mean" in row:
@@ -375,7 +492,19 @@ def winners(rows: list[dict]) -> list[dict]:
     """For each light and level: the design with the lowest per-pixel ΔE*ab, the lowest S-CIELAB, the highest
     rendered SNR (and the developed camera's ΔE*ab, S-CIELAB, CIEDE2000) among the usable cases only — "no usable
     image" where none is (``design`` ``None``, ``note``); and overall the lowest held-out conversion error and the
-    shortest capture time at the paper's level."""
+    shortest capture time at the paper's level.
+
+    Parameters
+    ----------
+    rows : list of dict
+        The judged results rows.
+
+    Returns
+    -------
+    list of dict
+        ``illuminant``, ``light_factor``, ``metric``, ``design`` (None with a ``note`` when no case is usable; tied
+        designs comma-separated for the noise-free metrics), ``value`` and ``sd``.
+    """
     out = []
     for light in dict.fromkeys(r["illuminant"] for r in rows):
         for factor in dict.fromkeys(r["light_factor"] for r in rows):
@@ -401,10 +530,28 @@ def winners(rows: list[dict]) -> list[dict]:
     return out
 
 
-def natural_case(scene, cube, design: str, seeds) -> dict:
+def natural_case(scene: Scene, cube: RadianceCube, design: str, seeds: Sequence[int]) -> dict:
     """One design capturing one textured scene (metered on its chart's white patch, as the chart cases are) over
     ``seeds``: the per-pixel ΔE*ab and S-CIELAB of :mod:`spectracam.evaluation.target_score` (held out: colours the conversion
-    was not fitted on), mean and spread over seeds."""
+    was not fitted on), mean and spread over seeds.
+
+    Parameters
+    ----------
+    scene : Scene
+        The textured scene (its target, light and viewing geometry).
+    cube : RadianceCube
+        Its render.
+    design : str
+        ``architecture/exposure``.
+    seeds : sequence of int
+        The noise seeds.
+
+    Returns
+    -------
+    dict
+        ``design``, ``delta_e_mean``, ``delta_e_p95``, ``s_cielab_mean``, ``s_cielab_p95`` (each with ``_sd``) and
+        ``pixels`` (how many were scored).
+    """
     from spectracam.scene.reference import TargetReference
     from spectracam.evaluation.target_score import score_target
 
@@ -422,10 +569,29 @@ def natural_case(scene, cube, design: str, seeds) -> dict:
     return row
 
 
-def run_natural(run: ArchitecturesRun, level: float, renderer: str, seeds, log=None, progress: bool = False,
-                use_cache: bool = True) -> dict:
+def run_natural(run: ArchitecturesRun, level: float, renderer: str, seeds: Sequence[int],
+                log: Callable[[str], object] | None = None, progress: bool = False, use_cache: bool = True) -> dict:
     """Every design on each of ``run.natural_scenes`` (:func:`natural_case`), with the paper's camera and processing
-    under the scene's own light at the paper's level."""
+    under the scene's own light at the paper's level.
+
+    Parameters
+    ----------
+    run : ArchitecturesRun
+    level : float
+        The paper's white luminance, cd/m².
+    renderer : str
+    seeds : sequence of int
+    log : callable or None
+        The renderer's notices.
+    progress, use_cache : bool
+        Progress bars; read and fill the render cache.
+
+    Returns
+    -------
+    dict
+        ``rows`` (``scene`` and :func:`natural_case`'s fields per design) and ``parameters`` (per scene: viewing
+        distance, m, display pixel pitch, mm, image size, px, and illuminant).
+    """
     from spectracam.io.cache import cached_render
     from spectracam.render import render
     from spectracam.pipeline.scene_file import load_scene, shipped_scene_file
@@ -447,10 +613,27 @@ def run_natural(run: ArchitecturesRun, level: float, renderer: str, seeds, log=N
     return {"rows": rows, "parameters": geometry}
 
 
-def write_architectures_outputs(out_dir: str | Path, results: dict, command: str, step=lambda msg: None) -> list:
+def write_architectures_outputs(out_dir: str | Path, results: dict, command: str,
+                                step: Callable[[str], object] = lambda msg: None) -> list:
     """results.json, report.md and the figures (architectures.png/.svg, responsivities.png/.svg); and each
     design's first capture at the paper's light (``_shots``, not in results.json): ``cases/<architecture>-<scheme>/``
-    raw.exr and rendered.exr, the images of its page (``spectracam view``)."""
+    raw.exr and rendered.exr, the images of its page (``spectracam view``).
+
+    Parameters
+    ----------
+    out_dir : str or Path
+    results : dict
+        :func:`run_architectures`'s result.
+    command : str
+        The command, recorded in results.json and report.md.
+    step : callable
+        ``step(line)`` once the files are written.
+
+    Returns
+    -------
+    list of Path
+        Every file written (architectures_spacetime.png/.svg too with ``space``).
+    """
     import json
 
     from spectracam.core.files import atomic_write
@@ -475,7 +658,20 @@ def write_architectures_outputs(out_dir: str | Path, results: dict, command: str
 
 
 def write_shots(directory: Path, shots: dict) -> list:
-    """``directory/<design with - for />/raw.exr`` and ``rendered.exr`` of each ``design → (raw, score)``."""
+    """``directory/<design with - for />/raw.exr`` and ``rendered.exr`` of each ``design → (raw, score)``.
+
+    Parameters
+    ----------
+    directory : Path
+        Where the designs' folders go.
+    shots : dict
+        ``design → (RawCapture, ChartScore)``.
+
+    Returns
+    -------
+    list of Path
+        The files written, two per design.
+    """
     from spectracam.io.exr import write_raw_exr
     from spectracam.io.report import write_rendered_exr
 

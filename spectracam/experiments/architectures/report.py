@@ -1,9 +1,14 @@
 """The architectures comparison's figures and report (``spectracam architectures``)."""
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from spectracam.io.plots import palette, pyplot
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = ["figure_comparison", "figure_responsivities", "figure_spacetime", "report_markdown"]
 
@@ -12,10 +17,21 @@ def _rows(results, light, factor):
     return [r for r in results["rows"] if r["illuminant"] == light and r["light_factor"] == factor]
 
 
-def figure_comparison(results: dict):
+def figure_comparison(results: dict) -> Figure:
     """Figure 5-style panels per light: rendered SNR (a) and per-pixel ΔE (b) of every design against
     the light level (log), error bars the spread over seeds; (c) held-out against training conversion
-    error at the paper's level."""
+    error at the paper's level.
+
+    Parameters
+    ----------
+    results : dict
+        An architectures run's results (``rows``, ``parameters``).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One row of three panels per light.
+    """
     plt = pyplot()
     lights = list(dict.fromkeys(r["illuminant"] for r in results["rows"]))
     designs = results["parameters"]["designs"]
@@ -90,9 +106,20 @@ def _draw_conversion_panel(ax, results: dict, light: str, styles: dict) -> None:
     ax.grid(True, alpha=0.3)
 
 
-def figure_responsivities(results: dict):
+def figure_responsivities(results: dict) -> Figure:
     """Each architecture's channel responsivities R_k(λ) (filter × QE × IR cut, e⁻/photon) on the
-    scene's bands."""
+    scene's bands.
+
+    Parameters
+    ----------
+    results : dict
+        An architectures run's results: the architectures of its ``rows``, the camera of ``parameters["scene"]``.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One panel per architecture, four to a row, against wavelength, nm.
+    """
     from spectracam.camera import CameraSpec, camera_responsivities
     from spectracam.pipeline.scene_file import Scene
 
@@ -122,7 +149,7 @@ def figure_responsivities(results: dict):
     return fig
 
 
-def figure_spacetime(results: dict):
+def figure_spacetime(results: dict) -> Figure:
     """(a) MTF50 against false colour at the edge for every spatial design (resolution against colour
     artefacts; hollow markers: with the optical low-pass filter); (b) S-CIELAB spatial error on the star;
     (c) colour breakup and (d) S-CIELAB against the own still capture, against speed."""
@@ -215,7 +242,16 @@ def _both_ways_table(rows) -> list[str]:
 
 
 def report_markdown(results: dict, command: str) -> str:
-    """report.md: the setup, one table per light and level, and what wins where."""
+    """report.md: the setup, one table per light and level, and what wins where.
+
+    Parameters
+    ----------
+    results : dict
+    command : str
+
+    Returns
+    -------
+    str"""
     p = results["parameters"]
     lines = ["# Every architecture with the paper's camera", "", f"Command: `{command}`", "",
              f"Renderer {p['renderer']}{' (quick: 160x120)' if p['quick'] else ''}; seeds {p['seeds']}; the "

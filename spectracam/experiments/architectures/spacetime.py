@@ -18,7 +18,14 @@ Each design is the architecture with the paper's scheme for it: ``single`` for o
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from spectracam.architecture.base import ARCHITECTURES
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+    from spectracam.pipeline.scene_file import Scene
 
 __all__ = ["DEMOSAICS", "OLPF_PX", "SPEEDS_PX_PER_MS", "run_space", "run_time", "spacetime_designs",
            "spacetime_winners"]
@@ -46,8 +53,29 @@ def _experiment_scene(scene, quick: bool):
     return scene.replace(grid=parse_grid({"start_nm": 400, "stop_nm": 700, "step_nm": 20}))
 
 
-def run_space(scene, renderer: str, quick: bool, log=None, progress: bool = False) -> dict:
-    """The spatial experiment on every design (module docstring): its rows and timing."""
+def run_space(scene: Scene, renderer: str, quick: bool, log: Callable[[str], object] | None = None,
+              progress: bool = False) -> dict:
+    """The spatial experiment on every design (module docstring): its rows and timing.
+
+    Parameters
+    ----------
+    scene : Scene
+        The paper's scene at its calibrated light: its camera's pixel pitch and f-number are used.
+    renderer : str
+        ``"mitsuba"`` or ``"analytic"``.
+    quick : bool
+        ``--quick``: the spatial experiment's quick run, 20-nm bands.
+    log : callable or None
+        ``log(msg)`` for the spatial run's lines.
+    progress : bool
+        Progress bars on a terminal.
+
+    Returns
+    -------
+    dict
+        ``rows`` (per design × demosaicker × OLPF: ``mtf50_cy_per_px``, ``false_colour_edge``, ``false_colour_star``,
+        ``scielab_spatial_star``, ``scielab_spatial_edge``), ``wall_s`` (s) and ``parameters``.
+    """
     from spectracam.experiments.spatial.experiment import SpatialSpec, run_spatial
 
     cam = scene.camera
@@ -70,8 +98,29 @@ def run_space(scene, renderer: str, quick: bool, log=None, progress: bool = Fals
                            "pixel_pitch_um": cam.sensor.pixel_pitch_um, "f_number": cam.optics.f_number}}
 
 
-def run_time(scene, renderer: str, quick: bool, log=None, progress: bool = False) -> dict:
-    """The motion experiment on every design (module docstring): its rows and timing."""
+def run_time(scene: Scene, renderer: str, quick: bool, log: Callable[[str], object] | None = None,
+             progress: bool = False) -> dict:
+    """The motion experiment on every design (module docstring): its rows and timing.
+
+    Parameters
+    ----------
+    scene : Scene
+        The paper's scene at its calibrated light.
+    renderer : str
+        ``"mitsuba"`` or ``"analytic"``.
+    quick : bool
+        ``--quick``: the motion experiment's quick run, every other speed of :data:`SPEEDS_PX_PER_MS`, 20-nm bands.
+    log : callable or None
+        ``log(msg)`` for the motion run's lines.
+    progress : bool
+        Progress bars on a terminal.
+
+    Returns
+    -------
+    dict
+        ``rows`` (per design × speed, px/ms: ``breakup_width_px``, ``scielab_delta_e``, ``capture_time_ms``, …),
+        ``wall_s`` (s) and ``parameters`` (with the white luminance, cd/m²).
+    """
     from spectracam.experiments.motion.experiment import MotionSpec, run_motion
 
     cam = scene.camera
@@ -92,7 +141,21 @@ def run_time(scene, renderer: str, quick: bool, log=None, progress: bool = False
 def spacetime_winners(space: dict, time_: dict) -> list[dict]:
     """Resolution (highest MTF50), least false colour at the edge, least S-CIELAB error on the star
     (over every spatial design), and at the fastest speed the least colour breakup and least motion
-    S-CIELAB error (ties named)."""
+    S-CIELAB error (ties named).
+
+    Parameters
+    ----------
+    space : dict
+        :func:`run_space`'s result.
+    time_ : dict
+        :func:`run_time`'s result.
+
+    Returns
+    -------
+    list of dict
+        ``part`` (``"space"``/``"time"``), ``metric``, ``design`` (tied designs comma-separated), ``value``; the
+        time winners also ``speed_px_per_ms``.
+    """
     out = []
     for metric, best in (("mtf50_cy_per_px", max), ("false_colour_edge", min), ("scielab_spatial_star", min)):
         scored = [r for r in space["rows"] if r.get(metric) is not None]

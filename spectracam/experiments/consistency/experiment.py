@@ -14,7 +14,7 @@ from __future__ import annotations
 import itertools
 import time
 from dataclasses import dataclass, field
-from typing import TypedDict
+from typing import TYPE_CHECKING, TypedDict
 
 import numpy as np
 
@@ -23,6 +23,12 @@ from spectracam.processing.color import ProcessingSpec
 from spectracam.io.plots import OKABE_ITO
 from spectracam.experiments.paper.claims import evaluate
 from spectracam.experiments.paper.experiment import PaperExperiment, calibrated_luminance, comparison, scenes_for
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+    from pathlib import Path
+
+    from matplotlib.figure import Figure
 
 __all__ = ["FACTORS", "ONE_AT_A_TIME", "VERDICT_VALUE", "ConsistencyResult", "Reading", "consistency_figure",
            "consistency_markdown", "readings", "run_consistency", "write_consistency_outputs"]
@@ -101,11 +107,28 @@ class ConsistencyResult(TypedDict):
     seconds: float
 
 
-def run_consistency(exp: PaperExperiment, renderer: str = "analytic", quick: bool = True, log=lambda m: None,
-                    progress: bool = False) -> ConsistencyResult:
+def run_consistency(exp: PaperExperiment, renderer: str = "analytic", quick: bool = True,
+                    log: Callable[[str], object] = lambda m: None, progress: bool = False) -> ConsistencyResult:
     """Every reading's claims.  Radiance is rendered once per wavelength grid and scaled to each
     reading's calibrated light level (rendering is linear in the light).  ``progress``: a bar over the
-    readings on a terminal."""
+    readings on a terminal.
+
+    Parameters
+    ----------
+    exp : PaperExperiment
+        The paper's experiment; each reading's tables go over its base camera and processing.
+    renderer : str
+    quick : bool
+        160 × 120 px scenes.
+    log : callable
+        ``log(line)`` per reading.
+    progress : bool
+
+    Returns
+    -------
+    ConsistencyResult
+        consistency.json's keys but ``command``.
+    """
     from spectracam.core.progress import bar
     from spectracam.render import render
     from spectracam.pipeline.scene_file import parse_grid
@@ -221,10 +244,21 @@ def _map_layout(result: dict, columns: list) -> _MapLayout:
     return _MapLayout(gap, col_w, table_w, map_w, map_h, code_band, key_lines, left, bottom, fig_w, fig_h)
 
 
-def consistency_figure(result: dict):
+def consistency_figure(result: dict) -> Figure:
     """A map: one row per reading, one column per claim, coloured by verdict.  Left of it a table of
     the reading's choices under their names; the claim codes over and under the columns, explained
-    in a key below.  Every text is at least 8 pt."""
+    in a key below.  Every text is at least 8 pt.
+
+    Parameters
+    ----------
+    result : dict
+        :func:`run_consistency`'s.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Sized to its rows and columns.
+    """
     from spectracam.io.plots import pyplot
 
     plt = pyplot()
@@ -324,6 +358,20 @@ def _draw_key(fig, lay: _MapLayout, claims: list) -> None:
 
 
 def consistency_markdown(result: dict, command: str) -> str:
+    """consistency.md: how often each claim holds, the reading that reproduces the most, and every reading's verdicts.
+
+    Parameters
+    ----------
+    result : dict
+        :func:`run_consistency`'s.
+    command : str
+        The command, recorded at the top.
+
+    Returns
+    -------
+    str
+        The markdown.
+    """
     rows, claims = result["rows"], result["claims"]
     factors = list(rows[0]["reading"])
     lines = ["# The paper's claims across the readings of its open choices", "",
@@ -349,7 +397,21 @@ def consistency_markdown(result: dict, command: str) -> str:
     return "\n".join(lines)
 
 
-def write_consistency_outputs(out_dir, result: dict, command: str) -> list:
+def write_consistency_outputs(out_dir: str | Path, result: dict, command: str) -> list:
+    """consistency.png/.svg, consistency.json (the result with ``command``) and consistency.md.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+    result : dict
+        :func:`run_consistency`'s.
+    command : str
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
     import json
     from pathlib import Path
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 import importlib.util
 import math
 from dataclasses import asdict, dataclass
-from typing import TypedDict
+from typing import TYPE_CHECKING, TypedDict
 
 import numpy as np
 
@@ -22,6 +22,9 @@ from spectracam.core.spectra import WavelengthGrid, cmf_band_weights, energy_to_
 from spectracam.evaluation import datasheet as ds
 from spectracam.sensor import (READOUT_NAMES, SensorSpec, adc_full_scale_dn, adc_inverse, fixed_pattern, noise_stream,
                                read_frame)
+
+if TYPE_CHECKING:
+    from spectracam.pipeline.scene_file import Scene
 
 __all__ = ["DATASHEET_STREAM", "DatasheetResult", "DatasheetSpec", "available_readouts", "chart_figures",
            "measure_readout", "photometry", "run_datasheet", "sensor_figures", "smi_figures", "speeds"]
@@ -77,7 +80,19 @@ class DatasheetResult(TypedDict):
 
 
 def sensor_figures(sensor: SensorSpec) -> dict:
-    """The configured sensor's own figures, as a datasheet lists them."""
+    """The configured sensor's own figures, as a datasheet lists them.
+
+    Parameters
+    ----------
+    sensor : SensorSpec
+
+    Returns
+    -------
+    dict
+        Read-out, full well (e⁻), read noise (e⁻ rms), conversion gain (µV/e⁻), temperature (°C), dark current (e⁻/s)
+        and its law, pixel pitch (µm), fill factor, ADC bits, system gain (DN/e⁻), black level (DN), hot-pixel
+        fraction, FPN (e⁻ rms) and PRNU (%); FPN and PRNU 0 with the fixed pattern off.
+    """
     return {"readout": sensor.readout, "full_well_e": sensor.q_max_e, "read_noise_e": sensor.read_noise_rms_e,
             "conversion_gain_uV_per_e": sensor.conversion_gain_uV_per_e, "temperature_C": sensor.temperature_C,
             "dark_current_e_per_s": sensor.dark_rate_e_per_s, "dark_current_law": sensor.dark_current_law,
@@ -89,7 +104,18 @@ def sensor_figures(sensor: SensorSpec) -> dict:
 
 def available_readouts(requested: tuple | None) -> tuple[tuple, tuple]:
     """``(measured, not available)``: the read-outs asked for (None: all five) that this installation can read —
-    every one but ``single`` needs :mod:`spectracam.sensor.readout`."""
+    every one but ``single`` needs :mod:`spectracam.sensor.readout`.
+
+    Parameters
+    ----------
+    requested : tuple or None
+        Read-out names; None: every one of ``READOUT_NAMES``.
+
+    Returns
+    -------
+    tuple of (tuple, tuple)
+        The names that can be measured here and those that cannot, each in the order asked.
+    """
     names = tuple(READOUT_NAMES) if requested is None else tuple(requested)
     if importlib.util.find_spec("spectracam.sensor.readout") is not None:
         return names, ()
@@ -147,7 +173,25 @@ def _model_snr(sensor: SensorSpec, signal_e: np.ndarray, time_s: float):
 
 def measure_readout(sensor: SensorSpec, spec: DatasheetSpec, eta: float, index: int = 0) -> dict:
     """One read-out measured: its SNR curve (measured and closed-form), saturation, SNR = 1 threshold, dynamic
-    range, SNR_max, and the signals of SNR 10 and 40; photons per pixel at ``eta`` (EMVA 1288's μ_p = μ_e/η)."""
+    range, SNR_max, and the signals of SNR 10 and 40; photons per pixel at ``eta`` (EMVA 1288's μ_p = μ_e/η).
+
+    Parameters
+    ----------
+    sensor : SensorSpec
+        With the read-out to measure.
+    spec : DatasheetSpec
+        Frame size, steps per decade, exposure time (s) and seed.
+    eta : float
+        Quantum efficiency at the spec's wavelength, e⁻/photon.
+    index : int
+        The read-out's noise stream (distinct per read-out).
+
+    Returns
+    -------
+    dict
+        Signals in e⁻ (and photons): ``saturation_e``, ``threshold_e``, ``snr1_e``/``snr10_e``/``snr40_e`` (None
+        where never reached), ``dynamic_range`` (and dB), ``snr_max`` (and dB), and the ``curve``.
+    """
     s = _series(sensor, spec, index)
     mu, var = s["signal_e"], s["var_e"]
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -170,7 +214,20 @@ def measure_readout(sensor: SensorSpec, spec: DatasheetSpec, eta: float, index: 
 def photometry(camera: CameraSpec, spec: DatasheetSpec) -> dict:
     """Electrons per lux·s at the sensor plane per channel, under the stated light, and what a lux of scene
     illuminance gives on the sensor plane for the stated object, through the camera's lens (its f-number,
-    transmittance and irradiance form: :meth:`CameraSpec.photo_electron_rates`)."""
+    transmittance and irradiance form: :meth:`CameraSpec.photo_electron_rates`).
+
+    Parameters
+    ----------
+    camera : CameraSpec
+    spec : DatasheetSpec
+        Its light (a CIE illuminant) and object reflectance.
+
+    Returns
+    -------
+    dict
+        ``e_per_lux_s`` per channel (e⁻ per lux·s at the sensor plane), ``sensor_lux_per_scene_lux`` (for the
+        object; ``…_white`` for a perfect white), and the light, channels and lens it used.
+    """
     from spectracam.optics import irradiance_factor, radiance_to_photon_irradiance
     from spectracam.scene.illuminant import IlluminantSpec, white_diffuser_radiance
 
@@ -192,7 +249,27 @@ def photometry(camera: CameraSpec, spec: DatasheetSpec) -> dict:
 def speeds(measured: dict, phot: dict, spec: DatasheetSpec, channel: str, iso_sat_constant: float) -> dict:
     """SNR 1/10 illuminances (sensor and scene) of ``channel`` at the exposure time, and the ISO 12232 speeds:
     H = μ_e/(e⁻ per lux·s); S_sat from the first channel to clip (a neutral object: every channel's saturation
-    charge over its electrons per lux·s), S_noise from ``channel``."""
+    charge over its electrons per lux·s), S_noise from ``channel``.
+
+    Parameters
+    ----------
+    measured : dict
+        :func:`measure_readout`'s (signals in e⁻).
+    phot : dict
+        :func:`photometry`'s.
+    spec : DatasheetSpec
+        Its exposure time, s.
+    channel : str
+        The channel read.
+    iso_sat_constant : float
+        ISO 12232's saturation-speed constant.
+
+    Returns
+    -------
+    dict
+        Exposures ``H_*_lux_s`` (lux·s), speeds ``S_sat``, ``S_noise40``, ``S_noise10``, and the SNR 1/10 illuminances
+        at the sensor and the scene, lux (None where the SNR is never reached).
+    """
     c = phot["e_per_lux_s"][channel]
     t, to_scene = spec.exposure_time_s, 1.0 / phot["sensor_lux_per_scene_lux"]
     h = lambda e: None if e is None else e / c  # noqa: E731  lux·s at the sensor plane
@@ -211,7 +288,20 @@ def speeds(measured: dict, phot: dict, spec: DatasheetSpec, channel: str, iso_sa
 
 def smi_figures(camera: CameraSpec, fit: str = "delta_e") -> dict:
     """ISO 17321-1's SMI of the camera's channels: the ColorChecker's 18 chromatic patches (ISO 17321-1 Table D.1,
-    ``iso17321``) under CIE D65, 380–780 nm in 5 nm steps; both fits."""
+    ``iso17321``) under CIE D65, 380–780 nm in 5 nm steps; both fits.
+
+    Parameters
+    ----------
+    camera : CameraSpec
+        Its channels' responsivities.
+    fit : str
+        The fit reported unsuffixed (``"delta_e"`` or ``"least_squares"``); the other's keys are suffixed.
+
+    Returns
+    -------
+    dict
+        ``smi``, ``delta_e_mean`` and the other fit's ``smi_<fit>``, ``delta_e_mean_<fit>``, with the light and patches.
+    """
     import colour
 
     from spectracam.core.spectra import cie_1931_cmfs
@@ -232,9 +322,23 @@ def smi_figures(camera: CameraSpec, fit: str = "delta_e") -> dict:
     return out
 
 
-def chart_figures(scene, spec: DatasheetSpec) -> dict:
+def chart_figures(scene: Scene, spec: DatasheetSpec) -> dict:
     """The chart through the configured camera (closed-form render): ΔE*ab and CIEDE2000, per pixel and of the
-    patches' mean colours, and ISO 15739 visual noise of the six grey patches at the scene's viewing geometry."""
+    patches' mean colours, and ISO 15739 visual noise of the six grey patches at the scene's viewing geometry.
+
+    Parameters
+    ----------
+    scene : Scene
+        A chart scene.
+    spec : DatasheetSpec
+        Its seed.
+
+    Returns
+    -------
+    dict
+        ``delta_e_ab_mean``, ``delta_e2000_mean``, ``…_of_mean``, the illuminant, samples per degree and
+        ``visual_noise`` per grey patch.
+    """
     import colour
 
     from spectracam.pipeline import simulate
@@ -259,9 +363,26 @@ def chart_figures(scene, spec: DatasheetSpec) -> dict:
             "illuminant": scene.illuminant.label, "samples_per_degree": spd, "visual_noise": greys}
 
 
-def run_datasheet(scene, spec: DatasheetSpec = DatasheetSpec()) -> DatasheetResult:
+def run_datasheet(scene: Scene, spec: DatasheetSpec = DatasheetSpec()) -> DatasheetResult:
     """The datasheet of ``scene``'s camera: ``{parameters, sensor, readouts, photometry, iso12232, smi, chart,
-    notes}`` (every read-out of ``spec.readouts`` measured; the photometric figures from the configured one)."""
+    notes}`` (every read-out of ``spec.readouts`` measured; the photometric figures from the configured one).
+
+    Parameters
+    ----------
+    scene : Scene
+        A chart scene; its camera is measured.
+    spec : DatasheetSpec
+
+    Returns
+    -------
+    DatasheetResult
+        results.json's keys but ``command``.
+
+    Raises
+    ------
+    SpectracamError
+        When the camera does not record ``spec.channel``, or its read-out cannot be read in this installation.
+    """
     from spectracam.experiments.emva.experiment import channel_qe
     from spectracam.io.dng import ISO_SATURATION_CONSTANT
 

@@ -5,8 +5,12 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = ["datasheet_markdown", "snr_figure", "write_datasheet_outputs"]
 
@@ -69,7 +73,20 @@ def _colour_rows(smi: dict, chart: dict) -> list[str]:
 
 def datasheet_markdown(result: dict, command: str) -> str:
     """The datasheet as Markdown: the sensor's configured figures, every read-out's EMVA 1288 figures, the
-    photometric sensitivity and ISO speeds, the colour figures, and how each was made."""
+    photometric sensitivity and ISO speeds, the colour figures, and how each was made.
+
+    Parameters
+    ----------
+    result : dict
+        :func:`~spectracam.experiments.datasheet.experiment.run_datasheet`'s.
+    command : str
+        The command, recorded at the top.
+
+    Returns
+    -------
+    str
+        datasheet.md's text.
+    """
     p, spec = result["parameters"], result["parameters"]
     lines = ["# Sensor datasheet of the simulated camera", "",
              f"Made by `{command}`; seed {spec['seed']}, frames of {48 if spec['quick'] else 128} × "
@@ -91,8 +108,19 @@ def datasheet_markdown(result: dict, command: str) -> str:
     return "\n".join(lines) + "\n"
 
 
-def snr_figure(result: dict):
-    """Every read-out's SNR against photons per pixel on one log–log plot: measured (dots), closed form (line)."""
+def snr_figure(result: dict) -> Figure:
+    """Every read-out's SNR against photons per pixel on one log–log plot: measured (dots), closed form (line).
+
+    Parameters
+    ----------
+    result : dict
+        A datasheet result: each read-out's ``curve`` and ``saturation_e``.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Points above saturation left out.
+    """
     from spectracam.io.plots import pyplot
 
     plt = pyplot()
@@ -131,8 +159,22 @@ def _clean(v):
     return v
 
 
-def write_datasheet_outputs(out_dir, result: dict, command: str) -> list:
-    """datasheet.md, results.json and snr.png/snr.svg, atomically."""
+def write_datasheet_outputs(out_dir: str | Path, result: dict, command: str) -> list:
+    """datasheet.md, results.json and snr.png/snr.svg, atomically.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+    result : dict
+        :func:`~spectracam.experiments.datasheet.experiment.run_datasheet`'s (NaN and infinities written as null).
+    command : str
+        Recorded in results.json and datasheet.md.
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
     from spectracam.core.files import atomic_write
     from spectracam.io.plots import save_figure
 

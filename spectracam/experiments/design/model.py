@@ -26,6 +26,7 @@ the ADC's zero code below 3σ of the dark noise (:mod:`spectracam.sensor`), so t
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -33,6 +34,13 @@ from spectracam.architecture.base import MosaicLayout
 from spectracam.core.errors import SpectracamError
 from spectracam.experiments.design.ad import backend, cholesky3, fresh, solve_spd, tensor, xyz_to_lab
 from spectracam.sensor import dark_gain_moments
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping, Sequence
+
+    from spectracam.architecture.base import Architecture
+    from spectracam.camera import CameraSpec
+    from spectracam.processing.color import ProcessingSpec
 
 __all__ = ["DEFAULT_DISPLAY_PIXEL_PITCH_MM", "DEFAULT_VIEWING_DISTANCE_M", "QUADRATURE_POINTS",
            "QUADRATURE_SEED", "SCORES", "CameraModel", "ColourSet", "LightModel", "LightResult",
@@ -49,7 +57,18 @@ QUADRATURE_SEED = 1999
 
 
 def normal_points(n: int = QUADRATURE_POINTS) -> np.ndarray:
-    """``(n, 3)`` standard normal points of a scrambled Sobol sequence (fixed seed)."""
+    """``(n, 3)`` standard normal points of a scrambled Sobol sequence (fixed seed).
+
+    Parameters
+    ----------
+    n : int
+        How many points (a power of two keeps Sobol's balance).
+
+    Returns
+    -------
+    ndarray
+        ``(n, 3)`` float64, the same for every call (:data:`QUADRATURE_SEED`).
+    """
     from scipy.stats import norm, qmc
 
     u = qmc.Sobol(3, scramble=True, seed=QUADRATURE_SEED).random(n)
@@ -71,7 +90,24 @@ class SensorModel:
     dsnu: float
 
     @classmethod
-    def of(cls, camera) -> "SensorModel":
+    def of(cls, camera: CameraSpec) -> "SensorModel":
+        """The sensor numbers of ``camera`` (its sensor, and its capture's ``white_fill``), as plain floats.
+
+        Parameters
+        ----------
+        camera : CameraSpec
+            The camera; a noise source switched off contributes 0.
+
+        Returns
+        -------
+        SensorModel
+            Variances in e⁻², the dark rate in e⁻/s, the well in e⁻.
+
+        Raises
+        ------
+        SpectracamError
+            When the sensor's read-out is not ``"single"`` (the model knows one read at the end of the exposure).
+        """
         s = camera.sensor
         if s.readout != "single":
             raise SpectracamError(f"sensor.readout = {s.readout!r}: the design's expected-error model knows one read at "
@@ -92,7 +128,25 @@ def demosaic_factors(layout: MosaicLayout, method: str) -> np.ndarray:
     """``F[u, c, k, j]``: for output site ``u`` of the tile (row-major), the covariance of demosaicked channels k
     and j per unit variance of input channel c's pixels, all pixels independent: Σ over c's pixels of the product
     of their weights in k and j.  Read from the demosaicker by one impulse per tile site (exact for a linear,
-    tile-periodic interpolator); a non-linear one is refused."""
+    tile-periodic interpolator); a non-linear one is refused.
+
+    Parameters
+    ----------
+    layout : MosaicLayout
+        The mosaic.
+    method : str
+        The demosaicker (``processing.demosaic``).
+
+    Returns
+    -------
+    ndarray
+        ``(tile sites, N, N, N)``.
+
+    Raises
+    ------
+    SpectracamError
+        When the demosaicker is not linear.
+    """
     from spectracam.processing.color import demosaic
 
     th, tw = layout.tile_shape
@@ -124,10 +178,22 @@ DEFAULT_VIEWING_DISTANCE_M = 0.5
 DEFAULT_DISPLAY_PIXEL_PITCH_MM = 25.4 / 120
 
 
-def viewing_samples_per_degree(processing) -> float:
+def viewing_samples_per_degree(processing: ProcessingSpec | object) -> float:
     """Image samples per degree of visual angle of ``processing``'s viewing geometry (``viewing_distance_m``,
     ``display_pixel_pitch_mm``; one image pixel per display pixel): ``1 / (2·atan(p/2d))`` in degrees
-    (:func:`spectracam.evaluation.scielab.samples_per_degree`), the chart score's own."""
+    (:func:`spectracam.evaluation.scielab.samples_per_degree`), the chart score's own.
+
+    Parameters
+    ----------
+    processing : ProcessingSpec or object
+        Its ``viewing_distance_m`` (m) and ``display_pixel_pitch_mm`` (mm); a missing one is
+        :data:`DEFAULT_VIEWING_DISTANCE_M` or :data:`DEFAULT_DISPLAY_PIXEL_PITCH_MM`.
+
+    Returns
+    -------
+    float
+        Samples per degree.
+    """
     from spectracam.evaluation.scielab import samples_per_degree
 
     d = getattr(processing, "viewing_distance_m", DEFAULT_VIEWING_DISTANCE_M)
@@ -145,7 +211,18 @@ def _scielab_kernels(samples_per_degree: float) -> np.ndarray:
 
 def scielab_white_factors(samples_per_degree: float) -> np.ndarray:
     """``ρ[i, j] = Σ_x h_i(x)·h_j(x)``: the covariance of opponent channels i and j after the S-CIELAB kernels
-    ``h_i``, ``h_j`` per unit covariance of spatially white noise (full planes: one independent draw per pixel)."""
+    ``h_i``, ``h_j`` per unit covariance of spatially white noise (full planes: one independent draw per pixel).
+
+    Parameters
+    ----------
+    samples_per_degree : float
+        The viewing geometry (:func:`viewing_samples_per_degree`).
+
+    Returns
+    -------
+    ndarray
+        ``(3, 3)`` ρ, over luminance, red-green and blue-yellow.
+    """
     h = _scielab_kernels(samples_per_degree)
     return np.einsum("iab,jab->ij", h, h)
 
@@ -165,7 +242,21 @@ def scielab_mosaic_factors(layout: MosaicLayout, method: str, samples_per_degree
     tile, the sum over every output pixel of site u — how it is computed: one impulse per tile site through
     :func:`spectracam.processing.color.demosaic`, each output plane convolved with each kernel.  With one-pixel kernels
     (``h = δ``) it is :func:`demosaic_factors` (``S[u, c, i, j, k, l] = F[u, c, k, l]``).  Cached per layout, method
-    and samples per degree (the factors depend on nothing else)."""
+    and samples per degree (the factors depend on nothing else).
+
+    Parameters
+    ----------
+    layout : MosaicLayout
+    method : str
+        The demosaicker; it must be linear.
+    samples_per_degree : float
+        The viewing geometry (:func:`viewing_samples_per_degree`).
+
+    Returns
+    -------
+    ndarray
+        ``(tile sites, N, 3, 3, N, N)`` S; the cached array itself (not a copy).
+    """
     from scipy.signal import fftconvolve
 
     from spectracam.processing.color import DEMOSAIC_MARGIN, demosaic
@@ -211,8 +302,24 @@ def _require_linear(layout: MosaicLayout, method: str) -> None:
                               "needs a linear demosaicker (bilinear, patch or malvar2004)")
 
 
-def capture_rule(architecture) -> str:
-    """``first`` (one exposure), ``max`` (sensors exposed together) or ``sum`` (frames in sequence)."""
+def capture_rule(architecture: Architecture) -> str:
+    """``first`` (one exposure), ``max`` (sensors exposed together) or ``sum`` (frames in sequence).
+
+    Parameters
+    ----------
+    architecture : Architecture
+        Probed with distinct exposure times through its ``capture_time_s``.
+
+    Returns
+    -------
+    str
+        ``"first"``, ``"max"`` or ``"sum"``.
+
+    Raises
+    ------
+    SpectracamError
+        When its capture time is none of these.
+    """
     probe = np.array([1.0, 2.0, 4.0, 8.0][:len(architecture.channels)])
     got = architecture.capture_time_s(probe)
     for name, want in (("first", probe[0]), ("max", probe.max()), ("sum", probe.sum())):
@@ -241,10 +348,31 @@ class CameraModel:
     scielab_factors: np.ndarray | None = None
 
     @classmethod
-    def of(cls, camera, processing, exposure: str | None = None,
+    def of(cls, camera: CameraSpec, processing: ProcessingSpec, exposure: str | None = None,
            samples_per_degree: float | None = None) -> "CameraModel":
         """The model of ``camera`` developed by ``processing``; ``samples_per_degree`` (S-CIELAB's viewing geometry)
-        defaults to the processing's viewing distance and display pixel pitch."""
+        defaults to the processing's viewing distance and display pixel pitch.
+
+        Parameters
+        ----------
+        camera : CameraSpec
+        processing : ProcessingSpec
+            Must score ΔE*ab (``cie1976``) without the gamut clip; a mosaic needs a linear demosaicker.
+        exposure : str or None
+            The exposure scheme; None: the camera's.
+        samples_per_degree : float or None
+            S-CIELAB's viewing geometry; None: the processing's.
+
+        Returns
+        -------
+        CameraModel
+            With the demosaicking and S-CIELAB factors computed.
+
+        Raises
+        ------
+        SpectracamError
+            On another ΔE formula, the gamut clip, a non-linear demosaicker, or an unmodelled capture or read-out.
+        """
         from spectracam.processing.color import display_rgb_to_xyz
 
         if processing.delta_e != "cie1976":
@@ -308,9 +436,29 @@ def _fold(op, values):
     return out
 
 
-def exposure_times(white_rates: list, cam: CameraModel, split=None) -> list:
+def exposure_times(white_rates: list, cam: CameraModel, split: Sequence[Any] | None = None) -> list:
     """Per-channel exposure times, s (:func:`spectracam.sensor.exposure.exposure_times_s` in tensors); ``split``
-    (scheme ``split``): each channel's share of the single exposure's time budget, capped at its saturation."""
+    (scheme ``split``): each channel's share of the single exposure's time budget, capped at its saturation.
+
+    Parameters
+    ----------
+    white_rates : list
+        Per channel, the white patch's rate, e⁻/s (tensors).
+    cam : CameraModel
+        Its exposure scheme (paper 4.5), capture rule and sensor (well, white fill, dark rate).
+    split : sequence or None
+        The shares, one per channel (scheme ``split`` only).
+
+    Returns
+    -------
+    list
+        Per channel, the exposure time, s (tensors).
+
+    Raises
+    ------
+    SpectracamError
+        For a scheme the model does not know.
+    """
     dr, _ = backend()
     s = cam.sensor
     sat = [s.white_fill * s.q_max_e / (w + s.dark_rate_e_per_s) for w in white_rates]
@@ -332,7 +480,20 @@ def conversion(chart_rates: list, target_rgb: np.ndarray) -> list:
     """The N×3 least-squares conversion (paper 3.5) from the chart's noise-free rates, as ``M[k][c]`` tensors.
     Three channels: the normal equations (the same solution as :func:`spectracam.processing.color.fit_conversion`); more
     channels: scaled to unit norm with a ridge of (10⁻⁴·largest singular value)² standing in for that fit's
-    singular-value cut-off."""
+    singular-value cut-off.
+
+    Parameters
+    ----------
+    chart_rates : list
+        Per channel, the 24 patches' noise-free rates, e⁻/s (``(24,)`` tensors).
+    target_rgb : ndarray
+        ``(24, 3)`` the patches' display RGB to reach.
+
+    Returns
+    -------
+    list of list
+        ``M[k][c]``, N×3 scalar tensors: channel k's rate to display channel c.
+    """
     dr, _ = backend()
     n = len(chart_rates)
     scale = [dr.sqrt(dr.sum(r * r)) for r in chart_rates] if n > 3 else [1.0] * n
@@ -348,9 +509,24 @@ def conversion(chart_rates: list, target_rgb: np.ndarray) -> list:
     return [[cols[c][k] / scale[k] for c in range(3)] for k in range(n)]
 
 
-def pixel_moments(rates: list, times: list, cam: CameraModel):
+def pixel_moments(rates: list, times: list, cam: CameraModel) -> tuple[list, list, list]:
     """``(p, var, dark)``: per channel, the mean photo-electrons, the variance of one pixel after the dark-frame
-    subtraction and the dark charge (see the module)."""
+    subtraction and the dark charge (see the module).
+
+    Parameters
+    ----------
+    rates : list
+        Per channel, the colours' rates, e⁻/s (``(S,)`` tensors).
+    times : list
+        Per channel, the exposure time, s.
+    cam : CameraModel
+        Its sensor's noise sources (paper 3.4).
+
+    Returns
+    -------
+    tuple of (list, list, list)
+        Per channel: ``p`` (e⁻), ``var`` (e⁻²) and ``dark`` (e⁻).
+    """
     s = cam.sensor
     p, var, dark = [], [], []
     for r, t in zip(rates, times):
@@ -369,8 +545,21 @@ def pixel_moments(rates: list, times: list, cam: CameraModel):
     return p, var, dark
 
 
-def channel_covariances(p, var, dark, cam: CameraModel) -> list:
-    """Per site of the tile, the N×N covariance (electrons²) of the channels one output pixel holds."""
+def channel_covariances(p: list, var: list, dark: list, cam: CameraModel) -> list:
+    """Per site of the tile, the N×N covariance (electrons²) of the channels one output pixel holds.
+
+    Parameters
+    ----------
+    p, var, dark : list
+        :func:`pixel_moments`' per-channel mean (e⁻), variance (e⁻²) and dark charge (e⁻).
+    cam : CameraModel
+        Its demosaicking factors (a mosaic), or whether full planes share one fixed pattern.
+
+    Returns
+    -------
+    list
+        One N×N nested list per tile site (one for full planes); an entry is a tensor or ``0.0``.
+    """
     n = len(var)
     s = cam.sensor
     if cam.mosaic_factors is None:
@@ -393,8 +582,25 @@ def channel_covariances(p, var, dark, cam: CameraModel) -> list:
     return out
 
 
-def expected_delta_e(mean_rgb: list, cov_rgb: list, lab_true: np.ndarray, cam: CameraModel):
-    """``(S,)`` E‖Lab(x) − Lab_true‖ for x ~ N(mean, cov) in display RGB, by the fixed quadrature."""
+def expected_delta_e(mean_rgb: list, cov_rgb: list, lab_true: np.ndarray, cam: CameraModel) -> Any:
+    """``(S,)`` E‖Lab(x) − Lab_true‖ for x ~ N(mean, cov) in display RGB, by the fixed quadrature.
+
+    Parameters
+    ----------
+    mean_rgb : list
+        Per display channel, the ``(S,)`` mean.
+    cov_rgb : list
+        3×3 nested lists of ``(S,)`` tensors, symmetric positive definite.
+    lab_true : ndarray
+        ``(S, 3)`` the colours' true CIELAB.
+    cam : CameraModel
+        Its quadrature points and display matrix (display RGB → XYZ; its white is the display's).
+
+    Returns
+    -------
+    TensorXf64
+        ``(S,)`` expected ΔE*ab.
+    """
     dr, _ = backend()
     L = cholesky3(cov_rgb)
     z = [tensor(cam.points[:, d])[None, :] for d in range(3)]
@@ -422,11 +628,32 @@ class WhiteModel:
     white_weights: np.ndarray
 
 
-def white_balance_penalty(R: list, rates: list, M: list, lab_true: np.ndarray, wm: WhiteModel, cam: CameraModel):
+def white_balance_penalty(R: list, rates: list, M: list, lab_true: np.ndarray, wm: WhiteModel,
+                          cam: CameraModel) -> Any:
     """``(K,)`` the extra noise-free ΔE*ab of the colours (``rates`` per channel, ``(S,)``) when the camera balances
     by the neutral its estimator finds in each training Mondrian instead of the true one: the estimate
     ``ê_jk = (Σ_s W_js ρ_sk^p / Σ_s W_js)^(1/p)``, the gains ``e/ê_j`` scaled so the white keeps its luminance, the
-    colours through ``diag(g_j)·M`` against their truth, minus the same through ``M``.  Differentiable in ``R``."""
+    colours through ``diag(g_j)·M`` against their truth, minus the same through ``M``.  Differentiable in ``R``.
+
+    Parameters
+    ----------
+    R : list
+        Per channel, the ``(B,)`` responsivity, e⁻/photon.
+    rates : list
+        Per channel, the colours' ``(S,)`` rates, e⁻/s.
+    M : list
+        The conversion, ``M[k][c]`` (:func:`conversion`).
+    lab_true : ndarray
+        ``(S, 3)`` the colours' true CIELAB.
+    wm : WhiteModel
+    cam : CameraModel
+        Its display matrix.
+
+    Returns
+    -------
+    TensorXf64
+        ``(K,)`` per training Mondrian, the mean ΔE*ab with the estimated white minus that with the true one.
+    """
     dr, _ = backend()
     n = len(R)
     e = [dr.sum(tensor(wm.white_weights) * r) for r in R]                    # the true neutral, e⁻/s
@@ -456,7 +683,7 @@ def white_balance_penalty(R: list, rates: list, M: list, lab_true: np.ndarray, w
     return dr.mean(delta_e(lab_of(g)), axis=1) - dr.mean(delta_e(lab_of(None)), axis=1)
 
 
-def scielab_covariances(M: list, times: list, var: list, C_planes, cam: CameraModel) -> list:
+def scielab_covariances(M: list, times: list, var: list, C_planes: list, cam: CameraModel) -> list:
     """Per output site of the tile, the 3×3 display-RGB covariance (as lists of ``(S,)`` tensors) of the noise after
     the demosaicker and S-CIELAB's filters (docs/metrics.md, "Expected S-CIELAB in the design model").
 
@@ -470,7 +697,26 @@ def scielab_covariances(M: list, times: list, var: list, C_planes, cam: CameraMo
       (:func:`scielab_white_factors`) and ``C`` the planes' channel covariance (the shared fixed pattern included);
 
     then back to display RGB: ``P⁻¹·Cov_f·P⁻ᵀ``.  ``var``: per channel the ``(S,)`` pixel variance (e⁻²);
-    ``C_planes``: :func:`channel_covariances` of full planes (ignored for a mosaic)."""
+    ``C_planes``: :func:`channel_covariances` of full planes (ignored for a mosaic).
+
+    Parameters
+    ----------
+    M : list
+        The conversion, ``M[k][c]``.
+    times : list
+        Per channel, the exposure time, s.
+    var : list
+        Per channel, the ``(S,)`` pixel variance, e⁻².
+    C_planes : list
+        :func:`channel_covariances` of full planes.
+    cam : CameraModel
+        Its display matrix and S-CIELAB factors.
+
+    Returns
+    -------
+    list
+        One 3×3 nested list of ``(S,)`` tensors per tile site (one for full planes).
+    """
     from spectracam.evaluation.scielab import XYZ_TO_OPPONENT
 
     P = XYZ_TO_OPPONENT @ cam.display_matrix
@@ -559,8 +805,9 @@ class LightResult:
 SCORES = ("delta_e", "s_cielab")
 
 
-def evaluate(R: list, light: LightModel, cam: CameraModel, split=None, sets=None, estimated=None,
-             scores=("delta_e",)) -> LightResult:
+def evaluate(R: list, light: LightModel, cam: CameraModel, split: Sequence[Any] | None = None,
+             sets: Sequence[str] | None = None, estimated: Mapping[str, WhiteModel] | None = None,
+             scores: Sequence[str] = ("delta_e",)) -> LightResult:
     """The expected-error model for responsivities ``R`` (N tensors of shape (B,), electrons per photon); with
     ``estimated`` (set name → :class:`WhiteModel`), the estimated white's penalty for those sets too; ``scores``:
     which of :data:`SCORES` to compute (each is a quadrature per tile site)."""

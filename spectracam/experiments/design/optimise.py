@@ -3,8 +3,14 @@ bounds; every evaluation (objective + gradient over all training colours × ligh
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+    from spectracam.experiments.design.problem import DesignProblem
 
 __all__ = ["Optimisation", "optimise"]
 
@@ -22,10 +28,31 @@ class Optimisation:
     history: list = field(default_factory=list)   # per evaluation: (objective, training ΔE)
 
 
-def optimise(problem, x0: np.ndarray | None = None, max_iterations: int = 80, tolerance: float = 1e-7,
-             log=lambda m: None, progress: bool = False) -> Optimisation:
+def optimise(problem: DesignProblem, x0: np.ndarray | None = None, max_iterations: int = 80, tolerance: float = 1e-7,
+             log: Callable[[str], object] = lambda m: None, progress: bool = False) -> Optimisation:
     """Minimise ``problem``'s objective from ``x0`` (default: its start) with L-BFGS-B; ``progress``: a bar
-    over the iterations on a terminal (it only counts: the optimiser's steps are the same)."""
+    over the iterations on a terminal (it only counts: the optimiser's steps are the same).
+
+    Parameters
+    ----------
+    problem : DesignProblem
+        Its ``value_and_gradient``, ``initial`` and ``bounds``.
+    x0 : ndarray or None
+        The start; None: ``problem.initial()``.
+    max_iterations : int
+        L-BFGS-B's ``maxiter``; reaching it is reported as the budget, not a failure.
+    tolerance : float
+        L-BFGS-B's ``ftol``.
+    log : callable
+        ``log(line)``: one line at the end (evaluations, iterations, training error, why it stopped).
+    progress : bool
+        A bar over the iterations on a terminal.
+
+    Returns
+    -------
+    Optimisation
+        The best design evaluated (not necessarily the last), its objective and training error, and the history.
+    """
     from scipy.optimize import minimize
 
     from spectracam.core.progress import bar

@@ -8,6 +8,8 @@ light, their truth the CIE 1931 colorimetry of :func:`spectracam.scene.reference
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
 
 from spectracam.scene.chart import WHITE_PATCH
@@ -19,22 +21,64 @@ from spectracam.processing.calibration import conversion_target_rgb
 from spectracam.experiments.design.ad import tensor
 from spectracam.experiments.design.model import ColourSet, LightModel
 
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    from spectracam.camera import CameraSpec
+    from spectracam.experiments.design.model import LightResult, WhiteModel
+    from spectracam.experiments.design.spec import DesignSpec
+    from spectracam.pipeline.scene_file import Scene
+    from spectracam.processing.color import ProcessingSpec
+
 __all__ = ["CHART", "DESIGN_MONDRIANS", "DesignProblem", "light_model", "photon_weights", "white_models"]
 
 #: The colour-set name that means the scene's own chart.
 CHART = "chart"
 
 
-def photon_weights(scene, camera) -> np.ndarray:
+def photon_weights(scene: Scene, camera: CameraSpec) -> np.ndarray:
     """``(B,)`` factor from band radiance to photo-electrons per second per unit responsivity: the optics'
-    photon irradiance × band width × pixel area (paper 3.2-3.3; :func:`spectracam.camera.band_weights`)."""
+    photon irradiance × band width × pixel area (paper 3.2-3.3; :func:`spectracam.camera.band_weights`).
+
+    Parameters
+    ----------
+    scene : Scene
+        Its wavelength grid, nm.
+    camera : CameraSpec
+        Its optics and pixel area, µm².
+
+    Returns
+    -------
+    ndarray
+        ``(B,)``: e⁻/s per unit responsivity (e⁻/photon) per W·m⁻²·sr⁻¹·nm⁻¹ of band radiance.
+    """
     grid = scene.grid
     return radiance_to_photon_irradiance(grid, camera.optics) * grid.widths_nm * camera.sensor.pixel_area_um2 * 1e-12
 
 
-def light_model(scene, camera, processing, sets=(CHART,), label: str | None = None) -> LightModel:
+def light_model(scene: Scene, camera: CameraSpec, processing: ProcessingSpec, sets: Sequence[str] = (CHART,),
+                label: str | None = None) -> LightModel:
     """The :class:`LightModel` of a chart scene for ``camera`` with the colour ``sets`` (``chart`` or library
-    names)."""
+    names).
+
+    Parameters
+    ----------
+    scene : Scene
+        A chart scene: its chart, light and grid.
+    camera : CameraSpec
+        Its optics and pixel (:func:`photon_weights`).
+    processing : ProcessingSpec
+        Sets the conversion's target display RGB.
+    sets : sequence of str
+        :data:`CHART` or reflectance-library names.
+    label : str or None
+        The light's label; None: the illuminant's.
+
+    Returns
+    -------
+    LightModel
+        The chart's weights and target RGB, the white patch's weights and each set's weights and true CIELAB.
+    """
     ref = ChartReference.of(scene)
     g = photon_weights(scene, camera)
     chart_w = ref.patch_radiance * g[None, :]
@@ -54,9 +98,28 @@ def light_model(scene, camera, processing, sets=(CHART,), label: str | None = No
 DESIGN_MONDRIANS = 24
 
 
-def white_models(scene, camera, light: LightModel, sets, settings) -> dict:
+def white_models(scene: Scene, camera: CameraSpec, light: LightModel, sets: Sequence[str],
+                 settings: DesignSpec) -> dict[str, WhiteModel]:
     """Set name → :class:`~spectracam.experiments.design.model.WhiteModel`: Mondrians of that set's colours under the light
-    (fixed draws), the estimator's order, and the light's perfect white diffuser through the optics."""
+    (fixed draws), the estimator's order, and the light's perfect white diffuser through the optics.
+
+    Parameters
+    ----------
+    scene : Scene
+        The light's scene.
+    camera : CameraSpec
+    light : LightModel
+        :func:`light_model`'s, holding the sets.
+    sets : sequence of str
+        The sets to model (repeats once).
+    settings : DesignSpec
+        ``white_balance`` (``"grey_world"``: order 1) and ``white_balance_p``.
+
+    Returns
+    -------
+    dict of str to WhiteModel
+        :data:`DESIGN_MONDRIANS` Mondrians per set, drawn with the trained estimator's seed.
+    """
     from spectracam.scene.illuminant import white_diffuser_radiance
     from spectracam.processing.white_balance import TRAINING_SEED, TRAINING_SURFACES
     from spectracam.experiments.design.model import WhiteModel
@@ -81,10 +144,26 @@ class DesignProblem:
     (``"s_cielab"``) over the training colours × lights, plus the realisability penalty, minus ``snr_weight`` × the
     mean combined SNR (dB) when asked.
 
-    ``x`` = [the parametrisation's variables | IR-cut edge, nm (if designed) | exposure shares (if designed)]."""
+    ``x`` = [the parametrisation's variables | IR-cut edge, nm (if designed) | exposure shares (if designed)].
 
-    def __init__(self, design: str, parametrisation: str, settings, camera, processing, scenes: list,
-                 training: str, held_out: str):
+    Parameters
+    ----------
+    design : str
+        ``architecture/exposure``; ``…/split`` designs the exposure shares too.
+    parametrisation : str
+        A name of :data:`~spectracam.experiments.design.variables.PARAMETRISATIONS`.
+    settings : DesignSpec
+    camera : CameraSpec
+        The base camera.
+    processing : ProcessingSpec
+    scenes : list of Scene
+        One chart scene per light, on one wavelength grid.
+    training, held_out : str
+        The colour sets optimised on and held out (:data:`CHART` or library names).
+    """
+
+    def __init__(self, design: str, parametrisation: str, settings: DesignSpec, camera: CameraSpec,
+                 processing: ProcessingSpec, scenes: list, training: str, held_out: str):
         from spectracam.experiments.design.model import CameraModel
         from spectracam.experiments.design.variables import PARAMETRISATIONS, Samples, check_parametrisation
 
@@ -125,8 +204,19 @@ class DesignProblem:
         return b
 
     # -- from x to the model --------------------------------------------------------------------------------------
-    def responsivities(self, x) -> list:
-        """The channels' band-averaged responsivities ``(B,)`` as tensors."""
+    def responsivities(self, x: Any) -> list:
+        """The channels' band-averaged responsivities ``(B,)`` as tensors.
+
+        Parameters
+        ----------
+        x : TensorXf64
+            The design vector (see the class).
+
+        Returns
+        -------
+        list
+            Per channel, the ``(B,)`` responsivity, e⁻/photon (filter × QE × IR cut).
+        """
         from spectracam.experiments.design.ad import backend, fresh, tensor
         from spectracam.experiments.design.variables import band_average, channels_from_primaries, logistic
 
@@ -143,8 +233,19 @@ class DesignProblem:
         R = [band_average(T * qe, self.samples) for T in self.param.transmittances(xp, self.samples)]
         return channels_from_primaries(self.architecture, R, band_average(qe, self.samples))
 
-    def shares(self, x):
-        """The exposure shares (tensors), normalised to sum 1 for frames in sequence."""
+    def shares(self, x: Any) -> list | None:
+        """The exposure shares (tensors), normalised to sum 1 for frames in sequence.
+
+        Parameters
+        ----------
+        x : TensorXf64
+            The design vector.
+
+        Returns
+        -------
+        list or None
+            One share per channel; None unless the design is ``…/split``.
+        """
         if not self.split:
             return None
         from spectracam.experiments.design.ad import fresh
@@ -164,9 +265,25 @@ class DesignProblem:
         """The expectation the objective minimises: ``delta_e`` or ``s_cielab`` (:attr:`DesignSpec.objective`)."""
         return getattr(self.settings, "objective", "delta_e")
 
-    def evaluate(self, x, sets=None, scores=("delta_e",)) -> list:
+    def evaluate(self, x: Any, sets: Sequence[str] | None = None,
+                 scores: Sequence[str] = ("delta_e",)) -> list[LightResult]:
         """The model's :class:`~spectracam.experiments.design.model.LightResult` for each light (``scores``: see
-        :func:`~spectracam.experiments.design.model.evaluate`)."""
+        :func:`~spectracam.experiments.design.model.evaluate`).
+
+        Parameters
+        ----------
+        x : TensorXf64
+            The design vector.
+        sets : sequence of str or None
+            The colour sets scored; None: every set of each light.
+        scores : sequence of str
+            ``"delta_e"`` and/or ``"s_cielab"``.
+
+        Returns
+        -------
+        list of LightResult
+            One per light, in order.
+        """
         from spectracam.experiments.design.model import evaluate
 
         R = self.responsivities(x)
@@ -174,9 +291,21 @@ class DesignProblem:
         white = self.white or [None] * len(self.lights)
         return [evaluate(R, light, self.model, split, sets, w, scores) for light, w in zip(self.lights, white)]
 
-    def objective(self, x):
+    def objective(self, x: Any) -> tuple[Any, Any]:
         """``(value, aux)``: the scalar the optimiser minimises (see the class), and the training ΔE*ab (or
-        S-CIELAB, as the objective) it holds."""
+        S-CIELAB, as the objective) it holds.
+
+        Parameters
+        ----------
+        x : TensorXf64
+            The design vector.
+
+        Returns
+        -------
+        tuple of TensorXf64
+            The objective, and the mean expected error over the training colours and lights (with the estimated
+            white's penalty when the camera finds its own white).
+        """
         from spectracam.experiments.design.ad import backend
 
         dr, _ = backend()
@@ -191,7 +320,19 @@ class DesignProblem:
             value = value - self.settings.snr_weight * snr
         return value, de
 
-    def value_and_gradient(self, x: np.ndarray):
+    def value_and_gradient(self, x: np.ndarray) -> tuple[float, np.ndarray, float]:
+        """The objective, its gradient and the training error at ``x`` (counted in ``evaluations``).
+
+        Parameters
+        ----------
+        x : ndarray
+            The design vector.
+
+        Returns
+        -------
+        tuple of (float, ndarray, float)
+            :meth:`objective`'s value, ``∂value/∂x`` (``x``'s shape), and the training ΔE*ab (or S-CIELAB).
+        """
         from spectracam.experiments.design.ad import numpy, value_and_gradient
 
         self.evaluations += 1
@@ -199,8 +340,20 @@ class DesignProblem:
         return v, g, float(numpy(de).reshape(-1)[0])
 
     # -- from x to the pipeline ------------------------------------------------------------------------------------
-    def camera_of(self, x: np.ndarray):
-        """The :class:`~spectracam.camera.CameraSpec` of design ``x``: what the capture → score pipeline runs."""
+    def camera_of(self, x: np.ndarray) -> CameraSpec:
+        """The :class:`~spectracam.camera.CameraSpec` of design ``x``: what the capture → score pipeline runs.
+
+        Parameters
+        ----------
+        x : ndarray
+            The design vector.
+
+        Returns
+        -------
+        CameraSpec
+            The base camera with the designed filters (and IR-cut edge, nm), and the ``split`` exposure's shares
+            clipped to [1e-6, 1].
+        """
         x = np.asarray(x, float)
         filters = self.param.filters(x[:self.n_param])
         if self.ir_cut:
@@ -213,6 +366,18 @@ class DesignProblem:
         return cam
 
     def describe(self, x: np.ndarray) -> dict:
+        """The design ``x`` in words and numbers, for results.json.
+
+        Parameters
+        ----------
+        x : ndarray
+            The design vector.
+
+        Returns
+        -------
+        dict
+            The parametrisation's description, with ``ir_cut_nm`` and ``exposure_split`` when designed.
+        """
         x = np.asarray(x, float)
         out = dict(self.param.describe(x[:self.n_param]))
         if self.ir_cut:

@@ -4,8 +4,16 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+    from matplotlib.figure import Figure
+
+    from spectracam.core.spectra import WavelengthGrid
 
 __all__ = ["VARIANTS", "figure_comparison", "figure_convergence", "figure_curves", "report_markdown",
            "responsivity_table", "table_rows", "write_design_outputs"]
@@ -20,7 +28,20 @@ def _variant(entry: dict, key: str) -> dict | None:
 
 
 def table_rows(results: dict) -> list[dict]:
-    """One row per design and variant: expected ΔE (training, held out, chart), Monte Carlo chart ΔE ± spread."""
+    """One row per design and variant: expected ΔE (training, held out, chart), Monte Carlo chart ΔE ± spread.
+
+    Parameters
+    ----------
+    results : dict
+        A design run's results (``designs``: each design's entry with its :data:`VARIANTS`).
+
+    Returns
+    -------
+    list of dict
+        ``design``, ``filters`` (the variant's label), ``training``, ``held_out``, ``chart_predicted``,
+        ``chart_monte_carlo`` ± ``chart_mc_std``, ``snr_db``, ``mc_snr_db``; the developed camera's, the S-CIELAB and
+        the estimated white's fields where the run has them.
+    """
     rows = []
     for name, e in results["designs"].items():
         for key, label in VARIANTS:
@@ -47,6 +68,21 @@ def table_rows(results: dict) -> list[dict]:
 
 
 def report_markdown(results: dict, command: str) -> str:
+    """report.md: the setup, the comparison table (expected and Monte Carlo ΔE*ab, SNR), S-CIELAB and the developed
+    camera where the run has them, and each design's variables and optimisation.
+
+    Parameters
+    ----------
+    results : dict
+        A design run's results.
+    command : str
+        The command, recorded at the top.
+
+    Returns
+    -------
+    str
+        The markdown.
+    """
     spec = results["parameters"]["design_spec"]
     out = [f"# Filter design by gradient\n\n`{command}`\n",
            f"Training: {spec['training']} × lights {', '.join(results['parameters']['lights'])} at "
@@ -92,9 +128,24 @@ def report_markdown(results: dict, command: str) -> str:
     return "\n".join(out) + "\n"
 
 
-def responsivity_table(results: dict, grid) -> tuple[list[str], np.ndarray]:
+def responsivity_table(results: dict, grid: WavelengthGrid) -> tuple[list[str], np.ndarray]:
     """Header and rows of curves.csv: wavelength, then each design's optimised and paper responsivities per
-    channel (electrons per photon, band averages)."""
+    channel (electrons per photon, band averages).
+
+    Parameters
+    ----------
+    results : dict
+        A design run's results, with each design's ``_cameras`` (``optimised``, ``paper``).
+    grid : WavelengthGrid
+        The bands, nm.
+
+    Returns
+    -------
+    header : list of str
+        ``wavelength_nm``, then ``design:optimised|paper:channel``.
+    data : ndarray
+        ``(B, columns)``: band centres, nm, then responsivities, e⁻/photon.
+    """
     from spectracam.camera import camera_responsivities
 
     cols, data = ["wavelength_nm"], [np.asarray(grid.centres_nm, float)]
@@ -114,8 +165,21 @@ _COLOURS = {"R": "#D55E00", "G": "#009E73", "B": "#0072B2", "W": "0.4", "Y": "#E
             "M": "#CC79A7"}
 
 
-def figure_curves(results: dict, grid):
-    """Each design's optimised responsivities (solid) against the paper's (dashed)."""
+def figure_curves(results: dict, grid: WavelengthGrid) -> Figure:
+    """Each design's optimised responsivities (solid) against the paper's (dashed).
+
+    Parameters
+    ----------
+    results : dict
+        A design run's results, with each design's ``_cameras``.
+    grid : WavelengthGrid
+        The bands, nm.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One panel per design, three to a row, titled with its held-out expected ΔE*ab before → after.
+    """
     from spectracam.camera import camera_responsivities
     from spectracam.io.plots import pyplot
 
@@ -149,8 +213,19 @@ def figure_curves(results: dict, grid):
     return fig
 
 
-def figure_convergence(results: dict):
-    """The training ΔE*ab (or S-CIELAB, the objective's) at every evaluation, per design."""
+def figure_convergence(results: dict) -> Figure:
+    """The training ΔE*ab (or S-CIELAB, the objective's) at every evaluation, per design.
+
+    Parameters
+    ----------
+    results : dict
+        A design run's results: each design's ``history``.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The best value so far against the evaluations (log x).
+    """
     from spectracam.io.plots import pyplot
 
     plt = pyplot()
@@ -168,8 +243,19 @@ def figure_convergence(results: dict):
     return fig
 
 
-def figure_comparison(results: dict):
-    """Held-out expected ΔE and Monte Carlo chart ΔE per design: paper's filters, optimised, Luther."""
+def figure_comparison(results: dict) -> Figure:
+    """Held-out expected ΔE and Monte Carlo chart ΔE per design: paper's filters, optimised, Luther.
+
+    Parameters
+    ----------
+    results : dict
+        A design run's results.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Two bar panels, one bar per variant the run has.
+    """
     from spectracam.io.plots import pyplot
 
     plt = pyplot()
@@ -205,8 +291,26 @@ def figure_comparison(results: dict):
     return fig
 
 
-def write_design_outputs(out_dir, results: dict, command: str, step=lambda m: None) -> list:
-    """Every file of a design run (the module)."""
+def write_design_outputs(out_dir: str | Path, results: dict, command: str,
+                         step: Callable[[str], object] = lambda m: None) -> list:
+    """Every file of a design run (the module).
+
+    Parameters
+    ----------
+    out_dir : str or Path
+    results : dict
+        :func:`~spectracam.experiments.design.run.run_design`'s (``_grid`` and each design's ``_cameras`` and
+        ``_shot`` are kept out of results.json).
+    command : str
+        Recorded in results.json, report.md, curves.json and under each figure.
+    step : callable
+        ``step(line)`` once written.
+
+    Returns
+    -------
+    list of Path
+        Every file written (the figures' PNG and SVG, the cases' EXR files included).
+    """
     from spectracam.core.files import atomic_write, json_default
     from spectracam.experiments.architectures.experiment import write_shots
     from spectracam.io.plots import save_figure

@@ -11,7 +11,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TypedDict
+from typing import TYPE_CHECKING, TypedDict
 
 import numpy as np
 
@@ -21,6 +21,12 @@ from spectracam.core.spectra import WavelengthGrid
 from spectracam.scene.illuminant import IlluminantSpec
 from spectracam.experiments.design.problem import CHART, DesignProblem
 from spectracam.experiments.design.spec import DesignSpec
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Sequence
+
+    from spectracam.camera import CameraSpec
+    from spectracam.processing.color import ProcessingSpec
 
 __all__ = ["GRID_CUTOFFS_NM", "DesignResult", "Setup", "design_one", "experiment_path", "grid_best", "light_label",
            "monte_carlo", "predicted", "render_cubes", "run_design", "setup"]
@@ -41,13 +47,43 @@ class Setup:
     labels: tuple
 
 
-def light_label(light) -> str:
+def light_label(light: float | str) -> str:
+    """A design file's light as the results label it: a colour temperature ``3000`` → ``"3000K"``, a CIE name as is.
+
+    Parameters
+    ----------
+    light : float or str
+        A blackbody temperature, K, or a CIE illuminant's name.
+
+    Returns
+    -------
+    str
+        The label.
+    """
     return f"{light:g}K" if isinstance(light, (int, float)) else str(light)
 
 
 def experiment_path(value: str, base_dir: Path) -> Path:
     """The file a design file's ``experiment`` names: a path relative to the design file, else a shipped
-    experiment by name exactly as ``--experiment`` takes it (``paper``, ``paper.toml``, ``scenes/paper``)."""
+    experiment by name exactly as ``--experiment`` takes it (``paper``, ``paper.toml``, ``scenes/paper``).
+
+    Parameters
+    ----------
+    value : str
+        The design file's ``experiment``.
+    base_dir : Path
+        The design file's directory.
+
+    Returns
+    -------
+    Path
+        The existing file, or the shipped experiment.
+
+    Raises
+    ------
+    ConfigError
+        When it is neither.
+    """
     from spectracam.experiments.options import shipped_files, shipped_named
 
     path = Path(value)
@@ -64,7 +100,20 @@ def experiment_path(value: str, base_dir: Path) -> Path:
 
 
 def setup(spec: DesignSpec, base_dir: Path) -> Setup:
-    """Load the experiment the spec names and build one scene per light at its calibrated level."""
+    """Load the experiment the spec names and build one scene per light at its calibrated level.
+
+    Parameters
+    ----------
+    spec : DesignSpec
+        Its ``experiment``, ``lights`` (K or CIE names) and ``image_px``.
+    base_dir : Path
+        Where ``experiment`` is relative to.
+
+    Returns
+    -------
+    Setup
+        The experiment's camera and processing, the level (cd/m², the paper's calibration), the scenes and labels.
+    """
     from spectracam.experiments.paper.experiment import calibrated_luminance, load_experiment
 
     path = experiment_path(spec.experiment, base_dir)
@@ -81,11 +130,21 @@ def setup(spec: DesignSpec, base_dir: Path) -> Setup:
     return Setup(spec, camera, processing, level, tuple(scenes), tuple(light_label(v) for v in spec.lights))
 
 
-def predicted(problem: DesignProblem, x=None, camera=None, scores=None) -> dict:
+def predicted(problem: DesignProblem, x: np.ndarray | None = None, camera: CameraSpec | None = None,
+              scores: Sequence[str] | None = None) -> dict:
     """The model's expected ΔE*ab and expected S-CIELAB (``*_s_cielab``; docs/metrics.md, "Expected S-CIELAB in the
-    design model") on the training, held-out and chart colours, and the chart SNR, per light and averaged, for
-    design ``x`` or for a ``camera`` the pipeline defines (the paper's, the Luther camera, a grid pair); ``scores``
-    (default both): ``("delta_e",)`` leaves the S-CIELAB out (the grid's 81 pairs are ranked by ΔE*ab alone)."""
+    design model") on the training, held-out and chart colours, and the chart SNR, per light and averaged, for design
+    ``x`` or a pipeline ``camera`` (the paper's, Luther's, a grid pair); ``scores=("delta_e",)`` leaves S-CIELAB out.
+
+    Parameters
+    ----------
+    problem : DesignProblem
+    x, camera : ndarray or CameraSpec, optional
+    scores : sequence of str, optional
+
+    Returns
+    -------
+    dict"""
     from spectracam.camera import camera_responsivities
     from spectracam.experiments.design.ad import numpy, tensor
     from spectracam.experiments.design.model import SCORES, CameraModel, evaluate
@@ -133,12 +192,30 @@ def predicted(problem: DesignProblem, x=None, camera=None, scores=None) -> dict:
     return out
 
 
-def monte_carlo(camera, cubes: dict, processing, seeds: int, base_seed: int = 0, keep: list | None = None) -> dict:
+def monte_carlo(camera: CameraSpec, cubes: dict, processing: ProcessingSpec, seeds: int, base_seed: int = 0,
+                keep: list | None = None) -> dict:
     """Chart ΔE*ab and SNR of ``camera`` through the real capture → score pipeline, ``seeds`` captures per light
     (seeds ``base_seed … base_seed + seeds − 1``): per light the mean and the spread over seeds, and their mean;
     the chart's measured S-CIELAB the same way (``s_cielab``, ``s_cielab_std``: the score's
     ``ChartSummary.s_cielab_mean``, where the score has it).  ``keep``: where given, the first capture (first light,
-    first seed) is appended as ``(raw, score)`` — the design's page images; the numbers are the same either way."""
+    first seed) is appended as ``(raw, score)`` — the design's page images; the numbers are the same either way.
+
+    Parameters
+    ----------
+    camera : CameraSpec
+        With its design (``camera.design``).
+    cubes : dict
+        Light label → ``(scene, cube)``.
+    processing : ProcessingSpec
+    seeds, base_seed : int
+    keep : list or None
+
+    Returns
+    -------
+    dict
+        ``mean`` and ``std`` (the chart ΔE*ab over lights, per seed), ``seeds``, ``snr_db``, ``by_light``, and
+        ``s_cielab``/``s_cielab_std`` where scored.
+    """
     from spectracam.experiments.paper.experiment import design_case
 
     by_light, per_seed, sc_seed = {}, [], []
@@ -171,7 +248,19 @@ def monte_carlo(camera, cubes: dict, processing, seeds: int, base_seed: int = 0,
 
 def grid_best(problem: DesignProblem) -> dict:
     """The grid sweep's block pairs scored by the model on the training objective (expected ΔE*ab, or S-CIELAB
-    with ``objective = "s_cielab"``): the best pair and its score."""
+    with ``objective = "s_cielab"``): the best pair and its score.
+
+    Parameters
+    ----------
+    problem : DesignProblem
+        A ``cfa`` design; its camera gets each pair of :data:`GRID_CUTOFFS_NM`.
+
+    Returns
+    -------
+    dict
+        ``cutoffs_nm`` (nm), ``camera``, ``predicted`` (:func:`predicted`, both scores), ``evaluations`` and ``grid``
+        (every ``(c1, c2, score)``).
+    """
     key = "training_s_cielab" if getattr(problem, "score", "delta_e") == "s_cielab" else "training"
     best = None
     rows = []
@@ -187,8 +276,8 @@ def grid_best(problem: DesignProblem) -> dict:
             "evaluations": len(rows), "grid": rows}
 
 
-def design_one(problem: DesignProblem, spec: DesignSpec, cubes: dict, log=lambda m: None,
-               progress: bool = False) -> dict:
+def design_one(problem: DesignProblem, spec: DesignSpec, cubes: dict,
+               log: Callable[[str], object] = lambda m: None, progress: bool = False) -> dict:
     """Optimise one design and score it every way (see the module); the cameras are returned for the report."""
     from spectracam.experiments.design.optimise import optimise
 
@@ -243,8 +332,21 @@ def design_one(problem: DesignProblem, spec: DesignSpec, cubes: dict, log=lambda
     return entry
 
 
-def render_cubes(st: Setup, log=lambda m: None) -> dict:
-    """One rendered chart cube per light (cached like every render)."""
+def render_cubes(st: Setup, log: Callable[[str], object] = lambda m: None) -> dict:
+    """One rendered chart cube per light (cached like every render).
+
+    Parameters
+    ----------
+    st : Setup
+        Its scenes, labels and the spec's renderer.
+    log : callable
+        ``log(line)`` per light rendered.
+
+    Returns
+    -------
+    dict
+        Light label → ``(scene, cube)``.
+    """
     from spectracam.io.cache import cached_render
 
     cubes = {}
@@ -268,10 +370,23 @@ class DesignResult(TypedDict):
     _grid: WavelengthGrid
 
 
-def run_design(spec: DesignSpec, base_dir: Path, log=lambda m: None, st: Setup | None = None,
-               progress: bool = False) -> DesignResult:
+def run_design(spec: DesignSpec, base_dir: Path, log: Callable[[str], object] = lambda m: None,
+               st: Setup | None = None, progress: bool = False) -> DesignResult:
     """Every design of ``spec``: the results.json dict, with each design's cameras under ``_cameras`` (``st``:
-    its :func:`setup`, if made already); ``progress``: bars over the designs and each one's iterations."""
+    its :func:`setup`, if made already); ``progress``: bars over the designs and each one's iterations.
+
+    Parameters
+    ----------
+    spec : DesignSpec
+    base_dir : Path
+        The design file's directory.
+    log : callable
+    st : Setup or None
+    progress : bool
+
+    Returns
+    -------
+    DesignResult"""
     from spectracam.core.progress import bar
     from spectracam.experiments.design.model import DEFAULT_DISPLAY_PIXEL_PITCH_MM, DEFAULT_VIEWING_DISTANCE_M, viewing_samples_per_degree
 

@@ -8,11 +8,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from spectracam.core.errors import ConfigError
 from spectracam.scene.reflectances import LIBRARIES, check_available
 from spectracam.core.spec import Spec
 from spectracam.experiments.design.variables import PARAMETRISATIONS
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable
 
 __all__ = ["DESIGN_KEYS", "DESIGN_OBJECTIVES", "DESIGN_WHITE_BALANCES", "QUICK", "DesignSpec", "load_design"]
 
@@ -166,9 +170,30 @@ QUICK = {"lights": (3000, 6500), "designs": ("cfa/single", "prism/optimal", "fsc
          "max_iterations": 25, "seeds": 2, "image_px": (160, 120), "training": "colorchecker24", "grid": False}
 
 
-def load_design(path: str | Path, overrides=(), quick: bool = False) -> tuple[DesignSpec, Path]:
+def load_design(path: str | Path, overrides: Iterable[str | tuple[str, object]] = (),
+                quick: bool = False) -> tuple[DesignSpec, Path]:
     """A validated :class:`DesignSpec` from a design file (``overrides``: ``--set`` pairs, applied last; ``quick``:
-    :data:`QUICK` before them); returns it and the directory its relative paths start from."""
+    :data:`QUICK` before them); returns it and the directory its relative paths start from.
+
+    Parameters
+    ----------
+    path : str or Path
+        The design file.
+    overrides : iterable of str or (str, object)
+        ``KEY=VALUE`` strings or ``(key, value)`` pairs; each key must be one of :data:`DESIGN_KEYS`.
+    quick : bool
+        ``--quick``: :data:`QUICK`'s keys replace the file's (the file as written is validated first).
+
+    Returns
+    -------
+    tuple of (DesignSpec, Path)
+        The spec and the design file's directory.
+
+    Raises
+    ------
+    ConfigError
+        On an unknown key, an invalid value, or a colour library that is not available.
+    """
     from spectracam.pipeline.overrides import apply_overrides, parse_assignment
     from spectracam.pipeline.scene_file import read_toml
 

@@ -25,6 +25,7 @@ name           variables                                              pipeline c
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -34,6 +35,13 @@ from spectracam.architecture.filters import CHANNELS, QE_MODELS, quantum_efficie
 from spectracam.core.registry import Registry
 from spectracam.core.spectra import band_sample_points, logistic_scale_nm
 from spectracam.experiments.design.ad import backend, fresh, tensor
+
+if TYPE_CHECKING:
+    from spectracam.architecture.base import Architecture
+    from spectracam.architecture.filters import FilterSpec
+    from spectracam.camera import CameraSpec
+    from spectracam.core.spectra import WavelengthGrid
+    from spectracam.experiments.design.spec import DesignSpec
 
 __all__ = ["DESIGN_VARIABLES", "PARAMETRISATIONS", "POINTS_PER_BAND", "Block", "Depths", "FreeForm", "Gaussian",
            "Parametrisation", "Samples", "band_average", "channels_from_primaries", "check_parametrisation",
@@ -56,7 +64,23 @@ class Samples:
     qe: np.ndarray
 
     @classmethod
-    def of(cls, camera, grid, ir_cut_designed: bool) -> "Samples":
+    def of(cls, camera: CameraSpec, grid: WavelengthGrid, ir_cut_designed: bool) -> "Samples":
+        """The samples of ``grid``'s bands, :data:`POINTS_PER_BAND` per band, with ``camera``'s QE there.
+
+        Parameters
+        ----------
+        camera : CameraSpec
+            Its filters' QE model and IR cut.
+        grid : WavelengthGrid
+            The bands, nm.
+        ir_cut_designed : bool
+            The IR-cut edge is a design variable: QE without the camera's IR cut.
+
+        Returns
+        -------
+        Samples
+            ``lam`` (nm), ``q`` and ``qe`` (e⁻/photon).
+        """
         lam = band_sample_points(grid, POINTS_PER_BAND)
         q = np.full(POINTS_PER_BAND + 1, 1.0 / POINTS_PER_BAND)
         q[[0, -1]] *= 0.5
@@ -65,13 +89,37 @@ class Samples:
         return cls(lam, q, np.asarray(qe, float))
 
 
-def band_average(values, samples: Samples):
-    """``(B,)`` trapezoid band averages of values at the sample points ``(B, P + 1)``."""
+def band_average(values: Any, samples: Samples) -> Any:
+    """``(B,)`` trapezoid band averages of values at the sample points ``(B, P + 1)``.
+
+    Parameters
+    ----------
+    values : TensorXf64
+        ``(B, P + 1)`` at ``samples.lam``.
+    samples : Samples
+        Its trapezoid weights ``q``.
+
+    Returns
+    -------
+    TensorXf64
+        ``(B,)``.
+    """
     dr, _ = backend()
     return dr.sum(values * tensor(samples.q)[None, :], axis=1)
 
 
-def logistic(x):
+def logistic(x: Any) -> Any:
+    """The logistic function ``1 / (1 + e^(−x))``, elementwise on tensors (the soft filter edge).
+
+    Parameters
+    ----------
+    x : TensorXf64
+
+    Returns
+    -------
+    TensorXf64
+        ``x``'s shape, in (0, 1).
+    """
     dr, _ = backend()
     return 1.0 / (1.0 + dr.exp(-x))
 
@@ -85,9 +133,24 @@ def designable() -> tuple[str, ...]:
     return tuple(n for n, cls in ARCHITECTURES.items() if cls.design_variables() in DESIGN_VARIABLES)
 
 
-def design_architecture(architecture):
+def design_architecture(architecture: Architecture | str) -> Architecture:
     """The architecture object the design models (``architecture``: one, or a registered name), or one line refusing
-    an architecture the design cannot model (unknown, or computing its channels its own way)."""
+    an architecture the design cannot model (unknown, or computing its channels its own way).
+
+    Parameters
+    ----------
+    architecture : Architecture or str
+
+    Returns
+    -------
+    Architecture
+        ``architecture``, or the registered one made from its name.
+
+    Raises
+    ------
+    SpectracamError
+        When the name is not registered, or its channels are made of neither filters nor depths.
+    """
     if isinstance(architecture, str):
         if architecture not in ARCHITECTURES:
             raise SpectracamError(f"design: architecture {architecture!r} is not registered; the design models "
@@ -100,10 +163,30 @@ def design_architecture(architecture):
     return architecture
 
 
-def channels_from_primaries(architecture, R: list, clear) -> list:
+def channels_from_primaries(architecture: Architecture | str, R: list, clear: Any) -> list:
     """The architecture's channels (an architecture, or a registered name) from the primaries' responsivities R, G, B
     and the unfiltered pixel's ``clear``, as its :attr:`~spectracam.architecture.base.Architecture.primaries` say
-    (:func:`spectracam.architecture.base.complementary`: a pair's sum capped at ``clear``; W: ``clear``)."""
+    (:func:`spectracam.architecture.base.complementary`: a pair's sum capped at ``clear``; W: ``clear``).
+
+    Parameters
+    ----------
+    architecture : Architecture or str
+        One designed by filters.
+    R : list
+        The primaries' ``(B,)`` responsivities, R, G, B, e⁻/photon.
+    clear : TensorXf64
+        ``(B,)`` the unfiltered pixel's (QE × IR cut).
+
+    Returns
+    -------
+    list
+        One ``(B,)`` tensor per channel, in the architecture's order.
+
+    Raises
+    ------
+    SpectracamError
+        When the architecture is not designed by filters (:func:`design_architecture`).
+    """
     dr, _ = backend()
     arch = design_architecture(architecture)
     if arch.design_variables() != "filters":
@@ -125,7 +208,17 @@ def channels_from_primaries(architecture, R: list, clear) -> list:
 
 class Parametrisation:
     """One way of designing filters (see the module).  ``x`` is a numpy vector; :meth:`transmittances` takes it
-    as a Dr.Jit tensor."""
+    as a Dr.Jit tensor.
+
+    Parameters
+    ----------
+    settings : DesignSpec
+        The design file's settings (start values, edge width, knots, …).
+    camera : CameraSpec
+        The camera designed; its filters are replaced.
+    grid : WavelengthGrid
+        The scene's bands, nm.
+    """
 
     name = ""
     #: What it varies, of :data:`DESIGN_VARIABLES`: an architecture is designed by the parametrisations that vary
@@ -134,29 +227,77 @@ class Parametrisation:
     #: Does it design stacked photodiodes (by their depths) rather than filters?
     stacked = False
 
-    def __init__(self, settings, camera, grid):
+    def __init__(self, settings: DesignSpec, camera: CameraSpec, grid: WavelengthGrid):
         self.settings, self.camera, self.grid = settings, camera, grid
 
     def initial(self) -> np.ndarray:
+        """The start of ``x``."""
         raise NotImplementedError
 
     def bounds(self) -> list:
+        """``(low, high)`` per entry of ``x`` (L-BFGS-B's box)."""
         raise NotImplementedError
 
-    def transmittances(self, x, samples: Samples) -> list:
-        """Three tensors ``(B, P + 1)``: T_R, T_G, T_B at the sample points."""
+    def transmittances(self, x: Any, samples: Samples) -> list:
+        """Three tensors ``(B, P + 1)``: T_R, T_G, T_B at the sample points.
+
+        Parameters
+        ----------
+        x : TensorXf64
+            The design vector; its first entries are this parametrisation's.
+        samples : Samples
+            Where, nm.
+
+        Returns
+        -------
+        list
+            T_R, T_G, T_B, each ``(B, P + 1)``, in [0, 1].
+        """
         raise NotImplementedError
 
-    def penalty(self, x):
-        """The realisability term (0 unless a parametrisation has one)."""
+    def penalty(self, x: Any) -> Any:
+        """The realisability term (0 unless a parametrisation has one).
+
+        Parameters
+        ----------
+        x : TensorXf64
+            The design vector.
+
+        Returns
+        -------
+        TensorXf64 or float
+            Added to the objective.
+        """
         return 0.0
 
-    def filters(self, x: np.ndarray):
-        """The :class:`~spectracam.architecture.filters.FilterSpec` of design ``x`` (for the pipeline)."""
+    def filters(self, x: np.ndarray) -> FilterSpec:
+        """The :class:`~spectracam.architecture.filters.FilterSpec` of design ``x`` (for the pipeline).
+
+        Parameters
+        ----------
+        x : ndarray
+            This parametrisation's entries of the design vector.
+
+        Returns
+        -------
+        FilterSpec
+            The camera's filters with the designed ones in their place.
+        """
         raise NotImplementedError
 
     def describe(self, x: np.ndarray) -> dict:
-        """The design's numbers, named (results.json)."""
+        """The design's numbers, named (results.json).
+
+        Parameters
+        ----------
+        x : ndarray
+            This parametrisation's entries of the design vector.
+
+        Returns
+        -------
+        dict
+            Name → value (nm, µm or the settings it was designed with).
+        """
         raise NotImplementedError
 
 
@@ -172,14 +313,14 @@ class Block(Parametrisation):
 
     name = "block"
 
-    def initial(self):
+    def initial(self) -> np.ndarray:
         return np.asarray(self.settings.start_cutoffs_nm, float)
 
-    def bounds(self):
+    def bounds(self) -> list:
         lo, hi = float(self.grid.edges_nm[0]), float(self.grid.edges_nm[-1])
         return [(lo + 5.0, hi - 5.0)] * 2
 
-    def transmittances(self, x, samples):
+    def transmittances(self, x: Any, samples: Samples) -> list:
         dr, _ = backend()
         lam = tensor(samples.lam)
         w = self.settings.edge_width_nm
@@ -196,16 +337,16 @@ class Block(Parametrisation):
         r1, r2 = rise(_t(x, 0)), rise(_t(x, 1))
         return [r2, r1 * (1.0 - r2), 1.0 - r1]
 
-    def penalty(self, x):
+    def penalty(self, x: Any) -> Any:
         dr, _ = backend()
         gap = _t(x, 1) - _t(x, 0) - 10.0   # the green band at least 10 nm wide
         return 1e3 * dr.square(dr.minimum(gap, 0.0))
 
-    def filters(self, x):
+    def filters(self, x: np.ndarray) -> FilterSpec:
         return self.camera.filters.replace(kind="block", cutoffs_nm=(float(x[0]), float(x[1])),
                                            edge_width_nm=float(self.settings.edge_width_nm))
 
-    def describe(self, x):
+    def describe(self, x: np.ndarray) -> dict:
         return {"cutoffs_nm": [round(float(v), 2) for v in x[:2]], "edge_width_nm": self.settings.edge_width_nm}
 
 
@@ -215,24 +356,24 @@ class Gaussian(Parametrisation):
 
     name = "gaussian"
 
-    def initial(self):
+    def initial(self) -> np.ndarray:
         return np.array([*self.settings.start_centres_nm, *self.settings.start_fwhm_nm], float)
 
-    def bounds(self):
+    def bounds(self) -> list:
         lo, hi = float(self.grid.edges_nm[0]), float(self.grid.edges_nm[-1])
         return [(lo, hi)] * 3 + [(10.0, 300.0)] * 3
 
-    def transmittances(self, x, samples):
+    def transmittances(self, x: Any, samples: Samples) -> list:
         dr, _ = backend()
         lam = tensor(samples.lam)
         k = float(2 * np.sqrt(2 * np.log(2)))   # a numpy scalar would take the tensor apart
         return [dr.exp(-0.5 * dr.square((lam - _t(x, i)) * (k / _t(x, 3 + i)))) for i in range(3)]
 
-    def filters(self, x):
+    def filters(self, x: np.ndarray) -> FilterSpec:
         return self.camera.filters.replace(kind="gaussian", centres_nm=tuple(float(v) for v in x[:3]),
                                            fwhm_nm=tuple(float(v) for v in x[3:6]))
 
-    def describe(self, x):
+    def describe(self, x: np.ndarray) -> dict:
         return {"centres_nm": [round(float(v), 2) for v in x[:3]], "fwhm_nm": [round(float(v), 2) for v in x[3:6]]}
 
 
@@ -250,14 +391,14 @@ class FreeForm(Parametrisation):
         n = int(np.ceil((hi - lo) / self.settings.knot_step_nm - 1e-9))
         return np.linspace(lo, hi, n + 1)
 
-    def initial(self):
+    def initial(self) -> np.ndarray:
         """The paper's block filters sampled at the knots (or the start cutoffs), lifted to the floor."""
         c1, c2 = self.settings.start_cutoffs_nm
         k = self.knots_nm
         T = np.stack([(k > c2), (k > c1) & (k <= c2), (k <= c1)]).astype(float)
         return np.clip(T, self.settings.min_transmittance, 1.0).ravel()
 
-    def bounds(self):
+    def bounds(self) -> list:
         return [(self.settings.min_transmittance, 1.0)] * (3 * self.knots_nm.size)
 
     def _hat(self, samples):
@@ -279,7 +420,7 @@ class FreeForm(Parametrisation):
         out[:, i * K:(i + 1) * K] = rows
         return out
 
-    def transmittances(self, x, samples):
+    def transmittances(self, x: Any, samples: Samples) -> list:
         dr, _ = backend()
         width = dr.width(x)
         key = (id(samples), width)
@@ -292,7 +433,7 @@ class FreeForm(Parametrisation):
             out.append(dr.reshape(type(T), T, samples.lam.shape))
         return out
 
-    def penalty(self, x):
+    def penalty(self, x: Any) -> Any:
         dr, _ = backend()
         K = self.knots_nm.size
         width = dr.width(x)
@@ -306,13 +447,13 @@ class FreeForm(Parametrisation):
             total = total + dr.mean(dr.square(d2)) * scale
         return self.settings.smoothness * total / 3.0
 
-    def filters(self, x):
+    def filters(self, x: np.ndarray) -> FilterSpec:
         K = self.knots_nm.size
         rows = np.clip(np.asarray(x, float)[:3 * K].reshape(3, K).T, 0.0, 1.0)
         return self.camera.filters.replace(kind="transmittance", transmittance_nm=tuple(self.knots_nm.tolist()),
                                            transmittance=tuple(tuple(r) for r in rows.tolist()))
 
-    def describe(self, x):
+    def describe(self, x: np.ndarray) -> dict:
         return {"knot_step_nm": self.settings.knot_step_nm, "knots": int(self.knots_nm.size),
                 "min_transmittance": self.settings.min_transmittance, "smoothness": self.settings.smoothness}
 
@@ -331,16 +472,31 @@ class Depths(Parametrisation):
         """The camera's window boundaries, as its stacked architecture reads them."""
         return self.camera.architecture().depths_um(self.camera.filters)
 
-    def initial(self):
+    def initial(self) -> np.ndarray:
         z = np.asarray(self.depths_um, float)
         return np.concatenate([[z[0]], np.diff(z)])
 
-    def bounds(self):
+    def bounds(self) -> list:
         n = len(self.depths_um)
         return [(0.01, 2.0)] + [(0.05, 20.0)] * (n - 1)
 
-    def layer_qe(self, x, samples, ir_cut=None):
-        """Bottom-first layer responsivities at the sample points (the pipeline's ``layer_qe`` × IR cut)."""
+    def layer_qe(self, x: Any, samples: Samples, ir_cut: Any | None = None) -> list:
+        """Bottom-first layer responsivities at the sample points (the pipeline's ``layer_qe`` × IR cut).
+
+        Parameters
+        ----------
+        x : TensorXf64
+            The dead layer z₀ and the windows' widths, µm.
+        samples : Samples
+            Where, nm.
+        ir_cut : TensorXf64 or None
+            The designed IR cut's transmittance there (it replaces the camera's shared one); None: the camera's.
+
+        Returns
+        -------
+        list
+            One ``(B, P + 1)`` tensor per layer, deepest first, e⁻/photon.
+        """
         dr, _ = backend()
         from spectracam.architecture.silicon import absorption_coefficient_per_um, reflectance
 
@@ -362,18 +518,30 @@ class Depths(Parametrisation):
             cut = cut * ir_cut
         return [front * (reach[k] - reach[k + 1]) * cut for k in reversed(range(n - 1))]
 
-    def filters(self, x):
+    def filters(self, x: np.ndarray) -> FilterSpec:
         z = np.cumsum(np.asarray(x, float))
         return self.camera.architecture().with_depths(self.camera.filters, z)
 
-    def describe(self, x):
+    def describe(self, x: np.ndarray) -> dict:
         return {"stacked_depths_um": [round(float(v), 4) for v in np.cumsum(x)]}
 
 
-def check_parametrisation(name: str, architecture) -> None:
+def check_parametrisation(name: str, architecture: Architecture | str) -> None:
     """The parametrisation ``name`` varies what the architecture (an architecture, or a registered name) is designed
     by (:meth:`~spectracam.architecture.base.Architecture.design_variables`): stacked photodiodes their depths, every
-    other architecture the design models its filters; one line otherwise, or for an architecture it cannot model."""
+    other architecture the design models its filters; one line otherwise, or for an architecture it cannot model.
+
+    Parameters
+    ----------
+    name : str
+        A name of :data:`PARAMETRISATIONS`.
+    architecture : Architecture or str
+
+    Raises
+    ------
+    SpectracamError
+        When the two do not fit, or the design cannot model the architecture.
+    """
     p = PARAMETRISATIONS[name]
     arch = design_architecture(architecture)
     varies = arch.design_variables()

@@ -35,11 +35,23 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from typing import TypedDict
+from typing import TYPE_CHECKING, TypedDict
 
 import numpy as np
 
 from spectracam.core.errors import SpectracamError
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Sequence
+    from pathlib import Path
+
+    from matplotlib.figure import Figure
+
+    from spectracam.camera import CameraSpec
+    from spectracam.camera.capture import RawCapture
+    from spectracam.pipeline.scene_file import Scene
+    from spectracam.render import RadianceCube
+    from spectracam.scene.reference import ChartCell
 
 __all__ = ["DELTA_E_KEPT", "DESIGNS", "GREY_PATCH", "HAND_HELD_LIMIT_S", "KEPT_METRICS", "QUICK_IMAGE_PX", "SCENES", "TEMPERATURES_C",
            "DynamicRangeResult", "DynamicRangeRun", "chart_rows", "dynamic_range_figure", "dynamic_range_markdown",
@@ -100,9 +112,36 @@ def _scene(name: str, quick: bool, sets: tuple):
     return parse_scene(data, source)
 
 
-def plan(quick: bool = False, seeds: int | None = None, renderer: str = "analytic", sets=(), designs=DESIGNS,
-         readouts=None, temperatures_C=None) -> DynamicRangeRun:
-    """Every scene with ``sets`` applied, and the cases, validated (a bad value is one line before any work)."""
+def plan(quick: bool = False, seeds: int | None = None, renderer: str = "analytic", sets: Sequence[str] = (),
+         designs: Sequence[str] = DESIGNS, readouts: Sequence[str] | None = None,
+         temperatures_C: Sequence[float] | None = None) -> DynamicRangeRun:
+    """Every scene with ``sets`` applied, and the cases, validated (a bad value is one line before any work).
+
+    Parameters
+    ----------
+    quick : bool
+        ``--quick``: 25 and 105 °C, one seed (each unless given), smaller scenes.
+    seeds : int or None
+        None: 3 (1 with ``quick``).
+    renderer : str
+    sets : sequence of str
+        ``--set PATH=VALUE``; not the paths a case sets (read-out, temperature, design).
+    designs : sequence of str
+    readouts : sequence of str or None
+        None: every read-out.
+    temperatures_C : sequence of float or None
+        Die temperatures, °C; None: :data:`TEMPERATURES_C`.
+
+    Returns
+    -------
+    DynamicRangeRun
+        With the hand-held time limit, :data:`HAND_HELD_LIMIT_S`.
+
+    Raises
+    ------
+    SpectracamError
+        On an invalid value.
+    """
     from spectracam.sensor import READOUT_NAMES
 
     readouts = tuple(READOUT_NAMES if readouts is None else readouts)
@@ -128,9 +167,28 @@ def plan(quick: bool = False, seeds: int | None = None, renderer: str = "analyti
                            HAND_HELD_LIMIT_S)
 
 
-def expose_hdr(cube, camera, seed: int, white_radiance: np.ndarray, limit_s: float):
+def expose_hdr(cube: RadianceCube, camera: CameraSpec, seed: int, white_radiance: np.ndarray,
+               limit_s: float) -> RawCapture:
     """A capture of ``cube`` metered on ``white_radiance`` ``(B,)`` (``white_fill`` of the read-out's range, the
-    camera's exposure scheme), shortened in proportion to last at most ``limit_s``."""
+    camera's exposure scheme), shortened in proportion to last at most ``limit_s``.
+
+    Parameters
+    ----------
+    cube : RadianceCube
+        W·m⁻²·sr⁻¹·nm⁻¹.
+    camera : CameraSpec
+    seed : int
+        The noise seed.
+    white_radiance : ndarray
+        ``(B,)`` the metered white's radiance.
+    limit_s : float
+        The longest capture, s.
+
+    Returns
+    -------
+    RawCapture
+        Its metering recorded as ``hdr_white`` with the factor it was shortened by.
+    """
     from spectracam.camera import band_weights
     from spectracam.camera.capture import RawCapture, capture_time_s
     from spectracam.sensor.exposure import exposure_times_s
@@ -172,9 +230,30 @@ def _mean_sd(values) -> tuple[float | None, float | None]:
     return float(v.mean()), float(v.std(ddof=1)) if v.size > 1 else 0.0
 
 
-def chart_rows(cube, scene, cells, camera, run: DynamicRangeRun, exposure: str) -> list[dict]:
+def chart_rows(cube: RadianceCube, scene: Scene, cells: Sequence[ChartCell], camera: CameraSpec,
+               run: DynamicRangeRun, exposure: str) -> list[dict]:
     """One row per chart of ``scene`` for one camera and exposure (``scene`` or ``chart``), each metric's mean and
-    standard deviation over the run's seeds."""
+    standard deviation over the run's seeds.
+
+    Parameters
+    ----------
+    cube : RadianceCube
+        ``scene``'s render.
+    scene : Scene
+    cells : sequence of ChartCell
+        Its charts (:func:`~spectracam.scene.reference.chart_cells`).
+    camera : CameraSpec
+    run : DynamicRangeRun
+        Its seeds and time limit.
+    exposure : str
+        ``"scene"``: one capture metered on the brightest chart; ``"chart"``: one per chart, metered on it.
+
+    Returns
+    -------
+    list of dict
+        ``chart``, white luminance (cd/m²), exposure times (ms), a note (why not exposed) and each metric with
+        ``_sd``.
+    """
     from spectracam.evaluation.score import camera_rates
 
     brightest = max(cells, key=lambda c: c.reference.illuminant.white_luminance_cd_m2)
@@ -208,7 +287,23 @@ def chart_rows(cube, scene, cells, camera, run: DynamicRangeRun, exposure: str) 
 def kept_range(rows: list[dict], threshold: float = DELTA_E_KEPT, metric: str = "delta_e_ab") -> dict:
     """The widest span of white luminance over which the mean ``metric`` stays below ``threshold``: the longest run of
     consecutive charts (by luminance) below it, each end moved to where it crosses the threshold, interpolated
-    linearly in log luminance with the next chart; ``lo_open``/``hi_open`` when the run reaches the ladder's end."""
+    linearly in log luminance with the next chart; ``lo_open``/``hi_open`` when the run reaches the ladder's end.
+
+    Parameters
+    ----------
+    rows : list of dict
+        :func:`chart_rows`' of one case.
+    threshold : float
+        ΔE.
+    metric : str
+        A row key (None: not scored, never below).
+
+    Returns
+    -------
+    dict
+        ``lo_cd_m2``, ``hi_cd_m2`` (None when no chart is below), ``range_db`` (20·log₁₀ hi/lo), ``lo_open``,
+        ``hi_open``.
+    """
     rows = sorted(rows, key=lambda r: r["white_luminance_cd_m2"])
     lum = np.log10([r["white_luminance_cd_m2"] for r in rows])
     de = np.array([np.inf if r[metric] is None else r[metric] for r in rows])
@@ -255,8 +350,23 @@ def _cases(run: DynamicRangeRun):
                 yield design, readout, t
 
 
-def run_dynamic_range(run: DynamicRangeRun, log=print, progress: bool = False) -> DynamicRangeResult:
-    """Render each scene once; capture and score it for every case (see the module docstring)."""
+def run_dynamic_range(run: DynamicRangeRun, log: Callable[[str], object] = print,
+                      progress: bool = False) -> DynamicRangeResult:
+    """Render each scene once; capture and score it for every case (see the module docstring).
+
+    Parameters
+    ----------
+    run : DynamicRangeRun
+        :func:`plan`'s.
+    log : callable
+        ``log(line)`` per case.
+    progress : bool
+
+    Returns
+    -------
+    DynamicRangeResult
+        results.json's keys but ``command``.
+    """
     from spectracam.pipeline import render
     from spectracam.scene.reference import chart_cells
 
@@ -286,10 +396,20 @@ def run_dynamic_range(run: DynamicRangeRun, log=print, progress: bool = False) -
 # ------------------------------------------------------------------------------------------------ the outputs
 
 
-def dynamic_range_figure(result: dict):
+def dynamic_range_figure(result: dict) -> Figure:
     """Mean ΔE against the chart's white luminance on the ladder (one exposure for the scene, the first temperature):
     against the scene (top) and against the camera's noise-free rendering (bottom), a column per design, a line per
-    read-out; the kept threshold dashed; values above 1000 drawn at 1000."""
+    read-out; the kept threshold dashed; values above 1000 drawn at 1000.
+
+    Parameters
+    ----------
+    result : dict
+        :func:`run_dynamic_range`'s.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     from spectracam.io.plots import palette, pyplot
 
     plt = pyplot()   # Agg, the colour-blind-safe cycle
@@ -330,7 +450,19 @@ def _fmt(v, f="{:.2f}") -> str:
 
 
 def dynamic_range_markdown(result: dict, command: str) -> str:
-    """report.md: the kept ranges of the ladder, then the two-chart scene's sun and shade."""
+    """report.md: the kept ranges of the ladder, then the two-chart scene's sun and shade.
+
+    Parameters
+    ----------
+    result : dict
+        :func:`run_dynamic_range`'s.
+    command : str
+        The command, recorded at the top.
+
+    Returns
+    -------
+    str
+    """
     p = result["parameters"]
     lines = ["# Dynamic range: which architecture and read-out keep colour", "", f"Command: `{command}`", "",
              f"Seeds: {p['seeds']}; renderer: {p['renderer']}; hand-held limit {p['time_limit_ms']:.1f} ms. "
@@ -360,15 +492,39 @@ def dynamic_range_markdown(result: dict, command: str) -> str:
 
 def summary_lines(result: dict) -> list[str]:
     """One line per design and read-out: the range kept within one scene (against the camera's noise-free rendering)
-    at the first temperature."""
+    at the first temperature.
+
+    Parameters
+    ----------
+    result : dict
+        :func:`run_dynamic_range`'s.
+
+    Returns
+    -------
+    list of str
+        For the command's log, range in dB and cd/m².
+    """
     t0 = result["parameters"]["temperatures_C"][0]
     return [f"  {k['design']:14s} {k['readout']:17s} kept {k['range_db']:5.1f} dB "
             f"({_fmt(k['lo_cd_m2'], '{:.3g}')}–{_fmt(k['hi_cd_m2'], '{:.3g}')} cd/m²)"
             for k in result["kept"] if k["temperature_C"] == t0 and k["exposure"] == "scene" and k["against"] == "capture"]
 
 
-def write_dynamic_range_outputs(out_dir, result: dict, command: str) -> list:
-    """results.json, report.md and dynamic_range.png/.svg, atomically."""
+def write_dynamic_range_outputs(out_dir: str | Path, result: dict, command: str) -> list:
+    """results.json, report.md and dynamic_range.png/.svg, atomically.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+    result : dict
+        :func:`run_dynamic_range`'s.
+    command : str
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
     from spectracam.io.report import write_figure_json_markdown
 
     return write_figure_json_markdown(out_dir, "dynamic_range", dynamic_range_figure(result), "results.json", result,

@@ -11,7 +11,7 @@ quantity can be held against it.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TypedDict
+from typing import TYPE_CHECKING, TypedDict
 
 import numpy as np
 
@@ -22,6 +22,11 @@ from spectracam.architecture.filters import CHANNELS, responsivities
 from spectracam.sensor import dark_gain_moments, fixed_pattern, noise_stream, read_frame
 from spectracam.core.spectra import WavelengthGrid
 from spectracam.io.plots import OKABE_ITO
+
+if TYPE_CHECKING:
+    from pathlib import Path
+
+    from matplotlib.figure import Figure
 
 __all__ = ["EMVA_STREAM", "KEYS", "LABELS", "LINEARITY_CLAUSE", "ROLES", "SATURATION_CLAUSE",
            "SENSITIVITY_CLAUSE", "EmvaResult", "EmvaSetup", "channel_qe", "configured", "datasheet_markdown", "figures",
@@ -53,13 +58,47 @@ class EmvaSetup:
 
 
 def channel_qe(camera: CameraSpec, channel: str, wavelength_nm: float) -> float:
-    """η at one wavelength: the channel's filter × QE (electrons per photon)."""
+    """η at one wavelength: the channel's filter × QE (electrons per photon).
+
+    Parameters
+    ----------
+    camera : CameraSpec
+        Its filters.
+    channel : str
+        ``"R"``, ``"G"`` or ``"B"``.
+    wavelength_nm : float
+        nm.
+
+    Returns
+    -------
+    float
+        e⁻/photon.
+    """
     grid = WavelengthGrid([wavelength_nm - 0.1, wavelength_nm, wavelength_nm + 0.1])
     return float(responsivities(camera.filters, grid)[CHANNELS.index(channel), 1])
 
 
 def simulate_series(camera: CameraSpec, setup: EmvaSetup = EmvaSetup()) -> tuple[EmvaSeries, dict]:
-    """The frames of the measurement, taken with one physical sensor (one fixed pattern)."""
+    """The frames of the measurement, taken with one physical sensor (one fixed pattern).
+
+    Parameters
+    ----------
+    camera : CameraSpec
+        Its sensor, read ``single``.
+    setup : EmvaSetup
+
+    Returns
+    -------
+    series : EmvaSeries
+        Bright and dark pairs at every step (DN), the spatial stacks and the photons per pixel μ_p.
+    info : dict
+        ``eta`` (e⁻/photon) and ``photons_per_s`` (per pixel).
+
+    Raises
+    ------
+    SpectracamError
+        For another read-out, a non-finite wavelength, or a channel that does not respond there.
+    """
     s = camera.sensor
     if s.readout != "single":
         raise SpectracamError(f"sensor.readout = {s.readout!r}: EMVA 1288 Linear's photon transfer needs a read-out "
@@ -101,7 +140,23 @@ def simulate_series(camera: CameraSpec, setup: EmvaSetup = EmvaSetup()) -> tuple
 
 
 def configured(camera: CameraSpec, setup: EmvaSetup, photons_per_s: float, eta: float) -> dict:
-    """The standard's quantities for the configured camera (see :func:`spectracam.evaluation.emva1288.expected`)."""
+    """The standard's quantities for the configured camera (see :func:`spectracam.evaluation.emva1288.expected`).
+
+    Parameters
+    ----------
+    camera : CameraSpec
+    setup : EmvaSetup
+        Its saturation time, s (the spatial stacks' exposure is half of it).
+    photons_per_s : float
+        Photons per pixel per second at the measurement's irradiance.
+    eta : float
+        e⁻/photon.
+
+    Returns
+    -------
+    dict
+        :func:`~spectracam.evaluation.emva1288.expected`'s.
+    """
     s = camera.sensor
     t50 = 0.5 * setup.saturation_time_s
     dark = s.dark_rate_e_per_s
@@ -140,7 +195,23 @@ class EmvaResult(TypedDict):
 
 
 def run_emva(camera: CameraSpec, setup: EmvaSetup = EmvaSetup()) -> EmvaResult:
-    """Measure and analyse; ``{"configured", "measured", "setup", "camera", "curves"}``."""
+    """Measure and analyse; ``{"configured", "measured", "setup", "camera", "curves"}``.
+
+    Parameters
+    ----------
+    camera : CameraSpec
+    setup : EmvaSetup
+
+    Returns
+    -------
+    EmvaResult
+        emva.json's keys but ``command``.
+
+    Raises
+    ------
+    SpectracamError
+        When the series cannot be analysed as EMVA 1288 prescribes (named in the camera's terms).
+    """
     series, info = simulate_series(camera, setup)
     try:
         measured = analyse(series)
@@ -180,7 +251,20 @@ def _fmt(fmt: str, v) -> str:
 
 
 def datasheet_markdown(result: dict, command: str) -> str:
-    """The EMVA 1288 datasheet of the simulated camera: configured beside measured."""
+    """The EMVA 1288 datasheet of the simulated camera: configured beside measured.
+
+    Parameters
+    ----------
+    result : dict
+        :func:`run_emva`'s.
+    command : str
+        The command, recorded at the top.
+
+    Returns
+    -------
+    str
+        datasheet.md's text.
+    """
     c, m, st = result["configured"], result["measured"], result["setup"]
     lines = ["# EMVA 1288 datasheet of the simulated camera", "",
              f"Made by `{command}`. Release 4.0, linear sensors; channel {st['channel']} at {st['wavelength_nm']:g} nm, "
@@ -221,7 +305,18 @@ def point_roles(curves: dict) -> dict:
     from the analysis's own masks (:func:`spectracam.evaluation.emva1288.analyse` ``curves``).  ``"fit"``: the
     steps the figure's fit used (photon transfer and SNR: the 0–70 % range of K and η, which the SNR
     model curve is drawn with; linearity: 5–95 %); ``"excluded"``: the other steps up to saturation;
-    ``"beyond_saturation"``: the steps past the saturation point, which no fit uses."""
+    ``"beyond_saturation"``: the steps past the saturation point, which no fit uses.
+
+    Parameters
+    ----------
+    curves : dict
+        The result's ``curves`` (its fit masks).
+
+    Returns
+    -------
+    dict
+        ``photon_transfer``, ``snr``, ``linearity`` → ``fit``, ``excluded``, ``beyond_saturation`` boolean arrays.
+    """
     beyond = np.asarray(curves["beyond_saturation_mask"], bool)
     out = {}
     for name, key in (("photon_transfer", "sensitivity_fit_mask"), ("snr", "sensitivity_fit_mask"),
@@ -261,9 +356,20 @@ def _draw_steps(ax, x, y, roles, fit_label, clause, shown=None, off_scale=None):
                         label=None if on.any() else style[role]["label"], **kw)
 
 
-def figures(result: dict):
+def figures(result: dict) -> dict[str, Figure]:
     """``{name: figure}``: photon transfer, SNR and linearity, as the standard draws them, with the
-    steps each fit left out marked (:func:`point_roles`)."""
+    steps each fit left out marked (:func:`point_roles`).
+
+    Parameters
+    ----------
+    result : dict
+        :func:`run_emva`'s (its ``curves`` and ``fit``).
+
+    Returns
+    -------
+    dict of str to matplotlib.figure.Figure
+        Three figures, by file name.
+    """
     from spectracam.io.plots import pyplot
 
     plt = pyplot()
@@ -360,8 +466,21 @@ def _draw_deviation(ax, cv: dict, fit: dict, r: dict, mu_p, fit_label: str) -> N
     ax.set_ylabel("deviation from the linear fit δ_y (%)")
 
 
-def write_emva_outputs(out_dir, result: dict, command: str) -> list:
-    """emva.json, datasheet.md and the three figures (PNG + SVG), atomically."""
+def write_emva_outputs(out_dir: str | Path, result: dict, command: str) -> list:
+    """emva.json, datasheet.md and the three figures (PNG + SVG), atomically.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+    result : dict
+        :func:`run_emva`'s (NaN written as null).
+    command : str
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
     import json
     from pathlib import Path
 

@@ -33,11 +33,17 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from typing import TypedDict
+from typing import TYPE_CHECKING, TypedDict
 
 import numpy as np
 
 from spectracam.core.errors import SpectracamError
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Sequence
+    from pathlib import Path
+
+    from matplotlib.figure import Figure
 
 __all__ = ["CORRECTIONS", "CRA_CORNER_DEG", "DESIGNS", "GREY_PATCH", "MAP_BLOCK_PX", "PITCHES_UM", "PIXEL", "QUICK_IMAGE_PX", "RADIAL_BINS", "SHIFTS",
            "WHITE_PATCH", "FieldResult", "FieldRun", "field_figure", "field_markdown", "field_maps_figure", "plan",
@@ -112,9 +118,35 @@ def _scene(quick: bool, sets: tuple, cra_deg: float):
     return parse_scene(data, source)
 
 
-def plan(quick: bool = False, seeds: int | None = None, renderer: str = "analytic", sets=(), designs=DESIGNS,
-         shifts=None, corrections=None, cra_deg: float = CRA_CORNER_DEG, pitches_um=None) -> FieldRun:
-    """The scene with ``sets`` applied, and the cases, validated (a bad value is one line before any work)."""
+def plan(quick: bool = False, seeds: int | None = None, renderer: str = "analytic", sets: Sequence[str] = (),
+         designs: Sequence[str] = DESIGNS, shifts: Sequence[float] | None = None,
+         corrections: Sequence[str] | None = None, cra_deg: float = CRA_CORNER_DEG,
+         pitches_um: Sequence[float] | None = None) -> FieldRun:
+    """The scene with ``sets`` applied, and the cases, validated (a bad value is one line before any work).
+
+    Parameters
+    ----------
+    quick : bool
+        ``--quick``: shifts 0 and 1, a 1.4 µm pixel, one seed (each unless given).
+    seeds : int or None
+    renderer : str
+    sets : sequence of str
+        ``--set PATH=VALUE``; not the paths a case sets (shift, correction, chief-ray angle, pitch, design).
+    designs, corrections : sequence of str, optional
+    shifts, pitches_um : sequence of float, optional
+        Microlens shifts (fractions of the ideal) and pixel pitches (µm); None: :data:`SHIFTS`, :data:`PITCHES_UM`.
+    cra_deg : float
+        The chief ray's angle at the corner, degrees (0–60).
+
+    Returns
+    -------
+    FieldRun
+
+    Raises
+    ------
+    SpectracamError
+        On an invalid value.
+    """
     from spectracam.processing.shading import SHADING_CORRECTIONS
 
     shifts = tuple(float(s) for s in (((0.0, 1.0) if quick else SHIFTS) if shifts is None else shifts))
@@ -150,7 +182,20 @@ def plan(quick: bool = False, seeds: int | None = None, renderer: str = "analyti
 
 def radial_bins(shape: tuple[int, int], n: int = RADIAL_BINS) -> np.ndarray:
     """Each pixel's ring ``(H, W)`` int: ⌊n·r⌋ (clipped to n − 1) of its relative image height r = distance from the
-    image's centre over the half diagonal."""
+    image's centre over the half diagonal.
+
+    Parameters
+    ----------
+    shape : tuple of int
+        ``(H, W)``.
+    n : int
+        Rings.
+
+    Returns
+    -------
+    ndarray
+        ``(H, W)`` int64, 0 … n − 1.
+    """
     h, w = shape
     y = np.arange(h) - (h - 1) / 2.0
     x = np.arange(w) - (w - 1) / 2.0
@@ -285,8 +330,22 @@ def _design_rows(run: FieldRun, scene, reference, chart, flat, rings, radius, de
     return rows
 
 
-def run_field(run: FieldRun, log=print, progress: bool = True) -> FieldResult:
-    """Every case of ``run``: a row per design × pixel pitch × microlens shift × correction."""
+def run_field(run: FieldRun, log: Callable[[str], object] = print, progress: bool = True) -> FieldResult:
+    """Every case of ``run``: a row per design × pixel pitch × microlens shift × correction.
+
+    Parameters
+    ----------
+    run : FieldRun
+        :func:`plan`'s.
+    log : callable
+        ``log(line)`` per case.
+    progress : bool
+
+    Returns
+    -------
+    FieldResult
+        The parameters, rows, the measured lenses (:mod:`.measured`), the time (s) and the maps.
+    """
     from spectracam.render import RadianceCube, render
     from spectracam.scene.reference import ChartReference
 
@@ -339,9 +398,20 @@ def _cct(reference) -> float:
 # ------------------------------------------------------------------------------------------------ the outputs
 
 
-def field_figure(result: dict):
+def field_figure(result: dict) -> Figure:
     """The flat grey's colour shading (ΔE*ab from the centre's colour) against relative image height: a column per
-    design, a line per microlens shift (colour) and correction (style)."""
+    design, a line per microlens shift (colour) and correction (style).
+
+    Parameters
+    ----------
+    result : dict
+        :func:`run_field`'s.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        A row per pixel pitch.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -377,9 +447,21 @@ def field_figure(result: dict):
     return fig
 
 
-def field_maps_figure(run_maps: dict, result: dict):
+def field_maps_figure(run_maps: dict, result: dict) -> Figure:
     """Maps: each design's flat grey as rendered, ΔE*ab from the centre's colour per pixel (block-averaged), a column
-    per correction, at the largest microlens shift."""
+    per correction, at the largest microlens shift.
+
+    Parameters
+    ----------
+    run_maps : dict
+        The result's ``maps``.
+    result : dict
+        :func:`run_field`'s (its parameters).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -412,7 +494,19 @@ def _fmt(v, f="{:.2f}") -> str:
 
 
 def field_markdown(result: dict, command: str) -> str:
-    """report.md: the corner's colour shading and the chart's cost of the field, per design, shift and correction."""
+    """report.md: the corner's colour shading and the chart's cost of the field, per design, shift and correction.
+
+    Parameters
+    ----------
+    result : dict
+        :func:`run_field`'s.
+    command : str
+        The command, recorded at the top.
+
+    Returns
+    -------
+    str
+    """
     p = result["parameters"]
     lines = ["# Off the axis: which architecture keeps colour uniform to the corner", "", f"Command: `{command}`", "",
              f"Lens: cos⁴ relative illumination, chief ray linear to {p['cra_corner_deg']:g}° at the corner; pixel: "
@@ -438,7 +532,18 @@ def field_markdown(result: dict, command: str) -> str:
 
 
 def summary_lines(result: dict) -> list[str]:
-    """Per design and pixel pitch: the shift and correction that keep the corner's colour closest to the centre's."""
+    """Per design and pixel pitch: the shift and correction that keep the corner's colour closest to the centre's.
+
+    Parameters
+    ----------
+    result : dict
+        :func:`run_field`'s.
+
+    Returns
+    -------
+    list of str
+        One line each, for the command's log.
+    """
     out = []
     for d in result["parameters"]["designs"]:
         for pitch in result["parameters"]["pixel_pitches_um"]:
@@ -450,8 +555,21 @@ def summary_lines(result: dict) -> list[str]:
     return out
 
 
-def write_field_outputs(out_dir, result: dict, command: str) -> list:
-    """results.json, report.md, field.png/.svg and (with the result's maps) field_maps.png/.svg, atomically."""
+def write_field_outputs(out_dir: str | Path, result: dict, command: str) -> list:
+    """results.json, report.md, field.png/.svg and (with the result's maps) field_maps.png/.svg, atomically.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+    result : dict
+        :func:`run_field`'s (its maps are kept out of results.json).
+    command : str
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
     from pathlib import Path
 
     from spectracam.io.plots import save_figure

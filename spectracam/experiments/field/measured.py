@@ -45,12 +45,21 @@ from __future__ import annotations
 import math
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
 from spectracam.core.errors import SpectracamError
 from spectracam.optics.field import LENSFUN_DIR, cos4_illumination, exit_pupil_illumination
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    from numpy.typing import ArrayLike
+
+    from spectracam.camera import CameraSpec
+    from spectracam.core.spectra import WavelengthGrid
 
 __all__ = ["CALIBRATION_TEMPERATURES_K", "IMX477_DECIMATION", "IMX477_F_NUMBER", "IMX477_PITCH_UM", "IMX477_PIXEL",
            "IMX477_FILTERS", "IMX477_SIZE_PX", "LENSFUN_APERTURE", "LENSFUN_LENS", "LENSFUN_PREDICT_APERTURE",
@@ -87,7 +96,7 @@ _LENSFUN_POINTS = 101
 
 # --------------------------------------------------------------------------------------------------- the IMX477
 def imx477_camera(exit_pupil_mm: float, *, decimation: int = IMX477_DECIMATION, f_number: float = IMX477_F_NUMBER,
-                  microlens_shift_fraction: float = 0.0):
+                  microlens_shift_fraction: float = 0.0) -> tuple[CameraSpec, WavelengthGrid, tuple[int, int]]:
     """The simulated Raspberry Pi HQ camera: the IMX477 behind an exit-pupil lens.
 
     Parameters
@@ -141,8 +150,8 @@ def _median3(table: np.ndarray) -> np.ndarray:
     return median_filter(np.asarray(table, float), size=3, mode="nearest")
 
 
-def simulated_alsc_tables(camera, grid, shape: tuple[int, int],
-                          temperatures_K=CALIBRATION_TEMPERATURES_K) -> dict:
+def simulated_alsc_tables(camera: CameraSpec, grid: WavelengthGrid, shape: tuple[int, int],
+                          temperatures_K: Sequence[float] = CALIBRATION_TEMPERATURES_K) -> dict:
     """The tables Raspberry Pi's camera tuning tool would write for a simulated camera.
 
     Each light's noise-free raw flat field (:func:`~spectracam.processing.shading.flat_field` under
@@ -204,8 +213,8 @@ def _step_signs(values) -> list:
     return [int(np.sign(b - a)) for a, b in zip(values, values[1:])]
 
 
-def imx477_reproduction(tuning_path=None, *, decimation: int = IMX477_DECIMATION, f_number: float = IMX477_F_NUMBER,
-                        microlens_shift_fraction: float = 0.0) -> dict:
+def imx477_reproduction(tuning_path: str | Path | None = None, *, decimation: int = IMX477_DECIMATION,
+                        f_number: float = IMX477_F_NUMBER, microlens_shift_fraction: float = 0.0) -> dict:
     """Reproduce the shape of the Raspberry Pi HQ camera's (IMX477) lens-shading tables.
 
     **Fitted** (one parameter): the lens's exit-pupil distance z (the relative illumination of an exit pupil seen as
@@ -403,7 +412,8 @@ def _parameters(decimation: int, f_number: float, microlens_shift_fraction: floa
 
 
 # --------------------------------------------------------------------------------------------------- lensfun
-def fit_exit_pupil(height_mm, curve, f_number: float | None, bounds_mm: tuple = (1.0, 1e5)) -> dict:
+def fit_exit_pupil(height_mm: ArrayLike, curve: ArrayLike, f_number: float | None,
+                   bounds_mm: tuple = (1.0, 1e5)) -> dict:
     """The exit-pupil distance whose relative illumination best fits a curve (least squares over the points).
 
     Parameters
@@ -441,7 +451,7 @@ def fit_exit_pupil(height_mm, curve, f_number: float | None, bounds_mm: tuple = 
             "at_bound": bool(min(res.x - lo, hi - res.x) < 1e-4)}
 
 
-def fit_cos4_corner(r, curve, bounds_deg: tuple = (0.0, 60.0)) -> dict:
+def fit_cos4_corner(r: ArrayLike, curve: ArrayLike, bounds_deg: tuple = (0.0, 60.0)) -> dict:
     """The corner chief-ray angle θ_c whose ``cos⁴(θ_c·r)`` best fits a curve over relative radii r (least
     squares).
 
@@ -475,7 +485,8 @@ def fit_cos4_corner(r, curve, bounds_deg: tuple = (0.0, 60.0)) -> dict:
 
 
 def lensfun_reproduction(lens: str = LENSFUN_LENS, focal_mm: float = 50.0, aperture: float = LENSFUN_APERTURE,
-                         predict_aperture: float = LENSFUN_PREDICT_APERTURE, db_dir=LENSFUN_DIR) -> dict:
+                         predict_aperture: float = LENSFUN_PREDICT_APERTURE,
+                         db_dir: str | Path = LENSFUN_DIR) -> dict:
     """Fit and predict a lensfun lens's measured vignetting with the exit-pupil and cos⁴ models.
 
     **Fitted** at ``aperture`` over r = 0 … 1 of the calibration frame (101 points; lensfun's "pa" curve

@@ -14,12 +14,20 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from spectracam.processing.color import display_rgb_to_xyz
 from spectracam.io.plots import pyplot, save_figure, srgb_image
 from spectracam.io.report import write_display_exr, write_png
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable
+
+    from numpy.typing import ArrayLike
+
+    from spectracam.experiments.motion.experiment import MotionRow
 
 #: Lowest top of a map figure's colour scale, ΔE*ab (about one just-noticeable difference): a figure
 #: of near-zero maps (a still capture against itself) is not stretched to show rounding.
@@ -29,17 +37,55 @@ MAP_PERCENTILE = 99.5
 
 
 def case_stem(design: str, speed_px_per_ms: float, rolling: bool) -> str:
-    """``fsc-optimal_0.01px-per-ms_global``: the file name of a case, without its suffix."""
+    """``fsc-optimal_0.01px-per-ms_global``: the file name of a case, without its suffix.
+
+    Parameters
+    ----------
+    design : str
+        ``architecture/exposure``.
+    speed_px_per_ms : float
+        The image speed, px/ms.
+    rolling : bool
+        Rolling shutter (else global).
+
+    Returns
+    -------
+    str
+    """
     return f"{design.replace('/', '-')}_{speed_px_per_ms:g}px-per-ms_{'rolling' if rolling else 'global'}"
 
 
 def map_name(speed_px_per_ms: float) -> str:
+    """The file name of one speed's S-CIELAB map figure, ``scielab_<speed>px-per-ms.png``.
+
+    Parameters
+    ----------
+    speed_px_per_ms : float
+        px/ms.
+
+    Returns
+    -------
+    str
+    """
     return f"scielab_{speed_px_per_ms:g}px-per-ms.png"
 
 
-def case_parameters(result: dict, row) -> dict:
+def case_parameters(result: dict, row: MotionRow) -> dict:
     """Everything that made a case's displayed image: the case, its exposure windows, the seed shown,
-    the experiment's parameters (motion, calibrated scene, geometry) and the renderer."""
+    the experiment's parameters (motion, calibrated scene, geometry) and the renderer.
+
+    Parameters
+    ----------
+    result : dict
+        The motion run's result.
+    row : MotionRow
+        The case.
+
+    Returns
+    -------
+    dict
+        JSON-ready; stored in the case's EXR.
+    """
     p = result["parameters"]
     key = f"{row.design}{' rolling' if row.rolling_shutter else ''}"
     full = row.to_dict()
@@ -51,7 +97,20 @@ def case_parameters(result: dict, row) -> dict:
 
 
 def write_case_images(result: dict, out: Path) -> list[Path]:
-    """``images/<case>.exr`` and ``.png`` for every case kept in ``result["images"]``."""
+    """``images/<case>.exr`` and ``.png`` for every case kept in ``result["images"]``.
+
+    Parameters
+    ----------
+    result : dict
+        The motion run's result (its ``images``: display XYZ per case).
+    out : Path
+        The output directory.
+
+    Returns
+    -------
+    list of Path
+        Two files per kept case: linear display RGB (EXR, with :func:`case_parameters`) and sRGB (PNG).
+    """
     white = np.asarray(result["display_white"], float)
     xyz_to_rgb = np.linalg.inv(display_rgb_to_xyz(result["parameters"]["scene"]["processing"]["display"]))
     paths = []
@@ -67,9 +126,20 @@ def write_case_images(result: dict, out: Path) -> list[Path]:
     return paths
 
 
-def map_scale(maps) -> float:
+def map_scale(maps: Iterable[ArrayLike]) -> float:
     """The top of a figure's colour scale: the :data:`MAP_PERCENTILE` of its maps' values, at least
-    :data:`MAP_VMIN_TOP`."""
+    :data:`MAP_VMIN_TOP`.
+
+    Parameters
+    ----------
+    maps : iterable of array_like
+        The S-CIELAB ΔE maps of one figure (non-finite values ignored).
+
+    Returns
+    -------
+    float
+        ΔE*ab.
+    """
     values = np.concatenate([np.asarray(m, float).ravel() for m in maps])
     values = values[np.isfinite(values)]
     return max(MAP_VMIN_TOP, float(np.percentile(values, MAP_PERCENTILE))) if values.size else MAP_VMIN_TOP
@@ -86,7 +156,20 @@ def _zone_outline(ax, zone: np.ndarray) -> None:
 
 
 def figure_map(result: dict, speed_px_per_ms: float, out: Path) -> list[Path]:
-    """``maps/scielab_<speed>px-per-ms.png``: every design (columns) and shutter (rows) at one speed."""
+    """``maps/scielab_<speed>px-per-ms.png``: every design (columns) and shutter (rows) at one speed.
+
+    Parameters
+    ----------
+    result : dict
+        The motion run's result.
+    speed_px_per_ms : float
+    out : Path
+
+    Returns
+    -------
+    list of Path
+        The figure written; empty when no case at this speed kept its images.
+    """
     plt = pyplot()
     rows = [r for r in result["rows"] if r.speed_px_per_ms == speed_px_per_ms
             and (r.design, r.speed_px_per_ms, r.rolling_shutter) in result["images"]]
@@ -131,7 +214,19 @@ def figure_map(result: dict, speed_px_per_ms: float, out: Path) -> list[Path]:
 
 
 def write_case_outputs(result: dict, out: Path) -> list[Path]:
-    """Every case's images and one S-CIELAB map figure per speed (module docstring)."""
+    """Every case's images and one S-CIELAB map figure per speed (module docstring).
+
+    Parameters
+    ----------
+    result : dict
+        The motion run's result.
+    out : Path
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
     out = Path(out)
     paths = write_case_images(result, out)
     for v in sorted({r.speed_px_per_ms for r in result["rows"]}):

@@ -16,8 +16,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    from numpy.typing import ArrayLike
 
 from spectracam.core.spec import Spec
 
@@ -63,8 +69,23 @@ class Motion(Spec):
         path *= (self.shake_rms_px * object_pixel_mm / rms) if rms > 0 else 0.0
         return t, path
 
-    def shake_mm(self, t_s, span_s, object_pixel_mm: float) -> np.ndarray:
-        """``(n, 2)`` shake displacement (mm in the object plane) at times ``t_s``."""
+    def shake_mm(self, t_s: ArrayLike, span_s: Sequence[float], object_pixel_mm: float) -> np.ndarray:
+        """``(n, 2)`` shake displacement (mm in the object plane) at times ``t_s``.
+
+        Parameters
+        ----------
+        t_s : array_like
+            Times, s (0: the middle of the capture).
+        span_s : sequence of float
+            ``(t0, t1)`` s, the span the random walk covers (its mean over the span is 0).
+        object_pixel_mm : float
+            One sensor pixel's size on the object plane, mm (scales ``shake_rms_px``).
+
+        Returns
+        -------
+        ndarray
+            ``(n, 2)`` mm (x, y), interpolated linearly along the walk; zeros without shake.
+        """
         t_s = np.atleast_1d(np.asarray(t_s, float))
         if self.shake_rms_px == 0.0:
             return np.zeros((t_s.size, 2))
@@ -72,9 +93,24 @@ class Motion(Spec):
         return np.stack([np.interp(t_s, tg, path[:, i]) for i in range(2)], axis=1)
 
     # -- poses ----------------------------------------------------------------------------------
-    def poses(self, t_s, span_s=(0.0, 0.0), object_pixel_mm: float = 1.0) -> np.ndarray:
+    def poses(self, t_s: ArrayLike, span_s: Sequence[float] = (0.0, 0.0), object_pixel_mm: float = 1.0) -> np.ndarray:
         """``(n, 3)`` poses ``(dx_mm, dy_mm, angle_deg)`` at times ``t_s`` (s, 0 = the middle of the
-        capture); ``span_s`` and ``object_pixel_mm`` place and scale the shake."""
+        capture); ``span_s`` and ``object_pixel_mm`` place and scale the shake.
+
+        Parameters
+        ----------
+        t_s : array_like
+            Times, s.
+        span_s : sequence of float
+            ``(t0, t1)`` s of the shake's walk.
+        object_pixel_mm : float
+            One sensor pixel on the object plane, mm.
+
+        Returns
+        -------
+        ndarray
+            ``(n, 3)``: translation (mm) and rotation (degrees) of the target at each time.
+        """
         t = np.atleast_1d(np.asarray(t_s, float))
         v = np.asarray(self.velocity_mm_per_s, float)
         out = np.zeros((t.size, 3))
@@ -82,9 +118,25 @@ class Motion(Spec):
         out[:, 2] = self.angular_velocity_deg_per_s * t
         return out
 
-    def max_image_speed_px_per_s(self, object_pixel_mm: float, radius_px: float, span_s=(0.0, 0.0)) -> float:
+    def max_image_speed_px_per_s(self, object_pixel_mm: float, radius_px: float,
+                                 span_s: Sequence[float] = (0.0, 0.0)) -> float:
         """How fast any image point within ``radius_px`` of the axis moves at most, px/s: ``|v| + |ω|·r``
-        plus the fastest step of the shake's (piecewise linear) path over ``span_s``."""
+        plus the fastest step of the shake's (piecewise linear) path over ``span_s``.
+
+        Parameters
+        ----------
+        object_pixel_mm : float
+            One sensor pixel on the object plane, mm.
+        radius_px : float
+            The farthest image point from the axis, px.
+        span_s : sequence of float
+            ``(t0, t1)`` s of the shake's walk.
+
+        Returns
+        -------
+        float
+            px/s, an upper bound.
+        """
         s = float(np.hypot(*self.velocity_mm_per_s)) / object_pixel_mm
         s += abs(math.radians(self.angular_velocity_deg_per_s)) * radius_px
         if self.shake_rms_px > 0:
@@ -94,15 +146,39 @@ class Motion(Spec):
         return s
 
 
-def pose_matrix(pose) -> np.ndarray:
-    """``(3, 3)`` homogeneous 2-D matrix of a pose: rotate by the angle, then translate."""
+def pose_matrix(pose: Sequence[float]) -> np.ndarray:
+    """``(3, 3)`` homogeneous 2-D matrix of a pose: rotate by the angle, then translate.
+
+    Parameters
+    ----------
+    pose : sequence of float
+        ``(dx_mm, dy_mm, angle_deg)``.
+
+    Returns
+    -------
+    ndarray
+        ``(3, 3)`` float64.
+    """
     dx, dy, a = (float(x) for x in pose)
     c, s = math.cos(math.radians(a)), math.sin(math.radians(a))
     return np.array([[c, -s, dx], [s, c, dy], [0.0, 0.0, 1.0]])
 
 
-def pose_key(pose, nd: int = 9) -> tuple:
-    """A hashable key of a pose (rounded to 1e-9 mm / degree): equal poses share a render."""
+def pose_key(pose: Sequence[float], nd: int = 9) -> tuple:
+    """A hashable key of a pose (rounded to 1e-9 mm / degree): equal poses share a render.
+
+    Parameters
+    ----------
+    pose : sequence of float
+        ``(dx_mm, dy_mm, angle_deg)``.
+    nd : int
+        Decimal places kept.
+
+    Returns
+    -------
+    tuple of float
+        The rounded pose (−0.0 made 0.0).
+    """
     return tuple(round(float(x), nd) + 0.0 for x in pose)
 
 

@@ -146,9 +146,22 @@ def _panel_crossing(ax, result, design="fsc/optimal", other="cfa/single"):
     ax.legend(fontsize=9, loc="upper left")
 
 
-def figure_curves(result, out: Path) -> list[Path]:
+def figure_curves(result: dict, out: Path) -> list[Path]:
     """breakup_scielab.png/.svg: breakup width, S-CIELAB and CIELAB against speed for every design and
-    shutter, and the S-CIELAB crossing of fsc/optimal over cfa/single zoomed."""
+    shutter, and the S-CIELAB crossing of fsc/optimal over cfa/single zoomed.
+
+    Parameters
+    ----------
+    result : dict
+        The motion run's result.
+    out : Path
+        The output directory.
+
+    Returns
+    -------
+    list of Path
+        The PNG and SVG.
+    """
     from matplotlib.lines import Line2D
 
     plt = pyplot()
@@ -204,7 +217,23 @@ def _crop(im, rows=None):
     return im[h // 2 - r:h // 2 + r, 4:-4]   # demosaicking's border columns left out
 
 
-def figure_crops(result, out: Path, rolling: bool = False) -> list[Path]:
+def figure_crops(result: dict, out: Path, rolling: bool = False) -> list[Path]:
+    """crops.png (crops_rolling.png with ``rolling``): the moving edge as each design shows it at up to four speeds,
+    under the scene at t = 0, nearest-neighbour zoomed.
+
+    Parameters
+    ----------
+    result : dict
+        The motion run's result (its kept images).
+    out : Path
+    rolling : bool
+        The rolling-shutter cases (else the global shutter's).
+
+    Returns
+    -------
+    list of Path
+        The PNG.
+    """
     plt = pyplot()
     rows = result["rows"]
     designs = _designs(rows)
@@ -270,10 +299,26 @@ def _captioned(rgb: np.ndarray, lines: list[str], n_lines: int, scale: int, font
     return canvas.convert("P", palette=Image.ADAPTIVE, colors=255)
 
 
-def fsc_frames_gif(result, out: Path, design: str = "fsc/optimal", speed: float | None = None) -> list[Path]:
+def fsc_frames_gif(result: dict, out: Path, design: str = "fsc/optimal", speed: float | None = None) -> list[Path]:
     """An animated GIF: the field-sequential camera's R, G and B frames (each in its colour, as the
     sensor recorded them, one after another) and then the displayed image they make together; zoomed
-    to at least :data:`GIF_MIN_WIDTH_PX` wide, captions of :data:`CAPTION_FONT_PX` px."""
+    to at least :data:`GIF_MIN_WIDTH_PX` wide, captions of :data:`CAPTION_FONT_PX` px.
+
+    Parameters
+    ----------
+    result : dict
+        The motion run's result (its kept images and exposure windows).
+    out : Path
+    design : str
+        A three-frame design.
+    speed : float or None
+        px/ms; None: the fastest whose smear stays within a third of the image's width.
+
+    Returns
+    -------
+    list of Path
+        fsc_frames.gif; empty when the design has no global-shutter case.
+    """
     rows = [r for r in result["rows"] if r.design == design and not r.rolling_shutter]
     if not rows:
         return []
@@ -312,8 +357,19 @@ def _fmt(v, f="{:.2f}"):
     return "–" if v is None or (isinstance(v, float) and not np.isfinite(v)) else f.format(v)
 
 
-def answer(result) -> list[str]:
-    """The question answered with the numbers."""
+def answer(result: dict) -> list[str]:
+    """The question answered with the numbers.
+
+    Parameters
+    ----------
+    result : dict
+        The motion run's result (its ``answer`` and rows).
+
+    Returns
+    -------
+    list of str
+        Markdown lines.
+    """
     a = result["answer"]
     rows = result["rows"]
     lines = []
@@ -433,7 +489,21 @@ def _setup(result) -> list[str]:
             f"* MTF50: the e-SFR of the displayed luminance across the edge, {esfr}.", ""]
 
 
-def report_markdown(result, command: str) -> str:
+def report_markdown(result: dict, command: str) -> str:
+    """report.md: the answer, the figures, the tables, the exposure windows, the case files, the setup and the time
+    per stage.
+
+    Parameters
+    ----------
+    result : dict
+        The motion run's result.
+    command : str
+        The command, recorded at the top.
+
+    Returns
+    -------
+    str
+    """
     out = ["# spectracam motion: when does the field-sequential camera's SNR advantage become a perceptual loss?", "",
            f"Made by `{command}` (renderer {result['renderer']}, {result['wall_s']:.1f} s, "
            f"{result['slice_renders']} slice renders).", "",
@@ -468,7 +538,23 @@ def report_markdown(result, command: str) -> str:
 
 def write_outputs(out_dir: Path, result: dict, command: str, images: bool = True) -> list[Path]:
     """The figures, every case's images and maps (:mod:`.cases`; not with ``images=False``, ``--no-images``),
-    results.json (rows as :meth:`~.experiment.MotionRow.to_dict`), mtf_curves.json and report.md."""
+    results.json (rows as :meth:`~.experiment.MotionRow.to_dict`), mtf_curves.json and report.md.
+
+    Parameters
+    ----------
+    out_dir : Path
+    result : dict
+        :func:`~.experiment.run_motion`'s.
+    command : str
+        Recorded in results.json and report.md.
+    images : bool
+        Also write every case's images and the S-CIELAB maps.
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
     out_dir = Path(out_dir)
     result = {**result, "case_images_written": bool(images)}
     rows = result["rows"]

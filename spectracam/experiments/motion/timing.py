@@ -20,11 +20,17 @@ length are centred on the same instant and the scene's pose at ``t = 0`` is thei
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from spectracam.architecture.base import PlanesLayout
 from spectracam.core.spec import Spec
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+    from spectracam.architecture.base import Architecture
 
 PRISM_ALIGNMENTS = ("start", "centre")
 
@@ -82,7 +88,20 @@ class CaptureTiming:
         return [tuple(v) for v in out.values()]
 
     def overlap_s(self, k: int, lo_s: np.ndarray, hi_s: np.ndarray) -> np.ndarray:
-        """``(rows, n)`` seconds of each interval ``[lo, hi]`` inside channel k's window of each row."""
+        """``(rows, n)`` seconds of each interval ``[lo, hi]`` inside channel k's window of each row.
+
+        Parameters
+        ----------
+        k : int
+            The channel.
+        lo_s, hi_s : ndarray
+            ``(n,)`` the intervals' ends, s (capture time, 0 at the capture's middle).
+
+        Returns
+        -------
+        ndarray
+            ``(rows, n)`` overlap, s, ≥ 0.
+        """
         a = self.start_s[k] + self.row_delay_s[:, None]
         b = a + self.duration_s[k]
         return np.clip(np.minimum(b, np.asarray(hi_s)[None, :]) - np.maximum(a, np.asarray(lo_s)[None, :]), 0.0, None)
@@ -94,10 +113,32 @@ class CaptureTiming:
                 "span_ms": [1e3 * x for x in self.span_s]}
 
 
-def capture_timing(architecture, times_s, timing: TimingSpec, rows: int, first_row: int = 0) -> CaptureTiming:
+def capture_timing(architecture: Architecture, times_s: ArrayLike, timing: TimingSpec, rows: int,
+                   first_row: int = 0) -> CaptureTiming:
     """The windows of an architecture's capture with per-channel exposure ``times_s`` (N,), for image
     rows ``first_row … first_row + rows − 1`` (row 0 is read first; a negative first row is a margin
     above the image), centred so that the middle of the whole capture is ``t = 0``.
+
+    Parameters
+    ----------
+    architecture : Architecture
+        Field-sequential frames are exposed one after another in ``timing.order``; other channels together.
+    times_s : array_like
+        ``(N,)`` exposure times, s.
+    timing : TimingSpec
+        Read-out gap (ms), frame order, prism alignment, rolling shutter and line time (µs).
+    rows : int
+        How many rows.
+    first_row : int
+        The first row's index (negative: a margin above the image).
+
+    Returns
+    -------
+    CaptureTiming
+        Each channel's start and duration (s), each row's delay (s) and whether the frames are sequential.
+
+    Examples
+    --------
 
     >>> from spectracam.architecture.base import make_architecture
     >>> t = capture_timing(make_architecture("fsc"), [0.01, 0.02, 0.03], TimingSpec(readout_gap_ms=1.0), 1)

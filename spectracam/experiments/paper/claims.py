@@ -25,7 +25,21 @@ def _claim(cid, claim, paper, measured, direction, size, why="") -> dict:
 
 
 def evaluate(r: dict) -> list[dict]:
-    """Claims checked against a comparison ``r`` (the shape of results.json)."""
+    """Claims checked against a comparison ``r`` (the shape of results.json): Figure 4's, the exposure and SNR
+    of Figure 5a, the ΔE*ab of Figure 5b and the error budget of Figure 6 (paper section 5).
+
+    Parameters
+    ----------
+    r : dict
+        A comparison's results: ``exposure_ms``, ``fig4_white_response``, ``fig5a_snr_db``, ``fig5b_delta_e`` and
+        optionally ``fig6_budget_delta_e``; a claim whose designs are missing is left out.
+
+    Returns
+    -------
+    list of dict
+        One per claim checked: ``id``, ``claim``, ``paper``, ``measured``, ``verdict`` (``"reproduced"``,
+        ``"partly"`` or ``"not"``) and ``why``.
+    """
     exp, f4, snr, de = r["exposure_ms"], r["fig4_white_response"], r["fig5a_snr_db"], r["fig5b_delta_e"]
     return _fig4_claims(f4) + _exposure_and_snr_claims(exp, snr) + _delta_e_claims(de) + _budget_claims(r)
 
@@ -131,7 +145,20 @@ def _budget_claims(r: dict) -> list[dict]:
 
 
 def survival(main: list[dict], alternatives: dict[str, list[dict]]) -> dict[str, dict[str, str]]:
-    """``{claim id: {alternative: verdict}}``, the main run first."""
+    """``{claim id: {alternative: verdict}}``, the main run first.
+
+    Parameters
+    ----------
+    main : list of dict
+        The main run's claims (:func:`evaluate`), under ``"default"``.
+    alternatives : dict of str to list of dict
+        Each alternative's name and its claims.
+
+    Returns
+    -------
+    dict of str to dict of str to str
+        Claim id → run name → verdict; a claim only an alternative checked has no ``"default"``.
+    """
     table = {c["id"]: {"default": c["verdict"]} for c in main}
     for name, claims in alternatives.items():
         for c in claims:
@@ -141,7 +168,19 @@ def survival(main: list[dict], alternatives: dict[str, list[dict]]) -> dict[str,
 
 def derivations(r: dict) -> list[str]:
     """Why a claim's size cannot be met, derived in closed form from this run's own numbers
-    (markdown lines for report.md)."""
+    (markdown lines for report.md): the SNR the FSC loses when limited to the CFA's exposure, bounded by
+    the shot-noise-limited and the fixed-pattern-limited loss.
+
+    Parameters
+    ----------
+    r : dict
+        A comparison's results (``exposure_ms`` in ms, ``fig5a_snr_db`` in dB).
+
+    Returns
+    -------
+    list of str
+        The markdown lines; empty unless ``cfa/single``, ``fsc/optimal`` and ``fsc/balanced`` were run.
+    """
     out = []
     exp, snr = r["exposure_ms"], r["fig5a_snr_db"]
     if {"cfa/single", "fsc/optimal", "fsc/balanced"} <= exp.keys():

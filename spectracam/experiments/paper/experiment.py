@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TypedDict
+from typing import TYPE_CHECKING, TypedDict
 
 import numpy as np
 
@@ -26,6 +26,12 @@ from spectracam.render import RadianceCube
 from spectracam.pipeline.scene_file import Scene, experiment_base_scene, read_toml
 from spectracam.evaluation.score import score
 from spectracam.core.spec import _is_number
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Iterable
+
+    from spectracam.camera.capture import RawCapture
+    from spectracam.evaluation.score import ChartScore
 
 __all__ = ["BUDGET_STEPS", "EXPERIMENT_KEYS", "QUICK_IMAGE_PX", "Alternative", "BudgetStep",
            "PaperExperiment", "PaperResult", "both_ways", "calibrated_luminance", "comparison", "comparison_cases",
@@ -71,9 +77,37 @@ class Alternative:
     light_scale: float = 1.0
 
     def camera(self, base: CameraSpec, source: str | None = None) -> CameraSpec:
+        """The camera of this reading: ``base`` with the optics/filters/sensor/capture tables over it.
+
+        Parameters
+        ----------
+        base : CameraSpec
+            The base scene's camera.
+        source : str or None
+            Named in a validation error (the experiment file and this reading's name).
+
+        Returns
+        -------
+        CameraSpec
+            The camera; ``base`` unchanged when the reading has no camera tables.
+        """
         return CameraSpec.from_dict({k: v for k, v in self.tables.items() if k != "processing"}, source, base)
 
     def processing(self, base: ProcessingSpec, source: str | None = None) -> ProcessingSpec:
+        """The processing of this reading: ``base`` with the ``processing`` table over it.
+
+        Parameters
+        ----------
+        base : ProcessingSpec
+            The base scene's processing.
+        source : str or None
+            Named in a validation error.
+
+        Returns
+        -------
+        ProcessingSpec
+            The processing; ``base`` unchanged when the reading has no ``processing`` table.
+        """
         return ProcessingSpec.from_dict(self.tables.get("processing", {}), source, base)
 
 
@@ -97,9 +131,27 @@ def _list(data: dict, key: str, default, ok, allowed: str, source: str) -> list:
     return v
 
 
-def load_experiment(path: str | Path, overrides=()) -> PaperExperiment:
+def load_experiment(path: str | Path, overrides: Iterable[str | tuple[str, object]] = ()) -> PaperExperiment:
     """Read and validate an experiment file (see scenes/paper.toml).  ``overrides`` (``--set``):
-    a path whose table is an experiment key changes the experiment, any other the base scene."""
+    a path whose table is an experiment key changes the experiment, any other the base scene.
+
+    Parameters
+    ----------
+    path : str or Path
+        The experiment file.
+    overrides : iterable of str or (str, object)
+        ``PATH=VALUE`` strings or ``(path, value)`` pairs, applied in order.
+
+    Returns
+    -------
+    PaperExperiment
+        The experiment, its base scene and sensitivity alternatives validated.
+
+    Raises
+    ------
+    ConfigError
+        On an invalid key or value (a textured target, a temperature outside 1000–40000 K, an unknown design…).
+    """
     p = Path(path)
     src = str(p)
     pairs = [parse_assignment(o) if isinstance(o, str) else o for o in overrides]
@@ -204,7 +256,26 @@ def _sensitivity_alternative(i: int, alt, base: Scene, src: str) -> Alternative:
 
 def calibrated_luminance(exp: PaperExperiment, camera: CameraSpec) -> float:
     """White-diffuser luminance at which cfa/single needs ``cfa_exposure_ms`` at the calibration
-    temperature: rates scale with the level, so solve white_fill·q_max = (level/L₁·w₁ + dark)·T in closed form."""
+    temperature: rates scale with the level, so solve white_fill·q_max = (level/L₁·w₁ + dark)·T in closed form.
+
+    Parameters
+    ----------
+    exp : PaperExperiment
+        The experiment: ``cfa_exposure_ms`` (ms) and ``calibration_temperature_K``, or a fixed
+        ``white_luminance_cd_m2``.
+    camera : CameraSpec
+        The camera whose highest white-patch rate (e⁻/s at L₁ = 100 cd/m²) is solved for.
+
+    Returns
+    -------
+    float
+        The white diffuser's luminance, cd/m²; ``white_luminance_cd_m2`` itself when the experiment fixes it.
+
+    Raises
+    ------
+    SpectracamError
+        When dark current alone would fill the well within ``cfa_exposure_ms``.
+    """
     if exp.white_luminance_cd_m2 is not None:
         return exp.white_luminance_cd_m2
     ref = exp.base.replace(illuminant=IlluminantSpec("blackbody", exp.calibration_temperature_K, None, 100.0))
@@ -220,7 +291,23 @@ def calibrated_luminance(exp: PaperExperiment, camera: CameraSpec) -> float:
 
 def scaled(scene: Scene, cube: RadianceCube, factor: float) -> tuple[Scene, RadianceCube]:
     """Rendering is linear in the light level: a scaled cube is the render at a scaled level (the
-    scene says so too, so that scoring fits the conversion on the light the camera saw)."""
+    scene says so too, so that scoring fits the conversion on the light the camera saw).
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene rendered.
+    cube : RadianceCube
+        Its render, radiance W·m⁻²·sr⁻¹·nm⁻¹.
+    factor : float
+        The light level's factor.
+
+    Returns
+    -------
+    tuple of (Scene, RadianceCube)
+        The scene with its white luminance times ``factor`` and the cube's radiance times ``factor`` (float32);
+        the two unchanged when ``factor`` is 1.
+    """
     if factor == 1.0:
         return scene, cube
     ill = scene.illuminant.replace(white_luminance_cd_m2=scene.illuminant.white_luminance_cd_m2 * factor)
@@ -228,8 +315,30 @@ def scaled(scene: Scene, cube: RadianceCube, factor: float) -> tuple[Scene, Radi
     return scene, RadianceCube(cube.radiance * np.float32(factor), cube.wavelengths_nm, {**cube.metadata, "scene": scene.to_dict()})
 
 
-def design_case(cube, scene: Scene, camera: CameraSpec, processing: ProcessingSpec, design: str, seed: int):
-    """One design under one light: its capture, score and the numbers the figures show."""
+def design_case(cube: RadianceCube, scene: Scene, camera: CameraSpec, processing: ProcessingSpec, design: str,
+                seed: int) -> dict:
+    """One design under one light: its capture, score and the numbers the figures show.
+
+    Parameters
+    ----------
+    cube : RadianceCube
+        The chart's render under the light.
+    scene : Scene
+        The scene rendered (its chart reference and white box).
+    camera, processing : CameraSpec, ProcessingSpec
+        The camera, metered anew when the processing finds its own white, and the processing.
+    design : str
+        ``architecture/exposure`` (``"fsc/optimal"``).
+    seed : int
+        The noise seed.
+
+    Returns
+    -------
+    dict
+        ``exposure_ms`` (capture time), ``channel_ms``, ``white_response`` (the white patch, fraction of the well),
+        ``snr_db``, ``delta_e``, ``delta_e_of_mean``, ``delta_e_conversion``, ``s_cielab``, ``s_cielab_p95``,
+        ``held_out``, ``training``, and the ``raw`` capture and its ``score``.
+    """
     cam = camera.with_design(design)
     if not processing.told_the_light:   # a camera that finds its own white meters itself too (issue 33)
         from spectracam.processing import metered_camera
@@ -248,8 +357,29 @@ def design_case(cube, scene: Scene, camera: CameraSpec, processing: ProcessingSp
             "held_out": result.held_out, "training": result.training, "raw": raw, "score": result}
 
 
-def error_budget(cube, scene: Scene, camera: CameraSpec, processing: ProcessingSpec, design: str, seed: int):
-    """Figure 6: ``[(step, ΔE, raw, score)]`` for each of :data:`BUDGET_STEPS`."""
+def error_budget(cube: RadianceCube, scene: Scene, camera: CameraSpec, processing: ProcessingSpec, design: str,
+                 seed: int) -> list[tuple[BudgetStep, float, RawCapture, ChartScore]]:
+    """Figure 6: ``[(step, ΔE, raw, score)]`` for each of :data:`BUDGET_STEPS`.
+
+    Parameters
+    ----------
+    cube : RadianceCube
+        The chart's render under the budget's illuminant.
+    scene : Scene
+        The scene rendered.
+    camera, processing : CameraSpec, ProcessingSpec
+        The camera, whose sensor has each step's sources on and the rest off, and the processing.
+    design : str
+        The design (``"cfa/single"``).
+    seed : int
+        The noise seed, the same for every step.
+
+    Returns
+    -------
+    list of tuple
+        Per step: the step, its mean ΔE*ab (against the noise-free camera or the scene, ``step.against``), the
+        capture and its score.
+    """
     cam = camera.with_design(design)
     reference = ChartReference.of(scene)
     s0 = cam.sensor
@@ -267,9 +397,28 @@ def error_budget(cube, scene: Scene, camera: CameraSpec, processing: ProcessingS
 
 
 def comparison(exp: PaperExperiment, cubes: dict, camera: CameraSpec, processing: ProcessingSpec,
-               light_scale: float = 1.0, keep_cases: bool = False, tick=lambda: None) -> tuple[dict, dict]:
+               light_scale: float = 1.0, keep_cases: bool = False,
+               tick: Callable[[], object] = lambda: None) -> tuple[dict, dict]:
     """Every design under every blackbody, and Figure 6.  ``cubes``: label → (scene, cube); ``tick`` is
-    called after each case (a progress bar's step: :func:`comparison_cases` of them)."""
+    called after each case (a progress bar's step: :func:`comparison_cases` of them).
+
+    Parameters
+    ----------
+    exp : PaperExperiment
+    cubes : dict
+        ``"3000"``…, and the budget's illuminant → ``(scene, cube)``.
+    camera, processing : CameraSpec, ProcessingSpec
+    light_scale : float
+        The light level's factor (:func:`scaled`).
+    keep_cases : bool
+        Also return each case (:func:`design_case`'s dict; the budget's list under ``(illuminant, "budget")``).
+    tick : callable
+
+    Returns
+    -------
+    tuple of (dict, dict)
+        The results' per-design fields (design → temperature → value) and ``fig6_budget_delta_e``; the cases.
+    """
     seed = exp.base.render.seed
     res = {"exposure_ms": {}, "channel_exposure_ms": {}, "fig4_white_response": {}, "fig5a_snr_db": {},
            "fig5b_delta_e": {}, "fig5b_delta_e_of_mean": {}, "delta_e_conversion": {}, "delta_e_conversion_p95": {},
@@ -306,10 +455,29 @@ def comparison(exp: PaperExperiment, cubes: dict, camera: CameraSpec, processing
 
 
 def both_ways(exp: PaperExperiment, cubes: dict, camera: CameraSpec, processing: ProcessingSpec, cases: dict,
-              tick=lambda: None) -> dict:
+              tick: Callable[[], object] = lambda: None) -> dict:
     """Every design under every blackbody scored by the oracle camera (the cases of :func:`comparison`) and by the
     developed one (``processing.camera = "developed"``: its own metering, white and calibration; captured anew with
-    the same seed): ``{"oracle": {field: {design: {T: v}}}, "developed": {...}, "white_balance": {design: {T: block}}}``."""
+    the same seed): ``{"oracle": {field: {design: {T: v}}}, "developed": {...}, "white_balance": {design: {T: block}}}``.
+
+    Parameters
+    ----------
+    exp : PaperExperiment
+    cubes : dict
+        Temperature label → ``(scene, cube)``.
+    camera, processing : CameraSpec, ProcessingSpec
+        The base camera and processing; the developed processing is made from it.
+    cases : dict
+        :func:`comparison`'s cases (``keep_cases=True``), the oracle's scores.
+    tick : callable
+        Called after each case.
+
+    Returns
+    -------
+    dict
+        As above, with ``developed_processing`` (the developed camera's ``camera``, ``white_balance`` and
+        ``calibration`` settings).
+    """
     from spectracam.pipeline import BOTH_WAYS_FIELDS, camera_processing, score_row
     from spectracam.processing import metered_camera
 
@@ -335,7 +503,17 @@ def both_ways(exp: PaperExperiment, cubes: dict, camera: CameraSpec, processing:
 
 
 def comparison_cases(exp: PaperExperiment) -> int:
-    """How many cases :func:`comparison` runs: every design under every blackbody, and the budget."""
+    """How many cases :func:`comparison` runs: every design under every blackbody, and the budget.
+
+    Parameters
+    ----------
+    exp : PaperExperiment
+
+    Returns
+    -------
+    int
+        ``len(temperatures_K) × len(designs) + 1``.
+    """
     return len(exp.temperatures_K) * len(exp.designs) + 1
 
 
@@ -344,12 +522,39 @@ QUICK_IMAGE_PX = (160, 120)
 
 
 def quick_scene(scene: Scene, quick: bool = True) -> Scene:
-    """``scene`` at :data:`QUICK_IMAGE_PX` when ``quick``."""
+    """``scene`` at :data:`QUICK_IMAGE_PX` when ``quick``.
+
+    Parameters
+    ----------
+    scene : Scene
+    quick : bool
+        ``--quick``.
+
+    Returns
+    -------
+    Scene
+        ``scene`` at 160 × 120 px, or ``scene`` itself.
+    """
     w, h = QUICK_IMAGE_PX
     return scene.replace(image=scene.image.replace(width=w, height=h)) if quick else scene
 
 
 def scenes_for(exp: PaperExperiment, level: float, quick: bool) -> dict[str, Scene]:
+    """The scenes the experiment renders: the base scene under each blackbody and under the budget's illuminant.
+
+    Parameters
+    ----------
+    exp : PaperExperiment
+    level : float
+        The white diffuser's luminance, cd/m² (:func:`calibrated_luminance`).
+    quick : bool
+        ``--quick`` (:func:`quick_scene`).
+
+    Returns
+    -------
+    dict of str to Scene
+        ``"3000"``, … (K) and the budget's illuminant (``"D65"``) → scene.
+    """
     base = quick_scene(exp.base, quick)
     out = {f"{T:g}": base.replace(illuminant=IlluminantSpec("blackbody", T, None, level)) for T in exp.temperatures_K}
     out[exp.budget_illuminant] = base.replace(illuminant=IlluminantSpec("cie", None, exp.budget_illuminant, level))
@@ -435,9 +640,26 @@ class PaperResult(_PaperKeys, total=False):
 
 
 def run_paper(exp: PaperExperiment, renderer: str = "mitsuba", quick: bool = False, use_cache: bool = True,
-              step=lambda msg: None, log=None, progress: bool = False) -> tuple[PaperResult, dict, dict]:
-    """Run the whole experiment; returns (results, cases, cubes).  ``step`` receives one line per step;
-    ``progress``: bars over the lights rendered, the cases and the sensitivity alternatives on a terminal."""
+              step: Callable[[str], object] = lambda msg: None, log: Callable[[str], object] | None = None,
+              progress: bool = False) -> tuple[PaperResult, dict, dict]:
+    """Run the whole experiment (paper section 5); returns (results, cases, cubes).  ``step`` receives one line per
+    step; ``progress``: bars over the lights rendered, the cases and the sensitivity alternatives on a terminal.
+
+    Parameters
+    ----------
+    exp : PaperExperiment
+    renderer : str
+    quick, use_cache : bool
+        ``--quick``; read and fill the render cache.
+    step, log : callable
+        ``step(line)`` per step; ``log``: the renderer's notices (None: none).
+    progress : bool
+
+    Returns
+    -------
+    tuple of (PaperResult, dict, dict)
+        The results (results.json's keys but ``command``), :func:`comparison`'s cases, label → ``(scene, cube)``.
+    """
     import time
 
     from spectracam.core.progress import bar

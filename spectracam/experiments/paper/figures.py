@@ -1,10 +1,15 @@
 """Figures 4, 5 and 6 drawn like the paper's: colour temperature on x, a marker per channel/design."""
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from spectracam.io.plots import OKABE_ITO
 from spectracam.io.plots import pyplot as _plt
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = ["CHANNEL_STYLE", "DESIGN_STYLE", "PAPER_DESIGNS", "fig4", "fig5", "fig6"]
 
@@ -18,10 +23,22 @@ DESIGN_STYLE = {"cfa/single": ("o", "black", "-"), "fsc/optimal": ("^", OKABE_IT
                 "fsc/balanced": ("s", OKABE_ITO[4], ":"), "prism/optimal": ("D", OKABE_ITO[3], "-.")}
 
 
-def fig4(results: dict):
+def fig4(results: dict) -> Figure:
     """Figure 4: each channel's response to the white patch; a filled marker where the channel
     reaches the metered fill of the well (the one that ends a single exposure; paper 4.5: "near
-    saturation", ``capture.white_fill``)."""
+    saturation", ``capture.white_fill``).
+
+    Parameters
+    ----------
+    results : dict
+        The paper run's results (results.json): ``fig4_white_response`` (design → temperature, K → the
+        channels' responses as fractions of the full well) and ``parameters``.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One panel per design drawn: ``cfa/single`` and ``fsc/optimal``, and any design outside the paper's.
+    """
     plt = _plt()
     f4 = results["fig4_white_response"]
     fill = (results.get("parameters", {}).get("scene") or {}).get("capture", {}).get("white_fill", 1.0)
@@ -67,7 +84,21 @@ def _channels(results: dict, design: str) -> tuple:
     return Scene.from_dict(scene).camera.with_design(design).architecture().channels
 
 
-def fig5(results: dict):
+def fig5(results: dict) -> Figure:
+    """Figure 5: (a) the SNR, dB, and (b) the mean ΔE*ab over the 24 patches against colour temperature, one line per
+    design, each labelled with its capture time at 5000 K, ms.
+
+    Parameters
+    ----------
+    results : dict
+        The paper run's results: ``fig5a_snr_db``, ``fig5b_delta_e`` and ``exposure_ms`` (design → temperature →
+        value).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The two panels.
+    """
     plt = _plt()
     fig, (a, b) = plt.subplots(1, 2, figsize=(9, 3.8))
     for ax, key, ylabel, title in ((a, "fig5a_snr_db", "SNR (dB)", "(a) SNR"),
@@ -92,7 +123,21 @@ def fig5(results: dict):
     return fig
 
 
-def fig6(results: dict):
+def fig6(results: dict) -> Figure:
+    """Figure 6: the error budget, the mean ΔE*ab after each step is added in turn (perfect, shot noise, CMOS noise,
+    quantization, colour conversion), as bars.
+
+    Parameters
+    ----------
+    results : dict
+        The paper run's results: ``fig6_budget_delta_e`` (the steps' ``label`` and ``delta_e``) and ``parameters``
+        (``budget_design``, ``budget_illuminant``).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One bar per step, labelled with its ΔE*ab.
+    """
     plt = _plt()
     steps = [(s["label"], s["delta_e"]) for s in results["fig6_budget_delta_e"]]
     fig, ax = plt.subplots(figsize=(6.5, 3.6))

@@ -3,11 +3,15 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from spectracam.core.files import atomic_write
 from spectracam.io.plots import save_figure
 from spectracam.experiments.paper import figures
 from spectracam.experiments.paper.claims import derivations
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
 
 __all__ = ["PAPER_CLAIMS_NOTE", "both_ways_lines", "report_markdown", "write_paper_outputs"]
 
@@ -29,7 +33,20 @@ def _per_design(results: dict, key: str, fmt: str) -> str:
 
 
 def report_markdown(results: dict, command: str) -> str:
-    """report.md: the choices the paper leaves open, every figure's numbers, the claims and their sensitivity."""
+    """report.md: the choices the paper leaves open, every figure's numbers, the claims and their sensitivity.
+
+    Parameters
+    ----------
+    results : dict
+        The paper run's results (:func:`~spectracam.experiments.paper.experiment.run_paper`'s first).
+    command : str
+        The command that made them, recorded at the top.
+
+    Returns
+    -------
+    str
+        The markdown.
+    """
     lines = [*_header_lines(results, command), *_figure_lines(results), *_claims_lines(results)]
     lines += _sensitivity_lines(results)
     lines += ["## Files", "", "`results.json` holds every number above; `cases/` holds the raw (raw.exr) and rendered "
@@ -160,9 +177,21 @@ def _key_numbers(r: dict) -> list[str]:
             g("fig5b_delta_e", "fsc/optimal", "{:.2f}"), g("fig5b_delta_e", "fsc/balanced", "{:.2f}")]
 
 
-def both_ways_lines(results: dict) -> list:
+def both_ways_lines(results: dict) -> list[str]:
     """The oracle camera (the paper's: told the light) beside the developed one (its own metering, white balance and
-    calibration), per design and light (issue 33)."""
+    calibration), per design and light (issue 33).
+
+    Parameters
+    ----------
+    results : dict
+        A run's results; its ``both_ways`` (:func:`~spectracam.experiments.paper.experiment.both_ways`) is tabled.
+
+    Returns
+    -------
+    list of str
+        Markdown lines: tables of mean ΔE*ab, S-CIELAB (when scored), CIEDE2000, held-out ΔE*ab (each cell
+        ``oracle / developed``) and the developed camera's white-balance angles, °; empty without ``both_ways``.
+    """
     bw = results.get("both_ways")
     if not bw:
         return []
@@ -215,9 +244,32 @@ def _held_out_lines(results: dict) -> list:
 
 
 def write_paper_outputs(out_dir: str | Path, results: dict, cases: dict, cubes: dict | None, command: str,
-                        step=lambda msg: None, save_cubes: bool = False) -> list[Path]:
+                        step: Callable[[str], object] = lambda msg: None, save_cubes: bool = False) -> list[Path]:
     """Figures, results.json, report.md, and every case's raw and rendered EXR; the spectral radiance
-    cubes (30 bands, ~37 MB each at 640x480) only with ``save_cubes`` — they are in the render cache."""
+    cubes (30 bands, ~37 MB each at 640x480) only with ``save_cubes`` — they are in the render cache.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+        The output directory; case files go under ``cases/LIGHT/DESIGN/``.
+    results : dict
+        The run's results (with ``command``).
+    cases : dict
+        :func:`~spectracam.experiments.paper.experiment.comparison`'s cases.
+    cubes : dict or None
+        Light label → ``(scene, cube)``, written only with ``save_cubes``.
+    command : str
+        The command, for report.md.
+    step : callable
+        ``step(line)`` after the summary files and after the case files.
+    save_cubes : bool
+        Also write each light's radiance cube (``cases/LIGHT/radiance.exr``).
+
+    Returns
+    -------
+    list of Path
+        The figures (PNG and SVG), results.json and report.md (the case files are not listed).
+    """
     from spectracam.io.exr import write_radiance_exr, write_raw_exr
     from spectracam.io.report import write_rendered_exr
 

@@ -4,14 +4,37 @@ from __future__ import annotations
 
 import dataclasses
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+    from spectracam.camera.capture import RawCapture
+    from spectracam.pipeline.scene_file import Scene
+    from spectracam.render import RadianceCube
 
 __all__ = ["score_and_write", "write_capture", "write_display"]
 
 
-def write_capture(out_dir: Path, raw, scene) -> list[Path]:
-    """DIR/raw.exr and, where a DNG reader takes its bits, DIR/raw.dng (with the camera's own white)."""
+def write_capture(out_dir: Path, raw: RawCapture, scene: Scene) -> list[Path]:
+    """DIR/raw.exr and, where a DNG reader takes its bits, DIR/raw.dng (with the camera's own white).
+
+    Parameters
+    ----------
+    out_dir : Path
+    raw : RawCapture
+        The capture (DN).
+    scene : Scene
+        Its scene: the chart reference, and the processing that says whether the camera finds its own white.
+
+    Returns
+    -------
+    list of Path
+        raw.exr, and raw.dng unless the ADC has more bits than a DNG reader takes or the read-out is not
+        ``single`` (then a line on stderr says so).
+    """
     from spectracam.io.dng import write_dng
     from spectracam.io.exr import write_raw_exr
     from spectracam.scene.reference import ChartReference
@@ -43,8 +66,21 @@ def write_capture(out_dir: Path, raw, scene) -> list[Path]:
     return paths + [write_dng(out_dir / "raw.dng", raw, reference, neutral_rates=neutral)]
 
 
-def write_display(out_dir: Path, raw, scene) -> list[Path]:
-    """rendered.exr and rendered.png of a capture without a chart truth (no score)."""
+def write_display(out_dir: Path, raw: RawCapture, scene: Scene) -> list[Path]:
+    """rendered.exr and rendered.png of a capture without a chart truth (no score).
+
+    Parameters
+    ----------
+    out_dir : Path
+    raw : RawCapture
+    scene : Scene
+        Its chart (the conversion is fitted on it) and processing.
+
+    Returns
+    -------
+    list of Path
+        rendered.exr (linear display RGB, with its parameters) and rendered.png (sRGB preview).
+    """
     from spectracam.io.report import srgb_preview, write_display_exr, write_png
     from spectracam.scene.reference import ChartReference
     from spectracam.evaluation.score import display_rgb
@@ -58,8 +94,20 @@ def write_display(out_dir: Path, raw, scene) -> list[Path]:
                                                                      tone_curve=scene.processing.tone_curve))]
 
 
-def score_and_write(raw, scene, out_dir: Path, log, cube=None) -> None:
-    """Score a capture, write its files (a chart's or a textured target's) and log what it scored."""
+def score_and_write(raw: RawCapture, scene: Scene, out_dir: Path, log: Callable[[str], object],
+                    cube: RadianceCube | None = None) -> None:
+    """Score a capture, write its files (a chart's or a textured target's) and log what it scored.
+
+    Parameters
+    ----------
+    raw : RawCapture
+    scene : Scene
+    out_dir : Path
+    log : callable
+        ``log(line)``: the scores and the files written.
+    cube : RadianceCube or None
+        The render, for the developed camera's own capture (:func:`spectracam.pipeline.both_ways`).
+    """
     from spectracam.io.report import write_score_outputs
     from spectracam.pipeline import both_ways, score
 

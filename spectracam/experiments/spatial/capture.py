@@ -17,6 +17,7 @@ normalisation) and the 3×3 conversion fitted on the chart (paper 3.5) to the di
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -29,6 +30,11 @@ from spectracam.sensor.exposure import exposure_times_s
 from spectracam.scene.reference import ChartReference
 from spectracam.evaluation.score import camera_rates
 from spectracam.core.spectra import K_M_LM_PER_W, cmf_band_weights
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+    from spectracam.core.spectra import WavelengthGrid
 
 __all__ = ["Conversion", "SpatialDesign", "misregistration_shifts", "process", "radiance_to_display_xyz",
            "record", "white_rate"]
@@ -57,7 +63,18 @@ class SpatialDesign:
 
 def misregistration_shifts(m_px: float | None) -> tuple:
     """Sampling offsets (dx, dy) px of the R, G, B sensors: red ``+m`` along x, blue ``+m`` along y
-    (``()``: every channel at the pixel centre)."""
+    (``()``: every channel at the pixel centre).
+
+    Parameters
+    ----------
+    m_px : float or None
+        The misregistration, px; 0 or None: none.
+
+    Returns
+    -------
+    tuple
+        ``((m, 0), (0, 0), (0, m))``, or ``()``.
+    """
     if not m_px:
         return ()
     return ((float(m_px), 0.0), (0.0, 0.0), (0.0, float(m_px)))
@@ -75,6 +92,20 @@ class Conversion:
 
     @classmethod
     def fit(cls, reference: ChartReference, camera: CameraSpec, processing: ProcessingSpec) -> "Conversion":
+        """The conversion fitted on the chart's noise-free rates to its XYZ carried to the display white (paper 3.5).
+
+        Parameters
+        ----------
+        reference : ChartReference
+            The chart's XYZ, white and noise-free rates.
+        camera : CameraSpec
+        processing : ProcessingSpec
+            Its display and chromatic adaptation.
+
+        Returns
+        -------
+        Conversion
+        """
         M_disp = display_rgb_to_xyz(processing.display)
         white = M_disp.sum(axis=1)
         adapt = adaptation_matrix(reference.white_xyz, white, processing.adaptation)
@@ -84,13 +115,42 @@ class Conversion:
 
 
 def white_rate(reference: ChartReference, camera: CameraSpec) -> np.ndarray:
-    """Noise-free photo-electron rates (N,) of the ColorChecker's white patch: where exposure is metered."""
+    """Noise-free photo-electron rates (N,) of the ColorChecker's white patch: where exposure is metered.
+
+    Parameters
+    ----------
+    reference : ChartReference
+    camera : CameraSpec
+
+    Returns
+    -------
+    ndarray
+        ``(N,)`` e⁻/s.
+    """
     return reference.patch_rates(camera)[WHITE_PATCH]
 
 
-def record(rates: np.ndarray, camera: CameraSpec, metered_rate: np.ndarray, seed: int, times=None) -> RawCapture:
+def record(rates: np.ndarray, camera: CameraSpec, metered_rate: np.ndarray, seed: int,
+           times: ArrayLike | None = None) -> RawCapture:
     """Expose an ``(H, W, N)`` rate image with the camera's architecture and exposure scheme (or the
-    exposure ``times`` given: a noise-free twin of a noisy capture keeps the noisy one's times)."""
+    exposure ``times`` given: a noise-free twin of a noisy capture keeps the noisy one's times).
+
+    Parameters
+    ----------
+    rates : ndarray
+        ``(H, W, N)`` photo-electron rates, e⁻/s.
+    camera : CameraSpec
+    metered_rate : ndarray
+        ``(N,)`` the metered white's rates, e⁻/s (:func:`white_rate`).
+    seed : int
+        The noise seed.
+    times : array_like or None
+        ``(N,)`` exposure times, s; None: metered by the camera's scheme.
+
+    Returns
+    -------
+    RawCapture
+    """
     arch = camera.architecture()
     if times is None:
         times = exposure_times_s(camera.capture.exposure, metered_rate, camera.sensor, arch, camera.capture.white_fill,
@@ -103,10 +163,24 @@ def record(rates: np.ndarray, camera: CameraSpec, metered_rate: np.ndarray, seed
 
 
 def process(raw: RawCapture, processing: ProcessingSpec, conversion: Conversion,
-            reference=None) -> tuple[np.ndarray, np.ndarray]:
+            reference: ChartReference | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``(camera rates (H, W, N) e⁻/s, display XYZ (H, W, 3), white Y = 1)`` of a capture; ``reference``: the scene's
     chart reference, whose wavelengths and light a lens-shading correction (``processing.shading``) is calibrated
-    for."""
+    for.
+
+    Parameters
+    ----------
+    raw : RawCapture
+    processing : ProcessingSpec
+        Demosaicking (bilinear for full planes, where it is unused) and shading correction.
+    conversion : Conversion
+    reference : ChartReference or None
+
+    Returns
+    -------
+    tuple of ndarray
+        The camera rates and the display XYZ.
+    """
     if not isinstance(raw.layout, MosaicLayout):
         processing = processing.replace(demosaic="bilinear")  # unused for planes
     rates = camera_rates(raw, processing, reference)
@@ -114,9 +188,26 @@ def process(raw: RawCapture, processing: ProcessingSpec, conversion: Conversion,
     return rates, xyz
 
 
-def radiance_to_display_xyz(radiance: np.ndarray, grid, white_luminance_cd_m2: float,
+def radiance_to_display_xyz(radiance: np.ndarray, grid: WavelengthGrid, white_luminance_cd_m2: float,
                             conversion: Conversion) -> np.ndarray:
     """XYZ (white Y = 1) of band-averaged radiance ``(..., B)``, carried to the display white: the ideal
-    rendering S-CIELAB and CIELAB compare against."""
+    rendering S-CIELAB and CIELAB compare against.
+
+    Parameters
+    ----------
+    radiance : ndarray
+        ``(..., B)`` W·m⁻²·sr⁻¹·nm⁻¹.
+    grid : WavelengthGrid
+        The bands, nm.
+    white_luminance_cd_m2 : float
+        The scene white's luminance, cd/m² (Y = 1 there).
+    conversion : Conversion
+        Its adaptation to the display white.
+
+    Returns
+    -------
+    ndarray
+        ``(..., 3)`` XYZ.
+    """
     xyz = K_M_LM_PER_W * (np.asarray(radiance, float) @ cmf_band_weights(grid)) / white_luminance_cd_m2
     return xyz @ conversion.scene_to_display.T

@@ -20,7 +20,7 @@ from __future__ import annotations
 import dataclasses
 import time
 from dataclasses import dataclass
-from typing import TypedDict
+from typing import TYPE_CHECKING, TypedDict
 
 import numpy as np
 
@@ -38,6 +38,11 @@ from spectracam.experiments.spatial.render import SubpixelCube, defocus_diameter
 from spectracam.evaluation.scielab import samples_per_degree
 from spectracam.experiments.spatial.score import SCORE_BORDER_PX, ScoringContext, SpatialRow, mtf_curves, score_image, seed_summary
 from spectracam.experiments.spatial.targets import BRIGHT_NEUTRAL, DARK_NEUTRAL, ColouredEdge, SiemensStar, SlantedEdge, Target, TiltedChart, ZonePlate
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Sequence
+
+    from spectracam.pipeline.scene_file import Scene
 
 STAGES = ("render", "optics", "capture", "processing", "metrics")
 #: The scene references a spatial image is scored against (docs/metrics.md): the scene band-limited to
@@ -292,10 +297,23 @@ def _once(spec: SpatialSpec, design: str, layout) -> list:
 SCENE_KEYS = ("illuminant", "wavelengths", "chart", "render", *CAMERA_TABLES, "processing")
 
 
-def load_spatial(sets=(), quick: bool = False):
+def load_spatial(sets: Sequence[str] = (), quick: bool = False) -> tuple[SpatialSpec, Scene]:
     """``(SpatialSpec, Scene)`` from ``--set`` overrides: top-level keys are the experiment's, tables
     (``illuminant``, ``wavelengths``, ``sensor``, ``optics``, ``filters``, ``processing``, …) the scene's,
-    over the paper's camera and light (``scenes/paper.toml``, as ``spectracam paper`` and ``motion``)."""
+    over the paper's camera and light (``scenes/paper.toml``, as ``spectracam paper`` and ``motion``).
+
+    Parameters
+    ----------
+    sets : sequence of str
+        ``--set PATH=VALUE``.
+    quick : bool
+        ``--quick``: the spec's quick variant and 20-nm bands.
+
+    Returns
+    -------
+    tuple of (SpatialSpec, Scene)
+        The validated spec and scene.
+    """
     from spectracam.pipeline.scene_file import paper_scene
 
     return load_spec_and_scene(SpatialSpec, sets, quick, base_scene=paper_scene())   # the paper's camera
@@ -396,10 +414,30 @@ class SpatialResult(TypedDict):
     wall_s: float
 
 
-def run_spatial(spec: SpatialSpec, scene, renderer: str = "mitsuba", log=None, keep_images: bool = True,
-                progress: bool = False) -> SpatialResult:
+def run_spatial(spec: SpatialSpec, scene: Scene, renderer: str = "mitsuba", log: Callable[[str], object] | None = None,
+                keep_images: bool = True, progress: bool = False) -> SpatialResult:
     """Run every case × target × design. Returns ``{"rows": [SpatialRow], "mtf_curves", "timings",
-    "images", "closed_form", ...}``.  ``progress``: a bar over the cases' targets on a terminal."""
+    "images", "closed_form", ...}``.  ``progress``: a bar over the cases' targets on a terminal.
+
+    Parameters
+    ----------
+    spec : SpatialSpec
+        Pixel pitches (µm), f-numbers, targets, designs, demosaickers, OLPFs, misregistrations.
+    scene : Scene
+        The camera, light and processing.
+    renderer : str
+        ``"mitsuba"`` or ``"analytic"``.
+    log : callable or None
+        ``log(line)`` per case.
+    keep_images : bool
+        Keep each case's images in the result (for the report's figures).
+    progress : bool
+
+    Returns
+    -------
+    SpatialResult
+        The rows, MTF curves, timings, images (with ``keep_images``) and the closed-form checks.
+    """
     from spectracam.core.progress import bar
 
     run = _Run(spec, scene, renderer, log or (lambda msg: None), keep_images, ChartReference.of(scene),

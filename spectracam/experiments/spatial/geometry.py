@@ -20,8 +20,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 from spectracam.core.errors import ConfigError
 
@@ -78,6 +82,25 @@ class CameraGeometry:
         """The camera whose image, focused on the object plane, spans ``field_width_mm`` across: the object
         distance ``d = f·(1 + 1/m)`` for the magnification ``m = sensor width / field width``.
 
+        Parameters
+        ----------
+        field_width_mm : float
+            The object plane's width the image spans, mm.
+        focal_length_mm : float
+            mm.
+        f_number : float
+        pixel_pitch_um : float
+            µm.
+        width_px, height_px : int
+            The image's size, px.
+
+        Returns
+        -------
+        CameraGeometry
+            Focused on the object plane (no separate focus distance).
+
+        Examples
+        --------
         >>> g = CameraGeometry.framing(100.0, 25.0, 4.0, 5.0, 200, 100)
         >>> round(g.object_distance_mm, 3), round(g.field_of_view_mm[0], 6)
         (2525.0, 100.0)
@@ -131,10 +154,22 @@ class CameraGeometry:
         """Entrance-pupil radius ``f / (2N)``, mm (Mitsuba's thinlens ``aperture_radius``)."""
         return self.focal_length_mm / (2 * self.f_number)
 
-    def blur_diameter_um(self, distance_mm) -> np.ndarray:
+    def blur_diameter_um(self, distance_mm: ArrayLike) -> np.ndarray:
         """Diameter of the defocus disc on the sensor of a point at ``distance_mm`` from the lens, µm:
         ``(f/N)·v·|1/z − 1/s|`` (thin lens, geometric optics).
 
+        Parameters
+        ----------
+        distance_mm : array_like
+            The points' distances from the lens, mm.
+
+        Returns
+        -------
+        ndarray
+            The disc's diameter, µm, ``distance_mm``'s shape; 0 at the focus distance.
+
+        Examples
+        --------
         >>> g = CameraGeometry(1000.0, 50.0, 2.0, 10.0, 64, 64)
         >>> float(g.blur_diameter_um(1000.0)), round(float(g.blur_diameter_um(1100.0)), 3)
         (0.0, 119.617)
@@ -144,7 +179,20 @@ class CameraGeometry:
 
     def pixel_centres_mm(self, supersampling: int = 1) -> tuple[np.ndarray, np.ndarray]:
         """Sensor coordinates (u right, w up; mm from the optical axis) of the centres of the columns and
-        rows of the (optionally supersampled) pixel grid; rows run top to bottom."""
+        rows of the (optionally supersampled) pixel grid; rows run top to bottom.
+
+        Parameters
+        ----------
+        supersampling : int
+            Samples per pixel along each axis.
+
+        Returns
+        -------
+        u : ndarray
+            ``(W·supersampling,)`` the columns' centres, mm.
+        w : ndarray
+            ``(H·supersampling,)`` the rows' centres, mm, top row first.
+        """
         s = self.pixel_pitch_mm / supersampling
         W, H = self.width_px * supersampling, self.height_px * supersampling
         u = (np.arange(W) + 0.5 - W / 2) * s
@@ -159,7 +207,18 @@ class CameraGeometry:
         return (self.image_distance_mm**2 / (self.image_distance_mm**2 + r2)) ** 2
 
     def with_margin(self, margin_px: int) -> "CameraGeometry":
-        """The same camera with ``margin_px`` more pixels on every side (the same centre and scale)."""
+        """The same camera with ``margin_px`` more pixels on every side (the same centre and scale).
+
+        Parameters
+        ----------
+        margin_px : int
+            Pixels added on each side.
+
+        Returns
+        -------
+        CameraGeometry
+            ``2·margin_px`` wider and taller.
+        """
         from dataclasses import replace
 
         return replace(self, width_px=self.width_px + 2 * margin_px, height_px=self.height_px + 2 * margin_px)

@@ -30,6 +30,7 @@ for the optics (:func:`margin_px`), that is cut away after sampling.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.fft as sfft
@@ -37,6 +38,13 @@ from scipy.special import j1
 
 from spectracam.camera import CameraSpec, band_weights
 from spectracam.experiments.spatial.geometry import CameraGeometry
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    from numpy.typing import ArrayLike
+
+    from spectracam.core.spectra import WavelengthGrid
 
 __all__ = ["MARGIN_PX", "WRAP_TOLERANCE", "OpticsSettings", "aperture_mtf", "channel_mtf_closed_form",
            "channel_spectra", "defocus_otf", "diffraction_otf", "margin_px", "olpf_otf", "pixel_rates",
@@ -55,6 +63,23 @@ def margin_px(pixel_pitch_um: float, f_number: float, wavelength_max_nm: float, 
     """Pixels to render around the image on each side so that at most :data:`WRAP_TOLERANCE` of the
     diffraction line spread wraps round from the far side (at least :data:`MARGIN_PX`).
 
+    Parameters
+    ----------
+    pixel_pitch_um : float
+        µm.
+    f_number : float
+    wavelength_max_nm : float
+        The longest band's wavelength, nm (the widest line spread).
+    shift_px : float
+        A channel's sampling shift, px, added.
+
+    Returns
+    -------
+    int
+        Pixels.
+
+    Examples
+    --------
     >>> margin_px(2.0, 8.0, 700.0), margin_px(2.0, 32.0, 700.0), margin_px(10.0, 1.4, 700.0)
     (19, 73, 8)
     """
@@ -62,9 +87,24 @@ def margin_px(pixel_pitch_um: float, f_number: float, wavelength_max_nm: float, 
     return max(MARGIN_PX, int(np.ceil(reach_um / pixel_pitch_um + abs(shift_px))))
 
 
-def diffraction_otf(rho_cy_per_um, wavelength_nm: float, f_number: float) -> np.ndarray:
+def diffraction_otf(rho_cy_per_um: ArrayLike, wavelength_nm: float, f_number: float) -> np.ndarray:
     """Diffraction-limited OTF of a circular pupil at radial frequency ρ (cycles/µm in the image plane).
 
+    Parameters
+    ----------
+    rho_cy_per_um : array_like
+        Radial frequencies, cycles/µm.
+    wavelength_nm : float
+        nm.
+    f_number : float
+
+    Returns
+    -------
+    ndarray
+        ``rho``'s shape, 1 at 0 and 0 from the cut-off 1/(λN) on.
+
+    Examples
+    --------
     >>> diffraction_otf(np.array([0.0, 1 / (0.55 * 8)]), 550.0, 8.0).round(6).tolist()
     [1.0, 0.0]
     """
@@ -73,8 +113,21 @@ def diffraction_otf(rho_cy_per_um, wavelength_nm: float, f_number: float) -> np.
     return (2 / np.pi) * (np.arccos(nu) - nu * np.sqrt(1 - nu * nu))
 
 
-def defocus_otf(rho_cy_per_um, blur_diameter_um: float) -> np.ndarray:
-    """OTF of a uniform disc of diameter c (geometric defocus): ``2·J₁(πcρ)/(πcρ)``, 1 at ρ = 0."""
+def defocus_otf(rho_cy_per_um: ArrayLike, blur_diameter_um: float) -> np.ndarray:
+    """OTF of a uniform disc of diameter c (geometric defocus): ``2·J₁(πcρ)/(πcρ)``, 1 at ρ = 0.
+
+    Parameters
+    ----------
+    rho_cy_per_um : array_like
+        Radial frequencies, cycles/µm.
+    blur_diameter_um : float
+        c, µm.
+
+    Returns
+    -------
+    ndarray
+        ``rho``'s shape (negative between its zeros).
+    """
     x = np.pi * float(blur_diameter_um) * np.asarray(rho_cy_per_um, float)
     out = np.ones_like(x)
     nz = x > 1e-9
@@ -82,12 +135,26 @@ def defocus_otf(rho_cy_per_um, blur_diameter_um: float) -> np.ndarray:
     return out
 
 
-def olpf_otf(fx_cy_per_px, fy_cy_per_px, separation_px: float) -> np.ndarray:
+def olpf_otf(fx_cy_per_px: ArrayLike, fy_cy_per_px: ArrayLike, separation_px: float) -> np.ndarray:
     """OTF of a 4-spot birefringent low-pass filter: two plates (split along x, then along y) turn a
     point into four equal spots at ``(±d/2, ±d/2)`` around it, so ``OTF = cos(π·fx·d)·cos(π·fy·d)``
     (real: the spots are centred on the point); first zero at ``1/(2d)`` — the Nyquist frequency for
     d = one pixel (Hecht, *Optics*, 4th ed., §8.4 on birefringent displacement; the usual camera OLPF).
 
+    Parameters
+    ----------
+    fx_cy_per_px, fy_cy_per_px : array_like
+        Frequencies, cycles/pixel (broadcast together).
+    separation_px : float
+        d, pixels.
+
+    Returns
+    -------
+    ndarray
+        The real OTF.
+
+    Examples
+    --------
     >>> olpf_otf(np.array([0.0, 0.5, 1.0]), 0.0, 1.0).round(12).tolist()
     [1.0, 0.0, -1.0]
     """
@@ -95,18 +162,55 @@ def olpf_otf(fx_cy_per_px, fy_cy_per_px, separation_px: float) -> np.ndarray:
     return np.cos(np.pi * np.asarray(fx_cy_per_px, float) * d) * np.cos(np.pi * np.asarray(fy_cy_per_px, float) * d)
 
 
-def aperture_mtf(fx_cy_per_px, fy_cy_per_px, fill_factor: float = 1.0) -> np.ndarray:
-    """Transfer of a centred square light-sensitive area of ``fill_factor`` of the pixel: ``sinc·sinc``."""
+def aperture_mtf(fx_cy_per_px: ArrayLike, fy_cy_per_px: ArrayLike, fill_factor: float = 1.0) -> np.ndarray:
+    """Transfer of a centred square light-sensitive area of ``fill_factor`` of the pixel: ``sinc·sinc``.
+
+    Parameters
+    ----------
+    fx_cy_per_px, fy_cy_per_px : array_like
+        Frequencies, cycles/pixel (broadcast together).
+    fill_factor : float
+        The area's share of the pixel (its side √fill_factor pixels).
+
+    Returns
+    -------
+    ndarray
+        Signed (negative beyond the first zero).
+    """
     a = float(np.sqrt(fill_factor))
     return np.sinc(np.asarray(fx_cy_per_px) * a) * np.sinc(np.asarray(fy_cy_per_px) * a)
 
 
-def channel_mtf_closed_form(f_cy_per_px, angle_deg: float, pitch_um: float, f_number: float, wavelengths_nm,
-                            weights, fill_factor: float = 1.0, olpf_separation_px: float = 0.0) -> np.ndarray:
+def channel_mtf_closed_form(f_cy_per_px: ArrayLike, angle_deg: float, pitch_um: float, f_number: float,
+                            wavelengths_nm: Sequence[float], weights: ArrayLike, fill_factor: float = 1.0,
+                            olpf_separation_px: float = 0.0) -> np.ndarray:
     """The MTF a channel should show along the normal of an edge ``angle_deg`` from a pixel axis: the
     circular-aperture OTF at each band weighted by the channel's signal in that band (``weights``,
     e.g. band weight × the edge's radiance step), times the pixel aperture's sinc (and the optical
-    low-pass filter's cosines) along that direction."""
+    low-pass filter's cosines) along that direction.
+
+    Parameters
+    ----------
+    f_cy_per_px : array_like
+        Frequencies along the edge's normal, cycles/pixel.
+    angle_deg : float
+        The normal's angle from the pixel's x axis, degrees.
+    pitch_um : float
+        µm.
+    f_number : float
+    wavelengths_nm : sequence of float
+        The bands' wavelengths, nm.
+    weights : array_like
+        ``(B,)`` the channel's signal per band.
+    fill_factor : float
+    olpf_separation_px : float
+        0: no low-pass filter.
+
+    Returns
+    -------
+    ndarray
+        ``f``'s shape, the MTF (≥ 0).
+    """
     f = np.asarray(f_cy_per_px, float)
     w = np.asarray(weights, float)
     otf = np.stack([diffraction_otf(f / pitch_um, lam, f_number) for lam in wavelengths_nm])  # (B, F)
@@ -130,12 +234,37 @@ class OpticsSettings:
     olpf_separation_px: float = 0.0
 
 
-def channel_spectra(radiance: np.ndarray, wavelengths_nm, supersampling: int, camera: CameraSpec, grid,
-                    settings: OpticsSettings, workers: int | None = None, weights: np.ndarray | None = None):
+def channel_spectra(radiance: np.ndarray, wavelengths_nm: Sequence[float], supersampling: int, camera: CameraSpec,
+                    grid: WavelengthGrid, settings: OpticsSettings, workers: int | None = None,
+                    weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[int, int]]:
     """The 2-D spectra ``(N, Hs, Ws//2+1)`` of each channel's photo-electron rate image after the
     per-band optics (diffraction, defocus), before the pixel aperture; ``(spectra, fy, fx, (Hs, Ws))``
     with the frequencies in cycles per sub-pixel.  ``weights`` ``(B, N)``: band weights to use instead
-    of the camera's own (several architectures' channels at once share the per-band transforms)."""
+    of the camera's own (several architectures' channels at once share the per-band transforms).
+
+    Parameters
+    ----------
+    radiance : ndarray
+        ``(Hs, Ws, B)`` sub-pixel radiance, W·m⁻²·sr⁻¹·nm⁻¹.
+    wavelengths_nm : sequence of float
+        The bands' wavelengths, nm.
+    supersampling : int
+        Sub-pixels per pixel along each axis.
+    camera : CameraSpec
+        Its pixel pitch (µm), f-number and band weights.
+    grid : WavelengthGrid
+    settings : OpticsSettings
+        Diffraction on or off, defocus (µm).
+    workers : int or None
+        scipy.fft's workers.
+    weights : ndarray or None
+        ``(B, N)``; None: the camera's.
+
+    Returns
+    -------
+    tuple
+        ``(spectra, fy, fx, (Hs, Ws))``.
+    """
     Hs, Ws, B = radiance.shape
     pitch = camera.sensor.pixel_pitch_um
     s_um = pitch / supersampling
@@ -160,11 +289,34 @@ def channel_spectra(radiance: np.ndarray, wavelengths_nm, supersampling: int, ca
     return out, fy, fx, (Hs, Ws)
 
 
-def sample_channels(spectra, fy, fx, shape, supersampling: int, fill_factor: float, shifts_px, margin_px: int,
+def sample_channels(spectra: np.ndarray, fy: np.ndarray, fx: np.ndarray, shape: tuple[int, int], supersampling: int,
+                    fill_factor: float, shifts_px: Sequence[tuple[float, float]], margin_px: int,
                     workers: int | None = None, olpf_separation_px: float = 0.0) -> np.ndarray:
     """``(H, W, N)`` rates: each channel's spectrum through the optical low-pass filter (if any) and the
     pixel aperture, shifted to its sampling positions (``shifts_px`` per channel, missing ones 0),
-    back to space and sampled at the pixel centres; ``margin_px`` cut from every side."""
+    back to space and sampled at the pixel centres; ``margin_px`` cut from every side.
+
+    Parameters
+    ----------
+    spectra, fy, fx : ndarray
+        :func:`channel_spectra`'s spectra and frequencies (cycles per sub-pixel).
+    shape : tuple of int
+        ``(Hs, Ws)``.
+    supersampling : int
+    fill_factor : float
+        The pixel aperture's share of the pixel.
+    shifts_px : sequence of (float, float)
+        Per channel ``(dx, dy)`` px.
+    margin_px : int
+    workers : int or None
+    olpf_separation_px : float
+        0: no low-pass filter.
+
+    Returns
+    -------
+    ndarray
+        ``(H, W, N)`` float32, e⁻/s.
+    """
     ss = supersampling
     aperture = aperture_mtf(fx * ss, fy * ss, fill_factor) / (np.sinc(fx) * np.sinc(fy))
     if olpf_separation_px > 0:
@@ -181,12 +333,32 @@ def sample_channels(spectra, fy, fx, shape, supersampling: int, fill_factor: flo
     return np.ascontiguousarray(np.stack(out, axis=-1), np.float32)
 
 
-def pixel_rates(radiance: np.ndarray, wavelengths_nm, supersampling: int, camera: CameraSpec, grid,
-                geometry: CameraGeometry, settings: OpticsSettings = OpticsSettings(), margin_px: int = MARGIN_PX,
-                workers: int | None = None) -> np.ndarray:
+def pixel_rates(radiance: np.ndarray, wavelengths_nm: Sequence[float], supersampling: int, camera: CameraSpec,
+                grid: WavelengthGrid, geometry: CameraGeometry, settings: OpticsSettings = OpticsSettings(),
+                margin_px: int = MARGIN_PX, workers: int | None = None) -> np.ndarray:
     """``(H, W, N)`` photo-electrons per second per pixel of each channel (float32) from the sub-pixel
     radiance ``(Hs, Ws, B)`` of an image with ``margin_px`` extra pixels on every side; ``geometry`` is
-    the camera without the margin (for cos⁴)."""
+    the camera without the margin (for cos⁴).
+
+    Parameters
+    ----------
+    radiance : ndarray
+        ``(Hs, Ws, B)`` W·m⁻²·sr⁻¹·nm⁻¹.
+    wavelengths_nm : sequence of float
+    supersampling : int
+    camera : CameraSpec
+    grid : WavelengthGrid
+    geometry : CameraGeometry
+    settings : OpticsSettings
+    margin_px : int
+    workers : int or None
+        scipy.fft's workers.
+
+    Returns
+    -------
+    ndarray
+        ``(H, W, N)`` float32, e⁻/s.
+    """
     spectra, fy, fx, shape = channel_spectra(radiance, wavelengths_nm, supersampling, camera, grid, settings, workers)
     rates = sample_channels(spectra, fy, fx, shape, supersampling, camera.sensor.fill_factor, settings.shifts_px, margin_px,
                             workers, settings.olpf_separation_px)

@@ -18,6 +18,7 @@ irradiance.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -25,6 +26,9 @@ from spectracam.scene.illuminant import IlluminantSpec, spectral_irradiance
 from spectracam.core.spectra import WavelengthGrid, band_average, band_sample_points
 from spectracam.experiments.spatial.geometry import CameraGeometry
 from spectracam.experiments.spatial.targets import Target
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
 
 RENDERERS = ("mitsuba", "analytic")
 
@@ -78,14 +82,45 @@ class SubpixelCube:
 
 
 def material_radiance(target: Target, illuminant: IlluminantSpec, grid: WavelengthGrid) -> np.ndarray:
-    """``(n_materials, B)`` band-averaged radiance ``E·S/π`` of each material lit along its normal."""
+    """``(n_materials, B)`` band-averaged radiance ``E·S/π`` of each material lit along its normal.
+
+    Parameters
+    ----------
+    target : Target
+        Its materials' reflectances S(λ).
+    illuminant : IlluminantSpec
+        The light's spectral irradiance E(λ).
+    grid : WavelengthGrid
+        The bands, nm.
+
+    Returns
+    -------
+    ndarray
+        ``(n_materials, B)`` W·m⁻²·sr⁻¹·nm⁻¹ (a Lambertian surface).
+    """
     E = spectral_irradiance(illuminant)
     return np.stack([band_average(lambda lam, S=S: E(lam) * S(lam) / np.pi, grid) for _, S in target.materials()])
 
 
 def render_analytic(target: Target, geometry: CameraGeometry, illuminant: IlluminantSpec, grid: WavelengthGrid,
                     supersampling: int) -> SubpixelCube:
-    """The closed form: each sub-pixel mixes the materials in proportion to the area they cover."""
+    """The closed form: each sub-pixel mixes the materials in proportion to the area they cover.
+
+    Parameters
+    ----------
+    target : Target
+    geometry : CameraGeometry
+        The camera (a pinhole: no defocus here; see :func:`defocus_diameter_um`).
+    illuminant : IlluminantSpec
+    grid : WavelengthGrid
+    supersampling : int
+        Sub-pixels per pixel along each axis.
+
+    Returns
+    -------
+    SubpixelCube
+        ``(H·s, W·s, B)`` float32 radiance, W·m⁻²·sr⁻¹·nm⁻¹.
+    """
     cov = target.coverage(geometry, supersampling).astype(np.float32)          # (M, Hs, Ws)
     L = material_radiance(target, illuminant, grid).astype(np.float32)         # (M, B)
     cube = np.tensordot(cov, L, axes=([0], [0]))                               # (Hs, Ws, B)
@@ -94,7 +129,18 @@ def render_analytic(target: Target, geometry: CameraGeometry, illuminant: Illumi
 
 
 def needs_thinlens(target: Target, geometry: CameraGeometry) -> bool:
-    """Is any part of the target away from the focus distance (so a thin lens blurs it)?"""
+    """Is any part of the target away from the focus distance (so a thin lens blurs it)?
+
+    Parameters
+    ----------
+    target : Target
+        Its depth range, where it has one (a tilted chart); else it lies at the object distance.
+    geometry : CameraGeometry
+
+    Returns
+    -------
+    bool
+    """
     depth = getattr(target, "depth_range_mm", None)
     if depth is None:
         return abs(geometry.object_distance_mm - geometry.focus) > 1e-9 * geometry.focus
@@ -169,7 +215,7 @@ def reflectance_param(key: str) -> str:
 
 def render_mitsuba(target: Target, geometry: CameraGeometry, illuminant: IlluminantSpec, grid: WavelengthGrid,
                    supersampling: int, samples_per_pixel: int = 4, seed: int = 0, variant: str = "auto",
-                   log=None, thinlens: bool | None = None) -> SubpixelCube:
+                   log: Callable[[str], object] | None = None, thinlens: bool | None = None) -> SubpixelCube:
     """Mitsuba 3 render of the target, ``samples_per_pixel`` per sub-pixel and band; ``thinlens``: the
     camera (default: a thin lens where any of the target is out of focus, else a perspective pinhole)."""
     from spectracam.core.errors import SpectracamError
@@ -226,8 +272,35 @@ def render_mitsuba(target: Target, geometry: CameraGeometry, illuminant: Illumin
 
 def render_target(renderer: str, target: Target, geometry: CameraGeometry, illuminant: IlluminantSpec,
                   grid: WavelengthGrid, supersampling: int, samples_per_pixel: int = 4, seed: int = 0,
-                  variant: str = "auto", log=None) -> SubpixelCube:
-    """Render with ``renderer`` (``"mitsuba"`` or ``"analytic"``)."""
+                  variant: str = "auto", log: Callable[[str], object] | None = None) -> SubpixelCube:
+    """Render with ``renderer`` (``"mitsuba"`` or ``"analytic"``).
+
+    Parameters
+    ----------
+    renderer : str
+    target : Target
+    geometry : CameraGeometry
+    illuminant : IlluminantSpec
+    grid : WavelengthGrid
+    supersampling : int
+        Sub-pixels per pixel along each axis.
+    samples_per_pixel, seed : int
+        Mitsuba's samples per sub-pixel and band, and its seed.
+    variant : str
+        Mitsuba's variant (``"auto"``: chosen for this machine).
+    log : callable or None
+        Mitsuba's notices.
+
+    Returns
+    -------
+    SubpixelCube
+        Radiance, W·m⁻²·sr⁻¹·nm⁻¹.
+
+    Raises
+    ------
+    ConfigError
+        For another renderer.
+    """
     from spectracam.core.errors import ConfigError
 
     if renderer == "analytic":
@@ -239,7 +312,20 @@ def render_target(renderer: str, target: Target, geometry: CameraGeometry, illum
 
 def defocus_diameter_um(target: Target, geometry: CameraGeometry, cube: SubpixelCube) -> float:
     """Blur-disc diameter the optics stage must still apply, µm: the thin lens's defocus of a target at
-    one depth when the renderer did not render it (the analytic pinhole); 0 otherwise."""
+    one depth when the renderer did not render it (the analytic pinhole); 0 otherwise.
+
+    Parameters
+    ----------
+    target : Target
+    geometry : CameraGeometry
+    cube : SubpixelCube
+        Its metadata say which camera rendered it.
+
+    Returns
+    -------
+    float
+        µm.
+    """
     if cube.metadata.get("camera") == "thinlens" or getattr(target, "depth_range_mm", None) is not None:
         return 0.0
     return float(geometry.blur_diameter_um(geometry.object_distance_mm))

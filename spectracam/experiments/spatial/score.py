@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
@@ -29,6 +29,11 @@ from spectracam.evaluation.esfr import NoEdge, esfr
 from spectracam.experiments.spatial.geometry import CameraGeometry
 from spectracam.evaluation.scielab import scielab
 from spectracam.experiments.spatial.targets import SlantedEdge, Target, TiltedChart, ZonePlate
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+    from spectracam.evaluation.esfr import ESFRResult
 
 __all__ = ["EDGE_ZONE_PX", "SCALAR_METRICS", "SCORE_BORDER_PX", "SPATIAL_METRICS", "Metric",
            "ScoringContext", "SpatialRow", "mtf_curves", "score_image", "seed_summary"]
@@ -95,8 +100,19 @@ class ScoringContext:
         g = np.hypot(*np.gradient(self.lab_reference[..., 0]))
         return ndimage.binary_dilation(g > 1.0, iterations=EDGE_ZONE_PX) & self.region
 
-    def esfr(self, image):
-        """The e-SFR of ``image`` cropped by the border, or None where it holds no usable edge."""
+    def esfr(self, image: ArrayLike) -> ESFRResult | None:
+        """The e-SFR of ``image`` cropped by the border, or None where it holds no usable edge.
+
+        Parameters
+        ----------
+        image : array_like
+            ``(H, W)`` one plane (luminance Y or a channel's rates); :data:`SCORE_BORDER_PX` cut from each side.
+
+        Returns
+        -------
+        ESFRResult or None
+            :func:`spectracam.evaluation.esfr.esfr`'s, with this context's binning correction.
+        """
         b = SCORE_BORDER_PX
         try:
             return esfr(np.asarray(image)[b:-b, b:-b], correct_binning=self.esfr_correct_binning)
@@ -194,12 +210,33 @@ SCALAR_METRICS = tuple(n for n in SPATIAL_METRICS if n != "mtf50_channels_cy_per
 
 
 def score_image(ctx: ScoringContext) -> dict:
-    """``{metric: value}`` of every registered metric (None where it does not apply to the target)."""
+    """``{metric: value}`` of every registered metric (None where it does not apply to the target).
+
+    Parameters
+    ----------
+    ctx : ScoringContext
+        The image, its reference and target.
+
+    Returns
+    -------
+    dict
+        Metric name (of :data:`SPATIAL_METRICS`) → value.
+    """
     return {name: (m.compute(ctx) if m.applies(ctx.target) else None) for name, m in SPATIAL_METRICS.items()}
 
 
 def mtf_curves(ctx: ScoringContext) -> dict | None:
-    """The e-SFR of Y and of every channel (edges), each cut to Y's frequencies; None for other targets."""
+    """The e-SFR of Y and of every channel (edges), each cut to Y's frequencies; None for other targets.
+
+    Parameters
+    ----------
+    ctx : ScoringContext
+
+    Returns
+    -------
+    dict or None
+        ``frequencies_cy_per_px``, ``Y`` and each channel's SFR (empty where no edge was found), ``edge_angle_deg``.
+    """
     if not _is_edge(ctx.target):
         return None
     lum = ctx.esfr_luminance
@@ -253,7 +290,18 @@ class SpatialRow:
 
 def seed_summary(per_seed: list[dict]) -> tuple[dict, dict, dict]:
     """``(means, 95 % intervals, values by seed)`` of the scalar metrics of several seeds' scores
-    (the per-channel MTF50s: means only). With one seed: its values and no intervals."""
+    (the per-channel MTF50s: means only). With one seed: its values and no intervals.
+
+    Parameters
+    ----------
+    per_seed : list of dict
+        :func:`score_image`'s per seed (the same keys).
+
+    Returns
+    -------
+    tuple of (dict, dict, dict)
+        Means; 95 % Student-t intervals ``[low, high]`` of the mean; the values by seed.
+    """
     from scipy import stats
 
     if len(per_seed) == 1:

@@ -21,7 +21,7 @@ import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TypedDict
+from typing import TYPE_CHECKING, Any, TypedDict
 
 import numpy as np
 
@@ -31,6 +31,11 @@ from spectracam.pipeline.overrides import DESIGN_PATH, PATH, apply_override, app
 from spectracam.pipeline.scene_file import Scene, load_scene, parse_scene, read_toml
 from spectracam.evaluation.score import SUMMARY_METRICS
 from spectracam.evaluation.usability import UsabilitySpec
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Iterable
+
+    from spectracam.render import RadianceCube
 
 __all__ = ["DESIGN_AXIS", "HANDSHAKE_TIMEOUT_S", "HELD_OUT_METRICS", "MAX_CELLS", "METRICS",
            "SCHEDULER_TIMEOUT_S", "SWEEP_KEYS", "TASK_RETRIES", "Sweep", "SweepResult", "base_value", "cell_scene",
@@ -96,11 +101,35 @@ def _axis_values(t: dict | list, field: str, source: str, max_values: int = MAX_
     raise ConfigError(field, t, "must be a non-empty list of values or a table {start, stop, step}", source)
 
 
-def load_sweep(path: str | Path, overrides=(), max_cells: int = MAX_CELLS, log=lambda m: None,
-               progress: bool = True) -> Sweep:
+def load_sweep(path: str | Path, overrides: Iterable[str | tuple[str, object]] = (), max_cells: int = MAX_CELLS,
+               log: Callable[[str], object] = lambda m: None, progress: bool = True) -> Sweep:
     """Read and validate a sweep file; every cell's scene is validated here, before anything runs.
     ``overrides`` (``--set``): a path whose table is a sweep key changes the sweep, any other the
-    base scene."""
+    base scene.
+
+    Parameters
+    ----------
+    path : str or Path
+        The sweep file.
+    overrides : iterable of str or (str, object)
+        ``PATH=VALUE`` strings or ``(path, value)`` pairs.
+    max_cells : int
+        ``--max-cells``: more cells are refused.
+    log : callable
+        ``log(line)``: the number of cells and trials.
+    progress : bool
+        A bar over the cells' validation.
+
+    Returns
+    -------
+    Sweep
+        With its largest scene and the number of distinct renders.
+
+    Raises
+    ------
+    ConfigError
+        On an invalid key or value, a cell that cannot be metered, or more cells than ``max_cells``.
+    """
     p = Path(path)
     pairs = [parse_assignment(o) if isinstance(o, str) else o for o in overrides]
     mine = [(k, v) for k, v in pairs if k.split(".")[0].split("[")[0] in SWEEP_KEYS]
@@ -223,7 +252,24 @@ def _size(scene: Scene) -> int:
 
 def check_meterable(scene: Scene, cell: dict, index: int, source: str) -> None:
     """A cell whose white patch cannot be metered (a channel left dark, dark current filling the well)
-    is refused here, before anything runs, not midway through the sweep."""
+    is refused here, before anything runs, not midway through the sweep.
+
+    Parameters
+    ----------
+    scene : Scene
+        The cell's scene.
+    cell : dict
+        Its axis values (named in the error).
+    index : int
+        Its index.
+    source : str
+        The sweep file.
+
+    Raises
+    ------
+    ConfigError
+        When the white patch cannot be metered.
+    """
     from spectracam.scene.chart import WHITE_PATCH
     from spectracam.sensor.exposure import saturation_times_s
     from spectracam.scene.reference import ChartReference
@@ -235,8 +281,21 @@ def check_meterable(scene: Scene, cell: dict, index: int, source: str) -> None:
         raise ConfigError(f"cell {index}", cell, str(e), source) from None
 
 
-def base_value(base: dict, path: str):
-    """The base scene's value at an axis path (``capture.design`` as ``"arch/scheme"``), or None."""
+def base_value(base: dict, path: str) -> Any:
+    """The base scene's value at an axis path (``capture.design`` as ``"arch/scheme"``), or None.
+
+    Parameters
+    ----------
+    base : dict
+        The base scene's tables.
+    path : str
+        An axis (``table.field`` or ``table.field[i]``).
+
+    Returns
+    -------
+    object
+        The value (an element with an index), or None where the scene has none.
+    """
     if path == DESIGN_AXIS:
         return f"{base['capture']['architecture']}/{base['capture']['exposure']}"
     m = PATH.match(path)
@@ -246,7 +305,20 @@ def base_value(base: dict, path: str):
 
 
 def cell_scene(sweep: Sweep, cell: dict, index: int) -> Scene:
-    """The scene of one cell: the base scene with each axis's value set (the ``--set`` path engine)."""
+    """The scene of one cell: the base scene with each axis's value set (the ``--set`` path engine).
+
+    Parameters
+    ----------
+    sweep : Sweep
+    cell : dict
+        Axis path → value.
+    index : int
+        The cell's index (named in errors).
+
+    Returns
+    -------
+    Scene
+    """
     d = sweep.base
     for path, value in cell.items():
         d = apply_override(d, path, value, source=f"{sweep.source}: axes")
@@ -254,7 +326,19 @@ def cell_scene(sweep: Sweep, cell: dict, index: int) -> Scene:
 
 
 def trial_seed(sweep_seed: int, trial: int) -> int:
-    """Noise seed of a trial, the same in every cell (common random numbers across cells)."""
+    """Noise seed of a trial, the same in every cell (common random numbers across cells).
+
+    Parameters
+    ----------
+    sweep_seed : int
+        The sweep's seed.
+    trial : int
+
+    Returns
+    -------
+    int
+        0 … 2³¹ − 1.
+    """
     return int(np.random.SeedSequence([sweep_seed, trial]).generate_state(1)[0] >> 1)  # 0 … 2³¹ − 1
 
 
@@ -269,9 +353,32 @@ def _flatten(d: dict, prefix: str = "") -> dict:
     return out
 
 
-def run_cell(index: int, cell: dict, scene: Scene, cube, trials: int, sweep_seed: int, metrics: tuple,
+def run_cell(index: int, cell: dict, scene: Scene, cube: RadianceCube, trials: int, sweep_seed: int, metrics: tuple,
              sweep_digest: str = "") -> dict:
-    """One cell: capture and score every trial.  Runs on a Dask worker (or in-process)."""
+    """One cell: capture and score every trial.  Runs on a Dask worker (or in-process).
+
+    Parameters
+    ----------
+    index : int
+    cell : dict
+        Axis path → value.
+    scene : Scene
+        The cell's scene (:func:`cell_scene`).
+    cube : RadianceCube
+        Its render.
+    trials, sweep_seed : int
+        Trials per cell and the sweep's seed (:func:`trial_seed`).
+    metrics : tuple of str
+        The summary metrics recorded.
+    sweep_digest : str
+        The sweep's digest, stamped on each row (the journal's check).
+
+    Returns
+    -------
+    dict
+        ``cell``, ``rows`` (one per trial: seed, axis values, scene parameters, metrics, usability) and
+        ``compute_s`` (s).
+    """
     from spectracam.camera.capture import capture
     from spectracam.processing import metered_camera
     from spectracam.scene.reference import ChartReference
@@ -297,14 +404,42 @@ def run_cell(index: int, cell: dict, scene: Scene, cube, trials: int, sweep_seed
     return {"cell": index, "rows": rows, "compute_s": time.perf_counter() - t0}
 
 
-def run_cells(items: list, cube, trials: int, sweep_seed: int, metrics: tuple, sweep_digest: str = "") -> list[dict]:
+def run_cells(items: list, cube: RadianceCube, trials: int, sweep_seed: int, metrics: tuple,
+              sweep_digest: str = "") -> list[dict]:
     """Several cells that share a radiance cube, as one Dask task: a task costs the engine a few
-    milliseconds (scheduling, transfer), which a batch of cells shares."""
+    milliseconds (scheduling, transfer), which a batch of cells shares.
+
+    Parameters
+    ----------
+    items : list
+        ``(index, cell, scene)`` per cell.
+    cube : RadianceCube
+        Their shared render.
+    trials, sweep_seed : int
+    metrics : tuple of str
+    sweep_digest : str
+        As :func:`run_cell`.
+
+    Returns
+    -------
+    list of dict
+        :func:`run_cell`'s, in order.
+    """
     return [run_cell(i, cell, scene, cube, trials, sweep_seed, metrics, sweep_digest) for i, cell, scene in items]
 
 
 def cells_per_task(n_cells: int, workers: int) -> int:
-    """About eight tasks per worker (load balance, progress), at most 32 cells each."""
+    """About eight tasks per worker (load balance, progress), at most 32 cells each.
+
+    Parameters
+    ----------
+    n_cells, workers : int
+
+    Returns
+    -------
+    int
+        Cells per task, at least 1.
+    """
     return max(1, min(32, math.ceil(n_cells / (8 * max(workers, 1)))))
 
 
@@ -338,13 +473,30 @@ def _read_journal(path: Path, digest: str, log=lambda m: None) -> tuple[list[dic
     return rows, good_len
 
 
-def finished_cells(rows: list[dict], sweep: "Sweep", cells: list[dict], log=lambda m: None) -> tuple[list[dict], set]:
+def finished_cells(rows: list[dict], sweep: "Sweep", cells: list[dict],
+                   log: Callable[[str], object] = lambda m: None) -> tuple[list[dict], set]:
     """``(rows, done)``: the journal rows that belong to this sweep and the cells they finish.  A row
     belongs when its cell exists, its trial is one of the sweep's with that trial's seed, its axis values
     and every scene parameter are the cell's, and every metric is a finite number (an SNR may be null:
     noise-free); a cell is finished by exactly one such row per trial.  Anything else — a row for cell
     9999, trial 99 of 2, a duplicate, a NaN or text metric, edited parameters — is dropped with a
-    warning and its cell computed again."""
+    warning and its cell computed again.
+
+    Parameters
+    ----------
+    rows : list of dict
+        The journal's rows (results.jsonl).
+    sweep : Sweep
+    cells : list of dict
+        The sweep's cells, by index.
+    log : callable
+        ``log(line)``: the warning.
+
+    Returns
+    -------
+    tuple of (list of dict, set)
+        The rows kept and the indices of the finished cells.
+    """
     by_cell: dict[int, dict[int, list]] = {}
     bad = 0
     expected_params: dict[int, dict] = {}
@@ -409,11 +561,22 @@ TASK_RETRIES = 2
 HANDSHAKE_TIMEOUT_S = 5.0
 
 
-def probe_scheduler(address) -> None:
+def probe_scheduler(address: object) -> None:
     """Refuse, in one line and within :data:`HANDSHAKE_TIMEOUT_S`, an address that is not a Dask
     scheduler: not ``tcp://HOST:PORT``, nothing listening, or a peer that does not open with Dask's
     handshake (an HTTP server sends nothing; another service sends something else) — before a client
-    could hang on it or read its bytes as a message length."""
+    could hang on it or read its bytes as a message length.
+
+    Parameters
+    ----------
+    address : object
+        ``--scheduler``.
+
+    Raises
+    ------
+    SpectracamError
+        When it is not a Dask scheduler's address, cannot be connected to, or does not answer as one.
+    """
     import re
     import socket
 
@@ -470,10 +633,24 @@ class SweepResult(TypedDict):
 
 
 def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None, workers: int | None = None,
-              serial: bool = False, resume: bool = False, progress: bool = True, log=lambda m: None,
-              stop_after: int | None = None) -> SweepResult:
+              serial: bool = False, resume: bool = False, progress: bool = True,
+              log: Callable[[str], object] = lambda m: None, stop_after: int | None = None) -> SweepResult:
     """Run (or resume) a sweep; returns timing figures.  ``stop_after`` ends after that many new cells
-    (for tests of interruption)."""
+    (for tests of interruption).
+
+    Parameters
+    ----------
+    sweep : Sweep
+    out_dir : str or Path
+    scheduler : str or None
+    workers, stop_after : int or None
+    serial, resume, progress : bool
+        Here, not on Dask (``scheduler``'s, or a local cluster if None); go on from the journal; progress bars.
+    log : callable
+
+    Returns
+    -------
+    SweepResult"""
     from spectracam.core.progress import Counter
 
     if scheduler is not None and not serial:

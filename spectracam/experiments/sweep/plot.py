@@ -7,11 +7,15 @@ import re
 import textwrap
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from spectracam.core.errors import SpectracamError
 from spectracam.io.plots import OKABE_ITO
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = ["AXIS_LABELS", "LARGER_IS_BETTER", "LEGEND_ROWS", "METRIC_LABELS", "axis_label", "load_results",
            "metric_label", "natural_key", "plot_sweep", "resolve_axes", "sweep_figure", "with_value"]
@@ -35,7 +39,18 @@ LARGER_IS_BETTER = ("snr_combined_db", "snr_R_db", "snr_G_db", "snr_B_db")
 
 
 def axis_label(path: str) -> str:
-    """``"sensor.read_noise_e"`` → ``"read noise (e⁻)"``."""
+    """``"sensor.read_noise_e"`` → ``"read noise (e⁻)"``.
+
+    Parameters
+    ----------
+    path : str
+        A sweep axis (a scene-file path).
+
+    Returns
+    -------
+    str
+        :data:`AXIS_LABELS`' label, else the field's name in words with its unit suffix spelled out; else ``path``.
+    """
     if path in AXIS_LABELS:
         return AXIS_LABELS[path]
     m = re.match(r"^[a-z_]+\.([A-Za-z_0-9]+?)(?:_([A-Za-z]+))?(\[\d+\])?$", path)
@@ -48,10 +63,30 @@ def axis_label(path: str) -> str:
 
 
 def metric_label(metric: str) -> str:
+    """A metric's label for an axis (:data:`METRIC_LABELS`; else its name in words).
+
+    Parameters
+    ----------
+    metric : str
+
+    Returns
+    -------
+    str
+    """
     return METRIC_LABELS.get(metric, (metric.replace("_", " "), True))[0]
 
 
 def load_results(out_dir: str | Path) -> tuple[dict, list[dict]]:
+    """sweep.json and results.parquet of a finished sweep, checked to describe one sweep (one line if not).
+
+    Parameters
+    ----------
+    out_dir : str or Path
+
+    Returns
+    -------
+    tuple of (dict, list of dict)
+        sweep.json's metadata (``axes``, ``metrics``, ``trials``, …) and the table's rows."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
@@ -113,9 +148,20 @@ def _base_value(row: dict, axis: str):
     return v
 
 
-def natural_key(v):
+def natural_key(v: object) -> tuple:
     """Sort key of an axis value: numbers by value, then text with its runs of digits compared as numbers
-    (``"fsc 9"`` before ``"fsc 10"``), so lines, panels and x values come in the variable's own order."""
+    (``"fsc 9"`` before ``"fsc 10"``), so lines, panels and x values come in the variable's own order.
+
+    Parameters
+    ----------
+    v : object
+        A number (not a bool) or anything with a text form.
+
+    Returns
+    -------
+    tuple
+        Comparable with every other value's key.
+    """
     if _is_number(v):
         return (0, float(v), ())
     parts = re.split(r"(\d+(?:\.\d+)?)", str(v))
@@ -130,8 +176,20 @@ def _fmt(v: float) -> str:
     return f"{v:.3g}" if abs(v) < 1000 else f"{v:.0f}"
 
 
-def with_value(path: str, v) -> str:
-    """``("illuminant.temperature_K", 3000)`` → ``"colour temperature = 3000 K"``."""
+def with_value(path: str, v: object) -> str:
+    """``("illuminant.temperature_K", 3000)`` → ``"colour temperature = 3000 K"``.
+
+    Parameters
+    ----------
+    path : str
+        A sweep axis.
+    v : object
+        Its value.
+
+    Returns
+    -------
+    str
+    """
     m = re.match(r"^(.*) \((.+)\)$", axis_label(path))
     return f"{m.group(1)} = {v} {m.group(2)}" if m else f"{axis_label(path)} = {v}"
 
@@ -165,7 +223,24 @@ def _annotate_best(ax, xy, text: str, points) -> None:
 
 def resolve_axes(meta: dict, x: str | None = None, line: str | None = None,
                  panel: str | None = None) -> tuple[str, str | None, str | None]:
-    """The x, line and panel axes: those asked for, the others from the sweep's varying axes."""
+    """The x, line and panel axes: those asked for, the others from the sweep's varying axes.
+
+    Parameters
+    ----------
+    meta : dict
+        sweep.json's metadata (its ``axes``: ``[path, values]`` pairs).
+    x, line, panel : str or None
+        The axes asked for; None: chosen from the varying ones (x the last, line the one before, panel the first).
+
+    Returns
+    -------
+    tuple of (str, str or None, str or None)
+
+    Raises
+    ------
+    SpectracamError
+        When an axis asked for is not the sweep's.
+    """
     axes = [a for a, _ in meta["axes"]]
     varying = [a for a, v in meta["axes"] if len(v) > 1]
     for name, value in (("x", x), ("line", line), ("panel", panel)):
@@ -201,11 +276,28 @@ class _Layout:
 
 
 def sweep_figure(meta: dict, rows: list[dict], metric: str, x: str, line: str | None = None,
-                 panel: str | None = None, base: dict | None = None):
+                 panel: str | None = None, base: dict | None = None) -> Figure:
     """The figure of one metric: x = ``x`` axis, one line per value of ``line`` (in the variable's order,
     coloured along a sequential colormap when it is numeric), one panel per value of ``panel``; other
     axes averaged over.  In each panel the best cell is circled and annotated with its value and line,
-    and its line drawn thick; the base scene's cell is starred."""
+    and its line drawn thick; the base scene's cell is starred.
+
+    Parameters
+    ----------
+    meta : dict
+        sweep.json's metadata.
+    rows : list of dict
+        results.parquet's rows.
+    metric : str
+    x : str
+    line, panel : str or None
+    base : dict or None
+        Axis → the base scene's value; None: sweep.json's ``base_values``.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     from spectracam.io.plots import pyplot
 
     plt = pyplot()
@@ -357,7 +449,28 @@ def plot_sweep(out_dir: str | Path, x: str | None = None, line: str | None = Non
                metrics: list[str] | None = None, base: dict | None = None) -> list[Path]:
     """Write ``plots/<metric>.png`` and ``.svg`` (:func:`sweep_figure`): x = ``x`` axis, lines = ``line``
     axis, one panel per value of ``panel``; other axes are averaged over.  Defaults: the axes in the sweep
-    file's order.  ``base``: axis → the base scene's value, marked with a star (default: from the sweep.json)."""
+    file's order.  ``base``: axis → the base scene's value, marked with a star (default: from the sweep.json).
+
+    Parameters
+    ----------
+    out_dir : str or Path
+        The sweep's directory; the plots go to ``plots/`` in it.
+    x, line, panel : str or None
+        Axes (:func:`resolve_axes`).
+    metrics : list of str or None
+        The metrics plotted; None: every one the sweep recorded.
+    base : dict or None
+
+    Returns
+    -------
+    list of Path
+        A PNG and an SVG per metric.
+
+    Raises
+    ------
+    SpectracamError
+        For a metric the sweep did not record, or a directory without a readable finished sweep.
+    """
     from spectracam.io.plots import save_figure
 
     meta, rows = load_results(out_dir)

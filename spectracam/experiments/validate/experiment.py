@@ -24,7 +24,7 @@ against spectracam's fits; skipped, with the reason, where the files are absent.
 """
 from __future__ import annotations
 
-from typing import TypedDict
+from typing import TYPE_CHECKING, TypedDict
 
 import numpy as np
 
@@ -34,16 +34,47 @@ from spectracam.core.errors import ConfigError
 from spectracam.core.cielab import delta_e, xyz_to_lab
 from spectracam.experiments.validate.scene import SCENE_OVERRIDES, validation_scene  # noqa: F401
 
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+    from pathlib import Path
+
+    from matplotlib.figure import Figure
+
+    from spectracam.architecture.cameras import PublishedMatrix
+    from spectracam.pipeline.scene_file import Scene
+
 __all__ = ["ValidateResult", "camera_row", "parse_matrix", "raw_patch_rates", "run_validate", "user_camera",
            "validate_camera", "validate_figure", "validate_markdown", "write_validate_outputs"]
 
 
 
-def user_camera(camera_file, matrix, unit: str = "relative", gains=None, gains_kept: bool = False):
+def user_camera(camera_file: str | Path, matrix: Sequence[float], unit: str = "relative",
+                gains: Sequence[float] | None = None,
+                gains_kept: bool = False) -> tuple[Scene, PublishedMatrix, str, tuple | None]:
     """``(scene, PublishedMatrix, gains note, (wl, curves) as read or None)`` of a user's camera: the CSV of
     ``filters.camera_file`` and its published XYZ(D65)→camera ``matrix`` (9 numbers), checked by the same
     rules as a scene's (:mod:`spectracam.architecture.filters`); the matrix also restores the gains of per-channel-normalised
-    curves, as for the shipped cameras."""
+    curves, as for the shipped cameras.
+
+    Parameters
+    ----------
+    camera_file : str or Path
+        The CSV of the camera's curves.
+    matrix : sequence of float
+        9 numbers, row-major (:func:`parse_matrix`).
+    unit : str
+        ``filters.camera_unit`` of the curves.
+    gains : sequence of float or None
+        ``filters.camera_gains``; None: none given.
+    gains_kept : bool
+        ``filters.camera_gains_kept``.
+
+    Returns
+    -------
+    tuple
+        The validation scene, the matrix, how the gains were set, and ``(wl, curves)`` when the curves are relative
+        and peak-normalised (else None).
+    """
     from pathlib import Path
 
     from spectracam.architecture.cameras import PublishedMatrix, file_gains, load_camera_csv, peak_normalised
@@ -68,8 +99,20 @@ def user_camera(camera_file, matrix, unit: str = "relative", gains=None, gains_k
     return scene, m, note, equal
 
 
-def raw_patch_rates(scene, renderer: str) -> np.ndarray:
-    """``(24, 3)`` raw rates (e⁻/s) of the patches from a real render and noise-free capture."""
+def raw_patch_rates(scene: Scene, renderer: str) -> np.ndarray:
+    """``(24, 3)`` raw rates (e⁻/s) of the patches from a real render and noise-free capture.
+
+    Parameters
+    ----------
+    scene : Scene
+        A validation scene.
+    renderer : str
+
+    Returns
+    -------
+    ndarray
+        ``(24, 3)`` e⁻/s: each patch's mean DN over the exposure time.
+    """
     from spectracam.pipeline import capture
     from spectracam.scene.reference import ChartReference
     from spectracam.render import render
@@ -82,16 +125,47 @@ def raw_patch_rates(scene, renderer: str) -> np.ndarray:
 
 
 def validate_camera(name: str, renderer: str = "analytic") -> dict:
-    """One shipped camera's row: simulated and published neutral, ΔE*ab with the published matrix and the fit."""
+    """One shipped camera's row: simulated and published neutral, ΔE*ab with the published matrix and the fit.
+
+    Parameters
+    ----------
+    name : str
+        A camera of the shipped library with a published matrix.
+    renderer : str
+
+    Returns
+    -------
+    dict
+        :func:`camera_row`'s.
+    """
     curves = library_curves(name)
     equal = (curves.wavelengths_nm, curves.values) if curves.per_channel else None
     return camera_row(name, validation_scene(name), PUBLISHED_MATRICES[curves.matrix],
                       curves.gains_note if curves.per_channel else "as published", equal, renderer)
 
 
-def camera_row(name: str, scene, matrix, gains_note: str, equal_gains, renderer: str = "analytic") -> dict:
+def camera_row(name: str, scene: Scene, matrix: PublishedMatrix, gains_note: str, equal_gains: tuple | None,
+               renderer: str = "analytic") -> dict:
     """A camera's row (module docstring); ``equal_gains``: ``(wl, curves)`` normalised per channel, whose white
-    at equal gains is shown beside (what ignoring the lost gains would give), or None."""
+    at equal gains is shown beside (what ignoring the lost gains would give), or None.
+
+    Parameters
+    ----------
+    name : str
+    scene : Scene
+        Its validation scene.
+    matrix : PublishedMatrix
+    gains_note : str
+        How the curves' gains were set.
+    equal_gains : tuple or None
+    renderer : str
+
+    Returns
+    -------
+    dict
+        The white patch's R/G and B/G simulated and published (and their error, %), the ΔE*ab of the published
+        matrix and of the fit (mean, max, per patch).
+    """
     from spectracam.scene.reference import ChartReference
 
     ref = ChartReference.of(scene)
@@ -142,7 +216,18 @@ class ValidateResult(_ValidateKeys, total=False):
 
 def run_validate(renderer: str = "analytic", user: dict | None = None) -> ValidateResult:
     """Every shipped camera with a published matrix, and the library as ``spectracam cameras`` lists it; with
-    ``user`` (the keyword arguments of :func:`user_camera`), that camera alone, checked the same way."""
+    ``user`` (the keyword arguments of :func:`user_camera`), that camera alone, checked the same way.
+
+    Parameters
+    ----------
+    renderer : str
+    user : dict or None
+
+    Returns
+    -------
+    ValidateResult
+        validate.json's keys but ``command``.
+    """
     from spectracam.experiments.validate.white_balance import run_validate_wb
 
     if user is not None:
@@ -168,7 +253,23 @@ def run_validate(renderer: str = "analytic", user: dict | None = None) -> Valida
 
 def parse_matrix(text: str) -> tuple:
     """9 numbers (an XYZ(D65)→camera matrix, row-major) from ``--matrix``: the numbers themselves, separated by
-    commas, spaces or brackets, or the path of a text file that holds them."""
+    commas, spaces or brackets, or the path of a text file that holds them (``#`` lines skipped).
+
+    Parameters
+    ----------
+    text : str
+        ``--matrix``.
+
+    Returns
+    -------
+    tuple of float
+        The 9 numbers.
+
+    Raises
+    ------
+    ConfigError
+        When it is not 9 finite numbers, or names a file that is not a readable regular text file.
+    """
     import os
     import re
     import stat
@@ -205,6 +306,19 @@ def _usable(name: str) -> bool:
 
 
 def validate_markdown(result: dict, command: str) -> str:
+    """validate.md: the cameras' rows as a table, the definitions, the real cameras' own data and the library.
+
+    Parameters
+    ----------
+    result : dict
+        :func:`run_validate`'s.
+    command : str
+        The command, recorded at the top.
+
+    Returns
+    -------
+    str
+    """
     lines = ["# Real cameras against their published matrices", "", f"`{command}`", "",
              f"Chart: {result['chart']} under {result['illuminant']}, noise-free, renderer {result['renderer']}.", "",
              "| camera | gains | white R/G sim / published | B/G sim / published | ΔE*ab published M (mean / max) "
@@ -234,7 +348,19 @@ def validate_markdown(result: dict, command: str) -> str:
     return "\n".join(lines) + "\n"
 
 
-def validate_figure(result: dict):
+def validate_figure(result: dict) -> Figure:
+    """The neutral under D65 (simulated against published R/G, B/G) and the per-patch ΔE*ab of the published matrix
+    (bars) and the fit (ticks), per camera.
+
+    Parameters
+    ----------
+    result : dict
+        :func:`run_validate`'s.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     from spectracam.io.plots import pyplot
 
     plt = pyplot()
@@ -266,8 +392,21 @@ def validate_figure(result: dict):
     return fig
 
 
-def write_validate_outputs(out_dir, result: dict, command: str) -> list:
-    """validate.json, validate.md and validate.png/.svg, atomically."""
+def write_validate_outputs(out_dir: str | Path, result: dict, command: str) -> list:
+    """validate.json, validate.md and validate.png/.svg, atomically.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+    result : dict
+        :func:`run_validate`'s.
+    command : str
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
     from spectracam.io.report import write_figure_json_markdown
 
     return write_figure_json_markdown(out_dir, "validate", validate_figure(result), "validate.json", result, command,

@@ -1,10 +1,15 @@
 """The scene every validation runs on: the shipped D65 chart with a camera's measured curves, noise-free."""
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from spectracam.architecture.cameras import library_curves
 from spectracam.core.errors import ConfigError
+
+if TYPE_CHECKING:
+    from spectracam.pipeline.scene_file import Scene
 
 __all__ = ["SCENE_OVERRIDES", "validation_scene"]
 
@@ -12,10 +17,30 @@ __all__ = ["SCENE_OVERRIDES", "validation_scene"]
 SCENE_OVERRIDES = {"image": {"width": 192, "height": 144}}
 
 
-def validation_scene(camera_name: str, filters: dict | None = None, range_nm: tuple | None = None):
+def validation_scene(camera_name: str, filters: dict | None = None, range_nm: tuple | None = None) -> Scene:
     """The shipped D65 chart scene with the camera's curves, noise-free, flat QE (the curves hold it), on
     400–700 nm or the part of it the curves cover (the Sigma's stop at 680 nm).  ``filters`` (with
-    ``range_nm``): a ``[filters]`` table of the user's own camera instead of a shipped one."""
+    ``range_nm``): a ``[filters]`` table of the user's own camera instead of a shipped one.
+
+    Parameters
+    ----------
+    camera_name : str
+        A camera of the shipped library, or the user's camera's name (for the messages).
+    filters : dict or None
+        The user's ``[filters]`` table; None: the library camera's.
+    range_nm : tuple or None
+        ``(lo, hi)`` nm the user's curves cover; None: the library camera's.
+
+    Returns
+    -------
+    Scene
+        On 10-nm bands within 400–700 nm.
+
+    Raises
+    ------
+    ConfigError
+        When the curves cover less than 20 nm of 400–700 nm.
+    """
     from spectracam.pipeline.scene_file import parse_scene, read_toml, shipped_scene_file
 
     data = read_toml(shipped_scene_file("d65.toml"), "scene file")
