@@ -24,29 +24,13 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 
-def _vm(field: str) -> int | None:
-    try:
-        with open("/proc/self/status") as f:
-            return next(int(line.split()[1]) * 1024 for line in f if line.startswith(field + ":"))
-    except (OSError, StopIteration):
-        return None
-
-
-def _reset_hwm() -> None:
-    try:
-        with open("/proc/self/clear_refs", "w") as f:
-            f.write("5")
-    except OSError:
-        pass
-
-
 def child(way: str, width: int, height: int, renderer: str, repeats: int) -> dict:
     """One way, in this process: times (best of ``repeats``), peaks, and the capture's digital numbers' digest."""
     import tracemalloc
 
     import numpy as np
 
-    from bench_capture import _scene
+    from bench_capture import _reset_hwm, _scene, _vm
     from spectracam.pipeline import capture, render, render_planes, score
 
     scene = _scene(width, height, False)

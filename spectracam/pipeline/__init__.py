@@ -633,6 +633,7 @@ def integrate_planes(wavelengths_nm: np.ndarray, bands: list, metadata: dict, ca
     from spectracam.camera import band_weights
     from spectracam.camera.capture import check_planes_capturable
     from spectracam.core.spectra import WavelengthGrid
+    from spectracam.render.cube import add_band
 
     check_planes_capturable(camera)
     wl = np.asarray(wavelengths_nm, float)
@@ -643,8 +644,7 @@ def integrate_planes(wavelengths_nm: np.ndarray, bands: list, metadata: dict, ca
         if not (np.isfinite(lo) and np.isfinite(hi) and lo >= 0):
             raise SpectracamError(f"{source}: radiance is not finite or negative in band {wl[b]:g} nm; a radiance is "
                                   "finite and ≥ 0")
-        for k in range(planes.shape[0]):
-            planes[k] += w[b, k] * band
+        add_band(planes, band, w[b])
     return ChannelPlanes(np.moveaxis(planes, 0, -1).copy(), wl, w.astype(np.float64), dict(metadata))
 
 

@@ -9,7 +9,7 @@ import numpy as np
 from spectracam.core.spec import Spec
 from spectracam.core.spectra import WavelengthGrid
 
-__all__ = ["VARIANTS", "ChannelPlanes", "RadianceCube", "RenderSpec"]
+__all__ = ["VARIANTS", "ChannelPlanes", "RadianceCube", "RenderSpec", "add_band"]
 
 #: Mitsuba variants a scene may ask for; ``auto`` picks the fastest that renders here.
 VARIANTS = ("auto", "llvm", "scalar", "cuda")
@@ -111,3 +111,21 @@ class ChannelPlanes:
     @property
     def shape(self) -> tuple[int, int, int]:
         return tuple(self.planes.shape)  # type: ignore[return-value]
+
+
+def add_band(planes: np.ndarray, band: np.ndarray, weights_row: np.ndarray) -> None:
+    """Add one band's image into ``(N, H, W)`` float32 planes in place: ``planes[k] += weights_row[k] · band``, one
+    contiguous multiply-add pass per plane (how :class:`ChannelPlanes` are integrated, band after band, by the
+    renderer and by ``capture --channel-planes``).
+
+    Parameters
+    ----------
+    planes : ndarray
+        ``(N, H, W)`` float32 accumulators.
+    band : ndarray
+        ``(H, W)`` float32 band-averaged radiance, W·m⁻²·sr⁻¹·nm⁻¹.
+    weights_row : ndarray
+        ``(N,)`` that band's weights (a row of the camera's band weights).
+    """
+    for k in range(planes.shape[0]):
+        planes[k] += np.float32(weights_row[k]) * band

@@ -42,7 +42,7 @@ from spectracam.core.errors import SpectracamError
 from spectracam.scene.illuminant import spectral_irradiance
 from spectracam.core.spectra import band_average, band_sample_points
 from spectracam.render.analytic import lights_metadata
-from spectracam.render.cube import ChannelPlanes, RadianceCube
+from spectracam.render.cube import ChannelPlanes, RadianceCube, add_band
 
 if TYPE_CHECKING:
     from spectracam.core.spectra import WavelengthGrid
@@ -455,8 +455,7 @@ def render_bands(mi: ModuleType, mi_scene: object, params: object, scene: Scene,
         if weights is None:
             out[:, :, b] = img
             continue
-        for k in range(out.shape[0]):   # each plane contiguous: one multiply-add pass over the image
-            out[k] += w[b, k] * img
+        add_band(out, img, w[b])
     return out
 
 
