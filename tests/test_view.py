@@ -406,6 +406,12 @@ def _drag(driver, x0, y0, x1, y1):
     time.sleep(0.3)
 
 
+#: A page script's helper: the element of id ``id`` under ``root``, looking into Bokeh's shadow roots.
+FIND_IN_SHADOW = ("function find(root, id) { const e = root.getElementById ? root.getElementById(id) : null; "
+                  "if (e) return e; for (const el of root.querySelectorAll('*')) { if (el.shadowRoot) { "
+                  "const f = find(el.shadowRoot, id); if (f) return f; } } return null; } ")
+
+
 def _csv_rows(text: str) -> tuple[list, list]:
     lines = text.strip().split("\n")
     return lines[0].split(","), [[float(v) if v else np.nan for v in ln.split(",")] for ln in lines[1:]]
@@ -414,7 +420,8 @@ def _csv_rows(text: str) -> tuple[list, list]:
 def test_line_profiles_are_the_files_values(outputs, browser):
     """Issue 39: a click on an image draws the profile along its row (or column, or a line between two clicks):
     raw — each CFA channel's digital numbers on its own pixels only; rendered — rendered.exr's R, G, B; scene — the
-    radiance of the band nearest 550 nm; each equal to OpenImageIO's read of the file, and the same as a CSV."""
+    radiance of the band nearest 550 nm, or of the band chosen in the probe's table; each equal to OpenImageIO's read
+    of the file, and the same as a CSV."""
     from spectracam.io.exr import read_raw_exr
 
     d = outputs / "simulate"
@@ -475,6 +482,23 @@ def test_line_profiles_are_the_files_values(outputs, browser):
     assert len(xs) == max(abs(xs[-1] - xs[0]), abs(ys[-1] - ys[0])) + 1 > 20     # one sample per pixel of the line
     assert np.all(np.abs(np.diff(xs)) <= 1) and np.all(np.abs(np.diff(ys)) <= 1) and xs[-1] > xs[0] and ys[-1] > ys[0]
     assert np.array_equal(np.asarray(p["values"][0], np.float32), pixels[ys, xs, bands[nm]].astype(np.float32))
+    # another wavelength, chosen in the probe's table: the scene profile is drawn again at that band, and the probe
+    # reads it (the file's float32 value at the probed pixel)
+    other = max(bands, key=lambda b: abs(b - nm))
+    click(browser, x + 0.4 * w, y + 0.5 * h)          # the line mode's first click also probes the pixel
+    browser.execute_script("window.spectracam.lineStart = null")
+    time.sleep(0.3)                                   # Bokeh draws the Div's new HTML (in a shadow root)
+    browser.execute_script(FIND_IN_SHADOW + f"const s = find(document, 'spectracam-wavelength'); s.value = '{other:g}'; "
+                           "s.dispatchEvent(new Event('change'))")
+    q = browser.execute_script("return window.spectracam.lastProfile")
+    assert q["channels"] == [f"L({other:g} nm)"] and q["x"] == p["x"] and q["y"] == p["y"]
+    assert np.array_equal(np.asarray(q["values"][0], np.float32), pixels[ys, xs, bands[other]].astype(np.float32))
+    probe = browser.execute_script("return window.spectracam.last")
+    info = browser.execute_script("return Bokeh.documents[0].get_model_by_name('probe_info').text")
+    assert f'<option value="{other:g}" selected>' in info
+    band = [round(v, 6) for v in probe["wavelengths_nm"]].index(round(other, 6))
+    assert np.float32(probe["spectrum"][band]) == pixels[probe["y"], probe["x"], bands[other]]
+    assert browser.execute_script(f"return window.spectracam.setWavelength({nm})") == nm
     browser.execute_script("Bokeh.documents[0].get_model_by_name('profile_mode').active = 0")
 
 

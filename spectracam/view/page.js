@@ -146,7 +146,8 @@
   }
 
   // The channels a profile or a region of the panel `role` reports: name, CSV column, colour and value at kept pixel k.
-  //   scene: the radiance of the band nearest the probe's read-out wavelength (550 nm), radiance.exr's own float32
+  //   scene: the radiance of the band nearest the read-out wavelength (550 nm until chosen in the probe's table,
+  //          setWavelength), radiance.exr's own float32
   //          values in W·m⁻²·sr⁻¹·nm⁻¹ — an engineer checks a scene against the physics, not the 8-bit sRGB preview,
   //          which is tone-mapped, clipped and quantised; without radiance.exr, the scene's L*, a*, b*;
   //   raw: each channel's digital numbers, in its channel's colour (a mosaic: only that channel's pixels);
@@ -260,7 +261,29 @@
         `<tr><th>scene L*, a*, b*</th><td>${lab3(p.scene_lab)}</td></tr>` +
         `<tr><th>rendered L*, a*, b*</th><td>${lab3(p.rendered_lab)}</td></tr>` +
         `<tr><th>ΔE*ab</th><td>${fmt(p.delta_e, 2)}</td></tr>` +
-        `<tr><th>radiance at 550 nm</th><td>${p.spectrum ? fmt(interp(c.wavelengths_nm, p.spectrum, 550), 5) + " W·m⁻²·sr⁻¹·nm⁻¹" : "– (no radiance.exr)"}</td></tr></table>` + csv;
+        `<tr><th>radiance at ${this.wavelengthChoice(c)}</th><td>${p.spectrum ? fmt(p.spectrum[nearestBand(c, this.wavelength_nm)], 5) + " W·m⁻²·sr⁻¹·nm⁻¹" : "– (no radiance.exr)"}</td></tr></table>` + csv;
+    },
+
+    // The read-out wavelength's chooser: the case's bands, the one nearest wavelength_nm selected.
+    wavelengthChoice: function (c) {
+      if (!c.spectra) return `${this.wavelength_nm} nm`;
+      const b = nearestBand(c, this.wavelength_nm);
+      return `<select id="spectracam-wavelength" onchange="window.spectracam.setWavelength(this.value)">` +
+        c.wavelengths_nm.map((w, i) => `<option value="${w}"${i === b ? " selected" : ""}>${w} nm</option>`).join("") +
+        "</select>";
+    },
+
+    // Read the scene's radiance at the band nearest `nm` (nm): the probe's table, and the scene panel's last profile
+    // and region drawn again.  Returns the band's wavelength, nm.
+    setWavelength: function (nm) {
+      const v = Number(nm);
+      if (!Number.isFinite(v)) return null;
+      this.wavelength_nm = v;
+      const c = caseData(this.current);
+      if (this.last && c) this.show(this.last, c);
+      if (this.lastProfile && this.lastProfile.role === "scene" && this.profileArgs) this.profile(...this.profileArgs);
+      if (this.lastRegion && this.lastRegion.role === "scene" && this.regionArgs) this.region(...this.regionArgs);
+      return c && c.spectra ? c.wavelengths_nm[nearestBand(c, v)] : v;
     },
 
     // The probed pixel's spectrum as CSV: one header row, one band a line (the file's float32 values).
@@ -296,6 +319,7 @@
     profile: function (role, x0, y0, x1, y1) {
       const c = caseData(this.current);
       if (!c) return null;
+      this.profileArgs = [role, x0, y0, x1, y1];
       const s = c.stride, [c0, r0] = keptPixel(c, x0, y0), [c1, r1] = keptPixel(c, x1, y1);
       const steps = Math.max(Math.abs(c1 - c0), Math.abs(r1 - r0));
       const xs = [], ys = [], distance = [], ks = [];
@@ -359,6 +383,7 @@
     region: function (role, x0, y0, x1, y1) {
       const c = caseData(this.current);
       if (!c) return null;
+      this.regionArgs = [role, x0, y0, x1, y1];
       const s = c.stride;
       const xa = Math.min(x0, x1), xb = Math.max(x0, x1);
       const ya = c.height - Math.max(y0, y1), yb = c.height - Math.min(y0, y1);   // the files' y, down
@@ -422,15 +447,6 @@
       if (x >= x0 && x < x1 && y >= y0 && y < y1) return name;
     }
     return null;
-  }
-
-  function interp(xs, ys, x) {
-    if (!xs.length) return NaN;
-    if (x <= xs[0]) return ys[0];
-    for (let i = 1; i < xs.length; i++) {
-      if (x <= xs[i]) return ys[i - 1] + (ys[i] - ys[i - 1]) * (x - xs[i - 1]) / (xs[i] - xs[i - 1]);
-    }
-    return ys[ys.length - 1];
   }
 
   window.spectracam = spectracam;
