@@ -500,6 +500,10 @@ def test_line_profiles_are_the_files_values(outputs, browser):
     assert np.float32(probe["spectrum"][band]) == pixels[probe["y"], probe["x"], bands[other]]
     assert browser.execute_script(f"return window.spectracam.setWavelength({nm})") == nm
     browser.execute_script("Bokeh.documents[0].get_model_by_name('profile_mode').active = 0")
+    # a channel's line on the white figure: light channels (W, Y) darkened to a relative luminance of 0.45, hue kept
+    inks = browser.execute_script("const i = window.spectracam.ink; return [i('#d9d9d9'), i('#e6cc00'), i('#ff261a'), "
+                                  "i(undefined)]")
+    assert inks == ["#737373", "#877800", "#ff261a", "#444444"]
 
 
 def test_a_regions_mean_and_sigma_per_channel(outputs, browser):

@@ -164,7 +164,7 @@
     }
     if (role === "raw") {
       const N = c.channels.length;
-      return c.dn ? c.channels.map((ch, j) => ({name: ch, column: `${ch}_DN`, colour: c.colours[ch] || "#444444",
+      return c.dn ? c.channels.map((ch, j) => ({name: ch, column: `${ch}_DN`, colour: ink(c.colours[ch]),
                                                 value: (k) => c.dn[k * N + j]})) : [];
     }
     if (role === "rendered") {
@@ -432,7 +432,7 @@
       if (resp) {
         const names = Object.keys(c.responsivities);
         resp.data = {xs: names.map(() => c.wavelengths_nm), ys: names.map((n) => c.responsivities[n]),
-                     color: names.map((n) => c.colours[n] || "#444444"), label: names};
+                     color: names.map((n) => ink(c.colours[n])), label: names};
       }
       const title = model("case_title");
       if (title) title.text = `<b>${c.name}</b> ${c.design ? "(" + c.design + ")" : ""} — ${c.width} × ${c.height} px` +
@@ -440,6 +440,17 @@
       return true;
     },
   };
+
+  // A channel's colour as a line on the figures' white: scaled down to a relative luminance (Rec. 709 weights of the
+  // sRGB values, a plain approximation) of at most 0.45, so white (W) and yellow (Y) channels stay visible; "#444444"
+  // for a channel without a colour.
+  function ink(hex) {
+    if (!hex || !/^#[0-9a-f]{6}$/i.test(hex)) return "#444444";
+    const v = [1, 3, 5].map((i) => parseInt(hex.slice(i, i + 2), 16));
+    const y = (0.2126 * v[0] + 0.7152 * v[1] + 0.0722 * v[2]) / 255;
+    if (y <= 0.45) return hex.toLowerCase();
+    return "#" + v.map((x) => Math.round(x * 0.45 / y).toString(16).padStart(2, "0")).join("");
+  }
 
   // The name of the chart patch whose scored box holds pixel (x, y) of the files, or null.
   function patchAt(c, x, y) {
@@ -449,5 +460,6 @@
     return null;
   }
 
+  spectracam.ink = ink;
   window.spectracam = spectracam;
 })();
