@@ -100,16 +100,10 @@ def execute(path: Path):
     with tempfile.TemporaryDirectory(prefix="spectracam-docs-") as tmp, _this_interpreter_as_python3(Path(tmp)):
         work = Path(tmp) / "cwd"
         work.mkdir()
-        env = {**os.environ, "TMPDIR": tmp, "PYTHONPATH": os.pathsep.join(
-            filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))}     # this checkout's package, not another
+        env = {**os.environ, "TMPDIR": tmp, "PYTHONFAULTHANDLER": "1",   # a crashed kernel prints its stack
+               "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))}  # this checkout's
         t = time.perf_counter()
-        try:
-            # (the kernel's log at ERROR: it warns on every start that its loopback TCP is unencrypted)
-            nbclient.NotebookClient(nb, kernel_name="python3", timeout=CELL_TIMEOUT_S,
-                                    extra_arguments=["--IPKernelApp.log_level=ERROR"],
-                                    resources={"metadata": {"path": str(work)}}).execute(env=env)
-        except nbclient.exceptions.CellExecutionError as e:
-            raise SystemExit(f"examples/{path.name} failed while the site was built:\n{_ANSI.sub('', str(e))}") from e
+        nb = _run(nbclient, nb, path, work, env)
         seconds = time.perf_counter() - t
     log.info("examples/%s: executed in %.1f s", path.name, seconds)
     nb.metadata["spectracam_docs"] = {"seconds": round(seconds, 1), "key": key}
@@ -120,6 +114,31 @@ def execute(path: Path):
     nbformat.write(nb, part)
     part.replace(cached)
     return nb
+
+
+def _run(nbclient, nb, path: Path, work: Path, env: dict):
+    """``nb`` executed in a new kernel (a copy; the kernel's log at ERROR: it warns on every start that its loopback
+    TCP is unencrypted).  A cell's error stops the build with that error; a kernel that dies (its process ended:
+    killed, out of memory or crashed, its stack on stderr) is started once more on a fresh copy, and a second death
+    stops the build (a CI run of the test suite saw one death of own_camera.ipynb's kernel, never repeated here)."""
+    import copy
+
+    for attempt in (1, 2):
+        run = copy.deepcopy(nb)
+        try:
+            nbclient.NotebookClient(run, kernel_name="python3", timeout=CELL_TIMEOUT_S,
+                                    extra_arguments=["--IPKernelApp.log_level=ERROR"],
+                                    resources={"metadata": {"path": str(work)}}).execute(env=env)
+            return run
+        except nbclient.exceptions.CellExecutionError as e:
+            raise SystemExit(f"examples/{path.name} failed while the site was built:\n{_ANSI.sub('', str(e))}") from e
+        except nbclient.exceptions.DeadKernelError as e:
+            if attempt == 2:
+                raise SystemExit(f"examples/{path.name}: its Jupyter kernel died twice while the site was built "
+                                 "(its stack, if it crashed, is on stderr above)") from e
+            log.info("examples/%s: its Jupyter kernel died (its stack, if it crashed, is on stderr); executed once "
+                     "more", path.name)
+    raise AssertionError("unreachable")
 
 
 def _fence(text: str, cls: str) -> str:
