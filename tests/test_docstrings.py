@@ -47,8 +47,6 @@ NOT_YET_REACHED = [
     "spectracam.experiments.spatial.report",
     "spectracam.experiments.spatial.score",
     "spectracam.experiments.spatial.targets",
-    "spectracam.experiments.validate.white_balance",
-    "spectracam.experiments.white_balance.experiment",
 ]
 NOT_YET = NOT_YET_ELSEWHERE + NOT_YET_REACHED
 
