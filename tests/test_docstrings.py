@@ -35,18 +35,13 @@ NOT_YET_ELSEWHERE = [
     "spectracam.sensor", "spectracam.sensor.kernels", "spectracam.sensor.readout", "spectracam.view",
     "spectracam.view.cases", "spectracam.view.contents", "spectracam.view.page",
 ]
-#: Not reached yet: the rest of the experiments.  Five of these have one function left that cannot take its sections
-#: with a docstring edit alone: architectures.report's figure_spacetime, design.model's evaluate, design.run's
-#: design_one and spatial.render's render_mitsuba would pass 60 lines (tests/test_layout.py) unless split, and
-#: spatial.score's Metric.applies defaults to a lambda (neither annotations nor a docstring).
+#: Not reached yet: the rest of the experiments.  Each of these has one function left that cannot take its
+#: sections with a docstring edit alone: architectures.report's figure_spacetime, design.model's evaluate and
+#: design.run's design_one would pass 60 lines (tests/test_layout.py) unless split.
 NOT_YET_REACHED = [
     "spectracam.experiments.architectures.report",
     "spectracam.experiments.design.model",
     "spectracam.experiments.design.run",
-    "spectracam.experiments.spatial.render",
-    "spectracam.experiments.spatial.report",
-    "spectracam.experiments.spatial.score",
-    "spectracam.experiments.spatial.targets",
 ]
 NOT_YET = NOT_YET_ELSEWHERE + NOT_YET_REACHED
 
