@@ -152,34 +152,25 @@ def figure_responsivities(results: dict) -> Figure:
 def figure_spacetime(results: dict) -> Figure:
     """(a) MTF50 against false colour at the edge for every spatial design (resolution against colour
     artefacts; hollow markers: with the optical low-pass filter); (b) S-CIELAB spatial error on the star;
-    (c) colour breakup and (d) S-CIELAB against the own still capture, against speed."""
+    (c) colour breakup and (d) S-CIELAB against the own still capture, against speed.
+
+    Parameters
+    ----------
+    results : dict
+        An architectures run's results: ``space`` (the spatial rows and parameters, noise off) and ``time`` (the
+        motion rows).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Four panels, one colour per architecture.
+    """
     plt = pyplot()
     space, time_ = results["space"], results["time"]
     archs = list(dict.fromkeys(r["design"].split("/")[0] for r in time_["rows"]))
     colour = dict(zip(archs, palette(len(archs))))
     fig, axes = plt.subplots(2, 2, figsize=(18, 11), gridspec_kw={"wspace": 0.75})
-    ax = axes[0, 0]
-    points: dict = {}    # designs that coincide (noise-free planes of the same filters) share one label
-    for r in space["rows"]:
-        if r["mtf50_cy_per_px"] is None:
-            continue
-        olpf = r["olpf_separation_px"] > 0
-        c = colour.get(r["design"].split("/")[0], "k")
-        ax.scatter(r["false_colour_edge"], r["mtf50_cy_per_px"], s=55, marker="s" if r["demosaic"] == "menon2007" else "o",
-                   facecolors="none" if olpf else c, edgecolors=c, linewidths=1.5)
-        key = (round(r["false_colour_edge"], 2), round(r["mtf50_cy_per_px"], 3))
-        points.setdefault(key, []).append(r["label"].replace("/single", "").replace("/optimal", "").replace(" aligned", ""))
-    key = []   # numbers beside the points and a key beside the panel: the names no longer collide
-    for n, ((x, y), names) in enumerate(sorted(points.items(), key=lambda kv: (-kv[0][1], kv[0][0])), start=1):
-        ax.annotate(str(n), (x, y), fontsize=7, xytext=(4, 2) if n % 2 else (4, -8), textcoords="offset points")
-        key.append(f"{n:>2}  {' = '.join(names)}")
-    ax.text(1.02, 1.0, "\n".join(key), transform=ax.transAxes, va="top", ha="left", fontsize=6.5, family="monospace")
-    ax.set_xscale("symlog", linthresh=0.5)
-    ax.set(xlabel="false colour at the neutral edge, √(Δa*²+Δb*²) (lower is better)",
-           ylabel="MTF50 of displayed luminance, cy/px (higher is better)",
-           title="(a) resolution against false colour (circles bilinear, squares Menon 2007; hollow: OLPF 1 px)")
-    ax.title.set_fontsize(10)
-    ax.grid(True, alpha=0.3)
+    _draw_tradeoff_panel(axes[0, 0], space, colour)
     ax = axes[0, 1]
     rows = sorted(space["rows"], key=lambda r: r["scielab_spatial_star"])
     y = np.arange(len(rows))
@@ -208,6 +199,32 @@ def figure_spacetime(results: dict) -> Figure:
                  "noise and light, global shutter): every architecture", fontsize=12)
     fig.subplots_adjust(left=0.05, right=0.98, top=0.92, bottom=0.06, hspace=0.3)   # room for panel (a)'s key
     return fig
+
+
+def _draw_tradeoff_panel(ax, space: dict, colour: dict) -> None:
+    """:func:`figure_spacetime`'s panel (a): MTF50 against false colour at the edge of every spatial design,
+    designs that coincide numbered once, with a key beside the panel."""
+    points: dict = {}    # designs that coincide (noise-free planes of the same filters) share one label
+    for r in space["rows"]:
+        if r["mtf50_cy_per_px"] is None:
+            continue
+        olpf = r["olpf_separation_px"] > 0
+        c = colour.get(r["design"].split("/")[0], "k")
+        ax.scatter(r["false_colour_edge"], r["mtf50_cy_per_px"], s=55, marker="s" if r["demosaic"] == "menon2007" else "o",
+                   facecolors="none" if olpf else c, edgecolors=c, linewidths=1.5)
+        key = (round(r["false_colour_edge"], 2), round(r["mtf50_cy_per_px"], 3))
+        points.setdefault(key, []).append(r["label"].replace("/single", "").replace("/optimal", "").replace(" aligned", ""))
+    key = []   # numbers beside the points and a key beside the panel: the names no longer collide
+    for n, ((x, y), names) in enumerate(sorted(points.items(), key=lambda kv: (-kv[0][1], kv[0][0])), start=1):
+        ax.annotate(str(n), (x, y), fontsize=7, xytext=(4, 2) if n % 2 else (4, -8), textcoords="offset points")
+        key.append(f"{n:>2}  {' = '.join(names)}")
+    ax.text(1.02, 1.0, "\n".join(key), transform=ax.transAxes, va="top", ha="left", fontsize=6.5, family="monospace")
+    ax.set_xscale("symlog", linthresh=0.5)
+    ax.set(xlabel="false colour at the neutral edge, √(Δa*²+Δb*²) (lower is better)",
+           ylabel="MTF50 of displayed luminance, cy/px (higher is better)",
+           title="(a) resolution against false colour (circles bilinear, squares Menon 2007; hollow: OLPF 1 px)")
+    ax.title.set_fontsize(10)
+    ax.grid(True, alpha=0.3)
 
 
 def _fmt(v, sd=None, digits=2):

@@ -810,11 +810,37 @@ def evaluate(R: list, light: LightModel, cam: CameraModel, split: Sequence[Any] 
              scores: Sequence[str] = ("delta_e",)) -> LightResult:
     """The expected-error model for responsivities ``R`` (N tensors of shape (B,), electrons per photon); with
     ``estimated`` (set name → :class:`WhiteModel`), the estimated white's penalty for those sets too; ``scores``:
-    which of :data:`SCORES` to compute (each is a quadrature per tile site)."""
-    if not set(scores) <= set(SCORES) or not scores:
-        raise SpectracamError(f"design: scores = {scores!r}: a non-empty subset of {', '.join(SCORES)}")
-    if "s_cielab" in scores and cam.scielab_factors is None:
-        raise SpectracamError("design: this camera model has no S-CIELAB factors (CameraModel.of computes them)")
+    which of :data:`SCORES` to compute (each is a quadrature per tile site).
+
+    Parameters
+    ----------
+    R : list
+        Per channel, the responsivity over the bands, e⁻ per photon (tensors of shape (B,)).
+    light : LightModel
+        The chart the conversion is fitted on and metered with, and the colour sets scored.
+    cam : CameraModel
+        Sensor, layout, exposure scheme and processing.
+    split : sequence or None
+        Each channel's share of the exposure budget (scheme ``split`` only; :func:`exposure_times`).
+    sets : sequence of str or None
+        The colour sets scored (None: every set of ``light``).
+    estimated : mapping of str to WhiteModel, or None
+        Set name → the estimated white whose penalty is computed for that set.
+    scores : sequence of str
+        Which of :data:`SCORES`.
+
+    Returns
+    -------
+    LightResult
+        Exposure times, s, the conversion and, per set, the expected ΔE*ab (and S-CIELAB), the SNR, dB, the
+        colours that clip and the white's penalty (tensors: differentiable).
+
+    Raises
+    ------
+    SpectracamError
+        On unknown or no scores, or S-CIELAB without the camera model's S-CIELAB factors.
+    """
+    _check_scores(scores, cam)
     dr, _ = backend()
     chart = _rates(light.chart_weights, R)
     M = conversion(chart, light.target_rgb)
@@ -831,33 +857,54 @@ def evaluate(R: list, light: LightModel, cam: CameraModel, split: Sequence[Any] 
         if "s_cielab" in scores:
             sc = [expected_delta_e(mean_rgb, cov, cs.lab, cam) for cov in scielab_covariances(M, times, var, covs, cam)]
             res.s_cielab[name] = sum(sc[1:], sc[0]) / len(sc)
-        des = []
-        for C in (covs if "delta_e" in scores else ()):
-            cov = [[0.0] * 3 for _ in range(3)]
-            for c in range(3):
-                for d in range(c + 1):
-                    acc = 0.0
-                    for k in range(n):
-                        for j in range(n):
-                            if isinstance(C[k][j], float) and C[k][j] == 0.0:
-                                continue
-                            acc = acc + fresh(M[k][c] * M[j][d] / (times[k] * times[j])) * C[k][j]
-                    cov[c][d] = cov[d][c] = acc + (1e-14 if c == d else 0.0)
-            des.append(expected_delta_e(mean_rgb, cov, cs.lab, cam))
+        des = [_expected_delta_e(C, M, times, n, mean_rgb, cs.lab, cam) for C in (covs if "delta_e" in scores else ())]
         if des:
             res.delta_e[name] = sum(des[1:], des[0]) / len(des)
         if estimated and name in estimated:
             res.white_penalty[name] = white_balance_penalty(R, rates, M, cs.lab, estimated[name], cam)
-        ln10 = float(np.log(10.0))
-        ch = [10.0 * dr.log(pk * pk / v) / ln10 for pk, v in zip(p, var)]
-        res.channel_snr_db[name] = ch
-        if cam.snr_combination == "power":
-            res.snr_db[name] = 10.0 * dr.log(sum(pk * pk for pk in p) / sum(var)) / ln10
-        else:
-            res.snr_db[name] = sum(ch) / n
-        over = None
-        for pk, v, dk in zip(p, var, dark):
-            hit = (pk + fresh(dk) + 3.0 * dr.sqrt(v)) > cam.sensor.q_max_e
-            over = hit if over is None else (over | hit)
-        res.clipped[name] = int(np.count_nonzero(over.numpy()))
+        _snr_and_clipping(res, name, p, var, dark, cam)
     return res
+
+
+def _check_scores(scores: Sequence[str], cam: CameraModel) -> None:
+    """Refuse :func:`evaluate`'s ``scores`` unless a non-empty subset of :data:`SCORES` the camera model can give."""
+    if not set(scores) <= set(SCORES) or not scores:
+        raise SpectracamError(f"design: scores = {scores!r}: a non-empty subset of {', '.join(SCORES)}")
+    if "s_cielab" in scores and cam.scielab_factors is None:
+        raise SpectracamError("design: this camera model has no S-CIELAB factors (CameraModel.of computes them)")
+
+
+def _expected_delta_e(C: list, M: list, times: list, n: int, mean_rgb: list, lab: np.ndarray,
+                      cam: CameraModel) -> Any:
+    """:func:`evaluate`'s expected ΔE*ab of one channel covariance ``C`` (N × N), through the conversion ``M`` and
+    the exposure times to display RGB."""
+    cov = [[0.0] * 3 for _ in range(3)]
+    for c in range(3):
+        for d in range(c + 1):
+            acc = 0.0
+            for k in range(n):
+                for j in range(n):
+                    if isinstance(C[k][j], float) and C[k][j] == 0.0:
+                        continue
+                    acc = acc + fresh(M[k][c] * M[j][d] / (times[k] * times[j])) * C[k][j]
+            cov[c][d] = cov[d][c] = acc + (1e-14 if c == d else 0.0)
+    return expected_delta_e(mean_rgb, cov, lab, cam)
+
+
+def _snr_and_clipping(res: LightResult, name: str, p: list, var: list, dark: list, cam: CameraModel) -> None:
+    """:func:`evaluate`'s per-channel and combined SNR, dB, and the colours whose mean + 3σ passes the well, of
+    set ``name`` into ``res``."""
+    dr, _ = backend()
+    n = len(p)
+    ln10 = float(np.log(10.0))
+    ch = [10.0 * dr.log(pk * pk / v) / ln10 for pk, v in zip(p, var)]
+    res.channel_snr_db[name] = ch
+    if cam.snr_combination == "power":
+        res.snr_db[name] = 10.0 * dr.log(sum(pk * pk for pk in p) / sum(var)) / ln10
+    else:
+        res.snr_db[name] = sum(ch) / n
+    over = None
+    for pk, v, dk in zip(p, var, dark):
+        hit = (pk + fresh(dk) + 3.0 * dr.sqrt(v)) > cam.sensor.q_max_e
+        over = hit if over is None else (over | hit)
+    res.clipped[name] = int(np.count_nonzero(over.numpy()))

@@ -278,7 +278,28 @@ def grid_best(problem: DesignProblem) -> dict:
 
 def design_one(problem: DesignProblem, spec: DesignSpec, cubes: dict,
                log: Callable[[str], object] = lambda m: None, progress: bool = False) -> dict:
-    """Optimise one design and score it every way (see the module); the cameras are returned for the report."""
+    """Optimise one design and score it every way (see the module); the cameras are returned for the report.
+
+    Parameters
+    ----------
+    problem : DesignProblem
+        The design, its parametrisation, the lights and the score optimised.
+    spec : DesignSpec
+        The optimiser's limits, the Monte Carlo seeds and which references to score (developed, Luther, grid).
+    cubes : dict
+        Light label → ``(scene, cube)``: the rendered charts the Monte Carlo captures (:func:`render_cubes`).
+    log : callable
+        ``log(line)``: the optimiser's summary and the Monte Carlo against the model.
+    progress : bool
+        A bar over the optimiser's iterations.
+
+    Returns
+    -------
+    dict
+        The optimised camera's variables, history, predicted and Monte Carlo ΔE*ab (chart and held out), the
+        same for the paper's filters (and the Luther camera, the grid's best), the times, s, and under
+        ``_cameras`` and ``_shot`` the cameras and a capture for the report.
+    """
     from spectracam.experiments.design.optimise import optimise
 
     t0 = time.perf_counter()
@@ -309,6 +330,17 @@ def design_one(problem: DesignProblem, spec: DesignSpec, cubes: dict,
         f"against the model's {p_opt['chart']:.3f}; expected S-CIELAB {p_opt['chart_s_cielab']:.3f}"
         + (f", measured {entry['monte_carlo_delta_e']['s_cielab']:.3f}" if "s_cielab" in entry["monte_carlo_delta_e"]
            else ""))
+    _score_references(entry, problem, spec, cubes, paper, developed)
+    entry["verify_s"] = time.perf_counter() - t1
+    entry["_cameras"] = {"optimised": designed, "paper": paper}
+    entry["_shot"] = shot[0] if shot else None
+    return entry
+
+
+def _score_references(entry: dict, problem: DesignProblem, spec: DesignSpec, cubes: dict, paper: CameraSpec,
+                      developed: ProcessingSpec | None) -> None:
+    """:func:`design_one`'s references, into ``entry``: the paper's filters, the Luther camera and the grid's best
+    (where the spec asks for them), each predicted and by Monte Carlo."""
     paper_pred = predicted(problem, camera=paper)
     entry["paper_filters"] = {"design": paper.design, "predicted_delta_e": paper_pred,
                               "held_out_delta_e": paper_pred["held_out"],
@@ -326,10 +358,6 @@ def design_one(problem: DesignProblem, spec: DesignSpec, cubes: dict,
                               "predicted_delta_e": g["predicted"], "held_out_delta_e": g["predicted"]["held_out"],
                               "monte_carlo_delta_e": monte_carlo(g["camera"], cubes, problem.processing, spec.seeds),
                               "grid": g["grid"]}
-    entry["verify_s"] = time.perf_counter() - t1
-    entry["_cameras"] = {"optimised": designed, "paper": paper}
-    entry["_shot"] = shot[0] if shot else None
-    return entry
 
 
 def render_cubes(st: Setup, log: Callable[[str], object] = lambda m: None) -> dict:

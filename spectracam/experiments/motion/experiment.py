@@ -50,7 +50,7 @@ import contextlib
 import math
 import time
 from dataclasses import dataclass, fields
-from typing import TypedDict
+from typing import TYPE_CHECKING, TypedDict
 
 import numpy as np
 
@@ -70,6 +70,13 @@ from spectracam.experiments.motion import metrics as mm
 from spectracam.experiments.motion.motion import Motion
 from spectracam.experiments.motion.render import RENDER_MODES, MovingScene, channel_rates, ideal_radiance, integrate
 from spectracam.experiments.motion.timing import TimingSpec, capture_timing
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Iterable, Iterator, Sequence
+
+    from spectracam.camera import CameraSpec
+    from spectracam.experiments.motion.timing import CaptureTiming
+    from spectracam.pipeline.scene_file import Scene
 
 __all__ = ["CAPTURE_OVER_CFA_EXPOSURE", "DESIGNS", "MEMORY_PER_SUBPIXEL_BYTES", "SCORE_BORDER_PX",
            "SEED_METRICS", "Capture", "DesignModel", "MotionEstimate", "MotionResult", "MotionRow", "MotionSetup",
@@ -178,6 +185,18 @@ class MotionSpec(Spec):
         self.integer("seeds", 1, 50)
 
     def timing(self, rolling: bool) -> TimingSpec:
+        """The windows' settings of this run, with a global or a rolling shutter.
+
+        Parameters
+        ----------
+        rolling : bool
+            A rolling shutter (each row ``line_time_us`` after the one above).
+
+        Returns
+        -------
+        TimingSpec
+            :attr:`order`, :attr:`readout_gap_ms`, the shutter, :attr:`line_time_us`, :attr:`prism_alignment`.
+        """
         return TimingSpec(self.order, self.readout_gap_ms, bool(rolling), self.line_time_us, self.prism_alignment)
 
     def quick(self) -> "MotionSpec":
@@ -189,17 +208,56 @@ class MotionSpec(Spec):
                             zone_half_width_px=min(self.zone_half_width_px, 16.0))
 
 
-def load_motion(sets=(), quick: bool = False):
+def load_motion(sets: Iterable[str | tuple[str, object]] = (), quick: bool = False) -> tuple[MotionSpec, Scene]:
     """``(MotionSpec, Scene)`` from ``--set`` overrides over the paper's camera and light
-    (:func:`spectracam.pipeline.scene_file.paper_scene`), as the spatial experiment reads them."""
+    (:func:`spectracam.pipeline.scene_file.paper_scene`), as the spatial experiment reads them.
+
+    Parameters
+    ----------
+    sets : iterable of str or (str, object)
+        ``--set``: top-level keys are :class:`MotionSpec`'s, tables the scene's.
+    quick : bool
+        :meth:`MotionSpec.quick`'s sizes (where ``--set`` does not choose them) and 20 nm bands.
+
+    Returns
+    -------
+    spec : MotionSpec
+        The experiment's parameters.
+    scene : Scene
+        The paper's scene with the tables of ``sets``.
+
+    Raises
+    ------
+    ConfigError
+        On an unknown key or table, or an invalid value.
+    """
     from spectracam.pipeline.scene_file import paper_scene
     from spectracam.experiments.spatial.experiment import load_spec_and_scene
 
     return load_spec_and_scene(MotionSpec, sets, quick, base_scene=paper_scene())
 
 
-def calibrated_scene(scene, spec: MotionSpec):
-    """The scene at the light level where cfa/single needs ``cfa_exposure_ms`` (paper: 28 ms at 5000 K)."""
+def calibrated_scene(scene: Scene, spec: MotionSpec) -> Scene:
+    """The scene at the light level where cfa/single needs ``cfa_exposure_ms`` (paper: 28 ms at 5000 K).
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene (its chart, light and camera).
+    spec : MotionSpec
+        Its ``cfa_exposure_ms`` (0: the scene unchanged), pixel pitch, f-number and noise.
+
+    Returns
+    -------
+    Scene
+        Its illuminant's white luminance, cd/m², scaled so that cfa/single's white patch fills the well to
+        ``white_fill`` in ``cfa_exposure_ms``.
+
+    Raises
+    ------
+    SpectracamError
+        When dark current alone would fill the well sooner.
+    """
     if spec.cfa_exposure_ms == 0:
         return scene
     cam = motion_camera(scene, spec).with_design("cfa/single")
@@ -213,7 +271,21 @@ def calibrated_scene(scene, spec: MotionSpec):
     return scene.replace(illuminant=scene.illuminant.replace(white_luminance_cd_m2=float(level)))
 
 
-def motion_camera(scene, spec: MotionSpec):
+def motion_camera(scene: Scene, spec: MotionSpec) -> CameraSpec:
+    """The scene's camera with the run's pixel pitch and f-number; without noise where ``spec.noise`` is off.
+
+    Parameters
+    ----------
+    scene : Scene
+        Its camera.
+    spec : MotionSpec
+        ``pixel_pitch_um``, ``f_number``, ``noise``.
+
+    Returns
+    -------
+    CameraSpec
+        Before a design is chosen.
+    """
     cam = scene.camera
     sensor = cam.sensor.replace(pixel_pitch_um=float(spec.pixel_pitch_um))
     if not spec.noise:
@@ -221,8 +293,25 @@ def motion_camera(scene, spec: MotionSpec):
     return cam.replace(sensor=sensor, optics=cam.optics.replace(f_number=float(spec.f_number)))
 
 
-def design_snr_db(scene, camera, design: str, seed: int) -> float | None:
-    """The paper's SNR of a design (chart patches, 160 × 120 px, closed-form render) under the scene's light."""
+def design_snr_db(scene: Scene, camera: CameraSpec, design: str, seed: int) -> float | None:
+    """The paper's SNR of a design (chart patches, 160 × 120 px, closed-form render) under the scene's light.
+
+    Parameters
+    ----------
+    scene : Scene
+        Its light and chart.
+    camera : CameraSpec
+        The motion camera (:func:`motion_camera`).
+    design : str
+        ``arch/scheme``.
+    seed : int
+        The noise seed.
+
+    Returns
+    -------
+    float or None
+        The combined SNR over the channels, dB (:func:`spectracam.pipeline.simulate`'s summary).
+    """
     from spectracam.pipeline import simulate
     from spectracam.pipeline.scene_file import ImageSpec
 
@@ -257,13 +346,26 @@ class MotionEstimate:
                 f"about {self.bytes / 2**30:.1f} GiB at the peak")
 
 
-def motion_estimate(spec: MotionSpec, scene) -> MotionEstimate:
+def motion_estimate(spec: MotionSpec, scene: Scene) -> MotionEstimate:
     """The peak memory and the slice renders of a run, before any work.  Memory: the measured bytes per
     sub-pixel (:data:`MEMORY_PER_SUBPIXEL_BYTES`, the default run's cache of rendered poses included) plus, with a
     set number of ``slices``, the cache those poses fill (each pose ``K × sub-pixels`` float32, up to
     :data:`~.render.BASIS_CACHE_BYTES`).  Renders: per case ``slices``, or (0) the slices of the step
     ``max_step_px`` over the longest capture (:data:`CAPTURE_OVER_CFA_EXPOSURE` × the CFA's exposure), at least
-    :data:`~.render.MIN_SLICES_PER_WINDOW` per window of three."""
+    :data:`~.render.MIN_SLICES_PER_WINDOW` per window of three.
+
+    Parameters
+    ----------
+    spec : MotionSpec
+        The run.
+    scene : Scene
+        Its wavelength grid (bands, and the longest wavelength for the margin).
+
+    Returns
+    -------
+    MotionEstimate
+        Peak memory, bytes, the slice renders at most, and the cases.
+    """
     from spectracam.experiments.motion.render import BASIS_CACHE_BYTES, MIN_SLICES_PER_WINDOW
 
     m = sopt.margin_px(spec.pixel_pitch_um, spec.f_number, scene.grid.edges_nm[-1])
@@ -285,8 +387,26 @@ def motion_estimate(spec: MotionSpec, scene) -> MotionEstimate:
     return MotionEstimate(float(need), int(sum(per_case) * len(spec.designs) * len(spec.rolling_shutter)), cases)
 
 
-def check_motion_memory(spec: MotionSpec, scene) -> MotionEstimate:
-    """Refuse, before any work, a motion run larger than the memory this process may use; its estimate."""
+def check_motion_memory(spec: MotionSpec, scene: Scene) -> MotionEstimate:
+    """Refuse, before any work, a motion run larger than the memory this process may use; its estimate.
+
+    Parameters
+    ----------
+    spec : MotionSpec
+        The run.
+    scene : Scene
+        Its wavelength grid.
+
+    Returns
+    -------
+    MotionEstimate
+        :func:`motion_estimate`'s.
+
+    Raises
+    ------
+    SpectracamError
+        When the estimate is more than the memory available.
+    """
     from spectracam.pipeline import check_bytes
 
     est = motion_estimate(spec, scene)
@@ -421,8 +541,21 @@ class StillReference:
 
 
 @contextlib.contextmanager
-def timed(timings: dict, stage: str):
-    """Add the block's wall time to ``timings[stage]``."""
+def timed(timings: dict, stage: str) -> Iterator[None]:
+    """Add the block's wall time to ``timings[stage]``.
+
+    Parameters
+    ----------
+    timings : dict
+        Stage → wall time, s.
+    stage : str
+        The stage, already a key of ``timings``.
+
+    Yields
+    ------
+    None
+        The block runs here.
+    """
     t0 = time.perf_counter()
     try:
         yield
@@ -430,8 +563,28 @@ def timed(timings: dict, stage: str):
         timings[stage] += time.perf_counter() - t0
 
 
-def prepare(spec: MotionSpec, scene, renderer: str, log, timings: dict) -> MotionSetup:
-    """The calibrated scene, the framing, the moving target and its ideal image (the render stage)."""
+def prepare(spec: MotionSpec, scene: Scene, renderer: str, log: Callable[[str], object] | None,
+            timings: dict) -> MotionSetup:
+    """The calibrated scene, the framing, the moving target and its ideal image (the render stage).
+
+    Parameters
+    ----------
+    spec : MotionSpec
+        The run.
+    scene : Scene
+        The scene before calibration (:func:`calibrated_scene`).
+    renderer : str
+        ``"mitsuba"`` or ``"analytic"``.
+    log : callable or None
+        ``log(line)``: the renderer's notices.
+    timings : dict
+        Stage → wall time, s; added to.
+
+    Returns
+    -------
+    MotionSetup
+        What every case shares.
+    """
     scene = calibrated_scene(scene, spec)
     w, h = spec.edge_size_px
     geometry = CameraGeometry.framing(w * spec.object_pixel_mm, spec.focal_length_mm, spec.f_number,
@@ -454,7 +607,22 @@ def prepare(spec: MotionSpec, scene, renderer: str, log, timings: dict) -> Motio
 
 
 def design_model(setup: MotionSetup, design: str, timings: dict) -> DesignModel:
-    """A design's camera, conversion (fitted on the chart), exposure times, references and SNR."""
+    """A design's camera, conversion (fitted on the chart), exposure times, references and SNR.
+
+    Parameters
+    ----------
+    setup : MotionSetup
+        What every case shares (:func:`prepare`).
+    design : str
+        ``arch/scheme``.
+    timings : dict
+        Stage → wall time, s; added to.
+
+    Returns
+    -------
+    DesignModel
+        The SNR None with the noise off.
+    """
     spec, scene = setup.spec, setup.scene
     camera = setup.camera.with_design(design)
     with timed(timings, "snr"):
@@ -472,17 +640,64 @@ def design_model(setup: MotionSetup, design: str, timings: dict) -> DesignModel:
 
 
 def case_speeds(spec: MotionSpec) -> tuple:
-    """The speeds captured: the swept ones, after a still capture (0) if the sweep does not start at rest."""
+    """The speeds captured: the swept ones, after a still capture (0) if the sweep does not start at rest.
+
+    Parameters
+    ----------
+    spec : MotionSpec
+        Its ``speeds_px_per_ms`` (sorted).
+
+    Returns
+    -------
+    tuple of float
+        px/ms, 0 first.
+    """
     return ((0.0,) if spec.speeds_px_per_ms[0] > 0 else ()) + spec.speeds_px_per_ms
 
 
 def speed_mm_per_s(spec: MotionSpec, v_px_per_ms: float) -> float:
+    """An image speed on the sensor as the object's speed in the scene.
+
+    Parameters
+    ----------
+    spec : MotionSpec
+        Its ``object_pixel_mm``.
+    v_px_per_ms : float
+        The image's speed on the sensor, px/ms.
+
+    Returns
+    -------
+    float
+        mm/s on the object plane.
+    """
     return v_px_per_ms * 1e3 * spec.object_pixel_mm
 
 
-def render_at_speed(setup: MotionSetup, dm: DesignModel, timing, v_px_per_ms: float, timings: dict):
+def render_at_speed(setup: MotionSetup, dm: DesignModel, timing: CaptureTiming, v_px_per_ms: float,
+                    timings: dict) -> tuple[np.ndarray, dict]:
     """The target moving at ``v_px_per_ms`` through the design's windows and the optics:
-    ``(time-averaged photo-electron rates (H, W, N), how the time was sliced)``."""
+    ``(time-averaged photo-electron rates (H, W, N), how the time was sliced)``.
+
+    Parameters
+    ----------
+    setup : MotionSetup
+        What every case shares (:func:`prepare`).
+    dm : DesignModel
+        The design (:func:`design_model`).
+    timing : CaptureTiming
+        The design's windows, per rendered row (margin included).
+    v_px_per_ms : float
+        The image's speed on the sensor, px/ms.
+    timings : dict
+        Stage → wall time, s; added to.
+
+    Returns
+    -------
+    rates : ndarray, shape (H, W, N)
+        e⁻/s per pixel and channel.
+    slicing : dict
+        ``slices``, ``slice_dt_ms``, ``samples_per_slice`` (:class:`~.render.Integrated`'s info).
+    """
     spec = setup.spec
     vmm = speed_mm_per_s(spec, v_px_per_ms)
     direction = math.radians(spec.direction_deg)
@@ -496,15 +711,54 @@ def render_at_speed(setup: MotionSetup, dm: DesignModel, timing, v_px_per_ms: fl
     return rates, integ.info
 
 
-def capture_at_seed(setup: MotionSetup, dm: DesignModel, rates: np.ndarray, seed: int, camera=None):
+def capture_at_seed(setup: MotionSetup, dm: DesignModel, rates: np.ndarray, seed: int,
+                    camera: CameraSpec | None = None) -> tuple[np.ndarray, np.ndarray]:
     """One capture of the rates by the design (its noise at ``seed``), processed to the display:
-    ``(camera rates (H, W, N), display XYZ (H, W, 3))``."""
+    ``(camera rates (H, W, N), display XYZ (H, W, 3))``.
+
+    Parameters
+    ----------
+    setup : MotionSetup
+        What every case shares (:func:`prepare`).
+    dm : DesignModel
+        The design (:func:`design_model`).
+    rates : ndarray, shape (H, W, N)
+        Photo-electron rates, e⁻/s (:func:`render_at_speed`).
+    seed : int
+        The noise seed.
+    camera : CameraSpec or None
+        Records instead of the design's camera (its noise-free twin).
+
+    Returns
+    -------
+    cam_rates : ndarray, shape (H, W, N)
+        The demosaicked, exposure-normalised camera rates.
+    xyz : ndarray, shape (H, W, 3)
+        Display XYZ, white Y = 1.
+    """
     raw = record(rates, camera or dm.camera, dm.white_rate, seed, dm.times_s)
     return process(raw, setup.scene.processing, dm.conversion, setup.reference)
 
 
 def capture(setup: MotionSetup, dm: DesignModel, rates: np.ndarray, timings: dict) -> Capture:
-    """The design's captures of the rates: one per noise seed, and the noise-free twin (noise off: the same)."""
+    """The design's captures of the rates: one per noise seed, and the noise-free twin (noise off: the same).
+
+    Parameters
+    ----------
+    setup : MotionSetup
+        What every case shares (:func:`prepare`).
+    dm : DesignModel
+        The design (:func:`design_model`).
+    rates : ndarray, shape (H, W, N)
+        Photo-electron rates, e⁻/s (:func:`render_at_speed`).
+    timings : dict
+        Stage → wall time, s; added to.
+
+    Returns
+    -------
+    Capture
+        The noisy captures and the noise-free twin's XYZ and camera rates.
+    """
     with timed(timings, "capture"):
         noisy = tuple(capture_at_seed(setup, dm, rates, sd) for sd in setup.seeds)
     with timed(timings, "processing"):
@@ -516,7 +770,24 @@ def capture(setup: MotionSetup, dm: DesignModel, rates: np.ndarray, timings: dic
 def still_reference(setup: MotionSetup, dm: DesignModel, still_xyz: np.ndarray, still_rates: np.ndarray
                     ) -> StillReference:
     """The noise-free still capture, its false colour within 2 px of the edge, against the camera's
-    conversion of the ideal image (√(Δa*² + Δb*²)), and its channels' edge profiles."""
+    conversion of the ideal image (√(Δa*² + Δb*²)), and its channels' edge profiles.
+
+    Parameters
+    ----------
+    setup : MotionSetup
+        What every case shares (:func:`prepare`).
+    dm : DesignModel
+        The design (:func:`design_model`).
+    still_xyz : ndarray, shape (H, W, 3)
+        The noise-free capture at rest, display XYZ.
+    still_rates : ndarray, shape (H, W, N)
+        Its camera rates.
+
+    Returns
+    -------
+    StillReference
+        The capture, its false colour (ΔE*ab, mean over the scored pixels within 2 px of the edge), its profiles.
+    """
     h, w = setup.valid.shape
     dist = mm.edge_distance((h, w), setup.edge_columns)
     zone = mm.edge_zone(dist, 2.0) & setup.valid
@@ -525,9 +796,33 @@ def still_reference(setup: MotionSetup, dm: DesignModel, still_xyz: np.ndarray, 
                           mm.channel_profiles(still_rates, dist, setup.valid))
 
 
-def score_capture(setup: MotionSetup, dm: DesignModel, still: StillReference, xyz: np.ndarray, zone: np.ndarray):
+def score_capture(setup: MotionSetup, dm: DesignModel, still: StillReference, xyz: np.ndarray,
+                  zone: np.ndarray) -> tuple[dict, np.ndarray, tuple[np.ndarray, np.ndarray]]:
     """One seed's capture scored: ``({metric: value} for SEED_METRICS, S-CIELAB map against the still
-    capture (H, W), (e-SFR frequencies, SFR))``."""
+    capture (H, W), (e-SFR frequencies, SFR))``.
+
+    Parameters
+    ----------
+    setup : MotionSetup
+        What every case shares (:func:`prepare`).
+    dm : DesignModel
+        The design (:func:`design_model`).
+    still : StillReference
+        The design's noise-free still capture.
+    xyz : ndarray, shape (H, W, 3)
+        The capture, display XYZ.
+    zone : ndarray of bool, shape (H, W)
+        The scored pixels near the edge, where the ΔE*ab are averaged.
+
+    Returns
+    -------
+    scores : dict
+        :data:`SEED_METRICS` → value (ΔE*ab; MTF50 cycles/px, NaN without a usable edge).
+    scielab_map : ndarray, shape (H, W)
+        S-CIELAB ΔE*ab against the still capture.
+    esfr : tuple of ndarray
+        ``(frequencies cycles/px, SFR)``.
+    """
     white, spd = dm.conversion.display_white, setup.samples_per_degree
     lab = xyz_to_lab(xyz, white)
     scielab_map = scielab(still.xyz, xyz, white, spd)
@@ -540,41 +835,73 @@ def score_capture(setup: MotionSetup, dm: DesignModel, still: StillReference, xy
     return scores, scielab_map, (f, sfr)
 
 
-def edge_distance_moving(setup: MotionSetup, timing, v_px_per_ms: float) -> np.ndarray:
+def edge_distance_moving(setup: MotionSetup, timing: CaptureTiming, v_px_per_ms: float) -> np.ndarray:
     """``(H, W)`` distance from the edge, px: each row's later window shifts a uniformly moving edge
-    (rolling shutter)."""
+    (rolling shutter).
+
+    Parameters
+    ----------
+    setup : MotionSetup
+        What every case shares (:func:`prepare`).
+    timing : CaptureTiming
+        The design's windows, per rendered row (margin included).
+    v_px_per_ms : float
+        The image's speed on the sensor, px/ms.
+
+    Returns
+    -------
+    ndarray, shape (H, W)
+        px, positive to the right; each row shifted by ``v·(row delay − mean row delay)`` along the motion's x.
+    """
     h, w = setup.valid.shape
     delay = timing.row_delay_s[setup.margin_px:setup.margin_px + h]
     shift = v_px_per_ms * 1e3 * math.cos(math.radians(setup.spec.direction_deg)) * (delay - delay.mean())
     return mm.edge_distance((h, w), setup.edge_columns + shift)
 
 
-def score_case(setup: MotionSetup, dm: DesignModel, timing, still: StillReference, v_px_per_ms: float,
-               cap: Capture, slicing: dict, rolling: bool):
-    """A case scored: ``(MotionRow, its e-SFR curve (first seed), its images (first seed))``."""
+def score_case(setup: MotionSetup, dm: DesignModel, timing: CaptureTiming, still: StillReference,
+               v_px_per_ms: float, cap: Capture, slicing: dict, rolling: bool) -> tuple[MotionRow, dict, dict]:
+    """A case scored: ``(MotionRow, its e-SFR curve (first seed), its images (first seed))``.
+
+    Parameters
+    ----------
+    setup : MotionSetup
+        What every case shares (:func:`prepare`).
+    dm : DesignModel
+        The design (:func:`design_model`).
+    timing : CaptureTiming
+        The design's windows, per rendered row (margin included).
+    still : StillReference
+        The design's noise-free still capture.
+    v_px_per_ms : float
+        The image's speed on the sensor, px/ms.
+    cap : Capture
+        The captures at that speed.
+    slicing : dict
+        How the time was sliced (:func:`render_at_speed`).
+    rolling : bool
+        The shutter.
+
+    Returns
+    -------
+    row : MotionRow
+        The case's scores.
+    curve : dict
+        The first seed's e-SFR (80 frequencies at most).
+    images : dict
+        The first seed's display XYZ, camera rates, added chroma profile, S-CIELAB map and scored zone.
+    """
     spec = setup.spec
-    white = dm.conversion.display_white
     dist = edge_distance_moving(setup, timing, v_px_per_ms)
     zone = mm.edge_zone(dist, spec.zone_half_width_px) & setup.valid
-    # colour breakup: the motion alone (noise-free moving capture against the noise-free still one)
-    d, chroma = mm.chroma_profile(cap.quiet_xyz, still.xyz, white, dist, 0.5, spec.zone_half_width_px, setup.valid)
+    (d, chroma), (d_s, chroma_s), edge, edge_scene = _breakup(setup, dm, still, cap, dist)
     cam_rates, xyz = cap.noisy[0]
-    d_s, chroma_s = mm.chroma_profile(xyz, dm.own_xyz, white, dist, 0.5, spec.zone_half_width_px, setup.valid)
-    # the channels' edges, to a fraction of a pixel: moved by the motion (against the still capture's) and
-    # against the scene's edge (d = 0), both located with the still capture's plateaus
-    d_e, still_prof = still.profiles
-    d_m, moving_prof = mm.channel_profiles(cap.quiet_rates, dist, setup.valid)
-    if d_m.shape != d_e.shape or not np.allclose(d_m, d_e):   # a rolling shutter moves the bins: re-bin the still
-        moving_prof = _rebin(d_m, moving_prof, d_e)
-    edge = mm.edge_channels(d_e, moving_prof, still_prof)
-    edge_scene = mm.edge_channels(d_e, moving_prof, still_prof, relative=False)
     scored = [score_capture(setup, dm, still, x, zone) for _, x in cap.noisy]
     per_seed = {k: [s[k] for s, _, _ in scored] for k in SEED_METRICS}
     _, scielab_map, (f, sfr) = scored[0]          # the first seed's map and curve are the ones drawn
     row = MotionRow(
         design=dm.design, speed_px_per_ms=v_px_per_ms, speed_mm_per_s=speed_mm_per_s(spec, v_px_per_ms),
-        rolling_shutter=bool(rolling),
-        breakup_width_px=finite_or_none(edge.separation_px),
+        rolling_shutter=bool(rolling), breakup_width_px=finite_or_none(edge.separation_px),
         max_added_chroma=float(np.nanmax(np.append(chroma, 0.0))),
         breakup_width_scene_px=finite_or_none(edge_scene.separation_px),
         false_colour_still=still.false_colour,
@@ -594,8 +921,50 @@ def score_case(setup: MotionSetup, dm: DesignModel, timing, still: StillReferenc
     return row, curve, images
 
 
-def sweep_speeds(setup: MotionSetup, dm: DesignModel, timing, rolling: bool, timings: dict):
-    """Every speed of one design and shutter: yields ``(row, curve, images)`` per swept speed."""
+def _breakup(setup: MotionSetup, dm: DesignModel, still: StillReference, cap: Capture,
+             dist: np.ndarray) -> tuple[tuple, tuple, mm.EdgeChannels, mm.EdgeChannels]:
+    """:func:`score_case`'s colour breakup: the added chroma profiles against the still capture (noise-free) and
+    against the camera's own ideal image (first seed), and the channels' edges against the still capture's and
+    against the scene's."""
+    spec = setup.spec
+    white = dm.conversion.display_white
+    # colour breakup: the motion alone (noise-free moving capture against the noise-free still one)
+    d, chroma = mm.chroma_profile(cap.quiet_xyz, still.xyz, white, dist, 0.5, spec.zone_half_width_px, setup.valid)
+    xyz = cap.noisy[0][1]
+    d_s, chroma_s = mm.chroma_profile(xyz, dm.own_xyz, white, dist, 0.5, spec.zone_half_width_px, setup.valid)
+    # the channels' edges, to a fraction of a pixel: moved by the motion (against the still capture's) and
+    # against the scene's edge (d = 0), both located with the still capture's plateaus
+    d_e, still_prof = still.profiles
+    d_m, moving_prof = mm.channel_profiles(cap.quiet_rates, dist, setup.valid)
+    if d_m.shape != d_e.shape or not np.allclose(d_m, d_e):   # a rolling shutter moves the bins: re-bin the still
+        moving_prof = _rebin(d_m, moving_prof, d_e)
+    edge = mm.edge_channels(d_e, moving_prof, still_prof)
+    edge_scene = mm.edge_channels(d_e, moving_prof, still_prof, relative=False)
+    return (d, chroma), (d_s, chroma_s), edge, edge_scene
+
+
+def sweep_speeds(setup: MotionSetup, dm: DesignModel, timing: CaptureTiming, rolling: bool,
+                 timings: dict) -> Iterator[tuple[MotionRow, dict, dict]]:
+    """Every speed of one design and shutter: yields ``(row, curve, images)`` per swept speed.
+
+    Parameters
+    ----------
+    setup : MotionSetup
+        What every case shares (:func:`prepare`).
+    dm : DesignModel
+        The design (:func:`design_model`).
+    timing : CaptureTiming
+        The design's windows, per rendered row (margin included).
+    rolling : bool
+        The shutter.
+    timings : dict
+        Stage → wall time, s; added to.
+
+    Yields
+    ------
+    tuple
+        :func:`score_case`'s, per swept speed; the still capture (speed 0) is the reference of all.
+    """
     still = None
     for v in case_speeds(setup.spec):
         rates, slicing = render_at_speed(setup, dm, timing, v, timings)
@@ -631,10 +1000,31 @@ class MotionResult(TypedDict):
     wall_s: float
 
 
-def run_motion(spec: MotionSpec, scene, renderer: str = "mitsuba", log=None, keep_images: bool = True,
-               progress: bool = False) -> MotionResult:
+def run_motion(spec: MotionSpec, scene: Scene, renderer: str = "mitsuba", log: Callable[[str], object] | None = None,
+               keep_images: bool = True, progress: bool = False) -> MotionResult:
     """Every design × speed × shutter. Returns ``{"rows": [MotionRow], "images", "timings", ...}``.
-    ``progress``: a bar over the cases on a terminal (:mod:`spectracam.core.progress`)."""
+    ``progress``: a bar over the cases on a terminal (:mod:`spectracam.core.progress`).
+
+    Parameters
+    ----------
+    spec : MotionSpec
+        The run.
+    scene : Scene
+        The scene (:func:`load_motion`), before calibration.
+    renderer : str
+        ``"mitsuba"`` or ``"analytic"``.
+    log : callable or None
+        ``log(line)``: each design and shutter done.
+    keep_images : bool
+        Keep every case's images (for the report's figures and case files).
+    progress : bool
+        A bar over the cases.
+
+    Returns
+    -------
+    MotionResult
+        The rows, curves, images, timings, the crossing speeds and the parameters.
+    """
     from spectracam.core.progress import bar
 
     log = log or (lambda msg: None)
@@ -671,7 +1061,19 @@ def run_motion(spec: MotionSpec, scene, renderer: str = "mitsuba", log=None, kee
             "wall_s": time.perf_counter() - t_start}
 
 
-def finite_or_none(x) -> float | None:
+def finite_or_none(x: float | None) -> float | None:
+    """``x`` as a float, or None where it is None, NaN or infinite.
+
+    Parameters
+    ----------
+    x : float or None
+        A value.
+
+    Returns
+    -------
+    float or None
+        For results.json (strict JSON has no NaN).
+    """
     return float(x) if x is not None and np.isfinite(x) else None
 
 
@@ -684,29 +1086,87 @@ def _rebin(d_from: np.ndarray, profiles: np.ndarray, d_to: np.ndarray) -> np.nda
     return out
 
 
-def mean_or_none(values):
+def mean_or_none(values: Sequence[float | None]) -> float | None:
+    """The mean of ``values``; None where one is None or not finite, or there is none.
+
+    Parameters
+    ----------
+    values : sequence of float or None
+        One per seed.
+
+    Returns
+    -------
+    float or None
+        The mean.
+    """
     v = [x for x in values if x is not None and np.isfinite(x)]
     return float(np.mean(v)) if len(v) == len(values) and v else None
 
 
-def sd_or_none(values):
+def sd_or_none(values: Sequence[float | None]) -> float | None:
+    """The sample standard deviation (ddof = 1) of ``values``; None where one is None or not finite, or there are
+    fewer than two.
+
+    Parameters
+    ----------
+    values : sequence of float or None
+        One per seed.
+
+    Returns
+    -------
+    float or None
+        The spread.
+    """
     v = [x for x in values if x is not None and np.isfinite(x)]
     return float(np.std(v, ddof=1)) if len(v) == len(values) and len(v) > 1 else None
 
 
 # -- the answer: where the field-sequential error crosses the CFA's --------------------------------
 
-def series(rows, design: str, rolling: bool, metric: str):
+def series(rows: Iterable[MotionRow], design: str, rolling: bool, metric: str) -> tuple[np.ndarray, np.ndarray]:
     """``(speeds, values)`` of one design and shutter, by speed; a missing value is NaN (``metric``: a
-    :class:`MotionRow` field)."""
+    :class:`MotionRow` field).
+
+    Parameters
+    ----------
+    rows : iterable of MotionRow
+        The run's rows.
+    design : str
+        ``arch/scheme``.
+    rolling : bool
+        The shutter.
+    metric : str
+        A :class:`MotionRow` field.
+
+    Returns
+    -------
+    speeds : ndarray
+        px/ms, ascending.
+    values : ndarray
+        The metric at each.
+    """
     rs = sorted((r for r in rows if r.design == design and r.rolling_shutter == rolling),
                 key=lambda r: r.speed_px_per_ms)
     values = [getattr(r, metric) for r in rs]
     return np.array([r.speed_px_per_ms for r in rs]), np.array([np.nan if x is None else x for x in values])
 
 
-def crossing(speeds, a, b) -> dict:
-    """Where ``a − b`` (ΔE of the field-sequential design minus the CFA's) first turns positive."""
+def crossing(speeds: np.ndarray, a: np.ndarray, b: np.ndarray) -> dict:
+    """Where ``a − b`` (ΔE of the field-sequential design minus the CFA's) first turns positive.
+
+    Parameters
+    ----------
+    speeds : ndarray
+        px/ms, ascending.
+    a, b : ndarray
+        The two designs' values at each speed.
+
+    Returns
+    -------
+    dict
+        ``speed_px_per_ms`` (interpolated linearly between the swept speeds; 0 where ``a`` is worse at the
+        first, None where it never is), ``status`` and, where it crosses, the two speeds ``between``.
+    """
     diff = a - b
     if diff.size == 0:
         return {"speed_px_per_ms": None, "status": "no data"}
@@ -719,10 +1179,26 @@ def crossing(speeds, a, b) -> dict:
     return {"speed_px_per_ms": None, "status": f"better at every swept speed (up to {speeds[-1]:g} px/ms)"}
 
 
-def seed_crossings(rows, design: str, other: str, rolling: bool) -> dict:
+def seed_crossings(rows: Sequence[MotionRow], design: str, other: str, rolling: bool) -> dict:
     """The S-CIELAB crossing of ``design`` over ``other`` per noise seed (common random numbers: both see
     the same seeds), their mean and a 95 % Student-t interval; a seed that never crosses makes the
-    interval open (``None``)."""
+    interval open (``None``).
+
+    Parameters
+    ----------
+    rows : sequence of MotionRow
+        The run's rows.
+    design, other : str
+        The field-sequential design and the one it is compared with.
+    rolling : bool
+        The shutter.
+
+    Returns
+    -------
+    dict
+        ``by_seed_px_per_ms``; ``mean_px_per_ms`` and ``ci95_px_per_ms`` where every seed (two or more) crosses;
+        empty without rows.
+    """
     from scipy import stats
 
     def by_seed(d):
@@ -744,9 +1220,22 @@ def seed_crossings(rows, design: str, other: str, rolling: bool) -> dict:
     return out
 
 
-def crossing_speeds(rows) -> dict:
+def crossing_speeds(rows: Sequence[MotionRow]) -> dict:
     """For each field-sequential design and shutter: the speed at which its S-CIELAB error around the
-    edge exceeds cfa/single's (and the same for CIELAB)."""
+    edge exceeds cfa/single's (and the same for CIELAB).
+
+    Parameters
+    ----------
+    rows : sequence of MotionRow
+        The run's rows.
+
+    Returns
+    -------
+    dict
+        Design (``" rolling"`` appended for the rolling shutter) → its crossings (:func:`crossing`, with
+        :func:`seed_crossings` for S-CIELAB) and the still errors; and from which speed fsc/balanced beats
+        fsc/optimal.  Empty without cfa/single.
+    """
     out = {}
     designs = sorted({r.design for r in rows})
     if "cfa/single" not in designs:

@@ -27,11 +27,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from spectracam.core.cielab import xyz_to_lab
 from spectracam.evaluation.esfr import NoEdge, esfr
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 #: Bins of the channels' edge profiles, px: ISO 12233's 4× supersampling of a slanted edge.
 EDGE_BIN_PX = 0.25
@@ -40,22 +44,79 @@ EDGE_BIN_PX = 0.25
 PLATEAU_CLEAR_PX = 6.0
 
 
-def edge_columns(width_px: int, height_px: int, x0_px: float, angle_deg: float, shift_px=0.0) -> np.ndarray:
+def edge_columns(width_px: int, height_px: int, x0_px: float, angle_deg: float,
+                 shift_px: ArrayLike = 0.0) -> np.ndarray:
     """``(H,)`` column where a slanted edge (:class:`~spectracam.experiments.spatial.targets.SlantedEdge` through
-    object pixel ``x0_px``, angle from the vertical) crosses each row's centre, plus ``shift_px``."""
+    object pixel ``x0_px``, angle from the vertical) crosses each row's centre, plus ``shift_px``.
+
+    Parameters
+    ----------
+    width_px, height_px : int
+        The image's size W and H, px.
+    x0_px : float
+        Where the edge crosses the image's middle row, object px from the centre column.
+    angle_deg : float
+        The edge's angle from the vertical, degrees.
+    shift_px : float or array_like, shape (H,)
+        Added to every row's column, px (a rolling shutter's per-row shift of a moving edge).
+
+    Returns
+    -------
+    ndarray, shape (H,)
+        The edge's column at each row's centre, px (pixel c spans ``[c, c + 1]``).
+    """
     y = height_px / 2 - np.arange(height_px) - 0.5
     return width_px / 2 + x0_px - math.tan(math.radians(angle_deg)) * y + np.asarray(shift_px, float)
 
 
-def edge_distance(shape, columns: np.ndarray) -> np.ndarray:
-    """``(H, W)`` horizontal distance of every pixel centre from the edge, px (positive to the right)."""
+def edge_distance(shape: tuple[int, ...], columns: np.ndarray) -> np.ndarray:
+    """``(H, W)`` horizontal distance of every pixel centre from the edge, px (positive to the right).
+
+    Parameters
+    ----------
+    shape : tuple of int
+        The image's shape; its first two entries are H and W.
+    columns : ndarray, shape (H,)
+        The edge's column in each row, px (:func:`edge_columns`).
+
+    Returns
+    -------
+    ndarray, shape (H, W)
+        Distance of each pixel centre from the edge, px.
+    """
     h, w = shape[:2]
     return (np.arange(w) + 0.5)[None, :] - columns[:, None]
 
 
-def chroma_profile(xyz: np.ndarray, own_xyz: np.ndarray, white, distance: np.ndarray, bin_px: float = 0.5,
-                   half_width_px: float = 48.0, valid: np.ndarray | None = None):
-    """``(d, chroma)``: bin centres (px from the edge) and the chroma the camera adds in each bin."""
+def chroma_profile(xyz: np.ndarray, own_xyz: np.ndarray, white: ArrayLike, distance: np.ndarray,
+                   bin_px: float = 0.5, half_width_px: float = 48.0,
+                   valid: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """``(d, chroma)``: bin centres (px from the edge) and the chroma the camera adds in each bin.
+
+    Parameters
+    ----------
+    xyz : ndarray, shape (H, W, 3)
+        The displayed image, display XYZ (white Y = 1).
+    own_xyz : ndarray, shape (H, W, 3)
+        The same camera's rendering of the ideal image, display XYZ: its (a*, b*) are subtracted.
+    white : array_like, shape (3,)
+        The white's XYZ, for CIELAB.
+    distance : ndarray, shape (H, W)
+        Each pixel's horizontal distance from the edge, px (:func:`edge_distance`).
+    bin_px : float
+        Width of a bin of distance, px.
+    half_width_px : float
+        Only pixels within this distance of the edge are binned, px.
+    valid : ndarray of bool, shape (H, W), optional
+        Only these pixels are binned (None: all).
+
+    Returns
+    -------
+    d : ndarray
+        The bins' centres, px from the edge.
+    chroma : ndarray
+        The chroma of each bin's mean (Δa*, Δb*), ΔE*ab; NaN where a bin holds no pixel.
+    """
     lab = xyz_to_lab(xyz, white)
     own = xyz_to_lab(own_xyz, white)
     da, db = lab[..., 1] - own[..., 1], lab[..., 2] - own[..., 2]
@@ -76,7 +137,22 @@ def chroma_profile(xyz: np.ndarray, own_xyz: np.ndarray, white, distance: np.nda
 def breakup_threshold_width_px(d: np.ndarray, chroma: np.ndarray, threshold: float = 2.0) -> float:
     """Pixels of distance across the edge over which the added chroma exceeds ``threshold`` (before issue 34
     the headline breakup width: it counts in whole bins, so it cannot read below about 2 px, and it counts
-    blur and demosaicking of a blurred edge as breakup; kept as a perceptual companion)."""
+    blur and demosaicking of a blurred edge as breakup; kept as a perceptual companion).
+
+    Parameters
+    ----------
+    d : ndarray
+        The bins' centres, px from the edge, evenly spaced (:func:`chroma_profile`).
+    chroma : ndarray
+        The added chroma in each bin, ΔE*ab (NaN counts as none).
+    threshold : float
+        ΔE*ab above which a bin counts.
+
+    Returns
+    -------
+    float
+        The number of bins over ``threshold`` times the bin width, px.
+    """
     bin_px = float(d[1] - d[0]) if d.size > 1 else 1.0
     return float(np.count_nonzero(np.nan_to_num(chroma) > threshold) * bin_px)
 
@@ -85,7 +161,26 @@ def channel_profiles(rates: np.ndarray, distance: np.ndarray, valid: np.ndarray 
                      bin_px: float = EDGE_BIN_PX) -> tuple[np.ndarray, np.ndarray]:
     """``(d (n,), profiles (n, N))``: each channel's mean value in bins of ``bin_px`` of horizontal distance from
     the edge over the whole scored image (the ISO 12233 supersampled edge profile, one per channel); NaN where a
-    bin holds no pixel."""
+    bin holds no pixel.
+
+    Parameters
+    ----------
+    rates : ndarray, shape (H, W, N)
+        The capture's N channels.
+    distance : ndarray, shape (H, W)
+        Each pixel's horizontal distance from the edge, px (:func:`edge_distance`).
+    valid : ndarray of bool, shape (H, W), optional
+        Only these pixels are binned (None: all).
+    bin_px : float
+        Width of a bin, px.
+
+    Returns
+    -------
+    d : ndarray, shape (n,)
+        The bins' centres, px from the edge.
+    profiles : ndarray, shape (n, N)
+        Each channel's mean in each bin.
+    """
     rates = np.asarray(rates, float)
     ok = np.ones(distance.shape, bool) if valid is None else np.asarray(valid, bool)
     dist = distance[ok]
@@ -102,7 +197,22 @@ def channel_profiles(rates: np.ndarray, distance: np.ndarray, valid: np.ndarray 
 
 def plateaus(d: np.ndarray, profiles: np.ndarray, clear_px: float = PLATEAU_CLEAR_PX) -> tuple[np.ndarray, np.ndarray]:
     """``(left (N,), right (N,))``: each channel's level on either side of a still edge, the mean of its profile
-    further than ``clear_px`` from the edge (NaN where the profile does not reach that far)."""
+    further than ``clear_px`` from the edge (NaN where the profile does not reach that far).
+
+    Parameters
+    ----------
+    d : ndarray, shape (n,)
+        The bins' centres, px from the edge.
+    profiles : ndarray, shape (n, N)
+        Each channel's edge profile (:func:`channel_profiles`).
+    clear_px : float
+        Only bins further than this from the edge count, px.
+
+    Returns
+    -------
+    left, right : ndarray, shape (N,)
+        Each channel's mean level left (d < −clear_px) and right (d > clear_px) of the edge.
+    """
     with np.errstate(invalid="ignore"):
         left = np.nanmean(np.where((d < -clear_px)[:, None], profiles, np.nan), axis=0) if (d < -clear_px).any() \
             else np.full(profiles.shape[1], np.nan)
@@ -114,7 +224,24 @@ def plateaus(d: np.ndarray, profiles: np.ndarray, clear_px: float = PLATEAU_CLEA
 def crossings(d: np.ndarray, profiles: np.ndarray, left: np.ndarray, right: np.ndarray, level: float) -> np.ndarray:
     """``(N,)``: where each channel's profile, normalised to 0 on the left plateau and 1 on the right
     (``(p − left)/(right − left)``), crosses ``level``, interpolated linearly between bins; where it crosses more
-    than once (noise, overshoot), the mean of its crossings; NaN where it never does or the step is flat."""
+    than once (noise, overshoot), the mean of its crossings; NaN where it never does or the step is flat.
+
+    Parameters
+    ----------
+    d : ndarray, shape (n,)
+        The bins' centres, px from the edge.
+    profiles : ndarray, shape (n, N)
+        Each channel's edge profile (:func:`channel_profiles`); bins where any channel is NaN are dropped.
+    left, right : ndarray, shape (N,)
+        Each channel's plateaus (:func:`plateaus`).
+    level : float
+        The normalised level to find, 0 to 1 (0.5: the edge; 0.1 and 0.9: its rise).
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        Each channel's crossing, px from the edge.
+    """
     keep = np.all(np.isfinite(profiles), axis=1)
     d, p = d[keep], profiles[keep]
     step = right - left
@@ -150,7 +277,26 @@ def edge_channels(d: np.ndarray, moving: np.ndarray, reference: np.ndarray | Non
     spread (the breakup), and each channel's 10–90 % rise (the blur).  A uniform motion at v over a window centred at t_k
     moves channel k's edge profile by v·t_k without changing its symmetry, so its 50 % crossing moves by exactly
     v·t_k whatever the window's length and the optics' (symmetric) blur: the breakup reads v·(t_last − t_first)
-    for frames in sequence and 0 for one shared window."""
+    for frames in sequence and 0 for one shared window.
+
+    Parameters
+    ----------
+    d : ndarray, shape (n,)
+        The bins' centres, px from the edge (:func:`channel_profiles`).
+    moving : ndarray, shape (n, N)
+        The moving capture's channel profiles.
+    reference : ndarray, shape (n, N), optional
+        The still capture's, on the same bins; its plateaus normalise both (None: the moving capture's own).
+    relative : bool
+        Shifts from the reference's crossings (False: from d = 0).
+    clear_px : float
+        The plateaus are taken further than this from the edge, px.
+
+    Returns
+    -------
+    EdgeChannels
+        Each channel's shift and rise, their spread (the breakup) and the mean rise (the blur), px.
+    """
     base = reference if reference is not None else moving
     left, right = plateaus(d, base, clear_px)
     x = crossings(d, moving, left, right, 0.5)
@@ -164,19 +310,68 @@ def edge_channels(d: np.ndarray, moving: np.ndarray, reference: np.ndarray | Non
 
 def breakup_width_px(d: np.ndarray, moving: np.ndarray, reference: np.ndarray | None = None) -> float:
     """The colour breakup of a moving edge, px: the spread of the channels' edge positions, each located to a
-    fraction of a pixel (:func:`edge_channels`)."""
+    fraction of a pixel (:func:`edge_channels`).
+
+    Parameters
+    ----------
+    d : ndarray, shape (n,)
+        The bins' centres, px from the edge (:func:`channel_profiles`).
+    moving : ndarray, shape (n, N)
+        The moving capture's channel profiles.
+    reference : ndarray, shape (n, N), optional
+        The still capture's, on the same bins (None: plateaus of ``moving``, shifts from d = 0).
+
+    Returns
+    -------
+    float
+        max − min of the channels' shifts, px; NaN where a channel's edge was not found.
+    """
     return edge_channels(d, moving, reference).separation_px
 
 
 def edge_zone(distance: np.ndarray, half_width_px: float) -> np.ndarray:
+    """The pixels within ``half_width_px`` of the edge, where S-CIELAB and CIELAB are averaged.
+
+    Parameters
+    ----------
+    distance : ndarray, shape (H, W)
+        Each pixel's horizontal distance from the edge, px (:func:`edge_distance`).
+    half_width_px : float
+        px.
+
+    Returns
+    -------
+    ndarray of bool, shape (H, W)
+        ``|distance| <= half_width_px``.
+    """
     return np.abs(distance) <= half_width_px
 
 
-def mtf_along_motion(xyz: np.ndarray, border_px: int = 4, correct_binning: bool = False):
+def mtf_along_motion(xyz: np.ndarray, border_px: int = 4,
+                     correct_binning: bool = False) -> tuple[np.ndarray, np.ndarray, float]:
     """e-SFR of the displayed luminance Y across the edge: ``(frequencies, sfr, mtf50)``; empty
     curves and a NaN MTF50 where noise or blur leave no usable edge (:class:`~spectracam.evaluation.esfr.NoEdge`).
     As ISO 12233:2017 states it by default; ``correct_binning``: with the binning correction, which is
-    not part of the standard (:func:`spectracam.evaluation.esfr.esfr`)."""
+    not part of the standard (:func:`spectracam.evaluation.esfr.esfr`).
+
+    Parameters
+    ----------
+    xyz : ndarray, shape (H, W, 3)
+        The displayed image, display XYZ.
+    border_px : int
+        Pixels cropped from every side before the edge is measured.
+    correct_binning : bool
+        Apply the binning correction.
+
+    Returns
+    -------
+    frequencies : ndarray
+        cycles/px.
+    sfr : ndarray
+        The e-SFR at each frequency.
+    mtf50 : float
+        cycles/px.
+    """
     b = border_px
     try:
         r = esfr(np.asarray(xyz)[b:-b, b:-b, 1], correct_binning=correct_binning)
@@ -185,9 +380,24 @@ def mtf_along_motion(xyz: np.ndarray, border_px: int = 4, correct_binning: bool 
     return r.frequencies_cy_per_px, r.sfr, float(r.mtf50_cy_per_px)
 
 
-def motion_mtf(f_cy_per_px, blur_px: float, angle_deg: float = 0.0) -> np.ndarray:
+def motion_mtf(f_cy_per_px: ArrayLike, blur_px: float, angle_deg: float = 0.0) -> np.ndarray:
     """Transfer of a uniform motion of ``blur_px`` along x, seen across an edge ``angle_deg`` from the
-    vertical: ``|sinc(f·L·cos a)|``."""
+    vertical: ``|sinc(f·L·cos a)|``.
+
+    Parameters
+    ----------
+    f_cy_per_px : array_like
+        Frequencies across the edge, cycles/px.
+    blur_px : float
+        L, the motion during the exposure, px.
+    angle_deg : float
+        The edge's angle from the vertical, degrees.
+
+    Returns
+    -------
+    ndarray
+        ``f_cy_per_px``'s shape.
+    """
     return np.abs(np.sinc(np.asarray(f_cy_per_px, float) * blur_px * math.cos(math.radians(angle_deg))))
 
 

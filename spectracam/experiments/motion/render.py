@@ -37,6 +37,7 @@ import math
 import zlib
 from collections import OrderedDict
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.fft as sfft
@@ -49,6 +50,12 @@ from spectracam.experiments.spatial.render import material_radiance, needs_thinl
 from spectracam.experiments.spatial.targets import SiemensStar, SlantedEdge, Target, object_points
 from spectracam.experiments.motion.motion import Motion, pose_key, pose_matrix
 from spectracam.experiments.motion.timing import CaptureTiming
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Sequence
+
+    from spectracam.core.spectra import WavelengthGrid
+    from spectracam.scene.illuminant import IlluminantSpec
 
 RENDER_MODES = ("materials", "bands")
 #: Fewest slices in the shortest exposure window (issue 34).  A window's cells at its two ends are partly
@@ -70,8 +77,23 @@ _OFF = 1e-9
 # ------------------------------------------------------------------------------------------------
 # the closed form at a pose
 
-def posed_edge(edge: SlantedEdge, geometry: CameraGeometry, pose) -> SlantedEdge:
-    """The slanted edge moved by a pose: an edge of angle ``a + θ`` through the moved point."""
+def posed_edge(edge: SlantedEdge, geometry: CameraGeometry, pose: Sequence[float]) -> SlantedEdge:
+    """The slanted edge moved by a pose: an edge of angle ``a + θ`` through the moved point.
+
+    Parameters
+    ----------
+    edge : SlantedEdge
+        The edge at the reference pose.
+    geometry : CameraGeometry
+        Its object pixel, mm.
+    pose : sequence of float
+        ``(dx_mm, dy_mm, angle_deg)`` on the object plane.
+
+    Returns
+    -------
+    SlantedEdge
+        The moved edge: its angle and its crossing ``x0_px`` of the middle row.
+    """
     from dataclasses import replace
 
     dx, dy, th = (float(x) for x in pose)
@@ -82,9 +104,32 @@ def posed_edge(edge: SlantedEdge, geometry: CameraGeometry, pose) -> SlantedEdge
     return replace(edge, angle_deg=a, x0_px=x0n / geometry.object_pixel_mm)
 
 
-def posed_coverage(target: Target, geometry: CameraGeometry, supersampling: int, pose) -> np.ndarray:
+def posed_coverage(target: Target, geometry: CameraGeometry, supersampling: int,
+                   pose: Sequence[float]) -> np.ndarray:
     """``(M, Hs, Ws)`` coverage of the target moved by ``pose``: the edge exactly (its closed form at
-    the moved line), the star by its point sampling at the inversely moved points."""
+    the moved line), the star by its point sampling at the inversely moved points.
+
+    Parameters
+    ----------
+    target : Target
+        A :class:`SlantedEdge` or a :class:`SiemensStar`.
+    geometry : CameraGeometry
+        The image and its object pixel, mm.
+    supersampling : int
+        Sub-pixels per pixel along each axis.
+    pose : sequence of float
+        ``(dx_mm, dy_mm, angle_deg)`` on the object plane.
+
+    Returns
+    -------
+    ndarray, shape (M, Hs, Ws)
+        The fraction of every sub-pixel each material covers.
+
+    Raises
+    ------
+    ConfigError
+        For another target (it moves with Mitsuba only).
+    """
     if isinstance(target, SlantedEdge):
         return posed_edge(target, geometry, pose).coverage(geometry, supersampling)
     if isinstance(target, SiemensStar):
@@ -108,10 +153,40 @@ def posed_coverage(target: Target, geometry: CameraGeometry, supersampling: int,
 
 class MovingScene:
     """A target that can be rendered at any pose: a basis ``(K, Hs, Ws)`` per pose, and the
-    coefficients ``(K, B)`` that turn it into band radiance."""
+    coefficients ``(K, B)`` that turn it into band radiance.
 
-    def __init__(self, target: Target, geometry: CameraGeometry, illuminant, grid, supersampling: int,
-                 renderer: str = "mitsuba", mode: str = "materials", variant: str = "auto", seed: int = 0, log=None):
+    Parameters
+    ----------
+    target : Target
+        The spatial target.
+    geometry : CameraGeometry
+        The camera's view of it (margin included).
+    illuminant : IlluminantSpec
+        The light, along the target's normal.
+    grid : WavelengthGrid
+        The bands, nm.
+    supersampling : int
+        Sub-pixels per pixel along each axis.
+    renderer : str
+        ``"mitsuba"`` or ``"analytic"`` (the edge and the star only; always ``materials`` mode).
+    mode : str
+        ``"materials"`` (one render per material) or ``"bands"`` (one per band): :data:`RENDER_MODES`.
+    variant : str
+        Mitsuba's variant (``"auto"``: chosen for this machine).
+    seed : int
+        Mitsuba's seed (each pose's renders are seeded from it and the pose).
+    log : callable or None
+        ``log(line)``: Mitsuba's notices.
+
+    Raises
+    ------
+    ConfigError
+        On an unknown renderer or mode.
+    """
+
+    def __init__(self, target: Target, geometry: CameraGeometry, illuminant: IlluminantSpec, grid: WavelengthGrid,
+                 supersampling: int, renderer: str = "mitsuba", mode: str = "materials", variant: str = "auto",
+                 seed: int = 0, log: Callable[[str], object] | None = None):
         if renderer not in ("mitsuba", "analytic"):
             raise ConfigError("renderer", renderer, "must be 'mitsuba' or 'analytic'")
         if mode not in RENDER_MODES:
@@ -210,8 +285,21 @@ class MovingScene:
         """``(K, B)``: band radiance = Σ_k basis_k · coefficients[k]."""
         return self.L if self.mode == "materials" else np.eye(len(self.grid))
 
-    def basis(self, pose, spp: int = 1) -> np.ndarray:
-        """``(K, Hs, Ws)`` float32 of the target at ``pose`` (cached by pose and samples)."""
+    def basis(self, pose: Sequence[float], spp: int = 1) -> np.ndarray:
+        """``(K, Hs, Ws)`` float32 of the target at ``pose`` (cached by pose and samples).
+
+        Parameters
+        ----------
+        pose : sequence of float
+            ``(dx_mm, dy_mm, angle_deg)`` on the object plane.
+        spp : int
+            Mitsuba's samples per sub-pixel of each render (the analytic renderer ignores it).
+
+        Returns
+        -------
+        ndarray, shape (K, Hs, Ws)
+            Materials mode: each material's coverage; bands mode: each band's radiance, W·m⁻²·sr⁻¹·nm⁻¹.
+        """
         key = (pose_key(pose), int(spp) if self.renderer == "mitsuba" else 0)
         if key in self._cache:
             self._cache.move_to_end(key)
@@ -226,18 +314,48 @@ class MovingScene:
             self._cache.popitem(last=False)
         return B
 
-    def clear(self):
+    def clear(self) -> None:
+        """Drop the cached renders of every pose."""
         self._cache.clear()
 
     def radiance(self, basis: np.ndarray) -> np.ndarray:
-        """``(Hs, Ws, B)`` band radiance of a basis image."""
+        """``(Hs, Ws, B)`` band radiance of a basis image.
+
+        Parameters
+        ----------
+        basis : ndarray, shape (K, Hs, Ws)
+            From :meth:`basis`, or a time average of such.
+
+        Returns
+        -------
+        ndarray, shape (Hs, Ws, B)
+            W·m⁻²·sr⁻¹·nm⁻¹.
+        """
         return np.tensordot(basis, self.coefficients.astype(np.float32), axes=([0], [0]))
 
     # -- optics ---------------------------------------------------------------------------------------
-    def transfer(self, camera: CameraSpec, settings: sopt.OpticsSettings):
+    def transfer(self, camera: CameraSpec,
+                 settings: sopt.OpticsSettings) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[int, int]]:
         """Per basis element and channel, the band-weighted optical transfer ``(K, N, Hs, Wf)``:
         ``Σ_b W[b,k]·c[m,b]·OTF_b`` — the spatial optics of :func:`spectracam.experiments.spatial.optics.channel_spectra`
-        applied to a basis instead of a cube (one FFT per basis element instead of one per band)."""
+        applied to a basis instead of a cube (one FFT per basis element instead of one per band).
+
+        Parameters
+        ----------
+        camera : CameraSpec
+            Its band weights, pixel pitch and f-number.
+        settings : OpticsSettings
+            Diffraction and defocus.
+
+        Returns
+        -------
+        transfer : ndarray, shape (K, N, Hs, Ws//2+1)
+            Per basis element and channel.
+        fy, fx : ndarray
+            The frequencies, cycles per sub-pixel, ``(Hs, 1)`` and ``(1, Ws//2+1)``.
+        shape : tuple of int
+            ``(Hs, Ws)``.
+        """
         key = (repr(camera.to_dict()), settings)
         if key not in self._transfer:
             Hs, Ws = self.geometry.height_px * self.supersampling, self.geometry.width_px * self.supersampling
@@ -274,7 +392,28 @@ class Integrated:
 
 def slice_times(motion: Motion, timing: CaptureTiming, geometry: CameraGeometry, max_step_px: float = 0.25,
                 slices: int = 0) -> tuple[np.ndarray, float]:
-    """``(t_j, Δt)``: slice centres covering the capture's span (see the module)."""
+    """``(t_j, Δt)``: slice centres covering the capture's span (see the module).
+
+    Parameters
+    ----------
+    motion : Motion
+        Its fastest image speed over the span sets the step.
+    timing : CaptureTiming
+        The capture's windows: their span, and the shortest one.
+    geometry : CameraGeometry
+        The image (its half-diagonal, px, bounds a rotation's speed) and its object pixel, mm.
+    max_step_px : float
+        The most the image moves between slices, px (before halving for the shortest window).
+    slices : int
+        A set number of slices evenly over the span instead (0: by ``max_step_px``).
+
+    Returns
+    -------
+    t : ndarray
+        Slice centres, s (0 = the middle of the capture).
+    dt : float
+        The slices' spacing, s.
+    """
     lo, hi = timing.span_s
     if slices > 0:
         dt = (hi - lo) / slices
@@ -294,7 +433,33 @@ def slice_times(motion: Motion, timing: CaptureTiming, geometry: CameraGeometry,
 def integrate(scene: MovingScene, motion: Motion, timing: CaptureTiming, max_step_px: float = 0.25,
               slices: int = 0, samples_per_subpixel: int = 16) -> Integrated:
     """Render the slices and integrate each channel group's window (see the module). ``timing`` must
-    cover the rows of ``scene.geometry`` (margin included)."""
+    cover the rows of ``scene.geometry`` (margin included).
+
+    Parameters
+    ----------
+    scene : MovingScene
+        Renders the target at each slice's pose.
+    motion : Motion
+        The target's poses in time.
+    timing : CaptureTiming
+        The channels' windows, per row.
+    max_step_px : float
+        The most the image moves between slices, px (:func:`slice_times`).
+    slices : int
+        A set number of slices instead (0: by ``max_step_px``).
+    samples_per_subpixel : int
+        Mitsuba's samples per sub-pixel, shared among the slices (at least 1 each).
+
+    Returns
+    -------
+    Integrated
+        Each channel group's time-averaged basis, the slice times and spacing, s, and the samples per slice.
+
+    Raises
+    ------
+    SpectracamError
+        When ``timing``'s rows are not the rendered image's.
+    """
     g = scene.geometry
     ss = scene.supersampling
     if timing.row_delay_s.size != g.height_px:
@@ -327,7 +492,28 @@ def integrate(scene: MovingScene, motion: Motion, timing: CaptureTiming, max_ste
 def channel_rates(scene: MovingScene, integrated: Integrated, camera: CameraSpec,
                   settings: sopt.OpticsSettings, margin_px: int,
                   workers: int | None = -1) -> np.ndarray:
-    """``(H, W, N)`` time-averaged photo-electrons per second per pixel of each channel (the margin cut)."""
+    """``(H, W, N)`` time-averaged photo-electrons per second per pixel of each channel (the margin cut).
+
+    Parameters
+    ----------
+    scene : MovingScene
+        Its optical transfer per basis element (:meth:`MovingScene.transfer`).
+    integrated : Integrated
+        The channel groups' time-averaged bases (:func:`integrate`).
+    camera : CameraSpec
+        The camera.
+    settings : OpticsSettings
+        Its spatial optics.
+    margin_px : int
+        Pixels cut from every side.
+    workers : int or None
+        scipy.fft's workers (−1: every core).
+
+    Returns
+    -------
+    ndarray, shape (H, W, N)
+        e⁻/s.
+    """
     Hk, fy, fx, shape = scene.transfer(camera, settings)
     spectra = np.zeros((Hk.shape[1], shape[0], fx.shape[1]), np.complex128)
     for chans, acc in integrated.groups:
@@ -339,7 +525,22 @@ def channel_rates(scene: MovingScene, integrated: Integrated, camera: CameraSpec
 
 
 def ideal_radiance(scene: MovingScene, spp: int, margin_px: int) -> np.ndarray:
-    """``(H, W, B)``: the static target at the reference pose (t = 0), each pixel's footprint (no optics)."""
+    """``(H, W, B)``: the static target at the reference pose (t = 0), each pixel's footprint (no optics).
+
+    Parameters
+    ----------
+    scene : MovingScene
+        The target.
+    spp : int
+        Mitsuba's samples per sub-pixel.
+    margin_px : int
+        Pixels cut from every side.
+
+    Returns
+    -------
+    ndarray, shape (H, W, B)
+        Band radiance averaged over each pixel, W·m⁻²·sr⁻¹·nm⁻¹.
+    """
     B = scene.basis((0.0, 0.0, 0.0), spp)
     ss = scene.supersampling
     K, Hs, Ws = B.shape

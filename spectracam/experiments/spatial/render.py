@@ -217,9 +217,43 @@ def render_mitsuba(target: Target, geometry: CameraGeometry, illuminant: Illumin
                    supersampling: int, samples_per_pixel: int = 4, seed: int = 0, variant: str = "auto",
                    log: Callable[[str], object] | None = None, thinlens: bool | None = None) -> SubpixelCube:
     """Mitsuba 3 render of the target, ``samples_per_pixel`` per sub-pixel and band; ``thinlens``: the
-    camera (default: a thin lens where any of the target is out of focus, else a perspective pinhole)."""
+    camera (default: a thin lens where any of the target is out of focus, else a perspective pinhole).
+
+    Parameters
+    ----------
+    target : Target
+        Its shapes and materials.
+    geometry : CameraGeometry
+        The camera's view of it: film, field of view, aperture and focus.
+    illuminant : IlluminantSpec
+        The light, along the target's normal.
+    grid : WavelengthGrid
+        The bands, nm; evenly spaced.
+    supersampling : int
+        Sub-pixels per pixel along each axis.
+    samples_per_pixel : int
+        Samples per sub-pixel and band.
+    seed : int
+        Each band's render is seeded from it (:func:`spectracam.render.mitsuba.band_seed`).
+    variant : str
+        Mitsuba's variant (``"auto"``: chosen for this machine).
+    log : callable or None
+        ``log(line)``: when a scene is built.
+    thinlens : bool or None
+        A thin-lens camera (True) or a perspective pinhole (False); None: :func:`needs_thinlens`.
+
+    Returns
+    -------
+    SubpixelCube
+        Radiance, W·m⁻²·sr⁻¹·nm⁻¹, with the variant, camera, samples and seed in its metadata.
+
+    Raises
+    ------
+    SpectracamError
+        When the bands are not evenly spaced.
+    """
     from spectracam.core.errors import SpectracamError
-    from spectracam.render.mitsuba import POINTS_PER_BAND, activate_variant, band_seed, select_variant
+    from spectracam.render.mitsuba import activate_variant, select_variant
 
     variant_name, reason = select_variant(variant)
     mi = activate_variant(variant_name)
@@ -229,6 +263,20 @@ def render_mitsuba(target: Target, geometry: CameraGeometry, illuminant: Illumin
         raise SpectracamError(f"wavelengths: Mitsuba renders evenly spaced grids only (bands are "
                               f"{widths.min():g}–{ref_width:g} nm wide)")
     thinlens = needs_thinlens(target, geometry) if thinlens is None else bool(thinlens)
+    scene, params, materials = _scene_for_camera(mi, target, geometry, supersampling, samples_per_pixel, ref_width,
+                                                 thinlens, variant_name, log)
+    shape = (geometry.height_px * supersampling, geometry.width_px * supersampling)
+    cube = _render_bands(mi, scene, params, materials, target, illuminant, grid, shape, seed)
+    meta = {"renderer": "mitsuba", "variant": variant_name, "variant_reason": reason,
+            "camera": "thinlens" if thinlens else "perspective", "samples_per_subpixel": samples_per_pixel,
+            "seed": seed, "mitsuba_version": mi.__version__}
+    return SubpixelCube(cube, np.asarray(grid.centres_nm, float), supersampling, geometry, meta)
+
+
+def _scene_for_camera(mi, target: Target, geometry: CameraGeometry, supersampling: int, samples_per_pixel: int,
+                      ref_width: float, thinlens: bool, variant_name: str, log: Callable[[str], object] | None):
+    """The target's Mitsuba scene (kept in ``_SCENES``, rebuilt for another field of view) with this
+    geometry's camera set: ``(scene, params, materials)``."""
     key = (repr(target.to_dict()), geometry.width_px, geometry.height_px, supersampling, samples_per_pixel,
            ref_width, thinlens, variant_name)
     if key not in _SCENES:
@@ -250,11 +298,19 @@ def render_mitsuba(target: Target, geometry: CameraGeometry, illuminant: Illumin
         params["sensor.focus_distance"] = geometry.focus
     params["sensor.far_clip"] = 10 * geometry.object_distance_mm + 1e4
     params.update()
+    return scene, params, materials
+
+
+def _render_bands(mi, scene, params, materials: dict, target: Target, illuminant: IlluminantSpec,
+                  grid: WavelengthGrid, shape: tuple[int, int], seed: int) -> np.ndarray:
+    """``(Hs, Ws, B)`` float32: one render per band, the light's and the materials' spectra of that band set in
+    the scene's parameters."""
+    from spectracam.render.mitsuba import POINTS_PER_BAND, band_seed
 
     E = spectral_irradiance(illuminant)
     spectra = [S for _, S in target.materials()]
     lam = band_sample_points(grid, POINTS_PER_BAND)
-    Hs, Ws, B = geometry.height_px * supersampling, geometry.width_px * supersampling, len(grid)
+    Hs, Ws, B = *shape, len(grid)
     cube = np.empty((Hs, Ws, B), np.float32)
     Float = type(params["light.irradiance.values"])
     for b in range(B):
@@ -264,10 +320,7 @@ def render_mitsuba(target: Target, geometry: CameraGeometry, illuminant: Illumin
         params.update()
         img = mi.render(scene, params, seed=band_seed(seed, b))
         cube[:, :, b] = np.asarray(img)[:, :, 0]
-    meta = {"renderer": "mitsuba", "variant": variant_name, "variant_reason": reason,
-            "camera": "thinlens" if thinlens else "perspective", "samples_per_subpixel": samples_per_pixel,
-            "seed": seed, "mitsuba_version": mi.__version__}
-    return SubpixelCube(cube, np.asarray(grid.centres_nm, float), supersampling, geometry, meta)
+    return cube
 
 
 def render_target(renderer: str, target: Target, geometry: CameraGeometry, illuminant: IlluminantSpec,

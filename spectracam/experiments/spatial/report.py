@@ -78,7 +78,23 @@ def _identical_groups(curves) -> list[list]:
     return groups
 
 
-def figure_mtf(result, out: Path) -> list[Path]:
+def figure_mtf(result: dict, out: Path) -> list[Path]:
+    """mtf.png and mtf.svg: the neutral edge's e-SFR of the displayed luminance Y per design, one panel per case
+    (pixel pitch, f-number), designs whose curves agree to 1e-4 drawn once, with the closed form (diffraction ×
+    pixel aperture, and × each OLPF) dotted.
+
+    Parameters
+    ----------
+    result : dict
+        What :func:`~spectracam.experiments.spatial.experiment.run_spatial` returns.
+    out : Path
+        The output folder.
+
+    Returns
+    -------
+    list of Path
+        The files written; none without edge curves.
+    """
     plt = pyplot()
     curves = [c for c in result["mtf_curves"] if c["target"] == "edge"]
     rows = _design_of(result["rows"])
@@ -133,7 +149,22 @@ SUMMARY_PANELS = (
 )
 
 
-def figure_summary(result, out: Path) -> list[Path]:
+def figure_summary(result: dict, out: Path) -> list[Path]:
+    """summary.png and summary.svg: a bar chart per :data:`SUMMARY_PANELS` panel whose target ran, one bar per
+    design and case (with its 95 % interval over seeds where noise is on).
+
+    Parameters
+    ----------
+    result : dict
+        What :func:`~spectracam.experiments.spatial.experiment.run_spatial` returns.
+    out : Path
+        The output folder.
+
+    Returns
+    -------
+    list of Path
+        The files written; none when no panel's target ran.
+    """
     plt = pyplot()
     rows = result["rows"]
     cases, labels, index, designs = _cases(rows), _labels(rows), _by_key(rows), _design_of(rows)
@@ -189,7 +220,24 @@ def _targets_with_images(result, case) -> list:
     return [t for t in result["parameters"]["spatial"]["targets"] if (case[0], case[1], t, "reference") in result["images"]]
 
 
-def figure_crops(result, out: Path, case) -> list[Path]:
+def figure_crops(result: dict, out: Path, case: tuple[float, float]) -> list[Path]:
+    """``crops_<pitch>um_f<N>.png``: the centre of every target's image, the reference and each design, for one
+    case (nearest-neighbour zoom).
+
+    Parameters
+    ----------
+    result : dict
+        What :func:`~spectracam.experiments.spatial.experiment.run_spatial` returns.
+    out : Path
+        The output folder.
+    case : tuple of float
+        ``(pixel pitch µm, f-number)``.
+
+    Returns
+    -------
+    list of Path
+        The file written; none when the case kept no images.
+    """
     plt = pyplot()
     labels = _labels(result["rows"])
     targets = _targets_with_images(result, case)
@@ -231,7 +279,24 @@ def _map_scale(result, target: str) -> float:
     return float(np.ceil(v / 10**e) * 10**e)
 
 
-def figure_scielab_maps(result, out: Path, target: str = "star") -> list[Path]:
+def figure_scielab_maps(result: dict, out: Path, target: str = "star") -> list[Path]:
+    """``scielab_<target>.png``: one target's S-CIELAB error maps against the camera's own rendering of the
+    reference, inside the scored region, per case and design, on one scale (:data:`MAP_PERCENTILE`).
+
+    Parameters
+    ----------
+    result : dict
+        What :func:`~spectracam.experiments.spatial.experiment.run_spatial` returns.
+    out : Path
+        The output folder.
+    target : str
+        The target's name, e.g. ``"star"``.
+
+    Returns
+    -------
+    list of Path
+        The file written; none when no case kept this target's images.
+    """
     plt = pyplot()
     rows = result["rows"]
     labels = _labels(rows)
@@ -289,10 +354,25 @@ def _map_with_colourbar(delta_e_map: np.ndarray, region: np.ndarray, vmax: float
     return np.asarray(canvas)
 
 
-def write_case_images(result, out: Path, command: str) -> list[Path]:
+def write_case_images(result: dict, out: Path, command: str) -> list[Path]:
     """Every design's displayed image of every case and target (and the reference) as linear display
     RGB EXR (half floats, with the parameters that made it) and sRGB PNG, and its S-CIELAB error map
-    (colour bar drawn in, one scale per target) under ``cases/<pitch>um_f<N>/<target>/``."""
+    (colour bar drawn in, one scale per target) under ``cases/<pitch>um_f<N>/<target>/``.
+
+    Parameters
+    ----------
+    result : dict
+        What :func:`~spectracam.experiments.spatial.experiment.run_spatial` returns.
+    out : Path
+        The output folder.
+    command : str
+        The command line, stored in each EXR's parameters.
+
+    Returns
+    -------
+    list of Path
+        The files written, ``cases/scales.json`` (each target's map scale) last.
+    """
     from spectracam.processing.color import display_rgb_to_xyz
     from spectracam.io.exr import write_exr
     from spectracam.io.report import display_chromaticities, write_png
@@ -342,8 +422,20 @@ def _with_ci(row, key, f="{:.2f}"):
     return v if ci is None else f"{v} ({f.format(ci[0])}–{f.format(ci[1])})"
 
 
-def answer(result) -> list[str]:
-    """The paper's question answered with numbers (means with 95 % intervals where noise is on)."""
+def answer(result: dict) -> list[str]:
+    """The paper's question answered with numbers (means with 95 % intervals where noise is on).
+
+    Parameters
+    ----------
+    result : dict
+        What :func:`~spectracam.experiments.spatial.experiment.run_spatial` returns.
+
+    Returns
+    -------
+    list of str
+        Markdown, one line per case (pitch, f-number) whose edge MTF50 is there for the field-sequential design
+        and every CFA.
+    """
     rows = result["rows"]
     index, designs = _by_key(rows), _design_of(rows)
     labels = _labels(rows)
@@ -352,51 +444,60 @@ def answer(result) -> list[str]:
     mis = [lab for lab in labels if designs[lab].misregistration_px > 0]
     lines = []
     for p, N in _cases(rows):
-        def g(lab, t, key):
-            r = index.get((lab, p, N, t))
-            return None if r is None else getattr(r, key)
-
-        def c(lab, t, key, f="{:.2f}"):
-            return _with_ci(index.get((lab, p, N, t)), key, f)
-
-        fsc, prism = "fsc/optimal", "prism/optimal aligned"
-        m = {lab: g(lab, "edge", "mtf50_cy_per_px") for lab in cfa}
-        if g(fsc, "edge", "mtf50_cy_per_px") is None or not m or any(v is None for v in m.values()):
-            continue
-        best, worst = max(m, key=m.get), min(m, key=m.get)
-        s = (f"* **{p:g} µm, f/{N:g}.** MTF50 (displayed luminance, neutral edge): field-sequential "
-             f"{c(fsc, 'edge', 'mtf50_cy_per_px', '{:.3f}')} cy/px, prism (aligned) {c(prism, 'edge', 'mtf50_cy_per_px', '{:.3f}')}; "
-             f"the colour filter array {c(worst, 'edge', 'mtf50_cy_per_px', '{:.3f}')} ({designs[worst].demosaic}) to "
-             f"{c(best, 'edge', 'mtf50_cy_per_px', '{:.3f}')} ({designs[best].demosaic}).")
-        fc = {lab: g(lab, "edge", "false_colour") for lab in labels}
-        if fc.get(fsc) is not None and all(fc.get(lab) for lab in cfa):
-            ratios = [fc[lab] / max(fc[k], 1e-9) for lab in cfa for k in (fsc, prism) if fc.get(k) is not None]
-            s += (f" False colour at the neutral edge: FSC {c(fsc, 'edge', 'false_colour')}, aligned prism "
-                  f"{c(prism, 'edge', 'false_colour')}, CFA {min(fc[lab] for lab in cfa):.2f}–{max(fc[lab] for lab in cfa):.2f} "
-                  f"(the CFA {min(ratios):.1f}–{max(ratios):.1f}× the prism's and FSC's).")
-        for t, what in (("edge_red_cyan", "red/cyan"), ("edge_blue_yellow", "blue/yellow")):
-            e = {lab: g(lab, t, "edge_delta_e") for lab in labels}
-            if e.get(fsc) is not None and all(e.get(lab) is not None for lab in cfa):
-                s += (f" Colour error at the {what} edge: FSC {c(fsc, t, 'edge_delta_e')}, CFA "
-                      + ", ".join(f"{designs[lab].demosaic} {c(lab, t, 'edge_delta_e')}" for lab in cfa) + " ΔE*ab.")
-        for t, what in (("zone_plate", "luminance"), ("zone_plate_chroma", "chroma")):
-            a = {lab: g(lab, t, "aliasing_delta_e") for lab in labels}
-            if a.get(fsc) is not None:
-                s += (f" Aliasing on the {what} zone plate (S-CIELAB above Nyquist): FSC {c(fsc, t, 'aliasing_delta_e')}, "
-                      f"CFA " + "/".join(c(lab, t, "aliasing_delta_e") for lab in cfa)
-                      + (f", CFA with OLPF " + "/".join(c(lab, t, "aliasing_delta_e") for lab in olpf) if olpf else "")
-                      + " ΔE*ab.")
-        for lab in mis:
-            s += (f" {_short(lab).replace('prism ', 'The prism ')}: MTF50 {c(lab, 'edge', 'mtf50_cy_per_px', '{:.3f}')}, "
-                  f"false colour at the edge {c(lab, 'edge', 'false_colour')}.")
-        for lab in olpf:
-            plain = next((k for k in cfa if designs[k].demosaic == designs[lab].demosaic), None)
-            if plain and None not in (g(plain, "edge", "mtf50_cy_per_px"), g(lab, "edge", "mtf50_cy_per_px")):
-                s += (f" {designs[lab].demosaic} with an OLPF of {designs[lab].olpf_separation_px:g} px: MTF50 "
-                      f"{g(plain, 'edge', 'mtf50_cy_per_px'):.3f} → {g(lab, 'edge', 'mtf50_cy_per_px'):.3f}, false colour "
-                      f"{_fmt(g(plain, 'edge', 'false_colour'), '{:.2f}')} → {_fmt(g(lab, 'edge', 'false_colour'), '{:.2f}')}.")
-        lines.append(s)
+        s = _answer_case(p, N, index, designs, labels, cfa, olpf, mis)
+        if s is not None:
+            lines.append(s)
     return lines
+
+
+def _answer_case(p: float, N: float, index: dict, designs: dict, labels: list, cfa: list, olpf: list,
+                 mis: list) -> str | None:
+    """:func:`answer`'s line for one case (pixel pitch ``p`` µm, f-number ``N``); None where the edge MTF50 of
+    the field-sequential design or of a CFA is missing."""
+    def g(lab, t, key):
+        r = index.get((lab, p, N, t))
+        return None if r is None else getattr(r, key)
+
+    def c(lab, t, key, f="{:.2f}"):
+        return _with_ci(index.get((lab, p, N, t)), key, f)
+
+    fsc, prism = "fsc/optimal", "prism/optimal aligned"
+    m = {lab: g(lab, "edge", "mtf50_cy_per_px") for lab in cfa}
+    if g(fsc, "edge", "mtf50_cy_per_px") is None or not m or any(v is None for v in m.values()):
+        return None
+    best, worst = max(m, key=m.get), min(m, key=m.get)
+    s = (f"* **{p:g} µm, f/{N:g}.** MTF50 (displayed luminance, neutral edge): field-sequential "
+         f"{c(fsc, 'edge', 'mtf50_cy_per_px', '{:.3f}')} cy/px, prism (aligned) {c(prism, 'edge', 'mtf50_cy_per_px', '{:.3f}')}; "
+         f"the colour filter array {c(worst, 'edge', 'mtf50_cy_per_px', '{:.3f}')} ({designs[worst].demosaic}) to "
+         f"{c(best, 'edge', 'mtf50_cy_per_px', '{:.3f}')} ({designs[best].demosaic}).")
+    fc = {lab: g(lab, "edge", "false_colour") for lab in labels}
+    if fc.get(fsc) is not None and all(fc.get(lab) for lab in cfa):
+        ratios = [fc[lab] / max(fc[k], 1e-9) for lab in cfa for k in (fsc, prism) if fc.get(k) is not None]
+        s += (f" False colour at the neutral edge: FSC {c(fsc, 'edge', 'false_colour')}, aligned prism "
+              f"{c(prism, 'edge', 'false_colour')}, CFA {min(fc[lab] for lab in cfa):.2f}–{max(fc[lab] for lab in cfa):.2f} "
+              f"(the CFA {min(ratios):.1f}–{max(ratios):.1f}× the prism's and FSC's).")
+    for t, what in (("edge_red_cyan", "red/cyan"), ("edge_blue_yellow", "blue/yellow")):
+        e = {lab: g(lab, t, "edge_delta_e") for lab in labels}
+        if e.get(fsc) is not None and all(e.get(lab) is not None for lab in cfa):
+            s += (f" Colour error at the {what} edge: FSC {c(fsc, t, 'edge_delta_e')}, CFA "
+                  + ", ".join(f"{designs[lab].demosaic} {c(lab, t, 'edge_delta_e')}" for lab in cfa) + " ΔE*ab.")
+    for t, what in (("zone_plate", "luminance"), ("zone_plate_chroma", "chroma")):
+        a = {lab: g(lab, t, "aliasing_delta_e") for lab in labels}
+        if a.get(fsc) is not None:
+            s += (f" Aliasing on the {what} zone plate (S-CIELAB above Nyquist): FSC {c(fsc, t, 'aliasing_delta_e')}, "
+                  f"CFA " + "/".join(c(lab, t, "aliasing_delta_e") for lab in cfa)
+                  + (f", CFA with OLPF " + "/".join(c(lab, t, "aliasing_delta_e") for lab in olpf) if olpf else "")
+                  + " ΔE*ab.")
+    for lab in mis:
+        s += (f" {_short(lab).replace('prism ', 'The prism ')}: MTF50 {c(lab, 'edge', 'mtf50_cy_per_px', '{:.3f}')}, "
+              f"false colour at the edge {c(lab, 'edge', 'false_colour')}.")
+    for lab in olpf:
+        plain = next((k for k in cfa if designs[k].demosaic == designs[lab].demosaic), None)
+        if plain and None not in (g(plain, "edge", "mtf50_cy_per_px"), g(lab, "edge", "mtf50_cy_per_px")):
+            s += (f" {designs[lab].demosaic} with an OLPF of {designs[lab].olpf_separation_px:g} px: MTF50 "
+                  f"{g(plain, 'edge', 'mtf50_cy_per_px'):.3f} → {g(lab, 'edge', 'mtf50_cy_per_px'):.3f}, false colour "
+                  f"{_fmt(g(plain, 'edge', 'false_colour'), '{:.2f}')} → {_fmt(g(lab, 'edge', 'false_colour'), '{:.2f}')}.")
+    return s
 
 
 #: The report's tables: target → metrics (a table each, one column per case).
@@ -413,8 +514,21 @@ REPORT_TABLES = {
 }
 
 
-def report_markdown(result, command: str) -> str:
-    """report.md: the answer, a table per target and metric, the figures, the set-up and the time per stage."""
+def report_markdown(result: dict, command: str) -> str:
+    """report.md: the answer, a table per target and metric, the figures, the set-up and the time per stage.
+
+    Parameters
+    ----------
+    result : dict
+        What :func:`~spectracam.experiments.spatial.experiment.run_spatial` returns.
+    command : str
+        The command line that made it.
+
+    Returns
+    -------
+    str
+        Markdown.
+    """
     rows = result["rows"]
     spec = result["parameters"]["spatial"]
     noise = (f"noise on (the paper's camera, `scenes/paper.toml`): every number is the mean over {spec['seeds']} seeds "
@@ -502,6 +616,25 @@ def _setup_lines(result, spec: dict, noise: str) -> list[str]:
 
 
 def write_outputs(out_dir: Path, result: dict, command: str, maps: bool = True) -> list[Path]:
+    """Write the figures, the case images, results.json, mtf_curves.json and report.md; ``result`` gains
+    ``figures`` (the PNGs' names).
+
+    Parameters
+    ----------
+    out_dir : Path
+        The output folder.
+    result : dict
+        What :func:`~spectracam.experiments.spatial.experiment.run_spatial` returns.
+    command : str
+        The command line, in results.json, report.md and the EXRs.
+    maps : bool
+        Write every design's image and error map under ``cases/`` (:func:`write_case_images`).
+
+    Returns
+    -------
+    list of Path
+        Every file written.
+    """
     out_dir = Path(out_dir)
     paths = []
     paths += figure_mtf(result, out_dir)

@@ -128,13 +128,29 @@ class ScoringContext:
         return {c: self.esfr(self.camera_rates[..., k]) for k, c in enumerate(self.channels)}
 
 
+def _every_target(target: Target) -> bool:
+    """The default of :attr:`Metric.applies`: a metric that applies to every target.
+
+    Parameters
+    ----------
+    target : Target
+        Any target.
+
+    Returns
+    -------
+    bool
+        True.
+    """
+    return True
+
+
 @dataclass(frozen=True)
 class Metric:
     """A spatial metric: what it measures, against which reference, the targets it applies to."""
 
     doc: str
     compute: Callable[[ScoringContext], object]
-    applies: Callable[[Target], bool] = lambda target: True
+    applies: Callable[[Target], bool] = _every_target
 
 
 #: name → :class:`Metric`; the row fields of :class:`SpatialRow` with the same names.

@@ -29,12 +29,19 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from spectracam.scene.chart import ChartSpec, patch_names_and_data, patch_rectangles_mm
 from spectracam.core.spectra import tabulated
 from spectracam.experiments.spatial.geometry import CameraGeometry
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Sequence
+    from types import ModuleType
+
+    from numpy.typing import ArrayLike
 
 __all__ = ["LIFT_MM", "ColouredEdge", "SiemensStar", "SlantedEdge", "Target", "TiltedChart", "ZonePlate",
            "neutral_materials", "object_points", "oversampled_mean", "patch_materials"]
@@ -46,12 +53,41 @@ LIFT_MM = 0.01
 
 
 def neutral_materials(dataset: str = "BabelColor Average") -> list:
-    """``[(name, reflectance)]`` of :data:`DARK_NEUTRAL` and :data:`BRIGHT_NEUTRAL`, in that order."""
+    """``[(name, reflectance)]`` of :data:`DARK_NEUTRAL` and :data:`BRIGHT_NEUTRAL`, in that order.
+
+    Parameters
+    ----------
+    dataset : str
+        The ColorChecker reflectance data set (:func:`spectracam.scene.chart.patch_names_and_data`).
+
+    Returns
+    -------
+    list of (str, callable)
+        Each patch's name and its reflectance as a function of wavelength, nm.
+    """
     return patch_materials((DARK_NEUTRAL, BRIGHT_NEUTRAL), dataset)
 
 
-def patch_materials(names, dataset: str = "BabelColor Average") -> list:
-    """``[(name, reflectance)]`` of the named ColorChecker patches, in that order."""
+def patch_materials(names: Sequence[str], dataset: str = "BabelColor Average") -> list:
+    """``[(name, reflectance)]`` of the named ColorChecker patches, in that order.
+
+    Parameters
+    ----------
+    names : sequence of str
+        ColorChecker patch names, e.g. ``"red"``.
+    dataset : str
+        The ColorChecker reflectance data set (:func:`spectracam.scene.chart.patch_names_and_data`).
+
+    Returns
+    -------
+    list of (str, callable)
+        Each patch's name and its reflectance as a function of wavelength, nm.
+
+    Raises
+    ------
+    ValueError
+        For a name that is no patch of the data set.
+    """
     data = {n: (wl, r) for n, wl, r in patch_names_and_data(dataset)}
     missing = [n for n in names if n not in data]
     if missing:
@@ -59,9 +95,26 @@ def patch_materials(names, dataset: str = "BabelColor Average") -> list:
     return [(n, tabulated(*data[n])) for n in names]
 
 
-def object_points(geometry: CameraGeometry, supersampling: int, oversampling: int):
+def object_points(geometry: CameraGeometry, supersampling: int, oversampling: int) -> tuple[np.ndarray, np.ndarray]:
     """Object-plane coordinates X (cols), Y (rows) of ``oversampling²`` points in every sub-pixel, mm:
-    arrays ``(Hs, os, 1)`` and ``(1, Ws, os)`` → broadcast by the caller. Pinhole projection onto z = 0."""
+    arrays ``(Ws, os)`` and ``(Hs, os)`` → broadcast by the caller. Pinhole projection onto z = 0.
+
+    Parameters
+    ----------
+    geometry : CameraGeometry
+        The sensor's pixels and the magnification.
+    supersampling : int
+        Sub-pixels per pixel along each axis.
+    oversampling : int
+        Points per sub-pixel along each axis (``os``).
+
+    Returns
+    -------
+    X : ndarray, shape (Ws, os)
+        x of the points of every sub-pixel column, mm.
+    Y : ndarray, shape (Hs, os)
+        y of the points of every sub-pixel row, mm (y up, top row first).
+    """
     k = geometry.object_distance_mm / geometry.image_distance_mm
     s = geometry.pixel_pitch_mm / supersampling
     u, w = geometry.pixel_centres_mm(supersampling)
@@ -69,9 +122,27 @@ def object_points(geometry: CameraGeometry, supersampling: int, oversampling: in
     return (u[:, None] + off[None, :]) * k, (w[:, None] - off[None, :]) * k  # (Ws, os), (Hs, os)
 
 
-def oversampled_mean(fn, X, Y, oversampling: int) -> np.ndarray:
+def oversampled_mean(fn: Callable[[np.ndarray, np.ndarray], np.ndarray], X: np.ndarray, Y: np.ndarray,
+                     oversampling: int) -> np.ndarray:
     """``(Hs, Ws)`` float64 mean of ``fn(x, y)`` over the ``oversampling²`` points of every sub-pixel
-    (:func:`object_points`' X and Y, in the units ``fn`` takes)."""
+    (:func:`object_points`' X and Y, in the units ``fn`` takes).
+
+    Parameters
+    ----------
+    fn : callable
+        ``fn(x (1, Ws), y (Hs, 1))`` → ``(Hs, Ws)`` values at the points.
+    X : ndarray, shape (Ws, os)
+        The points' x.
+    Y : ndarray, shape (Hs, os)
+        The points' y.
+    oversampling : int
+        ``os``, points per sub-pixel along each axis.
+
+    Returns
+    -------
+    ndarray, shape (Hs, Ws)
+        The mean over each sub-pixel's points.
+    """
     acc = np.zeros((Y.shape[0], X.shape[0]), np.float64)
     for i in range(oversampling):
         for j in range(oversampling):
@@ -92,12 +163,39 @@ class Target:
         raise NotImplementedError
 
     def coverage(self, geometry: CameraGeometry, supersampling: int) -> np.ndarray:
-        """``(n_materials, Hs, Ws)`` fraction of each sub-pixel's footprint covered by each material."""
+        """``(n_materials, Hs, Ws)`` fraction of each sub-pixel's footprint covered by each material.
+
+        Parameters
+        ----------
+        geometry : CameraGeometry
+            The camera's view of the target.
+        supersampling : int
+            Sub-pixels per pixel along each axis.
+
+        Returns
+        -------
+        ndarray, shape (n_materials, Hs, Ws)
+            Fractions 0 to 1, in the order of :meth:`materials`; they sum to 1 in every sub-pixel.
+        """
         raise NotImplementedError
 
-    def mitsuba_shapes(self, mi, geometry: CameraGeometry) -> list:
+    def mitsuba_shapes(self, mi: ModuleType, geometry: CameraGeometry) -> list:
         """``[(key, shape, material index)]``: a shape is a Mitsuba shape dict, or a triangle mesh
-        ``(vertices (n, 3) float32, faces (m, 3) uint32)``; the renderer gives each its BSDF."""
+        ``(vertices (n, 3) float32, faces (m, 3) uint32)``; the renderer gives each its BSDF.
+
+        Parameters
+        ----------
+        mi : ModuleType
+            Mitsuba, its variant set.
+        geometry : CameraGeometry
+            The camera's view of the target (the shapes cover its field of view), world units mm.
+
+        Returns
+        -------
+        list of (str, dict or tuple, int or tuple)
+            Each shape's key, the shape, and the index of its material in :meth:`materials` (a blend:
+            ``(material 0, material 1, weight bitmap)``).
+        """
         raise NotImplementedError
 
     def light_direction(self) -> list:
@@ -105,7 +203,18 @@ class Target:
         return [0.0, 0.0, -1.0]
 
     def region(self, geometry: CameraGeometry) -> np.ndarray:
-        """``(H, W)`` boolean: the pixels the target's scores average over."""
+        """``(H, W)`` boolean: the pixels the target's scores average over.
+
+        Parameters
+        ----------
+        geometry : CameraGeometry
+            The camera's view of the target.
+
+        Returns
+        -------
+        ndarray of bool, shape (H, W)
+            Here every pixel.
+        """
         return np.ones((geometry.height_px, geometry.width_px), bool)
 
     def to_dict(self) -> dict:
@@ -122,14 +231,14 @@ class SlantedEdge(Target):
     dataset: str = "BabelColor Average"
     name = "edge"
 
-    def materials(self):
+    def materials(self) -> list:
         return neutral_materials(self.dataset)
 
     def _line(self, geometry):
         t = math.tan(math.radians(self.angle_deg))
         return self.x0_px * geometry.object_pixel_mm, t   # edge: x = x0 - t·y (y up, so x grows down the image)
 
-    def coverage(self, geometry, supersampling):
+    def coverage(self, geometry: CameraGeometry, supersampling: int) -> np.ndarray:
         x0, t = self._line(geometry)
         k = geometry.object_distance_mm / geometry.image_distance_mm
         s = geometry.pixel_pitch_mm / supersampling * k
@@ -149,7 +258,7 @@ class SlantedEdge(Target):
         bright = np.clip(bright, 0.0, 1.0)
         return np.stack([1.0 - bright, bright])
 
-    def mitsuba_shapes(self, mi, geometry):
+    def mitsuba_shapes(self, mi: ModuleType, geometry: CameraGeometry) -> list:
         T = mi.ScalarTransform4f
         fw, fh = geometry.field_of_view_mm
         big = 4.0 * max(fw, fh)
@@ -170,7 +279,7 @@ class ColouredEdge(SlantedEdge):
     name = "coloured edge"
     neutral = False
 
-    def materials(self):
+    def materials(self) -> list:
         return patch_materials(self.patches, self.dataset)
 
 
@@ -196,40 +305,77 @@ class ZonePlate(Target):
         return set(self.patches) <= {DARK_NEUTRAL, BRIGHT_NEUTRAL, "white 9.5 (.05 D)", "neutral 8 (.23 D)",
                                      "neutral 5 (.70 D)", "black 2 (1.5 D)"}
 
-    def materials(self):
+    def materials(self) -> list:
         return patch_materials(self.patches, self.dataset)
 
-    def weight(self, x_px, y_px):
-        """Blend weight of material 1 at object-plane points (object pixels from the centre)."""
+    def weight(self, x_px: ArrayLike, y_px: ArrayLike) -> np.ndarray:
+        """Blend weight of material 1 at object-plane points (object pixels from the centre).
+
+        Parameters
+        ----------
+        x_px, y_px : array_like
+            The points' coordinates, object pixels from the centre (broadcast together).
+
+        Returns
+        -------
+        ndarray
+            ``w = ½ + ½ cos(π k r²)``, 0 to 1.
+        """
         k = self.max_frequency_cy_per_px / self.radius_px
         return 0.5 + 0.5 * np.cos(np.pi * k * (np.square(x_px) + np.square(y_px)))
 
-    def coverage(self, geometry, supersampling):
+    def coverage(self, geometry: CameraGeometry, supersampling: int) -> np.ndarray:
         X, Y = object_points(geometry, supersampling, self.oversampling)
         w = oversampled_mean(self.weight, X / geometry.object_pixel_mm, Y / geometry.object_pixel_mm, self.oversampling)
         return np.stack([1.0 - w, w])
 
-    def weight_bitmap(self, geometry):
-        """``(n, n)`` float32 blend weights at the texel centres of a square ``4×`` the field of view, row 0
-        at the top (+y) — what :meth:`mitsuba_shapes`' rectangle shows (a bitmap's first row is its top)."""
+    def weight_bitmap(self, geometry: CameraGeometry) -> tuple[np.ndarray, float]:
+        """``(n, n)`` float32 blend weights at the texel centres of a square 1.1 × the field of view's larger
+        side, row 0 at the top (+y) — what :meth:`mitsuba_shapes`' rectangle shows (a bitmap's first row is its
+        top).
+
+        Parameters
+        ----------
+        geometry : CameraGeometry
+            Its field of view and object pixel, mm.
+
+        Returns
+        -------
+        weights : ndarray, shape (n, n)
+            float32, :attr:`texels_per_px` texels per object pixel over a square 1.1 × the larger side of
+            the field of view.
+        half_mm : float
+            Half the square's side, mm.
+        """
         fw, fh = geometry.field_of_view_mm
         half_px = 0.5 * 1.1 * max(fw, fh) / geometry.object_pixel_mm
         n = int(np.ceil(2 * half_px * self.texels_per_px))
         c = (np.arange(n) + 0.5) / n * 2 * half_px - half_px
         return self.weight(c[None, :], -c[:, None]).astype(np.float32), half_px * geometry.object_pixel_mm
 
-    def mitsuba_shapes(self, mi, geometry):
+    def mitsuba_shapes(self, mi: ModuleType, geometry: CameraGeometry) -> list:
         weights, half_mm = self.weight_bitmap(geometry)
         rect = {"type": "rectangle", "to_world": mi.ScalarTransform4f().scale([half_mm, half_mm, 1])}
         return [("plate", rect, (0, 1, weights))]
 
-    def region(self, geometry):
+    def region(self, geometry: CameraGeometry) -> np.ndarray:
         u, w = geometry.pixel_centres_mm()
         k = geometry.object_distance_mm / geometry.image_distance_mm / geometry.object_pixel_mm
         return (u[None, :] * k) ** 2 + (w[:, None] * k) ** 2 <= self.radius_px ** 2
 
     def nyquist_radius_px(self, frequency_cy_per_px: float = 0.5) -> float:
-        """Radius (object pixels) where the local frequency is ``frequency_cy_per_px``."""
+        """Radius (object pixels) where the local frequency is ``frequency_cy_per_px``.
+
+        Parameters
+        ----------
+        frequency_cy_per_px : float
+            cycles per object pixel (0.5: the sensor's Nyquist frequency).
+
+        Returns
+        -------
+        float
+            Object pixels from the centre.
+        """
         return frequency_cy_per_px / self.max_frequency_cy_per_px * self.radius_px
 
 
@@ -245,7 +391,7 @@ class SiemensStar(Target):
     dataset: str = "BabelColor Average"
     name = "star"
 
-    def materials(self):
+    def materials(self) -> list:
         return neutral_materials(self.dataset)
 
     def _dark(self, x, y, radius):
@@ -253,13 +399,13 @@ class SiemensStar(Target):
         sector = np.floor(phi / (np.pi / self.cycles)).astype(np.int64)
         return (sector % 2 == 0) & (x * x + y * y <= radius * radius)
 
-    def coverage(self, geometry, supersampling):
+    def coverage(self, geometry: CameraGeometry, supersampling: int) -> np.ndarray:
         X, Y = object_points(geometry, supersampling, self.oversampling)
         R = self.radius_px * geometry.object_pixel_mm
         dark = oversampled_mean(lambda x, y: self._dark(x, y, R), X, Y, self.oversampling)
         return np.stack([dark, 1.0 - dark])
 
-    def mitsuba_shapes(self, mi, geometry):
+    def mitsuba_shapes(self, mi: ModuleType, geometry: CameraGeometry) -> list:
         T = mi.ScalarTransform4f
         fw, fh = geometry.field_of_view_mm
         R = self.radius_px * geometry.object_pixel_mm
@@ -276,7 +422,7 @@ class SiemensStar(Target):
         big = 4.0 * max(fw, fh)
         return [("background", {"type": "rectangle", "to_world": T().scale([big, big, 1])}, 1), ("star", mesh, 0)]
 
-    def region(self, geometry):
+    def region(self, geometry: CameraGeometry) -> np.ndarray:
         u, w = geometry.pixel_centres_mm()
         k = geometry.object_distance_mm / geometry.image_distance_mm
         R = self.radius_px * geometry.object_pixel_mm
@@ -294,11 +440,11 @@ class TiltedChart(Target):
     name = "chart"
     neutral = False
 
-    def to_dict(self):
+    def to_dict(self) -> dict:
         return {"type": self.name, "tilt_deg": self.tilt_deg, "chart": self.chart.to_dict(),
                 "oversampling": self.oversampling}
 
-    def materials(self):
+    def materials(self) -> list:
         const = self.chart.surround_reflectance
         return [(n, tabulated(wl, r)) for n, wl, r in patch_names_and_data(self.chart.dataset)] + \
             [("surround", lambda lam: np.full(np.shape(lam), const))]
@@ -308,9 +454,25 @@ class TiltedChart(Target):
         a = math.radians(self.tilt_deg)
         return np.array([math.cos(a), 0.0, -math.sin(a)]), np.array([math.sin(a), 0.0, math.cos(a)])  # e_x, normal
 
-    def chart_coordinates(self, geometry: CameraGeometry, u, w):
+    def chart_coordinates(self, geometry: CameraGeometry, u: ArrayLike,
+                          w: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Chart-plane coordinates (mm) and distance along the optical axis (mm) of the points seen at
-        sensor positions ``(u, w)`` mm (broadcast): ray from the lens centre through the object-plane point."""
+        sensor positions ``(u, w)`` mm (broadcast): ray from the lens centre through the object-plane point.
+
+        Parameters
+        ----------
+        geometry : CameraGeometry
+            The object and image distances, mm.
+        u, w : array_like
+            Sensor positions, mm from the optical axis (u right, w up).
+
+        Returns
+        -------
+        xc, yc : ndarray
+            The points' coordinates on the chart, mm from its centre.
+        depth : ndarray
+            Their distance from the lens along the optical axis, mm.
+        """
         ex, n = self._axes
         k = geometry.object_distance_mm / geometry.image_distance_mm
         d = geometry.object_distance_mm
@@ -334,7 +496,7 @@ class TiltedChart(Target):
             & (c >= 0) & (c < COLUMNS) & (r >= 0) & (r < ROWS)
         return np.where(inside, r * COLUMNS + c, ROWS * COLUMNS).astype(np.int64)
 
-    def coverage(self, geometry, supersampling):
+    def coverage(self, geometry: CameraGeometry, supersampling: int) -> np.ndarray:
         s = geometry.pixel_pitch_mm / supersampling
         u, w = geometry.pixel_centres_mm(supersampling)
         o = self.oversampling
@@ -348,7 +510,7 @@ class TiltedChart(Target):
             counts += np.bincount(idx.ravel(), minlength=25 * n)
         return (counts / o**2).reshape(25, w.size, u.size).astype(np.float32)
 
-    def mitsuba_shapes(self, mi, geometry):
+    def mitsuba_shapes(self, mi: ModuleType, geometry: CameraGeometry) -> list:
         T = mi.ScalarTransform4f
         fw, fh = geometry.field_of_view_mm
         big = 4.0 * max(fw, fh, *self.chart.board_size_mm)
@@ -359,12 +521,23 @@ class TiltedChart(Target):
                 [(x0 + x1) / 2, (y0 + y1) / 2, LIFT_MM]) @ T().scale([(x1 - x0) / 2, (y1 - y0) / 2, 1])}, p))
         return shapes
 
-    def light_direction(self):
+    def light_direction(self) -> list:
         return (-self._axes[1]).tolist()
 
     def patch_masks(self, geometry: CameraGeometry) -> np.ndarray:
         """``(24, H, W)``: pixels whose four corners all lie inside the patch shrunk by the chart's
-        ``mask_margin`` (the flat chart's scoring masks, through the perspective)."""
+        ``mask_margin`` (the flat chart's scoring masks, through the perspective).
+
+        Parameters
+        ----------
+        geometry : CameraGeometry
+            The camera's view of the chart.
+
+        Returns
+        -------
+        ndarray of bool, shape (24, H, W)
+            One mask per patch, in the chart's order.
+        """
         p = geometry.pixel_pitch_mm
         u, w = geometry.pixel_centres_mm()
         inset = self.chart.mask_margin * self.chart.patch_size_mm
@@ -376,11 +549,22 @@ class TiltedChart(Target):
                     masks[q] &= (xc >= x0 + inset) & (xc <= x1 - inset) & (yc >= y0 + inset) & (yc <= y1 - inset)
         return masks
 
-    def region(self, geometry):
+    def region(self, geometry: CameraGeometry) -> np.ndarray:
         return self.patch_masks(geometry).any(axis=0)
 
     def depth_range_mm(self, geometry: CameraGeometry) -> tuple[float, float]:
-        """Nearest and farthest distance (along the axis) of the chart's board corners."""
+        """Nearest and farthest distance (along the axis) of the chart's board corners.
+
+        Parameters
+        ----------
+        geometry : CameraGeometry
+            Its object distance, mm.
+
+        Returns
+        -------
+        tuple of float
+            ``(nearest, farthest)``, mm.
+        """
         bw, _ = self.chart.board_size_mm
         ex, _ = self._axes
         z = [geometry.object_distance_mm - sx * bw / 2 * ex[2] for sx in (-1, 1)]

@@ -33,13 +33,22 @@ import os
 import struct
 import sys
 from dataclasses import dataclass, field
-from functools import lru_cache
+from functools import lru_cache, partial
 from pathlib import Path
 from types import SimpleNamespace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from spectracam.core.errors import SpectracamError
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+    from numpy.typing import ArrayLike
+
+    from spectracam.pipeline.scene_file import Scene
+    from spectracam.scene.illuminant import IlluminantSpec
 
 __all__ = ["CACHE_SUBDIR", "CALIBRATION_CCT_K", "CALIBRATION_LIGHTS", "DCP_DIR", "DCP_MAGIC", "DCP_TAGS",
            "DEFINITIONS", "EFFECTIVE_RANGE_K", "PRESET_LIGHTS", "PRESET_SOURCES", "TARGET_CATEGORIES",
@@ -94,11 +103,27 @@ class DataFileError(SpectracamError):
     """A Debian data file (wb_presets.json, a .dcp) that does not have the structure it must have."""
 
 
-def load_wb_presets(path) -> dict:
+def load_wb_presets(path: str | Path) -> dict:
     """``{(maker, model): [(name, tuning, (R, G, B) multipliers), ...]}`` from darktable's ``wb_presets.json``
     (``{"version": 1, "wb_presets": [{"maker", "models": [{"model", "presets": [{"name", "tuning"?,
     "channels": [R, G, B, G2]}]}]}]}``; a missing ``tuning`` is 0).  Every field is checked; the
-    multipliers must be finite and > 0 (the fourth channel, unused by RGB cameras, is not read)."""
+    multipliers must be finite and > 0 (the fourth channel, unused by RGB cameras, is not read).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file (:func:`find_wb_presets`).
+
+    Returns
+    -------
+    dict
+        ``(maker, model)`` → its presets in the file's order.
+
+    Raises
+    ------
+    DataFileError
+        When the file cannot be read as JSON or a field is missing or wrong.
+    """
     p = Path(path)
     try:
         data = json.loads(p.read_bytes())
@@ -139,7 +164,25 @@ def load_wb_presets(path) -> dict:
 
 def presets_at_zero_tuning(presets: dict, maker: str, model: str) -> dict:
     """``{name: (R, G, B) multipliers}`` of ``maker``/``model`` at fine-tuning 0 (empty if the model is not
-    there); two different tuning-0 entries of one name are refused."""
+    there); two different tuning-0 entries of one name are refused.
+
+    Parameters
+    ----------
+    presets : dict
+        :func:`load_wb_presets`' result.
+    maker, model : str
+        darktable's names (:func:`maker_model`).
+
+    Returns
+    -------
+    dict
+        Preset name → ``(R, G, B)`` multipliers.
+
+    Raises
+    ------
+    DataFileError
+        On two different tuning-0 entries of one name.
+    """
     out: dict = {}
     for name, tuning, rgb in presets.get((maker, model), []):
         if tuning != 0:
@@ -150,8 +193,19 @@ def presets_at_zero_tuning(presets: dict, maker: str, model: str) -> dict:
     return out
 
 
-def preset_neutral(multipliers) -> np.ndarray:
-    """The raw neutral a preset stands for: ``1/m`` per channel, G = 1."""
+def preset_neutral(multipliers: ArrayLike) -> np.ndarray:
+    """The raw neutral a preset stands for: ``1/m`` per channel, G = 1.
+
+    Parameters
+    ----------
+    multipliers : array_like, shape (3,)
+        The preset's R, G, B multipliers.
+
+    Returns
+    -------
+    ndarray, shape (3,)
+        ``(R/G, 1, B/G)`` of the neutral.
+    """
     n = 1.0 / np.asarray(multipliers, float)
     return n / n[1]
 
@@ -218,9 +272,22 @@ PRESET_LIGHTS = {
 PRESET_SOURCES = {"Canon": _CANON, "Nikon": _NIKON}
 
 
-def light_spec(light: PresetLight, cct_K: float | None = None):
+def light_spec(light: PresetLight, cct_K: float | None = None) -> IlluminantSpec:
     """The :class:`~spectracam.scene.illuminant.IlluminantSpec` of ``light`` (at ``cct_K`` instead of its own, for
-    the effective-temperature search)."""
+    the effective-temperature search).
+
+    Parameters
+    ----------
+    light : PresetLight
+        The preset's light.
+    cct_K : float or None
+        The temperature to use, K (None: the light's; ignored for a named CIE lamp).
+
+    Returns
+    -------
+    IlluminantSpec
+        A blackbody, the named CIE lamp, or CIE daylight (:func:`daylight_spec`).
+    """
     from spectracam.scene.illuminant import IlluminantSpec
 
     T = float(cct_K if cct_K is not None else light.cct_K) if light.family != "cie" else None
@@ -232,9 +299,21 @@ def light_spec(light: PresetLight, cct_K: float | None = None):
 
 
 @lru_cache(maxsize=512)
-def daylight_spec(cct_K: float):
+def daylight_spec(cct_K: float) -> IlluminantSpec:
     """CIE daylight (D series, CIE 015) at the correlated colour temperature ``cct_K`` (4000–25000 K), as a
-    measured SPD."""
+    measured SPD.
+
+    Parameters
+    ----------
+    cct_K : float
+        K.
+
+    Returns
+    -------
+    IlluminantSpec
+        ``kind="measured"``: colour-science's D-series SPD at the daylight locus' chromaticity of ``cct_K``
+        (negative values clipped to 0).
+    """
     import colour
 
     from spectracam.scene.illuminant import IlluminantSpec
@@ -245,18 +324,42 @@ def daylight_spec(cct_K: float):
                           values=tuple(max(float(x), 0.0) for x in sd.values))
 
 
-def simulated_neutral(scene, illuminant) -> np.ndarray:
+def simulated_neutral(scene: Scene, illuminant: IlluminantSpec) -> np.ndarray:
     """``(3,)`` the scene camera's noise-free photo-electrons of a perfect white diffuser under ``illuminant``
     (an IlluminantSpec) on the scene's wavelength grid — what the DNG writer's ``AsShotNeutral`` is made of
-    (:func:`spectracam.io.dng.white_rates`) — normalised to G = 1."""
+    (:func:`spectracam.io.dng.white_rates`) — normalised to G = 1.
+
+    Parameters
+    ----------
+    scene : Scene
+        Its camera and wavelength grid.
+    illuminant : IlluminantSpec
+        The light.
+
+    Returns
+    -------
+    ndarray, shape (3,)
+        ``(R/G, 1, B/G)``.
+    """
     from spectracam.io.dng import white_rates
 
     n = white_rates(scene.camera, SimpleNamespace(illuminant=illuminant, grid=scene.grid))
     return n / n[1]
 
 
-def white_xyz(illuminant) -> np.ndarray:
-    """XYZ (CIE 1931 2°, 360–830 nm, Y = 1) of a perfect white under ``illuminant``: the light's own white."""
+def white_xyz(illuminant: IlluminantSpec) -> np.ndarray:
+    """XYZ (CIE 1931 2°, 360–830 nm, Y = 1) of a perfect white under ``illuminant``: the light's own white.
+
+    Parameters
+    ----------
+    illuminant : IlluminantSpec
+        The light.
+
+    Returns
+    -------
+    ndarray, shape (3,)
+        XYZ, Y = 1.
+    """
     from spectracam.scene.illuminant import relative_spd
     from spectracam.core.spectra import cie_1931_cmfs
 
@@ -275,9 +378,25 @@ def _log_rms(n: np.ndarray, ref: np.ndarray) -> float:
 EFFECTIVE_RANGE_K = {"daylight": (4000.0, 20000.0), "planckian": (1500.0, 12000.0)}
 
 
-def effective_cct(neutral_of, light: PresetLight, target: np.ndarray) -> tuple[float, float] | None:
+def effective_cct(neutral_of: Callable[[IlluminantSpec], np.ndarray], light: PresetLight,
+                  target: np.ndarray) -> tuple[float, float] | None:
     """``(T, rms)``: the temperature on ``light``'s locus whose neutral (``neutral_of(IlluminantSpec)``) is
-    nearest to ``target`` in log R/G and B/G, and the rms relative distance there; None for a named lamp."""
+    nearest to ``target`` in log R/G and B/G, and the rms relative distance there; None for a named lamp.
+
+    Parameters
+    ----------
+    neutral_of : callable
+        A light → the neutral ``(3,)``, G = 1 (simulated, or of a published matrix).
+    light : PresetLight
+        Its locus (daylight or Planckian) and the range searched (:data:`EFFECTIVE_RANGE_K`).
+    target : ndarray, shape (3,)
+        The preset's neutral, G = 1.
+
+    Returns
+    -------
+    tuple of float or None
+        ``(T K, rms)``, the rms a fraction (×100: percent), searched in mired; None for a named CIE lamp.
+    """
     if light.family not in EFFECTIVE_RANGE_K:
         return None
     from scipy.optimize import minimize_scalar
@@ -295,7 +414,18 @@ def _pct(a: float, b: float) -> float:
 
 def maker_model(model: str) -> tuple[str, str]:
     """darktable's ``(maker, model)`` of a published matrix's model name: ``"Canon EOS 5D Mark II"`` →
-    ``("Canon", "EOS 5D Mark II")``."""
+    ``("Canon", "EOS 5D Mark II")``.
+
+    Parameters
+    ----------
+    model : str
+        The published matrix's model name.
+
+    Returns
+    -------
+    tuple of str
+        ``(maker, model)``: split at the first space.
+    """
     maker, _, rest = model.partition(" ")
     return maker, rest
 
@@ -314,8 +444,21 @@ def _independence(curves, what: str) -> str:
             "measurement and the ΔE tests the curves' shape")
 
 
-def light_cct(light: PresetLight, illuminant) -> float:
-    """The light's correlated colour temperature, K: its own, or (a named lamp) that of its white (Ohno 2013)."""
+def light_cct(light: PresetLight, illuminant: IlluminantSpec) -> float:
+    """The light's correlated colour temperature, K: its own, or (a named lamp) that of its white (Ohno 2013).
+
+    Parameters
+    ----------
+    light : PresetLight
+        Its temperature, if it has one.
+    illuminant : IlluminantSpec
+        Its spectrum (:func:`light_spec`), for a named lamp.
+
+    Returns
+    -------
+    float
+        K.
+    """
     if light.cct_K is not None:
         return float(light.cct_K)
     import colour
@@ -326,7 +469,23 @@ def light_cct(light: PresetLight, illuminant) -> float:
 
 def wb_preset_rows(camera_name: str, presets: dict, dcp: "DcpProfile | None" = None) -> dict:
     """One camera's white-balance-preset table (:func:`run_validate_wb`); with the camera's DCP profile, the
-    neutral its ColorMatrix predicts for each light beside it (:meth:`DcpProfile.neutral`)."""
+    neutral its ColorMatrix predicts for each light beside it (:meth:`DcpProfile.neutral`).
+
+    Parameters
+    ----------
+    camera_name : str
+        A shipped camera with a published matrix model.
+    presets : dict
+        :func:`load_wb_presets`' result.
+    dcp : DcpProfile or None
+        The camera's DCP profile.
+
+    Returns
+    -------
+    dict
+        The camera, its darktable names, the presets' rows (see :data:`DEFINITIONS`) and those not compared;
+        ``skipped`` where darktable has no preset for the model.
+    """
     from spectracam.architecture.cameras import PUBLISHED_MATRICES, library_curves
     from spectracam.experiments.validate.scene import validation_scene
 
@@ -350,24 +509,7 @@ def wb_preset_rows(camera_name: str, presets: dict, dcp: "DcpProfile | None" = N
         if light is None:
             out["not_compared"].append(name)
             continue
-        ill = light_spec(light)
-        sim, pre, pub = sim_of(ill), preset_neutral(mult), pub_of(ill)
-        row = {"preset": name, "category": light.category, "target": light.category in TARGET_CATEGORIES,
-               "light": light.label, "light_reason": light.reason, "multipliers": list(mult),
-               "RG_simulated": float(sim[0]), "BG_simulated": float(sim[2]),
-               "RG_preset": float(pre[0]), "BG_preset": float(pre[2]),
-               "RG_error_percent": _pct(sim[0], pre[0]), "BG_error_percent": _pct(sim[2], pre[2]),
-               "RG_published_matrix": float(pub[0]), "BG_published_matrix": float(pub[2]),
-               "RG_published_error_percent": _pct(pub[0], pre[0]), "BG_published_error_percent": _pct(pub[2], pre[2])}
-        row["within_3_percent"] = bool(abs(row["RG_error_percent"]) < 3 and abs(row["BG_error_percent"]) < 3)
-        if dcp is not None:
-            nd = dcp.neutral(white_xyz(ill), light_cct(light, ill))
-            row.update({"RG_dcp": float(nd[0]), "BG_dcp": float(nd[2]), "RG_dcp_error_percent": _pct(nd[0], pre[0]),
-                        "BG_dcp_error_percent": _pct(nd[2], pre[2])})
-        for key, of in (("simulated", sim_of), ("published_matrix", pub_of)):
-            eff = effective_cct(of, light, pre)
-            row[f"effective_K_{key}"] = None if eff is None else eff[0]
-            row[f"effective_rms_percent_{key}"] = None if eff is None else 100 * eff[1]
+        row, sim, pre = _preset_row(name, mult, light, sim_of, pub_of, dcp)
         if light.category == "daylight":
             base = (sim, pre)
         out["presets"].append(row)
@@ -379,6 +521,30 @@ def wb_preset_rows(camera_name: str, presets: dict, dcp: "DcpProfile | None" = N
             p = row[f"{c}_preset"] / base[1][k]
             row[f"{c}_shape_error_percent"] = _pct(s, p)
     return out
+
+
+def _preset_row(name: str, mult: tuple, light: PresetLight, sim_of: Callable, pub_of: Callable,
+                dcp: DcpProfile | None) -> tuple[dict, np.ndarray, np.ndarray]:
+    """:func:`wb_preset_rows`' row of one preset, and its simulated and preset neutrals."""
+    ill = light_spec(light)
+    sim, pre, pub = sim_of(ill), preset_neutral(mult), pub_of(ill)
+    row = {"preset": name, "category": light.category, "target": light.category in TARGET_CATEGORIES,
+           "light": light.label, "light_reason": light.reason, "multipliers": list(mult),
+           "RG_simulated": float(sim[0]), "BG_simulated": float(sim[2]),
+           "RG_preset": float(pre[0]), "BG_preset": float(pre[2]),
+           "RG_error_percent": _pct(sim[0], pre[0]), "BG_error_percent": _pct(sim[2], pre[2]),
+           "RG_published_matrix": float(pub[0]), "BG_published_matrix": float(pub[2]),
+           "RG_published_error_percent": _pct(pub[0], pre[0]), "BG_published_error_percent": _pct(pub[2], pre[2])}
+    row["within_3_percent"] = bool(abs(row["RG_error_percent"]) < 3 and abs(row["BG_error_percent"]) < 3)
+    if dcp is not None:
+        nd = dcp.neutral(white_xyz(ill), light_cct(light, ill))
+        row.update({"RG_dcp": float(nd[0]), "BG_dcp": float(nd[2]), "RG_dcp_error_percent": _pct(nd[0], pre[0]),
+                    "BG_dcp_error_percent": _pct(nd[2], pre[2])})
+    for key, of in (("simulated", sim_of), ("published_matrix", pub_of)):
+        eff = effective_cct(of, light, pre)
+        row[f"effective_K_{key}"] = None if eff is None else eff[0]
+        row[f"effective_rms_percent_{key}"] = None if eff is None else 100 * eff[1]
+    return row, sim, pre
 
 
 # ------------------------------------------------------------------------------------------ DCP profiles
@@ -422,7 +588,20 @@ class DcpProfile:
         """The camera neutral ``CM·XYZ`` (G = 1) the profile predicts for a light of white ``illuminant_xyz`` and
         colour temperature ``cct_K``: with two calibrations their ColorMatrix interpolated linearly in 1/CCT
         between the calibration illuminants' temperatures, clamped outside (the DNG SDK's
-        ``dng_color_spec::FindXYZtoCamera``; the light's temperature is known here, so no iteration)."""
+        ``dng_color_spec::FindXYZtoCamera``; the light's temperature is known here, so no iteration).
+
+        Parameters
+        ----------
+        illuminant_xyz : ndarray, shape (3,)
+            The light's white, XYZ.
+        cct_K : float
+            The light's correlated colour temperature, K.
+
+        Returns
+        -------
+        ndarray, shape (3,)
+            ``(R/G, 1, B/G)``.
+        """
         codes = [c for c, _, _ in self.calibrations]
         if len(self.calibrations) == 1 or codes[0] not in CALIBRATION_CCT_K or codes[1] not in CALIBRATION_CCT_K:
             cm = self.calibrations[0][1]
@@ -438,7 +617,27 @@ class DcpProfile:
 def read_tiff_ifd0(data: bytes, magic: int = DCP_MAGIC, what: str = "DCP") -> dict:
     """``{tag: value}`` of a classic TIFF-structured file's first IFD: ASCII as ``str``, (S)RATIONAL as
     float arrays (a zero denominator refused), other numbers as tuples.  Strict: byte order ``II``/``MM``,
-    the given magic, every entry and value inside the file, known field types, tags in ascending order."""
+    the given magic, every entry and value inside the file, known field types, tags in ascending order.
+
+    Parameters
+    ----------
+    data : bytes
+        The whole file.
+    magic : int
+        The magic number after the byte order (:data:`DCP_MAGIC`; a TIFF's or DNG's is 42).
+    what : str
+        The file, as errors name it.
+
+    Returns
+    -------
+    dict
+        Tag number → value.
+
+    Raises
+    ------
+    DataFileError
+        Where the file breaks one of those rules.
+    """
     if len(data) < 8 or data[:2] not in (b"II", b"MM"):
         raise DataFileError(f"{what}: not a TIFF-structured file (no II/MM byte order)")
     bo = "<" if data[:2] == b"II" else ">"
@@ -459,7 +658,7 @@ def read_tiff_ifd0(data: bytes, magic: int = DCP_MAGIC, what: str = "DCP") -> di
         last = tag
         if typ not in _TIFF_TYPES:
             raise DataFileError(f"{what}: tag {tag} has unknown field type {typ}")
-        fmt, size = _TIFF_TYPES[typ]
+        _, size = _TIFF_TYPES[typ]
         nbytes = size * count
         if nbytes <= 4:
             payload = raw[:nbytes]
@@ -468,24 +667,45 @@ def read_tiff_ifd0(data: bytes, magic: int = DCP_MAGIC, what: str = "DCP") -> di
             if at + nbytes > len(data):
                 raise DataFileError(f"{what}: tag {tag}: {nbytes} bytes at {at} run past the end ({len(data)} bytes)")
             payload = data[at:at + nbytes]
-        if typ == 2:
-            tags[tag] = payload.split(b"\0", 1)[0].decode("latin-1")
-            continue
-        values = struct.unpack(bo + fmt[-1] * (len(fmt) * count), payload)
-        if typ in (5, 10):
-            num, den = np.array(values[0::2], float), np.array(values[1::2], float)
-            if np.any(den == 0):
-                raise DataFileError(f"{what}: tag {tag}: a rational with denominator 0")
-            tags[tag] = num / den
-        else:
-            tags[tag] = values
+        tags[tag] = _tiff_value(payload, bo, typ, count, tag, what)
     return tags
 
 
-def read_dcp(path) -> DcpProfile:
+def _tiff_value(payload: bytes, bo: str, typ: int, count: int, tag: int, what: str) -> str | np.ndarray | tuple:
+    """:func:`read_tiff_ifd0`'s value of one entry from its bytes: ASCII as ``str``, (S)RATIONAL as a float array
+    (a zero denominator refused), other numbers as a tuple."""
+    if typ == 2:
+        return payload.split(b"\0", 1)[0].decode("latin-1")
+    fmt, _ = _TIFF_TYPES[typ]
+    values = struct.unpack(bo + fmt[-1] * (len(fmt) * count), payload)
+    if typ in (5, 10):
+        num, den = np.array(values[0::2], float), np.array(values[1::2], float)
+        if np.any(den == 0):
+            raise DataFileError(f"{what}: tag {tag}: a rational with denominator 0")
+        return num / den
+    return values
+
+
+def read_dcp(path: str | Path) -> DcpProfile:
     """A DNG camera profile (``.dcp``): its camera, and ColorMatrix/ForwardMatrix at each calibration
     illuminant.  Refused unless ColorMatrix1 and CalibrationIlluminant1 are there, each matrix is 9 SRATIONALs
-    (3 colour planes), and a second ColorMatrix comes with its CalibrationIlluminant2."""
+    (3 colour planes), and a second ColorMatrix comes with its CalibrationIlluminant2.
+
+    Parameters
+    ----------
+    path : str or Path
+        The ``.dcp`` file.
+
+    Returns
+    -------
+    DcpProfile
+        With its HueSatMap where the profile has one (read, not applied).
+
+    Raises
+    ------
+    DataFileError
+        When the file cannot be read or breaks one of those rules.
+    """
     p = Path(path)
     try:
         data = p.read_bytes()
@@ -493,23 +713,7 @@ def read_dcp(path) -> DcpProfile:
         raise DataFileError(f"{p}: cannot be read ({e.strerror})") from None
     tags = read_tiff_ifd0(data, DCP_MAGIC, str(p))
     t = DCP_TAGS
-
-    def matrix(name):
-        v = tags.get(t[name])
-        if v is None:
-            return None
-        if not isinstance(v, np.ndarray) or v.shape != (9,) or not np.all(np.isfinite(v)):
-            raise DataFileError(f"{p}: {name} must be 9 (S)RATIONALs (3 colour planes × XYZ)")
-        return v.reshape(3, 3)
-
-    def illuminant(name):
-        v = tags.get(t[name])
-        if v is None:
-            return None
-        if not isinstance(v, tuple) or len(v) != 1:
-            raise DataFileError(f"{p}: {name} must be one SHORT, not {v!r}")
-        return int(v[0])
-
+    matrix, illuminant = partial(_dcp_matrix, tags, p), partial(_dcp_short, tags, p)
     if not isinstance(tags.get(t["UniqueCameraModel"]), str):
         raise DataFileError(f"{p}: no UniqueCameraModel (ASCII)")
     cals = []
@@ -524,22 +728,50 @@ def read_dcp(path) -> DcpProfile:
         if code is None:
             raise DataFileError(f"{p}: ColorMatrix{i} without CalibrationIlluminant{i}")
         cals.append((code, cm, fm))
-    hsm = None
-    dims = tags.get(t["ProfileHueSatMapDims"])
-    if dims is not None:
-        if not isinstance(dims, tuple) or len(dims) != 3 or min(dims) < 1:
-            raise DataFileError(f"{p}: ProfileHueSatMapDims must be 3 counts ≥ 1, not {dims!r}")
-        maps = []
-        for i in range(1, len(cals) + 1):
-            d = tags.get(t[f"ProfileHueSatMapData{i}"])
-            if d is None or isinstance(d, (str, np.ndarray)) or len(d) != 3 * int(np.prod(dims)):
-                raise DataFileError(f"{p}: ProfileHueSatMapData{i} must be {3 * int(np.prod(dims))} FLOATs "
-                                    f"(3 × the divisions {list(dims)})")
-            maps.append(np.asarray(d, float).reshape(-1, 3))
-        hsm = (tuple(int(x) for x in dims), maps)
+    hsm = _hue_sat_map(tags, p, len(cals))
     name, cop = tags.get(t["ProfileName"]), tags.get(t["ProfileCopyright"])
     return DcpProfile(str(p), tags[t["UniqueCameraModel"]], name if isinstance(name, str) else None,
                       cop if isinstance(cop, str) else None, cals, hsm)
+
+
+def _dcp_matrix(tags: dict, p: Path, name: str) -> np.ndarray | None:
+    """:func:`read_dcp`'s ``(3, 3)`` matrix of the tag ``name`` (9 finite (S)RATIONALs), or None where it is not
+    there."""
+    v = tags.get(DCP_TAGS[name])
+    if v is None:
+        return None
+    if not isinstance(v, np.ndarray) or v.shape != (9,) or not np.all(np.isfinite(v)):
+        raise DataFileError(f"{p}: {name} must be 9 (S)RATIONALs (3 colour planes × XYZ)")
+    return v.reshape(3, 3)
+
+
+def _dcp_short(tags: dict, p: Path, name: str) -> int | None:
+    """:func:`read_dcp`'s one SHORT of the tag ``name``, or None where it is not there."""
+    v = tags.get(DCP_TAGS[name])
+    if v is None:
+        return None
+    if not isinstance(v, tuple) or len(v) != 1:
+        raise DataFileError(f"{p}: {name} must be one SHORT, not {v!r}")
+    return int(v[0])
+
+
+def _hue_sat_map(tags: dict, p: Path, calibrations: int) -> tuple | None:
+    """:func:`read_dcp`'s HueSatMap: ``(divisions, [(n, 3) per calibration])``, or None where the profile has
+    none."""
+    t = DCP_TAGS
+    dims = tags.get(t["ProfileHueSatMapDims"])
+    if dims is None:
+        return None
+    if not isinstance(dims, tuple) or len(dims) != 3 or min(dims) < 1:
+        raise DataFileError(f"{p}: ProfileHueSatMapDims must be 3 counts ≥ 1, not {dims!r}")
+    maps = []
+    for i in range(1, calibrations + 1):
+        d = tags.get(t[f"ProfileHueSatMapData{i}"])
+        if d is None or isinstance(d, (str, np.ndarray)) or len(d) != 3 * int(np.prod(dims)):
+            raise DataFileError(f"{p}: ProfileHueSatMapData{i} must be {3 * int(np.prod(dims))} FLOATs "
+                                f"(3 × the divisions {list(dims)})")
+        maps.append(np.asarray(d, float).reshape(-1, 3))
+    return (tuple(int(x) for x in dims), maps)
 
 
 def _calibration_spec(code: int):
@@ -558,7 +790,21 @@ def _xyz_scaled(cam: np.ndarray, camera_to_xyz: np.ndarray, y_white: float) -> n
 
 
 def dcp_rows(camera_name: str, dcp: DcpProfile) -> dict:
-    """One camera's DCP table (:func:`run_validate_wb`)."""
+    """One camera's DCP table (:func:`run_validate_wb`).
+
+    Parameters
+    ----------
+    camera_name : str
+        A shipped camera with a published matrix model.
+    dcp : DcpProfile
+        Its profile.
+
+    Returns
+    -------
+    dict
+        The camera, the profile, a row per calibration illuminant with a standard spectrum (matrices, ΔE*ab and
+        neutrals: :data:`DEFINITIONS`) and those not compared.
+    """
     from spectracam.architecture.cameras import PUBLISHED_MATRICES, library_curves
     from spectracam.scene.reference import ChartReference
     from spectracam.experiments.validate.scene import validation_scene
@@ -669,7 +915,18 @@ DEFINITIONS = {
 
 def run_validate_wb(cameras: list[str]) -> dict:
     """``{"wb_presets": ..., "dcp_profiles": ...}`` for the shipped cameras ``cameras`` (usable, with a published
-    matrix model); each part is ``{"status": "ok", ...}`` or ``{"status": "skipped", "reason": ...}``."""
+    matrix model); each part is ``{"status": "ok", ...}`` or ``{"status": "skipped", "reason": ...}``.
+
+    Parameters
+    ----------
+    cameras : list of str
+        Shipped cameras with a published matrix model.
+
+    Returns
+    -------
+    dict
+        ``wb_presets``, ``dcp_profiles`` and :data:`DEFINITIONS`.
+    """
     from spectracam.architecture.cameras import PUBLISHED_MATRICES, library_curves
 
     out = {"definitions": DEFINITIONS}
@@ -706,7 +963,18 @@ def run_validate_wb(cameras: list[str]) -> dict:
 
 
 def wb_markdown(part: dict) -> list[str]:
-    """The markdown lines of both tables (part = :func:`run_validate_wb`'s result)."""
+    """The markdown lines of both tables (part = :func:`run_validate_wb`'s result).
+
+    Parameters
+    ----------
+    part : dict
+        :func:`run_validate_wb`'s result.
+
+    Returns
+    -------
+    list of str
+        Markdown.
+    """
     lines = _wb_preset_lines(part["wb_presets"])
     lines += ["## DCP profiles (RawTherapee)", ""]
     dc = part["dcp_profiles"]

@@ -25,11 +25,23 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from typing import TypedDict
+from typing import TYPE_CHECKING, TypedDict
 
 import numpy as np
 
 from spectracam.core.errors import SpectracamError
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Iterable, Sequence
+    from pathlib import Path
+
+    from matplotlib.figure import Figure
+    from numpy.typing import ArrayLike
+
+    from spectracam.experiments.paper.experiment import PaperExperiment
+    from spectracam.pipeline.scene_file import Scene
+    from spectracam.render import RadianceCube
+    from spectracam.scene.illuminant import IlluminantSpec
 
 __all__ = ["DEFINITIONS", "FAMILIES", "FAMILY_COLOURS", "LIGHTS", "LUTHER", "PAPER_DESIGN", "SCENES",
            "WAVELENGTHS", "Sensor", "WhiteBalanceResult", "WhiteBalanceRun", "case_scene", "error_statistics",
@@ -57,11 +69,39 @@ PAPER_DESIGN = "cfa/single"
 LUTHER = "Luther (XYZ)"
 
 
-def light_label(kind: str, value) -> str:
+def light_label(kind: str, value: float | str) -> str:
+    """A light's name in the results: ``"6500 K"`` for a blackbody, else its colour-science name.
+
+    Parameters
+    ----------
+    kind : str
+        ``"blackbody"`` or ``"cie"`` (:data:`LIGHTS`).
+    value : float or str
+        The blackbody's temperature, K, or the CIE light's name.
+
+    Returns
+    -------
+    str
+        The label.
+    """
     return f"{value:g} K" if kind == "blackbody" else str(value)
 
 
-def light_family(kind: str, value) -> str:
+def light_family(kind: str, value: float | str) -> str:
+    """A light's family (:data:`FAMILIES`): blackbody, daylight (``D…``), fluorescent (``FL…``) or LED (``LED…``).
+
+    Parameters
+    ----------
+    kind : str
+        ``"blackbody"`` or ``"cie"`` (:data:`LIGHTS`).
+    value : float or str
+        The blackbody's temperature, K, or the CIE light's name.
+
+    Returns
+    -------
+    str
+        The family; ``"other"`` for a CIE name of none of them.
+    """
     if kind == "blackbody":
         return "blackbody"
     name = str(value)
@@ -74,7 +114,23 @@ def light_family(kind: str, value) -> str:
     return "other"
 
 
-def light_spec(kind: str, value, level: float):
+def light_spec(kind: str, value: float | str, level: float) -> IlluminantSpec:
+    """A light of :data:`LIGHTS` as an illuminant.
+
+    Parameters
+    ----------
+    kind : str
+        ``"blackbody"`` or ``"cie"``.
+    value : float or str
+        The blackbody's temperature, K, or the CIE light's name.
+    level : float
+        Its white luminance, cd/m².
+
+    Returns
+    -------
+    IlluminantSpec
+        The light.
+    """
     from spectracam.scene.illuminant import IlluminantSpec
 
     if kind == "blackbody":
@@ -97,8 +153,19 @@ class Sensor:
     range_nm: tuple | None = None   # the curves' range, to which the grid is narrowed
 
 
-def sensors(exp) -> list[Sensor]:
-    """The paper's camera, every usable shipped measured camera, the Luther camera."""
+def sensors(exp: PaperExperiment) -> list[Sensor]:
+    """The paper's camera, every usable shipped measured camera, the Luther camera.
+
+    Parameters
+    ----------
+    exp : PaperExperiment
+        The paper's experiment: its base scene's filters are the paper's camera's.
+
+    Returns
+    -------
+    list of Sensor
+        The paper's camera first, the Luther camera last.
+    """
     from spectracam.architecture.cameras import CAMERAS, library_curves
     from spectracam.experiments.validate.experiment import _usable
 
@@ -149,8 +216,28 @@ class WhiteBalanceRun:
         return len(SCENES) * len(LIGHTS)
 
 
-def case_scene(exp, sensor: Sensor, file: str, quick: bool, sets=()):
-    """The scene ``file`` (shipped) as ``sensor`` captures it, with ``--set`` applied."""
+def case_scene(exp: PaperExperiment, sensor: Sensor, file: str, quick: bool,
+               sets: Iterable[str | tuple[str, object]] = ()) -> Scene:
+    """The scene ``file`` (shipped) as ``sensor`` captures it, with ``--set`` applied.
+
+    Parameters
+    ----------
+    exp : PaperExperiment
+        The paper's experiment: its base scene's optics, sensor, capture and processing.
+    sensor : Sensor
+        Its filters, and the wavelength range its curves cover.
+    file : str
+        The shipped scene file's stem, e.g. ``"mondrian"``.
+    quick : bool
+        :data:`QUICK_IMAGE_PX` instead of :data:`IMAGE_PX`.
+    sets : iterable of str or (str, object)
+        ``--set``: ``PATH=VALUE`` strings or ``(path, value)`` pairs.
+
+    Returns
+    -------
+    Scene
+        Validated, the developed camera's processing, the grid narrowed to the sensor's range.
+    """
     from spectracam.pipeline.overrides import apply_overrides
     from spectracam.pipeline.scene_file import parse_scene, read_toml, shipped_scene_file
 
@@ -175,8 +262,28 @@ def case_scene(exp, sensor: Sensor, file: str, quick: bool, sets=()):
     return parse_scene(data, source if not sets else f"{source} with the command line's options")
 
 
-def plan(quick: bool = False, seeds: int | None = None, renderer: str = "analytic", sets=(), exp=None) -> WhiteBalanceRun:
-    """Every sensor's every scene, validated (a bad ``--set`` is one line before any work)."""
+def plan(quick: bool = False, seeds: int | None = None, renderer: str = "analytic",
+         sets: Iterable[str | tuple[str, object]] = (), exp: PaperExperiment | None = None) -> WhiteBalanceRun:
+    """Every sensor's every scene, validated (a bad ``--set`` is one line before any work).
+
+    Parameters
+    ----------
+    quick : bool
+        Smaller images and fewer seeds (:data:`QUICK_IMAGE_PX`, :data:`QUICK_SEEDS`).
+    seeds : int or None
+        Noise seeds per case (None: :data:`SEEDS`, or :data:`QUICK_SEEDS` with ``quick``).
+    renderer : str
+        ``"analytic"`` or ``"mitsuba"``.
+    sets : iterable of str or (str, object)
+        ``--set``: applied to every case's scene.
+    exp : PaperExperiment or None
+        The paper's experiment (None: ``paper.toml``, shipped).
+
+    Returns
+    -------
+    WhiteBalanceRun
+        Every sensor and scene.
+    """
     from spectracam.pipeline.scene_file import shipped_scene_file
     from spectracam.experiments.paper.experiment import load_experiment
 
@@ -196,8 +303,26 @@ def _processings(scene) -> dict:
     return {m: scene.processing.replace(white_balance=m) for m in estimators()}
 
 
-def measure(cube, scene, seed: int, processings: dict | None = None) -> dict:
-    """One capture of ``cube`` as ``scene`` and every estimator's neutral and errors on it."""
+def measure(cube: RadianceCube, scene: Scene, seed: int, processings: dict | None = None) -> dict:
+    """One capture of ``cube`` as ``scene`` and every estimator's neutral and errors on it.
+
+    Parameters
+    ----------
+    cube : RadianceCube
+        The scene rendered under its light.
+    scene : Scene
+        The camera and processing that capture it.
+    seed : int
+        The noise seed.
+    processings : dict or None
+        Estimator → its processing (None: the scene's with each estimator of :func:`estimators`).
+
+    Returns
+    -------
+    dict
+        ``exposure_ms`` per channel, ``pixels_used`` of ``pixels``, ``true_neutral`` (max 1) and ``estimates``:
+        estimator → ``recovery_deg``, ``reproduction_deg`` and its ``neutral`` (max 1).
+    """
     from spectracam.pipeline import capture
     from spectracam.processing import scored_reflectances
     from spectracam.processing.calibration import white_neutral
@@ -224,9 +349,20 @@ def measure(cube, scene, seed: int, processings: dict | None = None) -> dict:
             "pixels": int(ctx.valid.size), "true_neutral": np.round(true / true.max(), 6).tolist(), "estimates": out}
 
 
-def training_block(scene) -> dict:
+def training_block(scene: Scene) -> dict:
     """The trained estimator's training block for ``scene``'s sensor and scored colours (memoised: trained once per
-    process for each sensor, grid and set of scored colours)."""
+    process for each sensor, grid and set of scored colours).
+
+    Parameters
+    ----------
+    scene : Scene
+        Its camera, grid, training library and scored colours (excluded from the training).
+
+    Returns
+    -------
+    dict
+        The trained correction, as a dict.
+    """
     from spectracam.processing import scored_reflectances, training_camera
     from spectracam.processing.white_balance import exclusion_key, trained_correction
     from spectracam.scene.reference import ChartReference, TargetReference
@@ -236,9 +372,31 @@ def training_block(scene) -> dict:
                               exclusion_key(scored)).to_dict()
 
 
-def run_job(run: WhiteBalanceRun, job: tuple, tick=lambda: None) -> tuple[list[dict], dict]:
+def run_job(run: WhiteBalanceRun, job: tuple, tick: Callable[[], object] = lambda: None) -> tuple[list[dict], dict]:
     """One scene on one grid: each light rendered once and captured by every sensor of the grid, every seed.
-    ``(rows, {sensor: training block})``; ``tick`` after each light."""
+    ``(rows, {sensor: training block})``; ``tick`` after each light.
+
+    Parameters
+    ----------
+    run : WhiteBalanceRun
+        The run.
+    job : tuple
+        ``(grid index, scene name)``, of :meth:`WhiteBalanceRun.jobs`.
+    tick : callable
+        Called after each light.
+
+    Returns
+    -------
+    rows : list of dict
+        One per sensor, light and seed: the case and :func:`measure`'s numbers.
+    training : dict
+        Sensor → its training block (empty without the trained estimator).
+
+    Raises
+    ------
+    SpectracamError
+        Naming the case, when a capture or an estimate fails.
+    """
     from spectracam.render import render
 
     g, name = job
@@ -283,6 +441,24 @@ def _one_thread():
     os.environ["SPECTRACAM_THREADS"] = "1"
 
 
+def _run_forked(run: WhiteBalanceRun, jobs: list, n: int, keep: Callable[[tuple, tuple], object],
+                update: Callable[[int], object]) -> None:
+    """:func:`run_white_balance`'s jobs in ``n`` processes forked from this one; ``keep(job, result)`` in the jobs'
+    order, ``update(lights)`` after each."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    _SHARED["run"] = run
+    try:
+        with ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("fork"),
+                                 initializer=_one_thread) as ex:
+            for job, r in zip(jobs, ex.map(_job, range(len(jobs)))):
+                keep(job, r)
+                update(len(LIGHTS))
+    finally:
+        _SHARED.clear()
+
+
 class WhiteBalanceResult(TypedDict):
     """What :func:`run_white_balance` returns, results.json's keys but ``command``: the trained estimator's
     training block by sensor and scene, a row per case and seed, the statistics by sensor and estimator
@@ -297,11 +473,28 @@ class WhiteBalanceResult(TypedDict):
     seconds: float
 
 
-def run_white_balance(run: WhiteBalanceRun, log=lambda msg: None, progress: bool = False,
+def run_white_balance(run: WhiteBalanceRun, log: Callable[[str], object] = lambda msg: None, progress: bool = False,
                       workers: int | None = None) -> WhiteBalanceResult:
     """Every case's errors, the statistics and the parameters (results.json).  The jobs run in processes forked
     from this one, one per core (the analytic renderer; Mitsuba renders here on its own threads); the numbers do
-    not depend on how many (each capture has its own seed)."""
+    not depend on how many (each capture has its own seed).
+
+    Parameters
+    ----------
+    run : WhiteBalanceRun
+        What to measure (:func:`plan`).
+    log : callable
+        ``log(line)``: the captures made and the time.
+    progress : bool
+        A bar over the scene × light renders.
+    workers : int or None
+        Processes (None: one per core, ``SPECTRACAM_THREADS`` if set, at most one per job).
+
+    Returns
+    -------
+    WhiteBalanceResult
+        The rows sorted by sensor, scene, light and seed, the training blocks, the statistics and the parameters.
+    """
     import multiprocessing
     import os
 
@@ -323,17 +516,7 @@ def run_white_balance(run: WhiteBalanceRun, log=lambda msg: None, progress: bool
             for job in jobs:
                 keep(job, run_job(run, job, b.update))
         else:
-            from concurrent.futures import ProcessPoolExecutor
-
-            _SHARED["run"] = run
-            try:
-                with ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("fork"),
-                                         initializer=_one_thread) as ex:
-                    for job, r in zip(jobs, ex.map(_job, range(len(jobs)))):
-                        keep(job, r)
-                        b.update(len(LIGHTS))
-            finally:
-                _SHARED.clear()
+            _run_forked(run, jobs, n, keep, b.update)
     order = {s.key: i for i, s in enumerate(run.sensors)}
     scene_order = {n: i for i, n in enumerate(SCENES.values())}
     light_order = {light_label(*x): i for i, x in enumerate(LIGHTS)}
@@ -348,6 +531,19 @@ def run_white_balance(run: WhiteBalanceRun, log=lambda msg: None, progress: bool
 
 
 def parameters(run: WhiteBalanceRun) -> dict:
+    """results.json's ``parameters``: the run's settings, every scene, light and sensor (with its camera), each
+    estimator's settings and the processing.
+
+    Parameters
+    ----------
+    run : WhiteBalanceRun
+        The run.
+
+    Returns
+    -------
+    dict
+        JSON-ready.
+    """
     from spectracam.processing import white_balance as wb
 
     first = run.scenes[run.sensors[0].key]
@@ -402,10 +598,35 @@ DEFINITIONS = {
 # ------------------------------------------------------------------------------------------------ statistics
 
 
-def error_statistics(values, seeds=None, families=None, scenes=None) -> dict:
+def error_statistics(values: ArrayLike, seeds: ArrayLike | None = None, families: Sequence[str] | None = None,
+                     scenes: Sequence[str] | None = None) -> dict:
     """Mean, median, 95th percentile and maximum of ``values``; with ``seeds``, each seed's mean and their sample
     standard deviation (``None`` with one seed); with ``families`` (``scenes``), each light family's (scene's) mean.
 
+    Parameters
+    ----------
+    values : array_like
+        Errors, degrees.
+    seeds : array_like or None
+        Each value's noise seed.
+    families : sequence of str or None
+        Each value's light family.
+    scenes : sequence of str or None
+        Each value's scene.
+
+    Returns
+    -------
+    dict
+        ``n``, ``mean``, ``median``, ``p95``, ``max``; ``per_seed_mean`` and ``mean_spread_over_seeds``,
+        ``by_family`` (in :data:`FAMILIES`' order), ``by_scene`` where asked for.
+
+    Raises
+    ------
+    SpectracamError
+        With no value, or one not finite.
+
+    Examples
+    --------
     >>> error_statistics([1.0, 2.0, 3.0, 4.0])["median"]
     2.5
     """
@@ -430,8 +651,23 @@ def error_statistics(values, seeds=None, families=None, scenes=None) -> dict:
     return out
 
 
-def sensor_statistics(rows: list[dict], sensor_keys, methods) -> dict:
-    """``{sensor: {estimator: {"recovery_deg": stats, "reproduction_deg": stats}}}`` over the rows."""
+def sensor_statistics(rows: list[dict], sensor_keys: Iterable[str], methods: Sequence[str]) -> dict:
+    """``{sensor: {estimator: {"recovery_deg": stats, "reproduction_deg": stats}}}`` over the rows.
+
+    Parameters
+    ----------
+    rows : list of dict
+        The cases (:func:`run_job`).
+    sensor_keys : iterable of str
+        The sensors.
+    methods : sequence of str
+        The estimators.
+
+    Returns
+    -------
+    dict
+        Each sensor's and estimator's :func:`error_statistics` of either angle, with seeds, families and scenes.
+    """
     out = {}
     for key in sensor_keys:
         mine = [r for r in rows if r["sensor"] == key]
@@ -449,6 +685,21 @@ def _num(x, fmt=".2f") -> str:
 
 
 def white_balance_markdown(result: dict, command: str) -> str:
+    """report.md: the set-up, a table per sensor of each estimator's errors (with means per light family and
+    scene), every sensor's recovery mean, the definitions and the estimators' settings.
+
+    Parameters
+    ----------
+    result : dict
+        What :func:`run_white_balance` returns.
+    command : str
+        The command line that made it.
+
+    Returns
+    -------
+    str
+        Markdown.
+    """
     from spectracam.processing.white_balance import TRAINING_LIGHTS
 
     p = result["parameters"]
@@ -472,22 +723,7 @@ def white_balance_markdown(result: dict, command: str) -> str:
              "and LED lights are held-out lights for it (and, of the lights here, " + ", ".join(held) + " are not in "
              "its training set). The other estimators are not trained.", ""]
     for s in p["sensors"]:
-        st = stats[s["key"]]
-        lines += [f"## {s['label']}", "",
-                  f"Grid {s['wavelengths_nm'][0]:g}–{s['wavelengths_nm'][1]:g} nm.", "",
-                  "| estimator | recovery mean ± seed spread | median | p95 | max | reproduction mean | median | p95 | "
-                  + " | ".join(f"recovery mean, {f}" for f in FAMILIES) + " | "
-                  + " | ".join(f"recovery mean, {n}" for n in p["scenes"]) + " |",
-                  "|---|" + "---|" * (7 + len(FAMILIES) + len(p["scenes"]))]
-        for m in methods:
-            r, q = st[m]["recovery_deg"], st[m]["reproduction_deg"]
-            spread = r.get("mean_spread_over_seeds")
-            lines.append(f"| {m} | {r['mean']:.2f}" + (f" ± {spread:.2g}" if spread is not None else "")
-                         + f" | {r['median']:.2f} | {r['p95']:.2f} | {r['max']:.2f} | {q['mean']:.2f} | "
-                         f"{q['median']:.2f} | {q['p95']:.2f} | "
-                         + " | ".join(_num(r["by_family"].get(f)) for f in FAMILIES) + " | "
-                         + " | ".join(_num(r["by_scene"].get(n)) for n in p["scenes"]) + " |")
-        lines.append("")
+        lines += _sensor_table(s, stats[s["key"]], methods, p["scenes"])
     lines += ["## Recovery error mean (°), every sensor", "",
               "| estimator | " + " | ".join(s["key"] for s in p["sensors"]) + " |",
               "|---|" + "---|" * len(p["sensors"])]
@@ -500,12 +736,43 @@ def white_balance_markdown(result: dict, command: str) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _sensor_table(s: dict, st: dict, methods: list, scenes: dict) -> list[str]:
+    """:func:`white_balance_markdown`'s section of one sensor ``s``: a row per estimator of its statistics ``st``."""
+    lines = [f"## {s['label']}", "",
+             f"Grid {s['wavelengths_nm'][0]:g}–{s['wavelengths_nm'][1]:g} nm.", "",
+             "| estimator | recovery mean ± seed spread | median | p95 | max | reproduction mean | median | p95 | "
+             + " | ".join(f"recovery mean, {f}" for f in FAMILIES) + " | "
+             + " | ".join(f"recovery mean, {n}" for n in scenes) + " |",
+             "|---|" + "---|" * (7 + len(FAMILIES) + len(scenes))]
+    for m in methods:
+        r, q = st[m]["recovery_deg"], st[m]["reproduction_deg"]
+        spread = r.get("mean_spread_over_seeds")
+        lines.append(f"| {m} | {r['mean']:.2f}" + (f" ± {spread:.2g}" if spread is not None else "")
+                     + f" | {r['median']:.2f} | {r['p95']:.2f} | {r['max']:.2f} | {q['mean']:.2f} | "
+                     f"{q['median']:.2f} | {q['p95']:.2f} | "
+                     + " | ".join(_num(r["by_family"].get(f)) for f in FAMILIES) + " | "
+                     + " | ".join(_num(r["by_scene"].get(n)) for n in scenes) + " |")
+    lines.append("")
+    return lines
+
+
 FAMILY_COLOURS = {"blackbody": "#d35400", "daylight": "#2c6fbb", "fluorescent": "#27ae60", "LED": "#8e44ad"}
 
 
-def white_balance_figure(result: dict):
+def white_balance_figure(result: dict) -> Figure:
     """Recovery error distribution per estimator, one panel per sensor: boxes (quartiles, whiskers 5–95 %), the
-    mean (white diamond) and every case coloured by its light family."""
+    mean (white diamond) and every case coloured by its light family.
+
+    Parameters
+    ----------
+    result : dict
+        What :func:`run_white_balance` returns.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure, not saved.
+    """
     from spectracam.io.plots import pyplot
 
     plt = pyplot()
@@ -541,8 +808,23 @@ def white_balance_figure(result: dict):
     return fig
 
 
-def write_white_balance_outputs(out_dir, result: dict, command: str) -> list:
-    """results.json, report.md and white_balance.png/.svg, atomically."""
+def write_white_balance_outputs(out_dir: str | Path, result: dict, command: str) -> list:
+    """results.json, report.md and white_balance.png/.svg, atomically.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+        The output folder.
+    result : dict
+        What :func:`run_white_balance` returns.
+    command : str
+        The command line, in results.json and report.md.
+
+    Returns
+    -------
+    list of Path
+        The PNG, the SVG, the JSON and the Markdown file.
+    """
     from spectracam.io.report import write_figure_json_markdown
 
     return write_figure_json_markdown(out_dir, "white_balance", white_balance_figure(result), "results.json", result,
@@ -550,7 +832,20 @@ def write_white_balance_outputs(out_dir, result: dict, command: str) -> list:
 
 
 def summary_line(result: dict, key: str) -> str:
-    """One line per sensor: each estimator's recovery error mean / median / p95."""
+    """One line per sensor: each estimator's recovery error mean / median / p95.
+
+    Parameters
+    ----------
+    result : dict
+        What :func:`run_white_balance` returns.
+    key : str
+        The sensor.
+
+    Returns
+    -------
+    str
+        The line, naming the estimator of the lowest mean.
+    """
     st = result["statistics"][key]
     best = min(st, key=lambda m: st[m]["recovery_deg"]["mean"])
     return f"  {key}: recovery error mean/median/p95 (°) " + "; ".join(
