@@ -629,6 +629,8 @@ class SweepResult(TypedDict):
     render_s: float
     wall_s: float
     cluster_start_s: float
+    #: Seconds to close the Dask client and a local cluster after the last cell (0 serially); in ``wall_s``.
+    cluster_stop_s: float
     compute_s: float
 
 
@@ -677,13 +679,13 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
     with open(journal, "ab") as jf:
         # cells done, rate and time left: a bar on a terminal, else a line every 30 s; the estimate up front
         bar = Counter(len(cells), initial=len(done), desc="sweep cells", unit="cell", log=log, progress=progress)
-        t1, cluster_start = time.perf_counter(), 0.0
+        t1, cluster_start, cluster_stop = time.perf_counter(), 0.0, 0.0
         record = _Recorder(jf, rows, bar)
         work = _Work(sweep, todo, scenes, cubes, groups, stop_after)
         if serial or not todo:
             _run_serial(work, record)
         else:
-            cluster_start = _run_dask(work, record, scheduler, workers,
+            cluster_start, cluster_stop = _run_dask(work, record, scheduler, workers,
                                       lambda e: _cluster_failed(e, len(done) + record.n_new, len(cells), journal))
         bar.close()
         wall = time.perf_counter() - t1
@@ -691,7 +693,8 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
     lock.close()
     compute = record.compute
     return {"cells": len(cells), "new_cells": record.n_new, "render_s": t_render, "wall_s": wall,
-            "cluster_start_s": cluster_start, "compute_s": float(np.sum(compute)) if compute else 0.0}
+            "cluster_start_s": cluster_start, "cluster_stop_s": cluster_stop,
+            "compute_s": float(np.sum(compute)) if compute else 0.0}
 
 
 def _sweep_meta(sweep: Sweep) -> dict:
@@ -865,8 +868,9 @@ def _cluster_failed(e: Exception, finished: int, total: int, journal: Path) -> S
                            "--resume to continue")
 
 
-def _run_dask(work: _Work, record: _Recorder, scheduler: str | None, workers: int | None, failed) -> float:
-    """The cells to do on a Dask cluster; returns how long the cluster took to start, s.  ``failed``
+def _run_dask(work: _Work, record: _Recorder, scheduler: str | None, workers: int | None,
+              failed) -> tuple[float, float]:
+    """The cells to do on a Dask cluster; returns how long the cluster took to start and to close, s.  ``failed``
     makes the error for a cluster that fails mid-sweep."""
     from distributed import as_completed
 
@@ -887,7 +891,8 @@ def _run_dask(work: _Work, record: _Recorder, scheduler: str | None, workers: in
         except Exception as e:  # noqa: BLE001 - a worker lost, a task cancelled: the cluster's fault
             raise failed(e) from None
     finally:
+        t_stop = time.perf_counter()
         client.close()
         if cluster is not None:
             cluster.close()
-    return cluster_start
+    return cluster_start, time.perf_counter() - t_stop
