@@ -691,10 +691,8 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, *, scheduler: str | None = None
         wall = time.perf_counter() - t1
     _write_tables(out, rows)
     lock.close()
-    compute = record.compute
-    return {"cells": len(cells), "new_cells": record.n_new, "render_s": t_render, "wall_s": wall,
-            "cluster_start_s": cluster_start, "cluster_stop_s": cluster_stop,
-            "compute_s": float(np.sum(compute)) if compute else 0.0}
+    return {"cells": len(cells), "new_cells": record.n_new, "render_s": t_render, "wall_s": wall, "cluster_start_s":
+            cluster_start, "cluster_stop_s": cluster_stop, "compute_s": float(np.sum(record.compute, initial=0.0))}
 
 
 def _sweep_meta(sweep: Sweep) -> dict:
