@@ -71,7 +71,20 @@ def _stride(width: int, height: int, bands: int, share: float = 1.0) -> int:
 def tile_stride(stride: int, tile_shape: tuple[int, int] | None) -> int:
     """The smallest stride ≥ ``stride`` that shares no factor with the mosaic's tile (1 stays 1): every ``s``-th pixel of
     a 2 × 2 Bayer tile with an even ``s`` is always the same site (a page drew a Bayer capture red only), with an odd
-    ``s`` the kept pixels step through every site, so every channel is drawn and probed."""
+    ``s`` the kept pixels step through every site, so every channel is drawn and probed.
+
+    Parameters
+    ----------
+    stride : int
+        The stride the page's budget asks for, ≥ 1.
+    tile_shape : tuple of int or None
+        The mosaic's tile ``(rows, columns)``; None for a capture without one (every pixel has every channel).
+
+    Returns
+    -------
+    int
+        The stride to keep, ≥ ``stride``.
+    """
     import math
 
     s = int(stride)
@@ -83,7 +96,18 @@ def tile_stride(stride: int, tile_shape: tuple[int, int] | None) -> int:
 
 
 def srgb8(linear: np.ndarray) -> np.ndarray:
-    """8-bit sRGB of linear RGB (clipped to [0, 1]; NaN as 0), colour-science's sRGB encoding, as rendered.png."""
+    """8-bit sRGB of linear RGB (clipped to [0, 1]; NaN as 0), colour-science's sRGB encoding, as rendered.png.
+
+    Parameters
+    ----------
+    linear : ndarray
+        ``(…, 3)`` linear RGB, white = 1.
+
+    Returns
+    -------
+    ndarray
+        The same shape, uint8 (IEC 61966-2-1's transfer function, rounded).
+    """
     import colour
 
     x = np.clip(np.nan_to_num(linear, nan=0.0), 0.0, 1.0)
@@ -91,7 +115,18 @@ def srgb8(linear: np.ndarray) -> np.ndarray:
 
 
 def rgba(rgb8: np.ndarray) -> np.ndarray:
-    """``(h, w, 3)`` uint8 → ``(h, w)`` uint32 RGBA, opaque (Bokeh's image_rgba)."""
+    """``(h, w, 3)`` uint8 → ``(h, w)`` uint32 RGBA, opaque (Bokeh's image_rgba).
+
+    Parameters
+    ----------
+    rgb8 : ndarray
+        ``(h, w, 3)`` uint8 RGB.
+
+    Returns
+    -------
+    ndarray
+        ``(h, w)`` uint32, each pixel's R, G, B, A bytes in memory order, A = 255.
+    """
     h, w, _ = rgb8.shape
     out = np.empty((h, w, 4), np.uint8)
     out[..., :3], out[..., 3] = rgb8, 255
@@ -231,8 +266,21 @@ def _chart_patches(scene) -> list:
 
 
 def load_case(name: str, radiance: Path | None, raw: Path | None, rendered: Path | None, share: float = 1.0) -> Case:
-    """A case from its files (any of them may be missing); ``share``: its part of the page's budget
-    (:func:`_stride`)."""
+    """A case from its files (any of them may be missing), every ``stride``-th pixel (:func:`tile_stride`).
+
+    Parameters
+    ----------
+    name : str
+        The case's name on the page (its directory relative to the output directory, ``"."`` for the top).
+    radiance, raw, rendered : Path or None
+        Its spectracam ``radiance.exr``, ``raw.exr`` and ``rendered.exr`` (None where it has none).
+    share : float
+        Its fraction of the page's budget of values, :data:`PAGE_VALUES` (1: the whole budget).
+
+    Returns
+    -------
+    Case
+    """
     from spectracam.io.exr import read_exr_header, read_radiance_exr
 
     cube = read_radiance_exr(radiance)[0] if radiance is not None else None

@@ -63,7 +63,24 @@ def _is_rendering(path: Path) -> bool:
 
 
 def find_contents(directory: Path) -> Contents:
-    """Everything the page can show in ``directory`` (one clear line when it is not one to show)."""
+    """Everything the page can show in ``directory`` (one clear line when it is not one to show).
+
+    Parameters
+    ----------
+    directory : Path
+        An output directory a spectracam command wrote.
+
+    Returns
+    -------
+    Contents
+        Its cases (shots with their EXR files), figures, reports, tables and JSON files, and which command wrote it.
+
+    Raises
+    ------
+    SpectracamError
+        A directory that does not exist, is a file, cannot be read, holds a damaged top-level JSON file or nothing
+        spectracam wrote.
+    """
     d = Path(directory)
     if not d.exists():
         raise SpectracamError(f"directory = {str(d)!r}: does not exist")
@@ -75,6 +92,25 @@ def find_contents(directory: Path) -> Contents:
                        and not any(part.startswith(".") for part in p.relative_to(d).parts))
     except OSError as e:
         raise SpectracamError(f"directory = {str(d)!r}: cannot be read ({e.strerror})") from None
+    shots = _sort_files(files, d, c)
+    # a sweep writes results.csv beside results.parquet: one table
+    c.tables = [t for t in c.tables if not (t.suffix == ".csv" and t.with_suffix(".parquet") in c.tables)]
+    ordered = sorted(shots.items(), key=lambda kv: (len(kv[0].relative_to(d).parts), str(kv[0])))
+    names = [(str(k.relative_to(d)) if k != d else ".", v) for k, v in ordered]
+    c.cases, c.more_cases = names[:MAX_CASES], [n for n, _ in names[MAX_CASES:]]
+    c.figures, c.more_figures = c.figures[:MAX_FIGURES], c.figures[MAX_FIGURES:]
+    results = _top_results(c, d)
+    c.kind = _kind_of(d, results if isinstance(results, dict) else None)
+    # figures and tables alone (any PNG or CSV) are not enough: spectracam's EXR files, reports or results
+    if not (c.cases or c.markdown or c.json_files or any(t.suffix == ".parquet" for t in c.tables)):
+        raise SpectracamError(f"directory = {str(d)!r}: holds nothing spectracam wrote (no spectracam EXR, report or "
+                              "results file)")
+    return c
+
+
+def _sort_files(files: list[Path], d: Path, c: Contents) -> dict[Path, dict]:
+    """Each file of ``d`` into ``c``'s figures, markdown, JSON files and tables; returns the shots: directory (or a
+    rendering's path without its suffix) → role → EXR file."""
     shots: dict[Path, dict] = {}
     for p in files:
         rel = p.relative_to(d)
@@ -91,12 +127,12 @@ def find_contents(directory: Path) -> Contents:
             c.json_files.append(p)
         elif p.name in ("report.csv", "results.parquet") or (p.suffix == ".csv" and len(rel.parts) == 1):
             c.tables.append(p)
-    # a sweep writes results.csv beside results.parquet: one table
-    c.tables = [t for t in c.tables if not (t.suffix == ".csv" and t.with_suffix(".parquet") in c.tables)]
-    ordered = sorted(shots.items(), key=lambda kv: (len(kv[0].relative_to(d).parts), str(kv[0])))
-    names = [(str(k.relative_to(d)) if k != d else ".", v) for k, v in ordered]
-    c.cases, c.more_cases = names[:MAX_CASES], [n for n, _ in names[MAX_CASES:]]
-    c.figures, c.more_figures = c.figures[:MAX_FIGURES], c.figures[MAX_FIGURES:]
+    return shots
+
+
+def _top_results(c: Contents, d: Path) -> object:
+    """The last top-level JSON file's content (None without one), its ``parameters`` into ``c``; a damaged file, or
+    a report.json that is not an object, refused in one line."""
     results = None
     for p in c.json_files:
         if p.parent == d:
@@ -111,9 +147,4 @@ def find_contents(directory: Path) -> Contents:
                                       f"expected; this file holds {kind})")
             if isinstance(results, dict):
                 c.parameters = results.get("parameters") or c.parameters
-    c.kind = _kind_of(d, results if isinstance(results, dict) else None)
-    # figures and tables alone (any PNG or CSV) are not enough: spectracam's EXR files, reports or results
-    if not (c.cases or c.markdown or c.json_files or any(t.suffix == ".parquet" for t in c.tables)):
-        raise SpectracamError(f"directory = {str(d)!r}: holds nothing spectracam wrote (no spectracam EXR, report or "
-                              "results file)")
-    return c
+    return results

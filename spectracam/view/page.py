@@ -14,6 +14,7 @@ import base64
 import html
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -22,6 +23,11 @@ from spectracam.core.errors import SpectracamError
 from spectracam.io.report import DELTA_E_VMAX  # the ΔE*ab colour scale of the scores' delta_e.png
 from spectracam.view.cases import CHANNEL_COLOURS, Case, load_case
 from spectracam.view.contents import Contents, find_contents
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+    from bokeh.models import Column
 
 __all__ = ["BOKEH_COMPONENTS", "BOTH_WAYS_ROWS", "EMBED_BYTES", "IMAGE_ROLES", "JSON_CHARS", "PROFILE_MODES",
            "TABLE_ROWS", "both_ways_table", "build_page", "case_json", "curve_colours", "exact_dtype", "interactive",
@@ -52,7 +58,18 @@ figcaption{font-size:0.8em;color:#555;word-break:break-all} pre{background:#f8f8
 
 def exact_dtype(a: np.ndarray) -> str:
     """The smallest little-endian type holding every value of ``a`` exactly: ``u1`` or ``u2`` for whole numbers
-    from 0 to 255 or 65535 (digital numbers of an ADC up to 16 bits, 8-bit pictures), else ``f4`` (float32)."""
+    from 0 to 255 or 65535 (digital numbers of an ADC up to 16 bits, 8-bit pictures), else ``f4`` (float32).
+
+    Parameters
+    ----------
+    a : ndarray
+        The values.
+
+    Returns
+    -------
+    str
+        ``"u1"``, ``"u2"`` or ``"f4"``.
+    """
     if a.dtype.kind in "ui" or (a.size and np.isfinite(a).all() and np.array_equal(a, np.round(a))):
         top = float(a.max()) if a.size else 0.0
         low = float(a.min()) if a.size else 0.0
@@ -68,7 +85,20 @@ def packed(a: np.ndarray | None, dtype: str | None = None) -> dict | None:
     zlib's deflate of the array's bytes (little-endian ``dtype``, :func:`exact_dtype` when not given), or — where it
     compresses better, as smooth float32 data does — of its bytes regrouped by byte position (``shuffle``: every
     value's first byte, then every second byte …, as HDF5's shuffle filter).  page.js inflates it with the
-    browser's own ``DecompressionStream`` and gets the very same values back (no lossy step anywhere)."""
+    browser's own ``DecompressionStream`` and gets the very same values back (no lossy step anywhere).
+
+    Parameters
+    ----------
+    a : ndarray or None
+        The values (any shape).
+    dtype : str or None
+        Their type on the page (``"u1"``, ``"u2"``, ``"f4"`` …); None: :func:`exact_dtype`.
+
+    Returns
+    -------
+    dict or None
+        ``{"dtype", "shape", "shuffle", "data"}``; None for None.
+    """
     import zlib
 
     if a is None:
@@ -89,7 +119,18 @@ def _hex(rgb) -> str:
 
 
 def curve_colours(case: Case) -> dict:
-    """The colour of each responsivity curve: its channel's, black for QE × IR cut."""
+    """The colour of each responsivity curve: its channel's, black for QE × IR cut.
+
+    Parameters
+    ----------
+    case : Case
+        The case (its channels).
+
+    Returns
+    -------
+    dict
+        Channel name (and ``"QE × IR cut"``) → ``"#rrggbb"`` (:data:`~spectracam.view.cases.CHANNEL_COLOURS`).
+    """
     return {**{c: _hex(CHANNEL_COLOURS.get(c, (0.45, 0.45, 0.45))) for c in case.channels}, "QE × IR cut": "#000000"}
 
 
@@ -104,7 +145,18 @@ def case_json(case: Case) -> dict:
     Carried once each: a mosaic's digital numbers as one plane (``dn``) with the channel of each pixel
     (``dn_channel``), not ``N`` planes mostly NaN; the rendering as rendered.exr's linear display RGB
     (``rendered_rgb``), whose L*a*b* (``display_to_xyz``, white = the display's) and ΔE*ab against ``scene_lab``
-    page.js computes; the three pictures as 8-bit RGB."""
+    page.js computes; the three pictures as 8-bit RGB.
+
+    Parameters
+    ----------
+    case : Case
+        The case.
+
+    Returns
+    -------
+    dict
+        JSON-ready: its name, size, stride, bands, channels, colours, responsivities, notes, patches and packed arrays.
+    """
     rows, cols = case.images[next(iter(case.images))].shape[:2] if case.images else (0, 0)
     mosaic = case.dn is not None and case.dn_channel is not None
     dn = (np.take_along_axis(case.dn, case.dn_channel[..., None].astype(np.intp), axis=-1)[..., 0] if mosaic
@@ -128,8 +180,19 @@ def _image_data(role: str) -> dict:
     return {"image": [img], "x": [0], "y": [0], "dw": [1], "dh": [1]}
 
 
-def interactive(cases: list[Case]):
-    """The Bokeh layout: case selector, linked images, spectrum and probe read-out, line profile and region."""
+def interactive(cases: list[Case]) -> Column:
+    """The Bokeh layout: case selector, linked images, spectrum and probe read-out, line profile and region.
+
+    Parameters
+    ----------
+    cases : list of Case
+        The cases, at least one (the first shown; a selector where there are several).
+
+    Returns
+    -------
+    bokeh.models.Column
+        The layout, for ``bokeh.embed.components``.
+    """
     from bokeh.layouts import column, gridplot, row
     from bokeh.models import Button, CustomJS, Div, RadioButtonGroup
 
@@ -275,7 +338,18 @@ def _swatch(lab) -> str:
 
 def patch_table(report: dict) -> str:
     """report.json's patches: scene and rendered L*a*b*, ΔE*ab (per pixel, of the mean, of the
-    conversion alone) and the combined SNR."""
+    conversion alone) and the combined SNR.
+
+    Parameters
+    ----------
+    report : dict
+        A ``score`` report.json.
+
+    Returns
+    -------
+    str
+        An HTML table; empty where it has no patches.
+    """
     rows = []
     for p in report.get("patches", []):
         s, r = p.get("scene_lab"), p.get("rendered_lab")
@@ -302,7 +376,18 @@ BOTH_WAYS_ROWS = (("delta_e_mean", "mean ΔE*ab per pixel", 2), ("delta_e_p95", 
 
 
 def both_ways_table(report: dict) -> str:
-    """report.json's ``both_ways``: the camera told the light (oracle) beside the one that finds its own white."""
+    """report.json's ``both_ways``: the camera told the light (oracle) beside the one that finds its own white.
+
+    Parameters
+    ----------
+    report : dict
+        A ``score`` report.json.
+
+    Returns
+    -------
+    str
+        An HTML table and the metering note; empty where it has no ``both_ways`` block.
+    """
     bw = report.get("both_ways")
     if not isinstance(bw, dict) or not isinstance(bw.get("oracle"), dict) or not isinstance(bw.get("developed"), dict):
         return ""
@@ -323,7 +408,20 @@ def _data_uri(path: Path) -> str:
 
 def markdown_html(path: Path, embedded: set | None = None) -> str:
     """report.md as HTML, its local images embedded (each one's resolved path added to ``embedded``, where given:
-    the figures section does not carry them a second time)."""
+    the figures section does not carry them a second time).
+
+    Parameters
+    ----------
+    path : Path
+        A Markdown file.
+    embedded : set or None
+        Where the resolved paths of the images it embeds are added; None: not recorded.
+
+    Returns
+    -------
+    str
+        HTML; images outside the file's directory are left as links.
+    """
     import re
 
     import markdown
@@ -341,6 +439,18 @@ def markdown_html(path: Path, embedded: set | None = None) -> str:
 
 
 def table_html(path: Path) -> str:
+    """A CSV or Parquet table as HTML: its first :data:`TABLE_ROWS` rows, four significant digits.
+
+    Parameters
+    ----------
+    path : Path
+        ``.parquet`` or ``.csv`` (one header row).
+
+    Returns
+    -------
+    str
+        The HTML table, and a note where rows were left out.
+    """
     import pandas as pd
 
     frame = pd.read_parquet(path) if path.suffix == ".parquet" else pd.read_csv(path)
@@ -391,7 +501,20 @@ def _missing_spectra(cases: list[Case]) -> list[str]:
 
 
 def build_page(c: Contents, cases: list[Case]) -> str:
-    """The whole page as one HTML string."""
+    """The whole page as one HTML string.
+
+    Parameters
+    ----------
+    c : Contents
+        What the directory holds (:func:`~spectracam.view.contents.find_contents`).
+    cases : list of Case
+        Its cases, loaded (:func:`~spectracam.view.cases.load_case`).
+
+    Returns
+    -------
+    str
+        A self-contained HTML page: Bokeh and page.js inlined, every case's data and figure embedded.
+    """
     from bokeh.embed import components
     from bokeh.resources import Resources
 
@@ -411,20 +534,7 @@ def build_page(c: Contents, cases: list[Case]) -> str:
         if c.more_cases:
             body.append(f"<p class=note>{len(c.more_cases)} more cases are not loaded into the probe (their "
                         "figures are below): " + ", ".join(map(html.escape, c.more_cases[:20])) + "…</p>")
-    for p in c.json_files:
-        if p.name == "report.json":
-            try:
-                report = json.loads(p.read_text())
-                if not isinstance(report, dict):   # a case's report.json that is not one: its text is still shown
-                    raise TypeError("not a JSON object")
-                both = both_ways_table(report)
-                table = patch_table(report)
-            except (ValueError, KeyError, TypeError, IndexError, AttributeError):
-                both = table = ""
-            if both:
-                body += [f"<h2>two cameras ({html.escape(str(p.relative_to(c.directory)))})</h2>", both]
-            if table:
-                body += [f"<h2>patches ({html.escape(str(p.relative_to(c.directory)))})</h2>", table]
+    body += _report_tables(c)
     for p in c.markdown:
         body += [f"<h2>{html.escape(str(p.relative_to(c.directory)))}</h2>", markdown_html(p, shown)]
     for p in c.tables:
@@ -452,8 +562,46 @@ def build_page(c: Contents, cases: list[Case]) -> str:
             f"<body>{''.join(body)}{script}</body></html>")
 
 
-def write_page(directory: Path, log=None) -> Path:
-    """Find what ``directory`` holds, build the page and write ``directory/index.html`` (atomically)."""
+def _report_tables(c: Contents) -> list[str]:
+    """Headings and tables (the two cameras, the patches) of each report.json; a report that is not one shows none."""
+    body = []
+    for p in c.json_files:
+        if p.name == "report.json":
+            try:
+                report = json.loads(p.read_text())
+                if not isinstance(report, dict):   # a case's report.json that is not one: its text is still shown
+                    raise TypeError("not a JSON object")
+                both = both_ways_table(report)
+                table = patch_table(report)
+            except (ValueError, KeyError, TypeError, IndexError, AttributeError):
+                both = table = ""
+            if both:
+                body += [f"<h2>two cameras ({html.escape(str(p.relative_to(c.directory)))})</h2>", both]
+            if table:
+                body += [f"<h2>patches ({html.escape(str(p.relative_to(c.directory)))})</h2>", table]
+    return body
+
+
+def write_page(directory: Path, log: Callable[[str], object] | None = None) -> Path:
+    """Find what ``directory`` holds, build the page and write ``directory/index.html`` (atomically).
+
+    Parameters
+    ----------
+    directory : Path
+        An output directory a spectracam command wrote.
+    log : callable or None
+        Given one line (the page's path, size, cases and figures) once it is written; None: silent.
+
+    Returns
+    -------
+    Path
+        ``directory/index.html``.
+
+    Raises
+    ------
+    SpectracamError
+        What :func:`~spectracam.view.contents.find_contents` refuses, or a case whose files cannot be read (named).
+    """
     from spectracam.core.files import atomic_write
 
     c = find_contents(directory)
