@@ -298,8 +298,25 @@ class SensorSpec(Spec):
     def fpn_rms_e(self) -> float:
         return self.fpn_fraction * self.q_max_e * FPN_READINGS[self.fpn_reading].rms_per_swing
 
-    def off(self, *sources: str) -> "SensorSpec":
-        """A copy with the named noise sources (or ``clipping``) switched off (e.g. ``off("fpn", "read_noise")``)."""
+    def off(self, *sources: str) -> SensorSpec:
+        """A copy with the named noise sources (or ``clipping``) switched off (e.g. ``off("fpn", "read_noise")``).
+
+        Parameters
+        ----------
+        *sources : str
+            Names of :data:`NOISE_SOURCES` (``shot_noise``, ``dark_current``, ``read_noise``, ``fpn``,
+            ``quantization``) or ``clipping``.
+
+        Returns
+        -------
+        SensorSpec
+            The same sensor with those switches False.
+
+        Raises
+        ------
+        ConfigError
+            A name that is not a switch.
+        """
         for s in sources:
             if s not in (*NOISE_SOURCES, "clipping"):
                 raise ConfigError("sensor", s, "not a switch; one of " + ", ".join((*NOISE_SOURCES, "clipping")))
@@ -307,7 +324,20 @@ class SensorSpec(Spec):
 
 
 def noise_stream(seed: int, *stream: int) -> np.random.SeedSequence:
-    """The seed sequence for one purpose (fixed pattern, a frame's temporal noise), from the one seed."""
+    """The seed sequence for one purpose (fixed pattern, a frame's temporal noise), from the one seed.
+
+    Parameters
+    ----------
+    seed : int
+        The capture's seed.
+    *stream : int
+        The purpose's path of integers (e.g. ``FPN_STREAM``, the sensor's index, the part).
+
+    Returns
+    -------
+    numpy.random.SeedSequence
+        ``SeedSequence([seed, *stream])``.
+    """
     return np.random.SeedSequence([seed, *stream])
 
 
@@ -374,7 +404,25 @@ def _normal_around_one(rms: float):
 def fixed_pattern(sensor: SensorSpec, shape: tuple[int, int], seed: int, sensor_index: int = 0) -> FixedPattern:
     """The fixed pattern of one physical sensor: the same for every frame with this seed (or the
     sensor's ``pattern_seed``) and sensor index, different across pixels and sensors.  Every value
-    is a counter-based draw of its pixel (:class:`~spectracam.sensor.kernels.CounterRNG`)."""
+    is a counter-based draw of its pixel (:class:`~spectracam.sensor.kernels.CounterRNG`).
+
+    Parameters
+    ----------
+    sensor : SensorSpec
+        The sensor: its FPN, PRNU, DSNU, column FPN and hot-pixel settings, and its switches.
+    shape : tuple of int
+        ``(H, W)`` pixels.
+    seed : int
+        The capture's seed (the sensor's ``pattern_seed`` replaces it when set).
+    sensor_index : int
+        Which sensor of a multi-sensor camera (a prism's three): each has its own pattern.
+
+    Returns
+    -------
+    FixedPattern
+        The offsets (e⁻), PRNU gains and DSNU factors, each ``shape`` float32 or None where absent; all None
+        with ``fpn`` off.
+    """
     return fixed_pattern_parts(sensor, shape, seed, sensor_index, defer=False)[0]
 
 
@@ -402,29 +450,59 @@ def fixed_pattern_parts(sensor: SensorSpec, shape: tuple[int, int], seed: int, s
                         defer: bool = True) -> tuple[FixedPattern, PatternDraws]:
     """:func:`fixed_pattern` with its per-pixel parts left undrawn (``defer``; offsets only for the
     built-in FPN readings): returns the pattern — whose ``offset_e`` then holds only the column FPN,
-    a row broadcast to ``shape``, or None — and the :class:`PatternDraws` the fused kernel makes."""
+    a row broadcast to ``shape``, or None — and the :class:`PatternDraws` the fused kernel makes.
+
+    Parameters
+    ----------
+    sensor : SensorSpec
+        The sensor, as for :func:`fixed_pattern`.
+    shape : tuple of int
+        ``(H, W)`` pixels.
+    seed : int
+        The capture's seed (the sensor's ``pattern_seed`` replaces it when set).
+    sensor_index : int
+        Which sensor of a multi-sensor camera.
+    defer : bool
+        Leave the per-pixel offset, PRNU gain and DSNU factor to the fused kernel (the DSNU is drawn here all the
+        same when there are hot pixels); False: draw everything, as :func:`fixed_pattern`.
+
+    Returns
+    -------
+    pattern : FixedPattern
+        What is drawn here: offsets (e⁻), gains and dark-current factors, ``shape`` float32, or None.
+    draws : PatternDraws
+        The parts left to the fused kernel (None where drawn here or absent).
+    """
     if sensor.pattern_seed is not None:
         seed = sensor.pattern_seed
     if not sensor.fpn:
         return FixedPattern(), PatternDraws()
     n = int(np.prod(shape))
-    offset = gain = dark_gain = None
-    draws = PatternDraws()
+    offset, offset_draw = _offset_part(sensor, shape, n, seed, sensor_index, defer)
+    gain = gain_draw = None
+    if sensor.prnu_fraction > 0:
+        seq = noise_stream(seed, FPN_STREAM, sensor_index, 1)
+        if defer:
+            gain_draw = PixelDraw(seq, "gain", sensor.prnu_fraction)
+        else:
+            gain = _draw(seq, n, _normal_around_one(sensor.prnu_fraction)).reshape(shape)
+    dark_gain, dark_draw = _dark_gain_part(sensor, shape, n, seed, sensor_index, defer)
+    return FixedPattern(offset, gain, dark_gain), PatternDraws(offset_draw, gain_draw, dark_draw)
+
+
+def _offset_part(sensor: SensorSpec, shape: tuple[int, int], n: int, seed: int, sensor_index: int,
+                 defer: bool) -> tuple[np.ndarray | None, PixelDraw | None]:
+    """The offset of :func:`fixed_pattern_parts`, e⁻: (pixel FPN plus column FPN as an array, or None; the pixel
+    FPN as a :class:`PixelDraw` left to the fused kernel, or None)."""
+    offset = draw = None
     if sensor.fpn_fraction > 0:
         reading = FPN_READINGS[sensor.fpn_reading]
         swing = sensor.fpn_fraction * sensor.q_max_e
         seq = noise_stream(seed, FPN_STREAM, sensor_index, 0)
         if defer and reading.draw in (_draw_std, _draw_bound):
-            draws = draws._replace(offset=PixelDraw(seq, "offset-bound" if reading.draw is _draw_bound else "offset",
-                                                    swing))
+            draw = PixelDraw(seq, "offset-bound" if reading.draw is _draw_bound else "offset", swing)
         else:
             offset = _draw(seq, n, lambda rng, out: reading.draw(rng, out, swing)).reshape(shape)
-    if sensor.prnu_fraction > 0:
-        seq = noise_stream(seed, FPN_STREAM, sensor_index, 1)
-        if defer:
-            draws = draws._replace(gain=PixelDraw(seq, "gain", sensor.prnu_fraction))
-        else:
-            gain = _draw(seq, n, _normal_around_one(sensor.prnu_fraction)).reshape(shape)
     if sensor.column_fpn_fraction > 0:
         cols = _draw(noise_stream(seed, FPN_STREAM, sensor_index, 2), shape[-1],
                      lambda rng, out: _draw_std(rng, out, sensor.column_fpn_fraction * sensor.q_max_e))
@@ -432,12 +510,20 @@ def fixed_pattern_parts(sensor: SensorSpec, shape: tuple[int, int], seed: int, s
             offset = offset + cols
         else:
             offset = np.broadcast_to(cols, shape)
-            offset = offset if draws.offset is not None else offset.copy()
+            offset = offset if draw is not None else offset.copy()
+    return offset, draw
+
+
+def _dark_gain_part(sensor: SensorSpec, shape: tuple[int, int], n: int, seed: int, sensor_index: int,
+                    defer: bool) -> tuple[np.ndarray | None, PixelDraw | None]:
+    """The dark-current factor of :func:`fixed_pattern_parts`: (DSNU with the hot-pixel tail as an array, or None;
+    the DSNU as a :class:`PixelDraw` left to the fused kernel — only without hot pixels —, or None)."""
+    dark_gain = draw = None
     hot = sensor.hot_pixel_fraction > 0 and sensor.dark_current
     if sensor.dsnu_fraction > 0 and sensor.dark_current:
         seq = noise_stream(seed, FPN_STREAM, sensor_index, 3)
         if defer and not hot:
-            draws = draws._replace(dark_gain=PixelDraw(seq, "dark_gain", sensor.dsnu_fraction))
+            draw = PixelDraw(seq, "dark_gain", sensor.dsnu_fraction)
         else:
             dark_gain = _draw(seq, n, _normal_around_one(sensor.dsnu_fraction))
             dark_gain = np.maximum(dark_gain, 0.0, out=dark_gain).reshape(shape)  # a dark current is never negative
@@ -446,7 +532,7 @@ def fixed_pattern_parts(sensor: SensorSpec, shape: tuple[int, int], seed: int, s
         dark_gain = tail + 1.0 if dark_gain is None else np.add(dark_gain, tail, out=dark_gain)
         # the stated dark current stays the mean over all pixels (as EMVA 1288 measures it): the tail redistributes
         dark_gain /= np.float32(1.0 + sensor.hot_pixel_fraction * sensor.hot_pixel_mean_factor)
-    return FixedPattern(offset, gain, dark_gain), draws
+    return dark_gain, draw
 
 
 def hot_pixel_excess(sensor: SensorSpec, n: int, seq: np.random.SeedSequence) -> np.ndarray:
@@ -456,6 +542,20 @@ def hot_pixel_excess(sensor: SensorSpec, n: int, seq: np.random.SeedSequence) ->
     ``m = hot_pixel_mean_factor``; one uniform draw ``u`` per pixel decides both (``u < p``: hot, with excess
     ``−m·ln(u/p)``, since ``u/p`` is then uniform on (0, 1)).  The excess's mean is ``p·m`` and its variance
     ``p·m²·(2 − p)``.
+
+    Parameters
+    ----------
+    sensor : SensorSpec
+        The sensor (``hot_pixel_fraction`` p, ``hot_pixel_mean_factor`` m).
+    n : int
+        Pixels.
+    seq : numpy.random.SeedSequence
+        The counter-based stream of the uniform draws (value ``i``: pixel ``i``).
+
+    Returns
+    -------
+    ndarray
+        ``(n,)`` float32 excess dark current, multiples of the mean dark current; 0 for a pixel that is not hot.
 
     References
     ----------
@@ -476,7 +576,18 @@ def dark_gain_moments(sensor: SensorSpec) -> tuple[float, float]:
     """Mean and variance across pixels of the dark-current factor: the DSNU's ``1`` and ``σ²`` (its clip at 0
     ignored) with the hot-pixel tail's ``p·m`` and ``p·m²·(2 − p)`` (:func:`hot_pixel_excess`), divided by the
     mean ``1 + p·m`` so that the stated dark current stays the mean of all pixels: ``(1, (σ² + p·m²·(2 − p)) /
-    (1 + p·m)²)``; ``(1, 0)`` without the fixed pattern or the dark current."""
+    (1 + p·m)²)``; ``(1, 0)`` without the fixed pattern or the dark current.
+
+    Parameters
+    ----------
+    sensor : SensorSpec
+        The sensor (``dsnu_fraction`` σ, ``hot_pixel_fraction`` p, ``hot_pixel_mean_factor`` m, switches).
+
+    Returns
+    -------
+    mean, variance : float
+        Of the per-pixel dark-current factor (dimensionless; the mean is 1).
+    """
     if not (sensor.fpn and sensor.dark_current):
         return 1.0, 0.0
     p, m = sensor.hot_pixel_fraction, sensor.hot_pixel_mean_factor
@@ -499,9 +610,31 @@ class PatternRef(NamedTuple):
         return fixed_pattern_parts(self.sensor, self.shape, self.seed, self.sensor_index)
 
 
-def integrate_charge(rate_e_per_s, time_s: float, dark_e: float, gain=None, dark_gain=None, out=None):
+def integrate_charge(rate_e_per_s: np.ndarray, time_s: float, dark_e: float, gain: np.ndarray | None = None,
+                     dark_gain: np.ndarray | None = None, out: np.ndarray | None = None) -> np.ndarray:
     """Expected charge ``ρ·T·g + i_d·A·T·d`` (paper 3.4; ``g`` the PRNU gain and ``d`` the DSNU
-    factor of each pixel, 1 without them), e⁻."""
+    factor of each pixel, 1 without them), e⁻.
+
+    Parameters
+    ----------
+    rate_e_per_s : ndarray
+        Photo-electron rates ρ, e⁻/s.
+    time_s : float
+        Exposure time T, s.
+    dark_e : float
+        Mean dark charge of the exposure ``i_d·A·T``, e⁻.
+    gain : ndarray or None
+        Each pixel's PRNU gain g (None: 1).
+    dark_gain : ndarray or None
+        Each pixel's DSNU factor d (None: 1).
+    out : ndarray or None
+        Where to write (None: a new array).
+
+    Returns
+    -------
+    ndarray
+        The expected charge, e⁻ (``out`` when given).
+    """
     out = np.multiply(rate_e_per_s, np.float32(time_s), out=out)
     if gain is not None:
         out *= gain
@@ -512,34 +645,104 @@ def integrate_charge(rate_e_per_s, time_s: float, dark_e: float, gain=None, dark
     return out
 
 
-def add_shot_noise(mean_e, out, rng, model: str = "gaussian"):
-    """Photon and dark-current shot noise on ``mean_e`` into ``out`` (registered ``model``)."""
+def add_shot_noise(mean_e: np.ndarray, out: np.ndarray, rng: np.random.Generator | CounterRNG,
+                   model: str = "gaussian") -> np.ndarray:
+    """Photon and dark-current shot noise on ``mean_e`` into ``out`` (registered ``model``).
+
+    Parameters
+    ----------
+    mean_e : ndarray
+        Expected charge, e⁻.
+    out : ndarray
+        Receives the noisy charge, e⁻ (float32, the shape of ``mean_e``).
+    rng : numpy.random.Generator or CounterRNG
+        The random numbers.
+    model : str
+        A name of :data:`SHOT_NOISE_MODELS`: ``"gaussian"`` (variance = mean, paper 3.4) or ``"poisson"``.
+
+    Returns
+    -------
+    ndarray
+        ``out``.
+    """
     SHOT_NOISE_MODELS[model](mean_e, out, rng)
     return out
 
 
-def clip_to_well(charge_e, q_max_e: float):
-    """The well holds 0..q_max electrons (paper 3.4)."""
+def clip_to_well(charge_e: np.ndarray, q_max_e: float) -> np.ndarray:
+    """The well holds 0..q_max electrons (paper 3.4).
+
+    Parameters
+    ----------
+    charge_e : ndarray
+        Charge, e⁻; clipped in place.
+    q_max_e : float
+        Full-well capacity, e⁻.
+
+    Returns
+    -------
+    ndarray
+        ``charge_e``, clipped to ``[0, q_max_e]``.
+    """
     return np.clip(charge_e, 0.0, q_max_e, out=charge_e)
 
 
-def add_read_noise(charge_e, rng, read_noise_e: float):
-    """Gaussian read noise σ_r added on readout (paper 3.4: Q_r)."""
+def add_read_noise(charge_e: np.ndarray, rng: np.random.Generator | CounterRNG, read_noise_e: float) -> np.ndarray:
+    """Gaussian read noise σ_r added on readout (paper 3.4: Q_r).
+
+    Parameters
+    ----------
+    charge_e : ndarray
+        Charge, e⁻ (float32); the noise is added in place.
+    rng : numpy.random.Generator or CounterRNG
+        The random numbers.
+    read_noise_e : float
+        σ_r, e⁻ rms.
+
+    Returns
+    -------
+    ndarray
+        ``charge_e``.
+    """
     r = rng.standard_normal(charge_e.size, dtype=np.float32).reshape(charge_e.shape)
     r *= np.float32(read_noise_e)
     charge_e += r
     return charge_e
 
 
-def add_offset_fpn(charge_e, offset_e):
-    """The pixel's fixed offset, V_FPN/g (paper 3.4)."""
+def add_offset_fpn(charge_e: np.ndarray, offset_e: np.ndarray) -> np.ndarray:
+    """The pixel's fixed offset, V_FPN/g (paper 3.4).
+
+    Parameters
+    ----------
+    charge_e : ndarray
+        Charge, e⁻; the offset is added in place.
+    offset_e : ndarray
+        Each pixel's offset, e⁻ (:attr:`FixedPattern.offset_e`).
+
+    Returns
+    -------
+    ndarray
+        ``charge_e``.
+    """
     charge_e += offset_e
     return charge_e
 
 
 def adc_full_scale_dn(sensor: SensorSpec) -> float:
     """Largest output: code 2ⁿ − 1 when quantising, else the continuous full scale 2ⁿ; for a high-dynamic-range
-    read-out, the top of its merged output word (:func:`spectracam.sensor.readout.output_top_dn`)."""
+    read-out, the top of its merged output word (:func:`spectracam.sensor.readout.output_top_dn`).
+
+    Parameters
+    ----------
+    sensor : SensorSpec
+        The sensor (``adc_bits``, ``quantization``, ``readout``).
+
+    Returns
+    -------
+    float
+        The largest digital number, DN.
+    """
     if sensor.readout != "single":
         from spectracam.sensor.readout import output_top_dn
 
@@ -547,11 +750,25 @@ def adc_full_scale_dn(sensor: SensorSpec) -> float:
     return float(2**sensor.adc_bits - 1 if sensor.quantization else 2**sensor.adc_bits)
 
 
-def adc(charge_e, sensor: SensorSpec):
+def adc(charge_e: np.ndarray, sensor: SensorSpec) -> np.ndarray:
     """n-bit uniform ADC, in place: ``DN = K·Q + black level``, floored to a code and clipped to
     ``0 … 2ⁿ − 1`` (the ADC clip; without quantisation the output is continuous, clipped to
     ``0 … 2ⁿ``).  With the default full scale the top code holds ``[q_max − 1/K, q_max)``.
 
+    Parameters
+    ----------
+    charge_e : ndarray
+        Charge, e⁻ (float32); overwritten with digital numbers.
+    sensor : SensorSpec
+        The sensor: system gain K, black level, ``adc_bits``, ``quantization`` and ``clipping``.
+
+    Returns
+    -------
+    ndarray
+        ``charge_e``, now digital numbers, DN.
+
+    Examples
+    --------
     >>> s = SensorSpec(q_max_e=256.0, adc_bits=8, black_level_DN=0.0)
     >>> adc(np.array([-3.0, 0.4, 1.0, 254.9, 300.0], np.float32), s).tolist()
     [0.0, 0.0, 1.0, 254.0, 255.0]
@@ -565,10 +782,25 @@ def adc(charge_e, sensor: SensorSpec):
     return charge_e
 
 
-def adc_inverse(digital, sensor: SensorSpec) -> np.ndarray:
+def adc_inverse(digital: np.ndarray, sensor: SensorSpec) -> np.ndarray:
     """Electrons from digital numbers: the black level removed, at mid-step, ``(DN − b + ½)/K`` (or
     ``(DN − b)/K`` when not quantised) — the least-error estimate for a uniform quantiser.
 
+    Parameters
+    ----------
+    digital : ndarray
+        Digital numbers, DN (a high-dynamic-range read-out's merged words: decoded by
+        :func:`spectracam.sensor.readout.decode`).
+    sensor : SensorSpec
+        The sensor that recorded them.
+
+    Returns
+    -------
+    ndarray
+        Electrons, e⁻ (photo + dark charge, with the offset FPN still in it), the shape of ``digital``.
+
+    Examples
+    --------
     >>> s = SensorSpec(q_max_e=256.0, adc_bits=8, black_level_DN=8.0, adc_full_scale_V=256 * 5e-6)  # K = 1
     >>> adc_inverse(np.array([8.0, 18.0]), s).round(9).tolist()
     [0.5, 10.5]
@@ -584,7 +816,27 @@ def read_frame(photo_rate_e_per_s: np.ndarray, time_s: float, sensor: SensorSpec
                pattern: FixedPattern = FixedPattern()) -> tuple[np.ndarray, np.ndarray]:
     """One frame read the way ``sensor.readout`` reads it: :func:`expose` for ``single`` (the paper), else the
     read-out scheme of :mod:`spectracam.sensor.readout` (its merged output word, which :func:`adc_inverse` decodes).
-    Arguments and returns as :func:`expose`."""
+
+    Parameters
+    ----------
+    photo_rate_e_per_s : ndarray
+        Photo-electrons per second per pixel, any shape.
+    time_s : float
+        Exposure time, s.
+    sensor : SensorSpec
+        The sensor; its ``readout`` picks the scheme.
+    noise : numpy.random.SeedSequence
+        Seeds this frame's temporal noise.
+    pattern : FixedPattern
+        The sensor's fixed pattern (default: none).
+
+    Returns
+    -------
+    digital : ndarray
+        Digital numbers (``single``) or merged output words, float32, the rates' shape.
+    expected_e : ndarray
+        The noise-free charge, photo + dark, e⁻, float32.
+    """
     if sensor.readout == "single":
         return expose(photo_rate_e_per_s, time_s, sensor, noise, pattern)
     from spectracam.sensor.readout import read

@@ -29,10 +29,19 @@ hands the same numbers to :func:`~spectracam.sensor.fixed_pattern`; without numb
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from spectracam.core.parallel import pool as _pool  # noqa: F401  (the pool, for the read-out's kernels)
 from spectracam.core.parallel import fused_enabled, run_bands, threads
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    from numpy.typing import ArrayLike, DTypeLike
+
+    from spectracam.sensor import FixedPattern, PatternRef, SensorSpec
 
 __all__ = ["LANES", "CounterRNG", "SpectralRates", "available", "expose", "normal_pair_np", "philox_np",
            "record", "stream_key", "threads", "uniform_np"]
@@ -97,13 +106,40 @@ _W0, _W1 = np.uint64(0x9E3779B9), np.uint64(0xBB67AE85)
 
 
 def stream_key(seq: np.random.SeedSequence) -> tuple[int, int]:
-    """The 64-bit Philox key (two 32-bit words) of a seed sequence."""
+    """The 64-bit Philox key (two 32-bit words) of a seed sequence.
+
+    Parameters
+    ----------
+    seq : numpy.random.SeedSequence
+        The stream's seed sequence.
+
+    Returns
+    -------
+    tuple of int
+        The key's two 32-bit words, its first two generated uint32 values.
+    """
     k = seq.generate_state(2, np.uint32)
     return int(k[0]), int(k[1])
 
 
-def philox_np(index: np.ndarray, key: tuple[int, int], draw: int = 0):
-    """Philox4x32-10 of counters ``(index low, index high, draw, 0)`` in NumPy: four uint32 arrays."""
+def philox_np(index: np.ndarray, key: tuple[int, int], draw: int = 0
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Philox4x32-10 of counters ``(index low, index high, draw, 0)`` in NumPy: four uint32 arrays.
+
+    Parameters
+    ----------
+    index : ndarray
+        The values' indices (64-bit counters; a pixel's index in the frame).
+    key : tuple of int
+        The stream's key (:func:`stream_key`).
+    draw : int
+        The third counter word: a further draw of the same indices (0: the first four words of each).
+
+    Returns
+    -------
+    tuple of ndarray
+        The four uint32 words of each counter, each the shape of ``index``.
+    """
     i = np.asarray(index, np.uint64)
     c0, c1 = i.astype(np.uint32), (i >> np.uint64(32)).astype(np.uint32)  # astype keeps the low word
     c2, c3 = np.full(i.shape, draw, np.uint32), np.zeros(i.shape, np.uint32)
@@ -162,13 +198,37 @@ def _sincos2pi_np(v):
     return np.where((q & 2) != 0, -sn, sn), np.where(((q + 1) & 2) != 0, -cs, cs)
 
 
-def uniform_np(a) -> np.ndarray:
-    """[0, 1) float32 from 32-bit words: ``(a >> 8)·2⁻²⁴``."""
+def uniform_np(a: ArrayLike) -> np.ndarray:
+    """[0, 1) float32 from 32-bit words: ``(a >> 8)·2⁻²⁴``.
+
+    Parameters
+    ----------
+    a : array_like
+        uint32 words (from :func:`philox_np`).
+
+    Returns
+    -------
+    ndarray
+        float32 uniform values on [0, 1), multiples of 2⁻²⁴, the shape of ``a``.
+    """
     return (np.asarray(a, np.uint32) >> 8).astype(np.int32).astype(np.float32) * _F(2.0**-24)
 
 
-def normal_pair_np(a0, a1):
-    """Box–Muller on two words, as the kernels compute it (bit-identical)."""
+def normal_pair_np(a0: ArrayLike, a1: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """Box–Muller on two words, as the kernels compute it (bit-identical).
+
+    Parameters
+    ----------
+    a0 : array_like
+        uint32 words giving the radius (a uniform on (0, 1], 24 bits).
+    a1 : array_like
+        uint32 words giving the angle (a uniform on [0, 1), 24 bits).
+
+    Returns
+    -------
+    tuple of ndarray
+        Two float32 standard normals per pair of words, ``r·cos`` and ``r·sin``.
+    """
     u = ((np.asarray(a0, np.uint32) >> 8).astype(np.int32) + 1).astype(np.float32) * _F(2.0**-24)
     r = np.sqrt(_F(-2) * _logf_np(u))
     s, c = _sincos2pi_np(uniform_np(a1))
@@ -181,6 +241,13 @@ class CounterRNG:
     ``standard_normal`` and ``random`` (float32, ``out=``) are counter based — numba's parallel kernel
     when available, else the bit-identical NumPy twin; any other method is a
     :class:`numpy.random.Generator` seeded from the same sequence (for plug-in FPN readings).
+
+    Parameters
+    ----------
+    seq : numpy.random.SeedSequence
+        The stream; its key is :func:`stream_key` of it.
+    start : int
+        The counter of this source's value 0 (a chunk's first pixel in the frame).
     """
 
     def __init__(self, seq: np.random.SeedSequence, start: int = 0):
@@ -198,10 +265,44 @@ class CounterRNG:
             out[...] = (normal_pair_np(a0, a1)[0] if normal else uniform_np(a0)).reshape(out.shape)
         return out
 
-    def standard_normal(self, size=None, dtype=np.float64, out=None):
+    def standard_normal(self, size: int | tuple[int, ...] | None = None, dtype: DTypeLike = np.float64,
+                        out: np.ndarray | None = None) -> np.ndarray:
+        """Standard normals, value ``i`` from counter ``start + i`` (Box–Muller on 24-bit uniforms, float32).
+
+        Parameters
+        ----------
+        size : int or tuple of int or None
+            The shape of a new array (when ``out`` is None).
+        dtype : data-type
+            Its type; the values are float32 numbers whatever it is.
+        out : ndarray or None
+            Filled in place where given (the parallel kernel runs on a C-contiguous float32 one).
+
+        Returns
+        -------
+        ndarray
+            ``out``, or the new array.
+        """
         return self._fill(out, size, dtype, True)
 
-    def random(self, size=None, dtype=np.float64, out=None):
+    def random(self, size: int | tuple[int, ...] | None = None, dtype: DTypeLike = np.float64,
+               out: np.ndarray | None = None) -> np.ndarray:
+        """Uniforms on [0, 1), value ``i`` from counter ``start + i`` (24 bits, float32).
+
+        Parameters
+        ----------
+        size : int or tuple of int or None
+            The shape of a new array (when ``out`` is None).
+        dtype : data-type
+            Its type; the values are float32 numbers whatever it is.
+        out : ndarray or None
+            Filled in place where given (the parallel kernel runs on a C-contiguous float32 one).
+
+        Returns
+        -------
+        ndarray
+            ``out``, or the new array.
+        """
         return self._fill(out, size, dtype, False)
 
     def __getattr__(self, name):
@@ -215,7 +316,16 @@ class SpectralRates:
     """Photo-electron rates ``(H, W, 3)`` of a radiance cube, ``radiance @ weights``, not computed:
     the fused path reads the cube itself.  Anything that indexes it or asks for an array gets the
     rates computed once (as :func:`~spectracam.camera.photo_electron_rates` does), so an
-    architecture written for arrays keeps working."""
+    architecture written for arrays keeps working.
+
+    Parameters
+    ----------
+    radiance : ndarray
+        The radiance cube ``(H, W, B)``, W·m⁻²·sr⁻¹·nm⁻¹.
+    weights : ndarray
+        ``(B, N)`` band weights (:func:`~spectracam.camera.band_weights`), one column per channel: e⁻/s per pixel
+        per W·m⁻²·sr⁻¹·nm⁻¹ of each band; kept as float32.
+    """
 
     def __init__(self, radiance: np.ndarray, weights: np.ndarray):
         self.radiance, self.weights = radiance, np.asarray(weights, np.float32)
@@ -236,7 +346,20 @@ class SpectralRates:
 
     def mean(self, rows: slice, cols: slice) -> np.ndarray:
         """The mean rates ``(3,)`` of a box of pixels (for metering), float64, without computing the
-        rest: the box's mean spectrum times the weights (the rates are linear in the radiance)."""
+        rest: the box's mean spectrum times the weights (the rates are linear in the radiance).
+
+        Parameters
+        ----------
+        rows : slice
+            The box's rows.
+        cols : slice
+            The box's columns.
+
+        Returns
+        -------
+        ndarray
+            The mean photo-electron rate of each channel, e⁻/s, float64.
+        """
         box = self.radiance[rows, cols]
         return box.mean(axis=tuple(range(box.ndim - 1)), dtype=np.float64) @ self.weights.astype(np.float64)
 
@@ -273,12 +396,38 @@ def _source(rates):
     return cube.reshape(-1), b, wpad.reshape(-1), stride, h, w
 
 
-def record(rates, channels: np.ndarray, times_s, sensor, noises, patterns):
+def record(rates: SpectralRates | np.ndarray, channels: np.ndarray, times_s: Sequence[float] | np.ndarray,
+           sensor: SensorSpec, noises: Sequence[np.random.SeedSequence],
+           patterns: Sequence[FixedPattern | PatternRef]) -> tuple[np.ndarray, np.ndarray] | None:
     """Outputs ``j`` = 0…J−1 of one pass: output ``j`` records, at tile site ``(y mod th, x mod tw)``,
     channel ``channels[j, …]`` of ``rates`` for ``times_s[j]`` seconds with temporal noise from seed
     sequence ``noises[j]`` and fixed pattern ``patterns[j]``.  Returns ``(digital, expected_e)``,
     each ``(J, H, W)`` float32 — what :func:`~spectracam.sensor.expose` gives for each output — or
-    None when the fused backend is not available."""
+    None when the fused backend is not available.
+
+    Parameters
+    ----------
+    rates : SpectralRates or ndarray
+        The radiance cube with its band weights (read in the pass), or photo-electron rates ``(H, W, C)`` or
+        ``(H, W)``, e⁻/s.
+    channels : ndarray
+        ``(J, th, tw)`` int: the channel each tile site of output ``j`` records; J is at most 3.
+    times_s : sequence of float
+        Exposure time of each output, s.
+    sensor : SensorSpec
+        The sensor.
+    noises : sequence of numpy.random.SeedSequence
+        Each output's temporal noise.
+    patterns : sequence of FixedPattern or PatternRef
+        Each output's fixed pattern, drawn or (a :class:`~spectracam.sensor.PatternRef`) with its per-pixel parts
+        drawn in the pass.
+
+    Returns
+    -------
+    tuple of ndarray or None
+        Digital numbers (DN) and expected electrons (the noise-free charge, e⁻), each ``(J, H, W)`` float32; None
+        without the fused backend, or for rates or channels it does not take.
+    """
     if _numba() is None:
         return None
     src = _source(rates)
@@ -291,6 +440,25 @@ def record(rates, channels: np.ndarray, times_s, sensor, noises, patterns):
         return None
     times = np.asarray(times_s, np.float64)[:j]
     darks = np.array([np.float32(sensor.dark_rate_e_per_s * t) for t in times], np.float32)
+    offs, gains, dgains, draw_mode, draw_keys, draw_scale = _pattern_args(patterns, j, h, w)
+    keys = np.array([stream_key(s) for s in noises[:j]], np.uint32)
+    fs = 2**sensor.adc_bits - 1 if sensor.quantization else 2**sensor.adc_bits
+    dn = np.empty((j, h, w), np.float32)
+    mean = np.empty((j, h, w), np.float32)
+    sigma = sensor.read_noise_rms_e
+    args = (cube, np.int64(nbands), wpad, np.int64(stride), channels, times.astype(np.float32), darks, offs, gains,
+            dgains, keys, draw_mode, draw_keys, draw_scale, np.float32(sensor.q_max_e), np.float32(sigma),
+            np.float32(sensor.system_gain_dn_per_e), np.float32(sensor.black_level_dn), np.float32(fs),
+            bool(sensor.shot_noise), sensor.shot_noise_model == "poisson", bool(sensor.clipping),
+            bool(sensor.quantization), dn, mean)
+    ok = _run("capture_kernel", h, lambda a, b: (np.int64(a), np.int64(b), *args))
+    return (dn, mean) if ok else None
+
+
+def _pattern_args(patterns, j: int, h: int, w: int) -> tuple:
+    """The fixed-pattern arguments of the capture kernel for outputs 0…j−1 (:func:`record`): the offset, gain and
+    dark-gain planes (three each, writable C float32; a row for a row broadcast, a dummy row of 0 or 1 where
+    absent) and, per output and part, how the kernel draws it (0: it does not), its key and its scale."""
     zeros, ones = np.zeros((1, w), np.float32), np.ones((1, w), np.float32)
 
     def plane(a, dummy):  # writable C float32 (a read-only array would compile another kernel)
@@ -317,23 +485,33 @@ def record(rates, channels: np.ndarray, times_s, sensor, noises, patterns):
     draw_mode = np.array([[0 if d is None else _DRAW_KINDS[d.kind] for d in dr] for dr in draws], np.int64)
     draw_keys = np.array([[(0, 0) if d is None else stream_key(d.seq) for d in dr] for dr in draws], np.uint32)
     draw_scale = np.array([[0.0 if d is None else d.scale for d in dr] for dr in draws], np.float32)
-    keys = np.array([stream_key(s) for s in noises[:j]], np.uint32)
-    fs = 2**sensor.adc_bits - 1 if sensor.quantization else 2**sensor.adc_bits
-    dn = np.empty((j, h, w), np.float32)
-    mean = np.empty((j, h, w), np.float32)
-    sigma = sensor.read_noise_rms_e
-    args = (cube, np.int64(nbands), wpad, np.int64(stride), channels, times.astype(np.float32), darks, offs, gains,
-            dgains, keys, draw_mode, draw_keys, draw_scale, np.float32(sensor.q_max_e), np.float32(sigma),
-            np.float32(sensor.system_gain_dn_per_e), np.float32(sensor.black_level_dn), np.float32(fs),
-            bool(sensor.shot_noise), sensor.shot_noise_model == "poisson", bool(sensor.clipping),
-            bool(sensor.quantization), dn, mean)
-    ok = _run("capture_kernel", h, lambda a, b: (np.int64(a), np.int64(b), *args))
-    return (dn, mean) if ok else None
+    return offs, gains, dgains, draw_mode, draw_keys, draw_scale
 
 
-def expose(photo_rate_e_per_s: np.ndarray, time_s: float, sensor, noise: np.random.SeedSequence, pattern):
+def expose(photo_rate_e_per_s: np.ndarray, time_s: float, sensor: SensorSpec, noise: np.random.SeedSequence,
+           pattern: FixedPattern) -> tuple[np.ndarray, np.ndarray] | None:
     """The fused twin of :func:`spectracam.sensor.expose` on given rates ``(H, W)`` (or any shape),
-    or None without the fused backend.  With no noise source on, bit-identical to it."""
+    or None without the fused backend.  With no noise source on, bit-identical to it.
+
+    Parameters
+    ----------
+    photo_rate_e_per_s : ndarray
+        Photo-electrons per second per pixel, any shape.
+    time_s : float
+        Exposure time, s.
+    sensor : SensorSpec
+        The sensor.
+    noise : numpy.random.SeedSequence
+        Seeds this frame's temporal noise.
+    pattern : FixedPattern
+        The fixed pattern ``(offset_e, gain, dark_gain)``, drawn (each an array of the rates' size, or None).
+
+    Returns
+    -------
+    tuple of ndarray or None
+        Digital numbers (DN) and expected electrons (e⁻), float32, the rates' shape; None without the fused
+        backend.
+    """
     rate = np.asarray(photo_rate_e_per_s, np.float32)
     shape = rate.shape
     r2 = rate.reshape(shape if rate.ndim == 2 else (1, -1))

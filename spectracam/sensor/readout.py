@@ -29,13 +29,20 @@ its attributes.
 from __future__ import annotations
 
 import math
-from typing import Callable, NamedTuple
+from typing import TYPE_CHECKING, Callable, NamedTuple
 
 import numpy as np
 
 from spectracam.core.errors import SpectracamError
 from spectracam.core.registry import Registry
 from spectracam.sensor import kernels
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    from numpy.typing import ArrayLike
+
+    from spectracam.sensor import FixedPattern, SensorSpec
 
 __all__ = ["AdcRead", "READOUTS", "ReadoutScheme", "SATURATION_MARGIN_SIGMA", "SWITCH_FRACTION", "adc_read",
            "compand", "companding_bound", "companding_curve", "decode", "estimate_current", "expand",
@@ -74,7 +81,7 @@ class AdcRead(NamedTuple):
     clip: bool
 
 
-def adc_read(sensor, gain: float = 1.0) -> AdcRead:
+def adc_read(sensor: SensorSpec, gain: float = 1.0) -> AdcRead:
     """The sensor's ADC for a read at ``gain`` × its system gain (a high conversion gain, a small photodiode).
 
     Parameters
@@ -194,7 +201,7 @@ def _scheme(sensor) -> "ReadoutScheme":
     return READOUTS[sensor.readout]
 
 
-def output_dn_per_e(sensor) -> float:
+def output_dn_per_e(sensor: SensorSpec) -> float:
     """DN per electron of the merged output word (its linear part, below the first companding knee).
 
     Twice the finest read's system gain — the sensor's K, or ``K·dual_gain_ratio`` for ``dual_gain`` — so the
@@ -217,9 +224,20 @@ def output_dn_per_e(sensor) -> float:
     return 2.0 * k * (sensor.dual_gain_ratio if sensor.readout == "dual_gain" else 1.0)
 
 
-def output_black_dn(sensor) -> float:
+def output_black_dn(sensor: SensorSpec) -> float:
     """The merged word's black level, DN: the sensor's pedestal in electrons, ``b/K``, at the word's gain (so
-    negative noise and offsets clip no more often than a single read's)."""
+    negative noise and offsets clip no more often than a single read's).
+
+    Parameters
+    ----------
+    sensor : SensorSpec
+        The sensor (its black level b and system gain K, its ``readout``).
+
+    Returns
+    -------
+    float
+        ``b·K_out/K``, DN of the merged word (b itself for ``single``).
+    """
     return sensor.black_level_dn * output_dn_per_e(sensor) / sensor.system_gain_dn_per_e
 
 
@@ -230,7 +248,7 @@ def _linear_top_dn(sensor) -> float:
     return float(math.floor(v) if sensor.quantization else v)
 
 
-def output_top_dn(sensor) -> float:
+def output_top_dn(sensor: SensorSpec) -> float:
     """The largest merged output value (companded, when ``companding_bits`` is set).
 
     Parameters
@@ -264,7 +282,7 @@ def _encode(q_est_e, sensor) -> np.ndarray:
     return o.astype(np.float32)
 
 
-def decode(digital, sensor) -> np.ndarray:
+def decode(digital: ArrayLike, sensor: SensorSpec) -> np.ndarray:
     """Electrons-equivalent at the nominal exposure time from merged output words: the scheme's estimate of the
     total charge (photo + dark, ``current × time_s``, beyond the well where the scheme extends the range).
 
@@ -292,13 +310,47 @@ def decode(digital, sensor) -> np.ndarray:
 
 
 # ------------------------------------------------------------------ companding
-def companding_curve(sensor) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def companding_curve(sensor: SensorSpec) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The piecewise-linear companding of the merged word into ``companding_bits`` bits: where each segment starts
+    and its step (the rule: :func:`companding_bound`).
+
+    Parameters
+    ----------
+    sensor : SensorSpec
+        The sensor (``companding_bits`` set; the merged word's gain, black level and top).
+
+    Returns
+    -------
+    x_starts : ndarray
+        Linear merged word (DN) at which each segment starts, float64.
+    code_starts : ndarray
+        The companded code at each start, float64.
+    steps : ndarray
+        Linear words per code in each segment, ``2^j``, float64 (one segment of step 1: the identity).
+
+    Raises
+    ------
+    SpectracamError
+        ``companding_bits`` too few to hold the merged word's range.
+    """
     return _companding(sensor)[:3]
 
 
-def companding_bound(sensor) -> float:
+def companding_bound(sensor: SensorSpec) -> float:
     """The bound c of the companding's steps, ``step ≤ c·σ`` (½ where the codes allow; see :func:`_companding`):
-    the companding adds at most ``c²/12`` to the variance."""
+    the companding adds at most ``c²/12`` to the variance.
+
+    Parameters
+    ----------
+    sensor : SensorSpec
+        The sensor (``companding_bits`` set).
+
+    Returns
+    -------
+    float
+        c, in units of the shot noise σ at the step's level; 0 when the merged word fits its bits as it is (no
+        companding).
+    """
     return _companding(sensor)[3]
 
 
@@ -344,7 +396,7 @@ def _companding(sensor):
                           f"{top:.0f} DN; allowed: more bits")
 
 
-def compand(linear, sensor) -> np.ndarray:
+def compand(linear: ArrayLike, sensor: SensorSpec) -> np.ndarray:
     """Linear merged words → companded codes (:func:`companding_curve`); floored within a segment when the sensor
     quantises, continuous otherwise.
 
@@ -367,7 +419,7 @@ def compand(linear, sensor) -> np.ndarray:
     return cs[j] + (np.floor(steps) if sensor.quantization else steps)
 
 
-def expand(codes, sensor) -> np.ndarray:
+def expand(codes: ArrayLike, sensor: SensorSpec) -> np.ndarray:
     """Companded codes → linear merged words at each code's mid-step (the mean of the ``2^j`` integer words a code
     of step ``2^j`` holds: ``+ (2^j − 1)/2``; continuous codes: exact).
 
@@ -410,7 +462,9 @@ def _mc_constants(sensor) -> _McConstants:
     return _McConstants(sv, sigma2, satlev, sensor.motion_threshold_sigma**2, sensor.readout_estimator == "wls")
 
 
-def multiple_capture_samples(current_e_per_s, time_s: float, sensor, noise, offset_e=None, start: int = 0):
+def multiple_capture_samples(current_e_per_s: ArrayLike, time_s: float, sensor: SensorSpec,
+                             noise: np.random.SeedSequence, offset_e: ArrayLike | None = None,
+                             start: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """The N + 1 digitised samples of a multiple capture (NumPy), for currents ``(n,)`` e⁻/s.
 
     Charge accumulates with its shot noise (Gaussian increments ``i·Δt + √(i·Δt)·z``, or Poisson counts), the well
@@ -470,7 +524,8 @@ def multiple_capture_samples(current_e_per_s, time_s: float, sensor, noise, offs
     return ys, tops
 
 
-def estimate_current(times_s, samples_e, sensor, at_top=None) -> np.ndarray:
+def estimate_current(times_s: Sequence[float] | np.ndarray, samples_e: ArrayLike, sensor: SensorSpec,
+                     at_top: np.ndarray | None = None) -> np.ndarray:
     """The multiple-capture estimate of the current from samples (NumPy, vectorised over pixels).
 
     ``wls``: the recursive weighted least-squares estimate [LiuElGamal2001]_ — a Kalman filter on (charge, current)
@@ -598,7 +653,9 @@ def _mc_numpy(rate, time_s, sensor, noise, pat: _Pattern):
     return o.astype(np.float32), mean
 
 
-def read_multiple_capture(rate_e_per_s, time_s: float, sensor, noise, pattern=None, backend: str | None = None):
+def read_multiple_capture(rate_e_per_s: np.ndarray, time_s: float, sensor: SensorSpec, noise: np.random.SeedSequence,
+                          pattern: FixedPattern | None = None, backend: str | None = None
+                          ) -> tuple[np.ndarray, np.ndarray]:
     """A multiple capture (``readout = "multiple_capture"``): N = ``readout_samples`` non-destructive samples at
     ``t_k = k·T/N`` after a reset sample, merged by ``readout_estimator`` (:func:`estimate_current`).
 
@@ -650,7 +707,7 @@ def _prepare(rate_e_per_s, time_s, sensor, pattern):
     return shape, rate, pat, mean, off
 
 
-def high_gain_read_noise_e(sensor) -> float:
+def high_gain_read_noise_e(sensor: SensorSpec) -> float:
     """The read noise of ``dual_gain``'s high-gain read, e⁻ rms: the read chain's noise is fixed in volts, so in
     electrons it falls with the conversion gain — ``read_noise_uV/(g·ratio)`` when the sensor states it in µV, else
     ``read_noise_rms_e/ratio``.
@@ -672,7 +729,8 @@ def high_gain_read_noise_e(sensor) -> float:
     return sensor.read_noise_rms_e / sensor.dual_gain_ratio
 
 
-def read_dual_gain(rate_e_per_s, time_s: float, sensor, noise, pattern=None):
+def read_dual_gain(rate_e_per_s: np.ndarray, time_s: float, sensor: SensorSpec, noise: np.random.SeedSequence,
+                   pattern: FixedPattern | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Dual conversion gain (``readout = "dual_gain"``) [Solhusvik2019]_: one integration (shot noise, the well
     ``q_max``) read twice by the same ADC — at ``dual_gain_ratio`` × the conversion gain (its swing ``q_max/ratio``
     e⁻, its read noise :func:`high_gain_read_noise_e`, the offset, fixed in volts, ``offset_e/ratio``) and at the
@@ -717,7 +775,8 @@ def read_dual_gain(rate_e_per_s, time_s: float, sensor, noise, pattern=None):
     return _encode(est, sensor).reshape(shape), mean.reshape(shape)
 
 
-def read_split_pixel(rate_e_per_s, time_s: float, sensor, noise, pattern=None):
+def read_split_pixel(rate_e_per_s: np.ndarray, time_s: float, sensor: SensorSpec, noise: np.random.SeedSequence,
+                     pattern: FixedPattern | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Split pixel (``readout = "split_pixel"``) [Solhusvik2019]_: the sensor's photodiode and a small one of
     sensitivity ``1/split_ratio`` (its dark current too: it scales with the area) and full well
     ``split_small_well_fraction·q_max``, each read once with the sensor's read noise (e⁻) and ADC — the small one at
@@ -772,7 +831,9 @@ def _frame_dn(rate, time_s, sensor, noise, pat: _Pattern, shape2d):
                         sensor.read_noise_rms_e, sensor.q_max_e)
 
 
-def read_bracketing(rate_e_per_s, time_s: float, sensor, noise, pattern=None, frame_rates=None):
+def read_bracketing(rate_e_per_s: np.ndarray, time_s: float, sensor: SensorSpec, noise: np.random.SeedSequence,
+                    pattern: FixedPattern | None = None, frame_rates: Sequence[ArrayLike] | None = None
+                    ) -> tuple[np.ndarray, np.ndarray]:
     """Exposure bracketing (``readout = "bracketing"``) [Debevec1997]_: ``bracketing_frames`` sequential full
     single reads of ``T, T/r, T/r², …`` (``r = bracketing_ratio``), each with its own shot, dark and read noise, well
     and ADC.  Merged: the longest frame below :data:`SWITCH_FRACTION` of the well, scaled to T (the shortest where
@@ -820,7 +881,8 @@ def read_bracketing(rate_e_per_s, time_s: float, sensor, noise, pattern=None, fr
 
 
 # ------------------------------------------------------------------ closed forms
-def multiple_capture_variance(current_e_per_s: float, time_s: float, sensor, estimator: str | None = None) -> float:
+def multiple_capture_variance(current_e_per_s: float, time_s: float, sensor: SensorSpec,
+                              estimator: str | None = None) -> float:
     """The variance of the multiple-capture estimate of a constant current, (e⁻/s)², closed form.
 
     ``wls``: the generalised least-squares variance ``[(XᵀΣ⁻¹X)⁻¹]₁₁`` of the model ``y_k = C + i·t_k + e_k``,
@@ -907,7 +969,7 @@ def _scheme_var(s, sensor):
     return var, well * r ** (n_f - 1)
 
 
-def snr_curve(signal_e, sensor) -> np.ndarray:
+def snr_curve(signal_e: ArrayLike, sensor: SensorSpec) -> np.ndarray:
     """The read-out's signal-to-noise ratio against the mean charge, closed form: mean over σ of its merged
     estimate (e⁻ at the exposure time), shot + read + quantisation noise of the read it uses — so ``dual_gain``
     and ``split_pixel`` show the dip where they switch reads, ``bracketing`` where it switches frames.
@@ -959,7 +1021,8 @@ READOUTS.register("bracketing", ReadoutScheme(
     lambda s, t: float(sum(t / s.bracketing_ratio**f for f in range(s.bracketing_frames)))))
 
 
-def read(rate_e_per_s, time_s: float, sensor, noise, pattern=None):
+def read(rate_e_per_s: np.ndarray, time_s: float, sensor: SensorSpec, noise: np.random.SeedSequence,
+         pattern: FixedPattern | None = None) -> tuple[np.ndarray, np.ndarray]:
     """One frame by the sensor's read-out scheme (``sensor.readout``; ``single`` is
     :func:`spectracam.sensor.expose`'s, and raises here).
 
