@@ -54,7 +54,10 @@ def test_output_contract(run):
     curves = data["curves"]
     assert len(curves) == 9 * 2 * len(EDGES) and all(len(c["Y"]) == len(c["frequencies_cy_per_px"]) for c in curves)
     assert {"G", "Y", "G OLPF 1 px", "Y OLPF 1 px"} <= set(data["closed_form"]["10um_f1.4"])
-    assert "## Answer" in (out / "report.md").read_text()
+    report = (out / "report.md").read_text()
+    assert "## Answer" in report
+    for name in ("mtf.png", "summary.png", "scielab_star.png", "crops_10um_f1.4.png"):   # every figure shown once
+        assert report.count(f"]({name})") == 1, name
 
 
 def test_sampling_colour_is_zero_without_a_mosaic_and_large_with_one(run):

@@ -539,13 +539,18 @@ def report_markdown(result: dict, command: str) -> str:
     out += _metric_tables(rows)
     out += ["## Figures", ""]
     for f in result.get("figures", []):
-        out.append(f"![{f}]({f})")
+        if f not in _INTRO_FIGURES:   # shown once, with the answer
+            out.append(f"![{f}]({f})")
     out += _setup_lines(result, spec, noise)
     out += ["## Time per stage (s)", "", "| target | " + " | ".join(result["timings"][next(iter(result["timings"]))])
             + " |", "|---|" + "---|" * 5]
     for t, st in result["timings"].items():
         out.append(f"| {t} | " + " | ".join(f"{v:.2f}" for v in st.values()) + " |")
     return "\n".join(out) + "\n"
+
+
+#: The figures the report shows beside its answer (not a second time under Figures).
+_INTRO_FIGURES = ("summary.png", "mtf.png")
 
 
 def _intro_lines(result, command: str, noise: str) -> list[str]:
