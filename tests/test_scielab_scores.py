@@ -259,3 +259,57 @@ def test_fft_filter_equals_the_row_and_column_passes(shape):
     ref = scielab_filter(x, 41.23)
     assert np.abs(scielab_filter_fft(x, 41.23) - ref).max() < 1e-12
     assert np.abs(scielab_filter_fft(x, 41.23, np.float32) - ref).max() < 2e-6
+
+
+@pytest.mark.parametrize("n", [1, 2, 5, 33])
+@pytest.mark.parametrize("reach", [0, 1, 4, 20, 70])
+def test_reflected_indices_are_numpys_symmetric_padding(n, reach):
+    """The bands' extension beyond the image's edges is numpy.pad's "symmetric" (scipy's "reflect"), also when the
+    reach is longer than the axis (the reflection repeats)."""
+    from spectracam.evaluation.scielab import reflected_indices
+
+    axis = np.arange(n) * 10
+    want = np.pad(axis, (reach, reach + 3), mode="symmetric")
+    np.testing.assert_array_equal(axis[reflected_indices(-reach, n + reach + 3, n)], want)
+
+
+def test_the_extended_filter_refuses_a_band_within_its_reach():
+    from spectracam.evaluation.scielab import filter_extended_opponent, scielab_reach
+
+    r = scielab_reach(41.23)
+    assert r == 20
+    with pytest.raises(ValueError) as e:
+        filter_extended_opponent(np.zeros((2 * r, 100, 3)), 41.23)
+    assert str(e.value).count("\n") == 0 and "(40, 100, 3)" in str(e.value) and "more than 40 rows" in str(e.value)
+
+
+@pytest.mark.parametrize("fused", ["1", "0"])
+@pytest.mark.parametrize("size", [(60, 36), (200, 150)])
+def test_chart_map_with_neighbouring_rows_as_the_margin_is_the_whole_images(size, fused, monkeypatch):
+    """Each band of the chart's S-CIELAB is filtered with its neighbours' rows (reflected rows at the image's
+    edges) as its only margin (issue 38): the map equals scielab of the whole image, in bands of a few rows, on a
+    chart smaller than the kernels' reach (60 × 36 at 41 samples/degree: reach 20) and a larger one; with the
+    compiled kernels and without (``SPECTRACAM_FUSED=0``)."""
+    import importlib
+
+    import spectracam
+
+    score_module = importlib.import_module("spectracam.evaluation.score")
+    monkeypatch.setenv("SPECTRACAM_FUSED", fused)
+    scene = small_scene(image={"width": size[0], "height": size[1]})
+    raw = spectracam.capture(spectracam.render(scene, "analytic"), scene=scene)
+    ref, processing = ChartReference.of(scene), scene.processing
+    rgb, _, _ = developed_rgb(raw, ref, processing)
+    M = display_rgb_to_xyz(processing.display)
+    white = M.sum(axis=1)
+    truth = chart_truth_xyz(ref, slice(0, ref.height_px), slice(0, ref.width_px))
+    truth = truth @ adaptation_matrix(ref.white_xyz, white, processing.adaptation).T
+    whole = scielab(rgb @ M.T, truth, white, processing.samples_per_degree)
+    for chunk in (1 << 19, 7 * (size[0] + 40)):   # one band; bands of 7 rows
+        monkeypatch.setattr(score_module, "SCIELAB_CHUNK_PIXELS", chunk)
+        score_module._truth_scielab_lab.cache_clear()
+        got = chart_scielab_map(rgb, ref, processing)
+        mask = np.isfinite(got)
+        assert mask.sum() == sum((r.stop - r.start) * (c.stop - c.start) for r, c in ref.boxes) > 0
+        np.testing.assert_allclose(got[mask], whole[mask], rtol=0, atol=2e-5)
+    score_module._truth_scielab_lab.cache_clear()

@@ -141,3 +141,44 @@ def box_kernel(start, stop, rgb, boxes, m, wn, against, method, de_map, sums):
                 s0 += d
                 s1 += d if method == CIEDE2000 else de2000(L1, a1, b1, L2, a2, b2)
         sums[p, 0], sums[p, 1] = s0, s1
+
+
+@njit_cached(nogil=True)
+def gather_kernel(start, stop, img, rows, cols, m, out):
+    """Rows ``[start, stop)`` of ``out`` ``(len(rows), len(cols), 3)``: ``m @ img[rows[i], cols[j]]`` in float64 —
+    an image's pixels picked (repeated, reflected) and carried through a 3 × 3 matrix in one pass (S-CIELAB's
+    extended opponent band)."""
+    for i in range(start, stop):
+        y = rows[i]
+        for j in range(cols.shape[0]):
+            x = cols[j]
+            a, b, c = np.float64(img[y, x, 0]), np.float64(img[y, x, 1]), np.float64(img[y, x, 2])
+            out[i, j, 0] = m[0, 0] * a + m[0, 1] * b + m[0, 2] * c
+            out[i, j, 1] = m[1, 0] * a + m[1, 1] * b + m[1, 2] * c
+            out[i, j, 2] = m[2, 0] * a + m[2, 1] * b + m[2, 2] * c
+
+
+@njit_cached(nogil=True)
+def masked_lab_kernel(start, stop, f, keep, offsets, m, wn, out):
+    """Rows ``[start, stop)`` of ``f`` ``(h, w, 3)``: the CIELAB of ``m @ f[i, j]`` against ``wn`` at the pixels where
+    ``keep[i, j]``, into ``out[offsets[i] + k]`` (``k``: the kept pixel's rank in its row; row-major order)."""
+    for i in range(start, stop):
+        k = offsets[i]
+        for j in range(f.shape[1]):
+            if keep[i, j]:
+                out[k, 0], out[k, 1], out[k, 2] = lab(f[i, j, 0], f[i, j, 1], f[i, j, 2], m, wn)
+                k += 1
+
+
+@njit_cached(nogil=True)
+def masked_delta_e_kernel(start, stop, f, keep, offsets, m, wn, ref, method, out, row0, col0):
+    """Rows ``[start, stop)`` of ``f`` ``(h, w, 3)``: at the pixels where ``keep[i, j]``, the ΔE of the formula
+    ``method`` between the CIELAB of ``m @ f[i, j]`` against ``wn`` and ``ref[offsets[i] + k]`` (row-major rank, as
+    :func:`masked_lab_kernel` writes it), into ``out[row0 + i, col0 + j]``."""
+    for i in range(start, stop):
+        k = offsets[i]
+        for j in range(f.shape[1]):
+            if keep[i, j]:
+                L1, a1, b1 = lab(f[i, j, 0], f[i, j, 1], f[i, j, 2], m, wn)
+                out[row0 + i, col0 + j] = delta_e(L1, a1, b1, ref[k, 0], ref[k, 1], ref[k, 2], method)
+                k += 1

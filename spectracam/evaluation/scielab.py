@@ -51,8 +51,9 @@ from spectracam.processing.color import samples_per_degree  # noqa: F401  (the v
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike, DTypeLike
 
-__all__ = ["SCIELAB_FILTERS", "XYZ_TO_OPPONENT", "XYZ_TO_OPPONENT_AS_PRINTED", "scielab", "scielab_filter",
-           "scielab_filter_fft", "scielab_kernels"]
+__all__ = ["OPPONENT_TO_XYZ", "SCIELAB_FILTERS", "XYZ_TO_OPPONENT", "XYZ_TO_OPPONENT_AS_PRINTED",
+           "filter_extended_opponent", "reflected_indices", "scielab", "scielab_filter", "scielab_filter_fft",
+           "scielab_kernels", "scielab_reach"]
 
 #: The published filters, Zhang & Wandell (1997), table: per opponent channel, (weight w_i, spread s_i in
 #: degrees of visual angle) of the Gaussians ``k_i exp(-(x² + y²)/s_i²)``.
@@ -73,7 +74,8 @@ XYZ_TO_OPPONENT = np.array([[0.2787336, 0.7218031, -0.1065520],
                             [0.0859513, -0.5899859, 0.5011089]])
 
 #: Its inverse, opponent → XYZ, computed once (a solve per image cost 83 ms at 1 Mpx; issue 38).
-_OPPONENT_TO_XYZ = np.linalg.inv(XYZ_TO_OPPONENT)
+OPPONENT_TO_XYZ = np.linalg.inv(XYZ_TO_OPPONENT)
+_OPPONENT_TO_XYZ = OPPONENT_TO_XYZ
 
 #: The matrix as printed in Zhang & Wandell (1997): O1 = 0.279X + 0.72Y - 0.107Z,
 #: O2 = -0.449X + 0.29Y - 0.077Z, O3 = 0.086X - 0.59Y + 0.501Z (pass it as ``opponent_matrix`` to use it).
@@ -260,16 +262,96 @@ def scielab_filter_fft(xyz: ArrayLike, samples_per_degree: float, dtype: DTypeLi
     if img.ndim != 3 or img.shape[-1] != 3:
         raise ValueError(f"S-CIELAB: expected an XYZ image of shape (rows, cols, 3), got {img.shape}")
     spd = _check_spd(samples_per_degree)
-    r = _support(spd, 1.0).size // 2
-    dt = np.dtype(dtype)
-    opp = np.pad((img @ XYZ_TO_OPPONENT.T).astype(dt), ((r, r), (r, r), (0, 0)), mode="symmetric")
+    r = scielab_reach(spd)
+    opp = np.pad((img @ XYZ_TO_OPPONENT.T).astype(np.dtype(dtype)), ((r, r), (r, r), (0, 0)), mode="symmetric")
+    return filter_extended_opponent(opp, spd).astype(float, copy=False) @ _OPPONENT_TO_XYZ.T
+
+
+def scielab_reach(samples_per_degree: float) -> int:
+    """The S-CIELAB kernels' reach, pixels: half the side of :func:`scielab_kernels`' (1° support) less the centre.
+
+    Parameters
+    ----------
+    samples_per_degree : float
+        Image samples per degree of visual angle.
+
+    Returns
+    -------
+    int
+        ``r``: the kernels are ``(2r + 1, 2r + 1)``.
+
+    Examples
+    --------
+    >>> scielab_reach(41.0)
+    20
+    """
+    return _support(_check_spd(samples_per_degree), 1.0).size // 2
+
+
+def reflected_indices(start: int, stop: int, n: int) -> np.ndarray:
+    """Indices ``start … stop − 1`` of an axis of ``n`` samples extended by reflection about its ends, as
+    ``numpy.pad(mode="symmetric")`` (SciPy's "reflect") extends it: ``d c b a | a b c d | d c b a``, period ``2n``.
+
+    Parameters
+    ----------
+    start, stop : int
+        The extended axis' positions (negative, or ``n`` and beyond, outside the axis).
+    n : int
+        Samples on the axis, ≥ 1.
+
+    Returns
+    -------
+    ndarray of int
+        ``stop − start`` indices in ``[0, n)``.
+
+    Examples
+    --------
+    >>> reflected_indices(-2, 6, 4).tolist()
+    [1, 0, 0, 1, 2, 3, 3, 2]
+    """
+    i = np.arange(start, stop) % (2 * n)
+    return np.where(i < n, i, 2 * n - 1 - i)
+
+
+def filter_extended_opponent(opp: np.ndarray, samples_per_degree: float) -> np.ndarray:
+    """The S-CIELAB filters applied, by FFT, to an opponent image that already extends the kernels' reach ``r``
+    (:func:`scielab_reach`) beyond the wanted pixels on every side (by reflection at an image's edge, by its own
+    pixels inside it): the wanted pixels' filtered opponent values.
+
+    One real FFT convolution per opponent channel with the full 2-D kernels of :func:`scielab_kernels`, zero-padded
+    to a fast length; the circular wrap reaches only the ``2r`` first rows and columns of the result, which are the
+    extension's, so the wanted pixels are the linear convolution's exactly (to the rounding of the FFT).  A band of a
+    larger image is filtered with its neighbours' rows as its extension, with no second margin (issue 38).
+
+    Parameters
+    ----------
+    opp : ndarray, shape (rows + 2r, cols + 2r, 3)
+        Opponent (O1, O2, O3) values, float64 or float32 (the FFT's precision).
+    samples_per_degree : float
+        Image samples per degree of visual angle.
+
+    Returns
+    -------
+    ndarray, shape (rows, cols, 3)
+        The filtered opponent values, in ``opp``'s precision.
+
+    Raises
+    ------
+    ValueError
+        ``samples_per_degree`` not a positive, finite number, or ``opp`` not ``(rows, cols, 3)`` with at least
+        ``2r + 1`` rows and columns.
+    """
+    spd = _check_spd(samples_per_degree)
+    r = scielab_reach(spd)
+    if opp.ndim != 3 or opp.shape[-1] != 3 or min(opp.shape[:2]) <= 2 * r:
+        raise ValueError(f"S-CIELAB: an extended opponent image of shape {opp.shape}: (rows, cols, 3) with more "
+                         f"than {2 * r} rows and columns (the kernels' reach, {r} px, either side)")
     h, w = opp.shape[:2]
     shape = (fft.next_fast_len(h, real=True), fft.next_fast_len(w, real=True))
     workers = threads()   # the same numbers on any number of threads (pocketfft splits the 1-D transforms)
     spectrum = fft.rfft2(opp, s=shape, axes=(0, 1), workers=workers)
-    spectrum *= _kernel_spectra(spd, shape, dt.name)
-    out = fft.irfft2(spectrum, s=shape, axes=(0, 1), workers=workers)[2 * r:h, 2 * r:w]
-    return out.astype(float, copy=False) @ _OPPONENT_TO_XYZ.T
+    spectrum *= _kernel_spectra(spd, shape, opp.dtype.name)
+    return fft.irfft2(spectrum, s=shape, axes=(0, 1), workers=workers)[2 * r:h, 2 * r:w]
 
 
 def scielab(xyz1: ArrayLike, xyz2: ArrayLike, white_xyz: ArrayLike, samples_per_degree: float,

@@ -506,7 +506,8 @@ def _pixels(box) -> int:
     return (r.stop - r.start) * (c.stop - c.start)
 
 
-def chart_truth_xyz(reference: ChartReference, rows: slice, cols: slice) -> np.ndarray:
+def chart_truth_xyz(reference: ChartReference, rows: slice | np.ndarray,
+                    cols: slice | np.ndarray) -> np.ndarray:
     """``(h, w, 3)`` CIE 1931 XYZ of the scene's pixels ``[rows, cols]`` under its light (the light's white has Y = 1):
     each patch's reference colour (``reference.patch_xyz``) over the part of the pixel it covers
     (:func:`spectracam.scene.chart.patch_coverage`, what a box-filtered render converges to), the surround's
@@ -516,8 +517,8 @@ def chart_truth_xyz(reference: ChartReference, rows: slice, cols: slice) -> np.n
     ----------
     reference : ChartReference
         The chart under its light.
-    rows, cols : slice
-        The pixels, in the image.
+    rows, cols : slice or ndarray of int
+        The pixels, in the image (index arrays may repeat or reorder them).
 
     Returns
     -------
@@ -538,7 +539,9 @@ def chart_truth_xyz(reference: ChartReference, rows: slice, cols: slice) -> np.n
 #: Pixels of the chart's S-CIELAB filtered at once: a band of rows (with the kernel's reach above and below) at a
 #: time, so a 12-Mpx chart never holds a full-size opponent image; a 640×480 chart is one band.  2¹⁹ (was 2²⁰): the
 #: band's float64 temporaries were a 12-Mpx score's peak (0.16 of the cube above what the score holds, against 0.11
-#: now; issue 38's 1.5 × the cube), for about 15 % more rows filtered (the reach either side of each band).
+#: then; issue 38's 1.5 × the cube).  A band's output rows are this over the box's width and the reach either side;
+#: its input adds the reach above and below (no second margin since issue 38's fifth session, which had added as
+#: much again).
 SCIELAB_CHUNK_PIXELS = 1 << 19
 
 
@@ -549,34 +552,94 @@ def _scored_mask(reference: ChartReference) -> np.ndarray:
     return mask
 
 
-def _scielab_bands(reference: ChartReference, spd: float):
-    """``(reach px, crop (rows, cols), input cols, [(out rows, in rows)])``: the scored pixels' bounding box, the
-    columns its filters read, and its bands of output rows with the input rows each needs (the kernel's reach either
-    side, within the image): filtering a band's input gives its output rows exactly as filtering the whole image
-    would."""
-    from spectracam.evaluation.scielab import scielab_kernels
+class _ScielabBands(NamedTuple):
+    """Where the chart's S-CIELAB is computed: the scored pixels' bounding box (``rows``, ``cols``), its bands of
+    rows, and the image's rows and columns each band's filters read (its own, then ``reach`` either side: its
+    neighbours' pixels inside the image, reflected beyond its edges as ``numpy.pad(mode="symmetric")``)."""
 
-    reach = scielab_kernels(spd)[0].shape[0] // 2
+    rows: slice
+    cols: slice
+    bands: list
+    rows_in: list
+    cols_in: np.ndarray
+
+
+def _scielab_bands(reference: ChartReference, spd: float) -> _ScielabBands:
+    """The scored pixels' bounding box cut into bands of at most :data:`SCIELAB_CHUNK_PIXELS` extended pixels:
+    filtering a band's extended input gives its rows exactly as filtering the whole image would (to the FFT's
+    rounding)."""
+    from spectracam.evaluation.scielab import reflected_indices, scielab_reach
+
+    reach = scielab_reach(spd)
     boxes = [(r, c) for r, c in reference.boxes if r.stop > r.start and c.stop > c.start]
     r0, r1 = min(r.start for r, _ in boxes), max(r.stop for r, _ in boxes)
     c0, c1 = min(c.start for _, c in boxes), max(c.stop for _, c in boxes)
-    cols_in = slice(max(0, c0 - reach), min(reference.width_px, c1 + reach))
-    band = max(1, SCIELAB_CHUNK_PIXELS // (cols_in.stop - cols_in.start))
-    bands = [(slice(lo, min(lo + band, r1)), slice(max(0, lo - reach), min(reference.height_px, min(lo + band, r1)
-                                                                          + reach))) for lo in range(r0, r1, band)]
-    return reach, (slice(r0, r1), slice(c0, c1)), cols_in, bands
+    band = max(1, SCIELAB_CHUNK_PIXELS // (c1 - c0 + 2 * reach))
+    bands = [slice(lo, min(lo + band, r1)) for lo in range(r0, r1, band)]
+    rows_in = [reflected_indices(b.start - reach, b.stop + reach, reference.height_px) for b in bands]
+    return _ScielabBands(slice(r0, r1), slice(c0, c1), bands, rows_in,
+                         reflected_indices(c0 - reach, c1 + reach, reference.width_px))
 
 
-def _filtered_lab(xyz: np.ndarray, out_rows: slice, in_rows: slice, out_cols: slice, cols_in: slice, keep: np.ndarray,
-                  spd: float, white: np.ndarray) -> np.ndarray:
-    """CIELAB (against ``white``) of the S-CIELAB-filtered ``xyz`` (the band's input) at the ``keep`` pixels of
-    its output rows and columns."""
-    from spectracam.evaluation.scielab import scielab_filter_fft
+class _Fused(NamedTuple):
+    """The compiled colour kernels (``core/_numba_colour.py``) and what the chart's S-CIELAB passes them: the filtered
+    opponent values to CIELAB (``to_lab``, scaled by the white's Y) and the white as the kernels take it."""
 
-    f = scielab_filter_fft(xyz, spd)   # float64 FFT: the row and column passes' result to 1e-15, 2× faster
-    f = f[out_rows.start - in_rows.start:out_rows.stop - in_rows.start,
-          out_cols.start - cols_in.start:out_cols.stop - cols_in.start]
-    return xyz_to_lab(f[keep], white)
+    mod: object
+    to_lab: np.ndarray
+    white: np.ndarray
+
+
+def _fused(white: np.ndarray, method: str | None = None) -> _Fused | None:
+    """The kernels for the chart's S-CIELAB against the display ``white``, or None: no numba (or
+    ``SPECTRACAM_FUSED=0``), or a ΔE formula ``method`` the kernels do not compute (NumPy and colour-science then)."""
+    from spectracam.core.cielab import DELTA_E_CODES, _kernels, lab_white
+    from spectracam.evaluation.scielab import OPPONENT_TO_XYZ
+
+    mod = _kernels() if method is None or method in DELTA_E_CODES else None
+    if mod is None:
+        return None
+    return _Fused(mod, np.ascontiguousarray(OPPONENT_TO_XYZ / float(white[1])), lab_white(white))
+
+
+def _band_opponent(img: np.ndarray, rows_in: np.ndarray, cols_in: np.ndarray, to_opponent: np.ndarray,
+                   fused: _Fused | None) -> np.ndarray:
+    """``(len(rows_in), len(cols_in), 3)`` float64: ``to_opponent @`` the image's pixels at the extended band's
+    rows and columns, in one compiled pass where the kernels run."""
+    from spectracam.core.parallel import run_bands
+
+    if fused is None or img.dtype not in (np.float32, np.float64):
+        return img[rows_in[:, None], cols_in] @ to_opponent.T
+    out = np.empty((len(rows_in), len(cols_in), 3))
+    m = np.ascontiguousarray(to_opponent, float)
+    run_bands(fused.mod.gather_kernel, len(rows_in),
+              lambda a, b: (np.int64(a), np.int64(b), img, rows_in, cols_in, m, out))
+    return out
+
+
+def _kept_offsets(keep: np.ndarray, start: int) -> np.ndarray:
+    """``(rows + 1,)`` int64: the row-major rank of each row's first kept pixel, from ``start``."""
+    return start + np.concatenate([[0], np.cumsum(keep.sum(axis=1))]).astype(np.int64)
+
+
+def _filtered_lab(opp: np.ndarray, keep: np.ndarray, spd: float, white: np.ndarray,
+                  fused: _Fused | None) -> np.ndarray:
+    """``(n, 3)``: CIELAB (against ``white``) at the ``keep`` pixels of a band of the S-CIELAB-filtered image, in
+    row-major order, from the band's opponent values extended by the filters' reach
+    (:func:`spectracam.evaluation.scielab.filter_extended_opponent`, float64 FFT: the row and column passes' result
+    to 1e-15)."""
+    from spectracam.core.parallel import run_bands
+    from spectracam.evaluation.scielab import OPPONENT_TO_XYZ, filter_extended_opponent
+
+    f = filter_extended_opponent(opp, spd)
+    if fused is None:
+        return xyz_to_lab(f[keep] @ OPPONENT_TO_XYZ.T, white)
+    keep = np.ascontiguousarray(keep)
+    offsets = _kept_offsets(keep, 0)
+    out = np.empty((int(offsets[-1]), 3))
+    run_bands(fused.mod.masked_lab_kernel, len(keep), lambda a, b: (np.int64(a), np.int64(b), f, keep, offsets,
+                                                                    fused.to_lab, fused.white, out))
+    return out
 
 
 @lru_cache(maxsize=2)
@@ -584,18 +647,43 @@ def _truth_scielab_lab(reference: ChartReference, display: str, adaptation: str,
     """``(n, 3)``: CIELAB against the display white of the scene's truth image carried to the display white
     (``processing.adaptation``) and through the S-CIELAB filters, at the scored pixels in row-major order.
     Memoised: every capture of a scene (designs, seeds, noise steps) is scored against the same truth."""
+    from spectracam.evaluation.scielab import XYZ_TO_OPPONENT
     from spectracam.processing.color import adaptation_matrix
 
     M_disp = display_rgb_to_xyz(display)
     white = M_disp.sum(axis=1)
-    to_display = adaptation_matrix(reference.white_xyz, white, adaptation)
-    _, (_, cols), cols_in, bands = _scielab_bands(reference, spd)
-    mask = _scored_mask(reference)
-    out = [_filtered_lab(chart_truth_xyz(reference, in_rows, cols_in) @ to_display.T, rows, in_rows, cols, cols_in,
-                         mask[rows, cols], spd, white) for rows, in_rows in bands]
+    to_opponent = XYZ_TO_OPPONENT @ adaptation_matrix(reference.white_xyz, white, adaptation)
+    at = _scielab_bands(reference, spd)
+    mask, fused = _scored_mask(reference), _fused(white)
+    out = [_filtered_lab(chart_truth_xyz(reference, rows_in, at.cols_in) @ to_opponent.T, mask[rows, at.cols], spd,
+                         white, fused) for rows, rows_in in zip(at.bands, at.rows_in)]
     lab = np.concatenate(out)
     lab.flags.writeable = False
     return lab
+
+
+def _band_delta_e(opp: np.ndarray, keep: np.ndarray, spd: float, white: np.ndarray, truth: np.ndarray, start: int,
+                  method: str, out: np.ndarray, rows: slice, cols: slice, fused: _Fused | None) -> int:
+    """Writes into ``out[rows, cols]`` the S-CIELAB ΔE (``method``) of a band at its ``keep`` pixels against the
+    truth's CIELAB from row-major rank ``start``; returns the rank after the band's last kept pixel."""
+    from spectracam.core.cielab import DELTA_E_CODES
+    from spectracam.core.parallel import run_bands
+    from spectracam.evaluation.scielab import filter_extended_opponent
+
+    if fused is None:
+        lab = _filtered_lab(opp, keep, spd, white, None)
+        block = out[rows, cols]
+        block[keep] = delta_e(lab, truth[start:start + len(lab)], method)
+        out[rows, cols] = block
+        return start + len(lab)
+    f = filter_extended_opponent(opp, spd)
+    keep = np.ascontiguousarray(keep)
+    offsets = _kept_offsets(keep, start)
+    code = np.int64(DELTA_E_CODES[method])
+    run_bands(fused.mod.masked_delta_e_kernel, len(keep),
+              lambda a, b: (np.int64(a), np.int64(b), f, keep, offsets, fused.to_lab, fused.white, truth, code, out,
+                            np.int64(rows.start), np.int64(cols.start)))
+    return int(offsets[-1])
 
 
 def chart_scielab_map(rgb: np.ndarray, reference: ChartReference, processing: ProcessingSpec) -> np.ndarray:
@@ -629,21 +717,20 @@ def chart_scielab_map(rgb: np.ndarray, reference: ChartReference, processing: Pr
         out = np.full(rgb.shape[:2], np.nan, np.float32)
         out[rows, cols] = chart_scielab_map(np.ascontiguousarray(rgb[rows, cols]), reference.local(), processing)
         return out
+    from spectracam.evaluation.scielab import XYZ_TO_OPPONENT
+
     spd = processing.samples_per_degree
     M_disp = display_rgb_to_xyz(processing.display)
     white = M_disp.sum(axis=1)
+    to_opponent = XYZ_TO_OPPONENT @ M_disp
     truth = _truth_scielab_lab(reference, processing.display, processing.adaptation, spd)
-    _, (_, cols), cols_in, bands = _scielab_bands(reference, spd)
-    mask = _scored_mask(reference)
+    at = _scielab_bands(reference, spd)
+    mask, fused = _scored_mask(reference), _fused(white, processing.delta_e)
     out = np.full(mask.shape, np.nan, np.float32)
     start = 0
-    for rows, in_rows in bands:
-        keep = mask[rows, cols]
-        lab = _filtered_lab(rgb[in_rows, cols_in] @ M_disp.T, rows, in_rows, cols, cols_in, keep, spd, white)
-        block = out[rows, cols]
-        block[keep] = delta_e(lab, truth[start:start + len(lab)], processing.delta_e)
-        out[rows, cols] = block
-        start += len(lab)
+    for rows, rows_in in zip(at.bands, at.rows_in):
+        start = _band_delta_e(_band_opponent(rgb, rows_in, at.cols_in, to_opponent, fused), mask[rows, at.cols], spd,
+                              white, truth, start, processing.delta_e, out, rows, at.cols, fused)
     return out
 
 
