@@ -149,3 +149,38 @@ def test_the_p95_of_a_map_is_nanpercentiles(n):
     got = _p95(a)
     assert (np.isnan(want) and np.isnan(got)) or got == want
     assert np.isnan(_p95(np.full((4, 5), np.nan, np.float32)))
+
+
+@pytest.mark.parametrize("shape", [(1, 1, 3), (3, 5, 3), (301, 7, 3), (700, 1000, 3)])
+def test_the_rendering_is_narrowed_to_float32_in_its_own_buffer(shape, monkeypatch):
+    """The score's float32 rendering is ``astype``'s values, made without a second full-size image (issue 38: the
+    score's resident peak): it lives in the float64 image's own buffer, shrunk to half; chunks smaller than the
+    image are exercised."""
+    from spectracam.evaluation import score as S
+
+    monkeypatch.setattr(S, "NARROW_CHUNK", 1000)
+    held = [np.random.default_rng(1).normal(size=shape) * 1e3]   # the list is the only reference, as in score()
+    want = held[0].astype(np.float32)
+    got = S._narrowed_to_float32(held)
+    assert got.dtype == np.float32 and got.shape == shape and got.flags.c_contiguous
+    np.testing.assert_array_equal(got, want)
+    root = got
+    while root.base is not None:
+        root = root.base
+    assert root.dtype == np.float64 and root.size == (want.size + 1) // 2   # the old buffer, shrunk; not a copy
+
+
+def test_narrowing_leaves_an_image_others_refer_to_alone():
+    """A view of the float64 image elsewhere (or a view as the image): ``astype``, the image unchanged."""
+    from spectracam.evaluation import score as S
+
+    a = np.random.default_rng(2).random((40, 30, 3))
+    copy = a.copy()
+    view = a[5:]
+    got = S._narrowed_to_float32([a])
+    np.testing.assert_array_equal(got, copy.astype(np.float32))
+    np.testing.assert_array_equal(a, copy)
+    assert view.base is a
+    got = S._narrowed_to_float32([view])
+    np.testing.assert_array_equal(got, copy[5:].astype(np.float32))
+    np.testing.assert_array_equal(a, copy)

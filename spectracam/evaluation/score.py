@@ -8,6 +8,7 @@ result to linear display RGB.  Everything here dispatches on the capture's layou
 from __future__ import annotations
 
 import dataclasses
+import sys
 from dataclasses import dataclass
 from functools import lru_cache
 from collections.abc import Sequence
@@ -622,30 +623,32 @@ def _kept_offsets(keep: np.ndarray, start: int) -> np.ndarray:
     return start + np.concatenate([[0], np.cumsum(keep.sum(axis=1))]).astype(np.int64)
 
 
-def _filtered_lab(opp: np.ndarray, keep: np.ndarray, spd: float, white: np.ndarray,
-                  fused: _Fused | None) -> np.ndarray:
-    """``(n, 3)``: CIELAB (against ``white``) at the ``keep`` pixels of a band of the S-CIELAB-filtered image, in
-    row-major order, from the band's opponent values extended by the filters' reach
+def _filtered_lab(opp: np.ndarray, keep: np.ndarray, spd: float, white: np.ndarray, fused: _Fused | None,
+                  out: np.ndarray, start: int) -> int:
+    """Writes into ``out[start:]`` the CIELAB (against ``white``) at the ``keep`` pixels of a band of the
+    S-CIELAB-filtered image, in row-major order, from the band's opponent values extended by the filters' reach
     (:func:`spectracam.evaluation.scielab.filter_extended_opponent`, float64 FFT: the row and column passes' result
-    to 1e-15)."""
+    to 1e-15); returns the index after the band's last."""
     from spectracam.core.parallel import run_bands
     from spectracam.evaluation.scielab import OPPONENT_TO_XYZ, filter_extended_opponent
 
     f = filter_extended_opponent(opp, spd)
     if fused is None:
-        return xyz_to_lab(f[keep] @ OPPONENT_TO_XYZ.T, white)
+        lab = xyz_to_lab(f[keep] @ OPPONENT_TO_XYZ.T, white)
+        out[start:start + len(lab)] = lab
+        return start + len(lab)
     keep = np.ascontiguousarray(keep)
-    offsets = _kept_offsets(keep, 0)
-    out = np.empty((int(offsets[-1]), 3))
+    offsets = _kept_offsets(keep, start)
     run_bands(fused.mod.masked_lab_kernel, len(keep), lambda a, b: (np.int64(a), np.int64(b), f, keep, offsets,
                                                                     fused.to_lab, fused.white, out))
-    return out
+    return int(offsets[-1])
 
 
 @lru_cache(maxsize=2)
 def _truth_scielab_lab(reference: ChartReference, display: str, adaptation: str, spd: float) -> np.ndarray:
     """``(n, 3)``: CIELAB against the display white of the scene's truth image carried to the display white
-    (``processing.adaptation``) and through the S-CIELAB filters, at the scored pixels in row-major order.
+    (``processing.adaptation``) and through the S-CIELAB filters, at the scored pixels in row-major order, written
+    band by band into one array (no list of bands to join: a 12-Mpx chart's truth was the score's resident peak).
     Memoised: every capture of a scene (designs, seeds, noise steps) is scored against the same truth."""
     from spectracam.evaluation.scielab import XYZ_TO_OPPONENT
     from spectracam.processing.color import adaptation_matrix
@@ -655,9 +658,12 @@ def _truth_scielab_lab(reference: ChartReference, display: str, adaptation: str,
     to_opponent = XYZ_TO_OPPONENT @ adaptation_matrix(reference.white_xyz, white, adaptation)
     at = _scielab_bands(reference, spd)
     mask, fused = _scored_mask(reference), _fused(white)
-    out = [_filtered_lab(chart_truth_xyz(reference, rows_in, at.cols_in) @ to_opponent.T, mask[rows, at.cols], spd,
-                         white, fused) for rows, rows_in in zip(at.bands, at.rows_in)]
-    lab = np.concatenate(out)
+    lab = np.empty((int(mask[at.rows, at.cols].sum()), 3))
+    start = 0
+    for rows, rows_in in zip(at.bands, at.rows_in):
+        start = _filtered_lab(chart_truth_xyz(reference, rows_in, at.cols_in) @ to_opponent.T, mask[rows, at.cols],
+                              spd, white, fused, lab, start)
+    assert start == len(lab)
     lab.flags.writeable = False
     return lab
 
@@ -671,7 +677,8 @@ def _band_delta_e(opp: np.ndarray, keep: np.ndarray, spd: float, white: np.ndarr
     from spectracam.evaluation.scielab import filter_extended_opponent
 
     if fused is None:
-        lab = _filtered_lab(opp, keep, spd, white, None)
+        lab = np.empty((int(keep.sum()), 3))
+        _filtered_lab(opp, keep, spd, white, None, lab, 0)
         block = out[rows, cols]
         block[keep] = delta_e(lab, truth[start:start + len(lab)], method)
         out[rows, cols] = block
@@ -778,10 +785,39 @@ def score(raw: RawCapture, reference: ChartReference, processing: ProcessingSpec
     de_map = np.full((h, w), np.nan, np.float32)
     patches, de2000, sc_map = _patch_scores(raw, reference, processing, rgb, M, colours, de_map)
     summary = _chart_summary(raw, patches, de_map, de2000, sc_map, wb)
-    del sc_map   # not kept: freed before the rendering's float32 copy below, the score's last full-size allocation
+    del sc_map   # not kept: freed before the rendering is narrowed to float32 below
     parameters = _score_parameters(raw, processing, delta_e_reference, M)
     training, held_out = _held_out_blocks(raw, reference, processing, M, patches)
-    return ChartScore(summary, tuple(patches), parameters, rgb.astype(np.float32), de_map, training, held_out, wb)
+    held = [rgb]
+    del rgb      # the only reference is in held: narrowed in its own buffer
+    return ChartScore(summary, tuple(patches), parameters, _narrowed_to_float32(held), de_map, training, held_out, wb)
+
+
+#: Elements narrowed at a time by :func:`_narrowed_to_float32` (a 4-MB float64 temporary).
+NARROW_CHUNK = 1 << 19
+
+
+def _narrowed_to_float32(held: list) -> np.ndarray:
+    """``rgb.astype(np.float32)`` for the one array in ``held`` (taken out of it), made in ``rgb``'s own buffer where
+    ``rgb`` is a C-contiguous float64 array that owns its data and nothing else refers to it (``ndarray.resize``
+    checks that no other reference or view exists): each chunk of values is written, as float32, over the first
+    half of the buffer (a chunk never reaches values not yet read), then the buffer is shrunk to that half
+    (``realloc``).  The score's last full-size allocation was the float32 copy beside the float64 image, its resident
+    peak (issue 38: 0.1 of a 12-Mpx cube).  The values are ``astype``'s.  Otherwise (a view, another dtype, another
+    reference): ``astype``, the float64 image left as it was."""
+    rgb = held.pop()
+    if rgb.dtype != np.float64 or not rgb.flags.c_contiguous or not rgb.flags.owndata or rgb.size < 2 \
+            or sys.getrefcount(rgb) > 2:   # the local name and getrefcount's argument: nothing else refers to it
+        return rgb.astype(np.float32)
+    shape, size = rgb.shape, rgb.size
+    flat = rgb.reshape(-1)
+    narrow = flat.view(np.float32)
+    for a in range(0, size, NARROW_CHUNK):
+        b = min(a + NARROW_CHUNK, size)
+        narrow[a:b] = flat[a:b]              # reads the chunk (a temporary) before writing over bytes [4a, 4b)
+    del flat, narrow
+    rgb.resize(((size + 1) // 2,))           # ValueError if anything else referred to it (checked above)
+    return rgb.view(np.float32)[:size].reshape(shape)
 
 
 def score_region(raw: RawCapture, rates: np.ndarray, reference: ChartReference,
