@@ -52,8 +52,8 @@ if TYPE_CHECKING:
     from numpy.typing import ArrayLike, DTypeLike
 
 __all__ = ["OPPONENT_TO_XYZ", "SCIELAB_FILTERS", "XYZ_TO_OPPONENT", "XYZ_TO_OPPONENT_AS_PRINTED",
-           "filter_extended_opponent", "reflected_indices", "scielab", "scielab_filter", "scielab_filter_fft",
-           "scielab_kernels", "scielab_reach"]
+           "filter_extended_opponent", "reflected_indices", "scielab", "scielab_components", "scielab_filter",
+           "scielab_filter_fft", "scielab_kernels", "scielab_reach"]
 
 #: The published filters, Zhang & Wandell (1997), table: per opponent channel, (weight w_i, spread s_i in
 #: degrees of visual angle) of the Gaussians ``k_i exp(-(x² + y²)/s_i²)``.
@@ -265,6 +265,36 @@ def scielab_filter_fft(xyz: ArrayLike, samples_per_degree: float, dtype: DTypeLi
     r = scielab_reach(spd)
     opp = np.pad((img @ XYZ_TO_OPPONENT.T).astype(np.dtype(dtype)), ((r, r), (r, r), (0, 0)), mode="symmetric")
     return filter_extended_opponent(opp, spd).astype(float, copy=False) @ _OPPONENT_TO_XYZ.T
+
+
+def scielab_components(samples_per_degree: float) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
+    """Each opponent channel's kernel as its separable parts: :func:`scielab_kernels`' ``k = Σ w_i g_i g_iᵀ``.
+
+    Parameters
+    ----------
+    samples_per_degree : float
+        Image samples per degree of visual angle.
+
+    Returns
+    -------
+    tuple of three (weights, gaussians)
+        Per channel (luminance, red-green, blue-yellow): the weights ``(n,)``, summing to 1, and the unit-sum 1-D
+        Gaussians ``(n, 2r + 1)`` sampled on the 1° support (:func:`scielab_reach`).
+
+    Raises
+    ------
+    ValueError
+        ``samples_per_degree`` not a positive, finite number.
+
+    Examples
+    --------
+    >>> w, g = scielab_components(41.0)[0]
+    >>> k = scielab_kernels(41.0)[0]
+    >>> bool(np.allclose(np.einsum("i,ij,ik->jk", w, g, g), k, rtol=0, atol=1e-18))
+    True
+    """
+    spd = _check_spd(samples_per_degree)
+    return tuple((w, g) for g, w in (_components(spd, 1.0, ch) for ch in _CHANNELS))
 
 
 def scielab_reach(samples_per_degree: float) -> int:

@@ -635,16 +635,13 @@ def _kept_offsets(keep: np.ndarray, start: int) -> np.ndarray:
     return start + np.concatenate([[0], np.cumsum(keep.sum(axis=1))]).astype(np.int64)
 
 
-def _filtered_lab(opp: np.ndarray, keep: np.ndarray, spd: float, white: np.ndarray, fused: _Fused | None,
-                  out: np.ndarray, start: int) -> int:
-    """Writes into ``out[start:]`` the CIELAB (against ``white``) at the ``keep`` pixels of a band of the
-    S-CIELAB-filtered image, in row-major order, from the band's opponent values extended by the filters' reach
-    (:func:`spectracam.evaluation.scielab.filter_extended_opponent`, float64 FFT: the row and column passes' result
-    to 1e-15); returns the index after the band's last."""
+def _kept_lab(f: np.ndarray, keep: np.ndarray, white: np.ndarray, fused: _Fused | None, out: np.ndarray,
+              start: int) -> int:
+    """Writes into ``out[start:]`` the CIELAB (against ``white``) of the filtered opponent values ``f`` ``(h, w, 3)``
+    at its ``keep`` pixels, in row-major order; returns the index after the last."""
     from spectracam.core.parallel import run_bands
-    from spectracam.evaluation.scielab import OPPONENT_TO_XYZ, filter_extended_opponent
+    from spectracam.evaluation.scielab import OPPONENT_TO_XYZ
 
-    f = filter_extended_opponent(opp, spd)
     if fused is None:
         lab = xyz_to_lab(f[keep] @ OPPONENT_TO_XYZ.T, white)
         out[start:start + len(lab)] = lab
@@ -656,12 +653,52 @@ def _filtered_lab(opp: np.ndarray, keep: np.ndarray, spd: float, white: np.ndarr
     return int(offsets[-1])
 
 
+def _truth_factors(reference: ChartReference, rows: slice, cols: slice, to_opponent: np.ndarray,
+                   spd: float) -> tuple[np.ndarray, list]:
+    """The scene's truth (:func:`chart_truth_xyz`) through ``to_opponent`` and the S-CIELAB filters at the pixels
+    ``[rows, cols]``, by separation (issue 38; no FFT, no opponent image): ``(base (3,), [(down, across)] per
+    channel)`` with the filtered channel ``c`` = ``base[c] + down_c[:, y].T @ across_c``.
+
+    The truth is the surround's colour plus, for each patch ``p``, its step from the surround times the product of
+    its row and column coverages, ``cy_p(y)·cx_p(x)``; each kernel is ``Σ_i w_i g_i g_iᵀ`` summing to 1
+    (:func:`spectracam.evaluation.scielab.scielab_components`) and the image's reflection about its edges is the
+    reflection of each coverage about its ends.  So a channel's filtered truth is its surround value plus
+    ``Σ_i w_i Σ_p step_p (g_i ⋆ cy_p)(y) (g_i ⋆ cx_p)(x)``: 1-D filters of the 24 coverages and one matrix product
+    per channel; the same numbers as filtering the truth image (to the rounding of float64)."""
+    from numpy.lib.stride_tricks import sliding_window_view
+
+    from spectracam.evaluation.scielab import reflected_indices, scielab_components, scielab_reach
+    from spectracam.scene.chart import View, patch_coverage
+
+    cy, cx = patch_coverage(reference.chart, View.fit(reference.chart, reference.width_px, reference.height_px))
+    r = scielab_reach(spd)
+    surround = reference.chart.surround_reflectance * np.asarray(reference.white_xyz, float)
+    step = (np.asarray(reference.patch_xyz, float) - surround) @ to_opponent.T        # (24, 3) opponent steps
+    ywin = sliding_window_view(cy[:, reflected_indices(rows.start - r, rows.stop + r, cy.shape[1])], 2 * r + 1, axis=1)
+    xwin = sliding_window_view(cx[:, reflected_indices(cols.start - r, cols.stop + r, cx.shape[1])], 2 * r + 1, axis=1)
+    factors = []
+    for c, (weights, gaussians) in enumerate(scielab_components(spd)):
+        down = np.concatenate([(ywin @ g) * (w * step[:, c])[:, None] for w, g in zip(weights, gaussians)])
+        factors.append((down, np.concatenate([xwin @ g for g in gaussians])))
+    return to_opponent @ surround, factors
+
+
+def _truth_band_filtered(base: np.ndarray, factors: list, rows: slice) -> np.ndarray:
+    """``(rows, cols, 3)``: the filtered truth's band ``rows`` (relative to the factors' first row), from
+    :func:`_truth_factors`."""
+    planes = np.empty((3, rows.stop - rows.start, factors[0][1].shape[1]))
+    for c, (down, across) in enumerate(factors):
+        np.matmul(down[:, rows].T, across, out=planes[c])
+        planes[c] += base[c]
+    return np.moveaxis(planes, 0, -1)
+
+
 @lru_cache(maxsize=2)
 def _truth_scielab_lab(reference: ChartReference, display: str, adaptation: str, spd: float) -> np.ndarray:
     """``(n, 3)``: CIELAB against the display white of the scene's truth image carried to the display white
-    (``processing.adaptation``) and through the S-CIELAB filters, at the scored pixels in row-major order, written
-    band by band into one array (no list of bands to join: a 12-Mpx chart's truth was the score's resident peak).
-    Memoised: every capture of a scene (designs, seeds, noise steps) is scored against the same truth."""
+    (``processing.adaptation``) and through the S-CIELAB filters (:func:`_truth_band_filtered`), at the scored pixels
+    in row-major order, written band by band into one array.  Memoised: every capture of a scene (designs, seeds,
+    noise steps) is scored against the same truth."""
     from spectracam.evaluation.scielab import XYZ_TO_OPPONENT
     from spectracam.processing.color import adaptation_matrix
 
@@ -669,12 +706,13 @@ def _truth_scielab_lab(reference: ChartReference, display: str, adaptation: str,
     white = M_disp.sum(axis=1)
     to_opponent = XYZ_TO_OPPONENT @ adaptation_matrix(reference.white_xyz, white, adaptation)
     at = _scielab_bands(reference, spd)
+    base, factors = _truth_factors(reference, at.rows, at.cols, to_opponent, spd)
     mask, fused = _scored_mask(reference), _fused(white)
     lab = np.empty((int(mask[at.rows, at.cols].sum()), 3))
     start = 0
-    for rows, rows_in in zip(at.bands, at.rows_in):
-        start = _filtered_lab(chart_truth_xyz(reference, rows_in, at.cols_in) @ to_opponent.T, mask[rows, at.cols],
-                              spd, white, fused, lab, start)
+    for rows in at.bands:
+        f = _truth_band_filtered(base, factors, slice(rows.start - at.rows.start, rows.stop - at.rows.start))
+        start = _kept_lab(f, mask[rows, at.cols], white, fused, lab, start)
     assert start == len(lab)
     lab.flags.writeable = False
     return lab
@@ -690,7 +728,7 @@ def _band_delta_e(opp: np.ndarray, keep: np.ndarray, spd: float, white: np.ndarr
 
     if fused is None:
         lab = np.empty((int(keep.sum()), 3))
-        _filtered_lab(opp, keep, spd, white, None, lab, 0)
+        _kept_lab(filter_extended_opponent(opp, spd), keep, white, None, lab, 0)
         block = out[rows, cols]
         block[keep] = delta_e(lab, truth[start:start + len(lab)], method)
         out[rows, cols] = block
