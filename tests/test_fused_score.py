@@ -238,3 +238,20 @@ def test_narrowing_under_a_profiler_and_a_tracer():
     finally:
         sys.settrace(None)
     np.testing.assert_array_equal(got, want)
+
+
+@pytest.mark.parametrize("kernels", ["1", "0"])
+@pytest.mark.parametrize("method,layout", [("bilinear", "GRBG"), ("bilinear", "BGGR"), ("malvar2004", "RGGB"),
+                                           ("patch", "GRBG")])
+def test_demosaicking_with_a_divisor_is_demosaicking_then_dividing(kernels, method, layout, monkeypatch):
+    """The exposure normalisation divided in as the compiled bilinear pass writes (issue 38) gives, bit for bit,
+    the demosaicked image divided afterwards; so do the other methods and the path without the kernels."""
+    from spectracam.architecture.base import MosaicLayout
+    from spectracam.processing.color import demosaic
+
+    monkeypatch.setenv("SPECTRACAM_FUSED", kernels)
+    lay = MosaicLayout.bayer(layout)
+    mosaic = np.random.default_rng(6).random((64, 48)) * 3000
+    times = np.array([0.0123, 0.0301, 0.00711])[:len(lay.channels)]
+    want = demosaic(mosaic, lay, method) / times[None, None, :]
+    np.testing.assert_array_equal(demosaic(mosaic, lay, method, divisor=times), want)

@@ -20,9 +20,10 @@ _WEIGHTS = np.array([[[0.25, 0.5, 0.25], [0.5, 1.0, 0.5], [0.25, 0.5, 0.25]],
 
 
 @njit_cached(nogil=True)
-def bilinear_bayer_kernel(start, stop, cfa, chan, green, weights, out):
+def bilinear_bayer_kernel(start, stop, cfa, chan, green, weights, divisor, out):
     """Rows ``[start, stop)`` of ``out`` ``(H, W, 3)``: channel ``chan[y % 2, x % 2]`` of the Bayer tile is the one
-    site ``(y, x)`` records; ``green[c]`` picks channel ``c``'s kernel in ``weights``."""
+    site ``(y, x)`` records; ``green[c]`` picks channel ``c``'s kernel in ``weights``; each channel ``c`` is divided
+    by ``divisor[c]`` as it is written (the exposure normalisation; 1 for none: the same values)."""
     h, w = cfa.shape
     for y in range(start, stop):
         for x in range(w):
@@ -41,4 +42,4 @@ def bilinear_bayer_kernel(start, stop, cfa, chan, green, weights, out):
                         a1 += v
                     else:
                         a2 += v
-            out[y, x, 0], out[y, x, 1], out[y, x, 2] = a0, a1, a2
+            out[y, x, 0], out[y, x, 1], out[y, x, 2] = a0 / divisor[0], a1 / divisor[1], a2 / divisor[2]

@@ -479,7 +479,7 @@ DEMOSAIC_BAND_ROWS = 512
 DEMOSAIC_MARGIN = 8
 
 
-def demosaic(mosaic: np.ndarray, layout: MosaicLayout, method: str) -> np.ndarray:
+def demosaic(mosaic: np.ndarray, layout: MosaicLayout, method: str, divisor: np.ndarray | None = None) -> np.ndarray:
     """Full-colour image from a mosaic of the given layout with a registered demosaicking method.
 
     Works band by band (band edges on whole tiles, :data:`DEMOSAIC_BAND_ROWS` rows with
@@ -496,6 +496,9 @@ def demosaic(mosaic: np.ndarray, layout: MosaicLayout, method: str) -> np.ndarra
         A name in :data:`DEMOSAIC_METHODS`: ``"bilinear"`` (any periodic mosaic), ``"malvar2004"`` and
         ``"menon2007"`` (three-channel mosaics, remosaicked to Bayer first when not Bayer), or ``"patch"`` (the
         paper's reading: each tile's mean per channel).
+    divisor : ndarray, optional
+        ``(N,)``: each channel divided by its value (the exposure times: rates from electrons), in the compiled
+        bilinear pass as it writes, after the others; the same values as dividing the result.
 
     Returns
     -------
@@ -515,8 +518,16 @@ def demosaic(mosaic: np.ndarray, layout: MosaicLayout, method: str) -> np.ndarra
     .. [Catrysse1999] see docs/references.md; section 3.5.
     """
     fn = DEMOSAIC_METHODS[method]
-    if method == "bilinear" and (fused := _bilinear_bayer_fused(mosaic, layout)) is not None:
+    if method == "bilinear" and (fused := _bilinear_bayer_fused(mosaic, layout, divisor)) is not None:
         return fused
+    out = _demosaic_bands(fn, mosaic, layout)
+    if divisor is not None:
+        out /= np.asarray(divisor, float)[None, None, :]
+    return out
+
+
+def _demosaic_bands(fn, mosaic: np.ndarray, layout: MosaicLayout) -> np.ndarray:
+    """:func:`demosaic` band by band (or whole when the image is one band)."""
     h = mosaic.shape[0]
     step = DEMOSAIC_BAND_ROWS
     if h <= step + 2 * DEMOSAIC_MARGIN:
@@ -530,7 +541,8 @@ def demosaic(mosaic: np.ndarray, layout: MosaicLayout, method: str) -> np.ndarra
     return out
 
 
-def _bilinear_bayer_fused(mosaic: np.ndarray, layout: MosaicLayout) -> np.ndarray | None:
+def _bilinear_bayer_fused(mosaic: np.ndarray, layout: MosaicLayout,
+                          divisor: np.ndarray | None = None) -> np.ndarray | None:
     """``bilinear`` on a Bayer mosaic in one compiled pass (``processing/_numba_demosaic.py``: colour-demosaicing's
     arithmetic, to the rounding of float64), or None: another mosaic, no numba, or ``SPECTRACAM_FUSED=0``."""
     from spectracam.core.cielab import _kernels
@@ -548,8 +560,9 @@ def _bilinear_bayer_fused(mosaic: np.ndarray, layout: MosaicLayout) -> np.ndarra
     chan = np.array(["RGB".index(k) for k in layout.bayer_pattern], np.int64).reshape(2, 2)
     green = np.array([0, 1, 0], np.int64)
     out = np.empty((*cfa.shape, 3), np.float64)
+    d = np.ones(3) if divisor is None else np.ascontiguousarray(divisor, np.float64).reshape(3)
     run_bands(mod.bilinear_bayer_kernel, cfa.shape[0],
-              lambda a, b: (np.int64(a), np.int64(b), cfa, chan, green, mod._WEIGHTS, out))
+              lambda a, b: (np.int64(a), np.int64(b), cfa, chan, green, mod._WEIGHTS, d, out))
     return out
 
 
