@@ -75,7 +75,6 @@ XYZ_TO_OPPONENT = np.array([[0.2787336, 0.7218031, -0.1065520],
 
 #: Its inverse, opponent → XYZ, computed once (a solve per image cost 83 ms at 1 Mpx; issue 38).
 OPPONENT_TO_XYZ = np.linalg.inv(XYZ_TO_OPPONENT)
-_OPPONENT_TO_XYZ = OPPONENT_TO_XYZ
 
 #: The matrix as printed in Zhang & Wandell (1997): O1 = 0.279X + 0.72Y - 0.107Z,
 #: O2 = -0.449X + 0.29Y - 0.077Z, O3 = 0.086X - 0.59Y + 0.501Z (pass it as ``opponent_matrix`` to use it).
@@ -264,7 +263,7 @@ def scielab_filter_fft(xyz: ArrayLike, samples_per_degree: float, dtype: DTypeLi
     spd = _check_spd(samples_per_degree)
     r = scielab_reach(spd)
     opp = np.pad((img @ XYZ_TO_OPPONENT.T).astype(np.dtype(dtype)), ((r, r), (r, r), (0, 0)), mode="symmetric")
-    return filter_extended_opponent(opp, spd).astype(float, copy=False) @ _OPPONENT_TO_XYZ.T
+    return filter_extended_opponent(opp, spd).astype(float, copy=False) @ OPPONENT_TO_XYZ.T
 
 
 def scielab_components(samples_per_degree: float) -> tuple[tuple[np.ndarray, np.ndarray], ...]:

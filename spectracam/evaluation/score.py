@@ -518,8 +518,7 @@ def _pixels(box) -> int:
     return (r.stop - r.start) * (c.stop - c.start)
 
 
-def chart_truth_xyz(reference: ChartReference, rows: slice | np.ndarray,
-                    cols: slice | np.ndarray) -> np.ndarray:
+def chart_truth_xyz(reference: ChartReference, rows: slice, cols: slice) -> np.ndarray:
     """``(h, w, 3)`` CIE 1931 XYZ of the scene's pixels ``[rows, cols]`` under its light (the light's white has Y = 1):
     each patch's reference colour (``reference.patch_xyz``) over the part of the pixel it covers
     (:func:`spectracam.scene.chart.patch_coverage`, what a box-filtered render converges to), the surround's
@@ -529,8 +528,8 @@ def chart_truth_xyz(reference: ChartReference, rows: slice | np.ndarray,
     ----------
     reference : ChartReference
         The chart under its light.
-    rows, cols : slice or ndarray of int
-        The pixels, in the image (index arrays may repeat or reorder them).
+    rows, cols : slice
+        The pixels, in the image.
 
     Returns
     -------
