@@ -232,7 +232,8 @@ def scielab_filter_fft(xyz: ArrayLike, samples_per_degree: float, dtype: DTypeLi
     so the result equals :func:`scielab_filter`'s to the rounding of ``dtype`` (float64: 1e-15 of the largest
     value; float32: about 1e-6, which moves a ΔE of 10 by up to 1e-4; ``tests/test_scielab_scores.py``).  On a
     640×480 image, with the kernels' spectra memoised, about 2× faster in float64 (3× in float32) than the 14
-    row and column passes, which is why the chart scores use it (in float64).
+    row and column passes, which is why the chart scores filter their renderings the same way (in float64, band by
+    band, through :func:`filter_extended_opponent`, which this calls after its pad).
 
     Parameters
     ----------
