@@ -176,6 +176,9 @@ def test_narrowing_leaves_an_image_others_refer_to_alone():
 
     a = np.random.default_rng(2).random((40, 30, 3))
     copy = a.copy()
+    got = S._narrowed_to_float32([a])            # one other reference: this test's name
+    np.testing.assert_array_equal(got, copy.astype(np.float32))
+    np.testing.assert_array_equal(a, copy)
     view = a[5:]
     got = S._narrowed_to_float32([a])
     np.testing.assert_array_equal(got, copy.astype(np.float32))

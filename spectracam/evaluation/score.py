@@ -854,8 +854,10 @@ def _narrowed_to_float32(held: list) -> np.ndarray:
     peak (issue 38: 0.1 of a 12-Mpx cube).  The values are ``astype``'s.  Otherwise (a view, another dtype, another
     reference): ``astype``, the float64 image left as it was."""
     rgb = held.pop()
+    alone = object()   # held by one local name, as rgb is: its count is what "nothing else refers to it" reads as on
+    #                    this interpreter (the argument's own reference is counted or not depending on the version)
     if rgb.dtype != np.float64 or not rgb.flags.c_contiguous or not rgb.flags.owndata or rgb.size < 2 \
-            or sys.getrefcount(rgb) > 2:   # the local name and getrefcount's argument: nothing else refers to it
+            or sys.getrefcount(rgb) > sys.getrefcount(alone):
         return rgb.astype(np.float32)
     shape, size = rgb.shape, rgb.size
     flat = rgb.reshape(-1)
