@@ -44,6 +44,22 @@ def private_render_cache(tmp_path_factory):
         os.environ["SPECTRACAM_CACHE"] = old
 
 
+def pytest_configure(config):
+    """Keep the tests' snapshot of colour-science's tables (:mod:`spectracam.core.colour_data`) out of the user's
+    cache, from before collection (a module may read a table as it is imported); subprocesses inherit the variable.
+    Made once per run by the first reader; removed at the end."""
+    if not os.environ.get("SPECTRACAM_TABLES"):
+        config._colour_tables = tempfile.mkdtemp(prefix="spectracam-colour-tables-")
+        os.environ["SPECTRACAM_TABLES"] = config._colour_tables
+
+
+def pytest_unconfigure(config):
+    folder = getattr(config, "_colour_tables", None)
+    if folder:
+        os.environ.pop("SPECTRACAM_TABLES", None)
+        shutil.rmtree(folder, ignore_errors=True)
+
+
 @pytest.fixture(scope="session")
 def scene_5000():
     return small_scene(illuminant={"temperature_K": 5000})

@@ -194,13 +194,11 @@ def library_curves(name: str) -> CameraCurves:
 
 def d65_white_xyz() -> np.ndarray:
     """XYZ of CIE D65 (CIE 1931 2°, Y = 1), from its tabulated spectrum at 1 nm over 360–830 nm."""
-    import colour
-
+    from spectracam.core import colour_data
     from spectracam.core.spectra import cie_1931_cmfs
 
     wl, cmfs = cie_1931_cmfs()
-    sd = colour.SDS_ILLUMINANTS["D65"]
-    E = np.interp(wl, sd.wavelengths, sd.values)
+    E = np.interp(wl, *colour_data.illuminant_sd("D65"))
     xyz = np.trapezoid(E[:, None] * cmfs, wl, axis=0)
     return xyz / xyz[1]
 
@@ -224,11 +222,10 @@ def d65_response(wl: np.ndarray, values: np.ndarray,
     ndarray
         ``(3,)`` R, G, B response, G = 1.
     """
-    import colour
+    from spectracam.core import colour_data
 
-    sd = colour.SDS_ILLUMINANTS["D65"]
     lam = np.arange(np.ceil(wl[0]), np.floor(wl[-1]) + 1.0)
-    E = np.interp(lam, sd.wavelengths, sd.values) * (1.0 if reflectance is None else reflectance(lam))
+    E = np.interp(lam, *colour_data.illuminant_sd("D65")) * (1.0 if reflectance is None else reflectance(lam))
     S = np.stack([np.interp(lam, wl, values[:, k]) for k in range(3)], axis=-1)
     r = np.trapezoid(S * E[:, None], lam, axis=0)
     return r / r[1]

@@ -189,7 +189,8 @@ def energy_to_photons(values_per_nm: np.ndarray, wavelength_nm: np.ndarray) -> n
 
 
 def cie_1931_cmfs() -> tuple[np.ndarray, np.ndarray]:
-    """The CIE 1931 2° colour-matching functions from colour-science.
+    """The CIE 1931 2° colour-matching functions from colour-science (its table, read by
+    :func:`spectracam.core.colour_data.cmfs_1931`).
 
     Returns
     -------
@@ -202,10 +203,9 @@ def cie_1931_cmfs() -> tuple[np.ndarray, np.ndarray]:
     ----------
     .. [CIE015] see docs/references.md; the CIE 1931 standard colorimetric observer.
     """
-    import colour
+    from spectracam.core import colour_data
 
-    cmfs = colour.MSDS_CMFS[CMFS_NAME]
-    return np.asarray(cmfs.wavelengths, dtype=float), np.asarray(cmfs.values, dtype=float)
+    return colour_data.cmfs_1931()
 
 
 def cmf_band_weights(grid: WavelengthGrid) -> np.ndarray:

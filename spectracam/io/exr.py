@@ -300,10 +300,10 @@ def preview_rgb(radiance: np.ndarray, grid: WavelengthGrid, white_luminance_cd_m
     ndarray
         ``(H, W, 3)`` linear sRGB (ITU-R BT.709 primaries), unclipped.
     """
-    import colour
+    from spectracam.core import colour_data
 
     xyz = np.tensordot(radiance, cmf_band_weights(grid), axes=([-1], [0])) * (K_M_LM_PER_W / white_luminance_cd_m2)
-    m = np.asarray(colour.RGB_COLOURSPACES["sRGB"].matrix_XYZ_to_RGB)
+    m = colour_data.srgb_matrix("XYZ_to_RGB")
     return np.tensordot(xyz, m, axes=([-1], [1]))
 
 

@@ -77,18 +77,16 @@ def srgb_preview(rendered_rgb: np.ndarray, display: str, adapt_white: bool = Tru
     ndarray
         ``(H, W, 3)`` uint8, sRGB-encoded (IEC 61966-2-1).
     """
-    import colour
-
+    from spectracam.core import colour_data
     from spectracam.processing.tone import tone_map
 
     M = display_rgb_to_xyz(display)
-    srgb = colour.RGB_COLOURSPACES["sRGB"]
-    to_srgb = np.asarray(srgb.matrix_XYZ_to_RGB)
+    to_srgb = colour_data.srgb_matrix("XYZ_to_RGB")
     if adapt_white:
-        d65 = np.asarray(srgb.matrix_RGB_to_XYZ).sum(axis=1)
+        d65 = colour_data.srgb_matrix("RGB_to_XYZ").sum(axis=1)
         to_srgb = to_srgb @ adaptation_matrix(M.sum(axis=1), d65, "bradford")
     lin = rendered_rgb @ (to_srgb @ M).T
-    return (np.clip(colour.cctf_encoding(tone_map(lin, tone_curve), "sRGB"), 0, 1) * 255 + 0.5).astype(np.uint8)
+    return (np.clip(colour_data.srgb_encode(tone_map(lin, tone_curve)), 0, 1) * 255 + 0.5).astype(np.uint8)
 
 
 def write_png(path: Path, rgb8: np.ndarray) -> Path:

@@ -275,10 +275,10 @@ def xy_to_cct(xy: ArrayLike) -> float:
     float
         The CCT, K.
     """
-    import colour
+    from spectracam.core import colour_data
 
-    uv = colour.xy_to_UCS_uv(np.asarray(xy, float))
-    cct = float(np.asarray(colour.temperature.uv_to_CCT(uv, method="Robertson 1968"))[0])
+    uv = colour_data.xy_to_uv(np.asarray(xy, float))
+    cct = float(np.asarray(colour_data.uv_to_cct_robertson(uv))[0])
     if not np.isfinite(cct):
         return CCT_RANGE_K[1]
     return float(np.clip(cct, *CCT_RANGE_K))
@@ -301,21 +301,19 @@ def light_cct_K(illuminant: IlluminantSpec) -> float:
     """
     if illuminant.kind == "blackbody":
         return float(illuminant.temperature_K)
-    import colour
-
+    from spectracam.core import colour_data
     from spectracam.scene.illuminant import relative_spd
 
     lam = np.arange(380.0, 781.0, 5.0)
     spd = relative_spd(illuminant)(lam)
-    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(
-        colour.SpectralShape(380, 780, 5)).values
+    cmfs = colour_data.cmfs_1931_380_780_5()
     return xy_to_cct(xyz_to_xy(spd @ cmfs))
 
 
 def _illuminant_cct(name: str) -> float:
-    import colour
+    from spectracam.core import colour_data
 
-    return xy_to_cct(colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"][name])
+    return xy_to_cct(colour_data.illuminant_xy(name))
 
 
 @lru_cache(maxsize=64)

@@ -215,21 +215,20 @@ class ProcessingSpec(Spec):
 @DISPLAYS.register("srgb")
 def _srgb() -> np.ndarray:
     """IEC 61966-2-1 sRGB primaries and D65 white."""
-    import colour
+    from spectracam.core import colour_data
 
-    return np.asarray(colour.RGB_COLOURSPACES["sRGB"].matrix_RGB_to_XYZ, float)
+    return colour_data.srgb_matrix("RGB_to_XYZ")
 
 
 @DISPLAYS.register("crt")
 def _crt() -> np.ndarray:
     """The phosphor spectra of :data:`CRT_PRIMARIES` integrated against the CIE 1931 CMFs."""
-    import colour
-
+    from spectracam.core import colour_data
     from spectracam.core.spectra import cie_1931_cmfs
 
     wl, cmfs = cie_1931_cmfs()
-    prim = colour.MSDS_DISPLAY_PRIMARIES[CRT_PRIMARIES]
-    spd = np.stack([np.interp(wl, prim.wavelengths, np.asarray(prim.values)[:, k], left=0, right=0) for k in range(3)])
+    prim_wl, prim = colour_data.display_primaries(CRT_PRIMARIES)
+    spd = np.stack([np.interp(wl, prim_wl, prim[:, k], left=0, right=0) for k in range(3)])
     M = np.trapezoid(spd[:, :, None] * cmfs[None, :, :], wl, axis=1).T  # columns: XYZ of each primary
     return M / M[1].sum()
 
@@ -270,19 +269,21 @@ def _xyz_scaling(white_from, white_to):
 
 @ADAPTATIONS.register("bradford")
 def _bradford(white_from, white_to):
-    """von Kries in the Bradford cone space (Lam 1985), colour-science's implementation."""
-    import colour
+    """von Kries in the Bradford cone space (Lam 1985), colour-science's matrix
+    (:func:`spectracam.core.colour_data.von_kries_matrix`, the same numbers as
+    ``colour.adaptation.matrix_chromatic_adaptation_VonKries``)."""
+    from spectracam.core import colour_data
 
-    return np.asarray(colour.adaptation.matrix_chromatic_adaptation_VonKries(white_from, white_to, transform="Bradford"))
+    return colour_data.von_kries_matrix(white_from, white_to, "Bradford")
 
 
 @ADAPTATIONS.register("cat16")
 def _cat16(white_from, white_to):
     """von Kries in CAT16's sharpened cone space (Li et al., Color Res. Appl. 42(6) 2017; CIECAM16's), full
-    adaptation, colour-science's implementation."""
-    import colour
+    adaptation, colour-science's matrix (:func:`spectracam.core.colour_data.von_kries_matrix`)."""
+    from spectracam.core import colour_data
 
-    return np.asarray(colour.adaptation.matrix_chromatic_adaptation_VonKries(white_from, white_to, transform="CAT16"))
+    return colour_data.von_kries_matrix(white_from, white_to, "CAT16")
 
 
 def adaptation_matrix(white_from: np.ndarray, white_to: np.ndarray, method: str) -> np.ndarray:

@@ -70,12 +70,9 @@ def patch_names_and_data(dataset: str) -> list[tuple[str, np.ndarray, np.ndarray
     list of (str, ndarray, ndarray)
         Each patch's name, its measured wavelengths (nm) and reflectances (0…1), in the standard order.
     """
-    import colour
+    from spectracam.core import colour_data
 
-    sds = colour.SDS_COLOURCHECKERS[dataset]
-    out = []
-    for name, sd in sds.items():
-        out.append((name, np.array(sd.wavelengths, dtype=float), np.array(sd.values, dtype=float)))
+    out = colour_data.sd_set(f"colourchecker/{dataset}")
     if len(out) != ROWS * COLUMNS:
         raise ValueError(f"dataset {dataset!r} has {len(out)} patches, expected 24")
     return out

@@ -40,11 +40,11 @@ def _blackbody(spec: "IlluminantSpec") -> Spectrum:
 
 @ILLUMINANTS.register("cie")
 def _cie(spec: "IlluminantSpec") -> Spectrum:
-    """A tabulated CIE illuminant from colour-science (``name``: D65, D50, A, FL2, ...)."""
-    import colour
+    """A tabulated CIE illuminant from colour-science (``name``: D65, D50, A, FL2, ...; its table, read by
+    :func:`spectracam.core.colour_data.illuminant_sd`)."""
+    from spectracam.core import colour_data
 
-    sd = colour.SDS_ILLUMINANTS[spec.name]
-    return tabulated(sd.wavelengths, sd.values)
+    return tabulated(*colour_data.illuminant_sd(spec.name))
 
 
 @ILLUMINANTS.register("measured")
@@ -78,11 +78,12 @@ class IlluminantSpec(Spec):
         if self.kind == "blackbody":
             self.number("temperature_K", *TEMPERATURE_RANGE_K, unit="K")
         elif self.kind == "cie":
-            import colour
+            from spectracam.core import colour_data
 
-            if self.name not in colour.SDS_ILLUMINANTS:
+            names = colour_data.illuminant_names()
+            if self.name not in names:
                 raise self.error("name", "must be a CIE illuminant or another light colour-science ships, e.g. D65, A, "
-                                 f"FL2, LED-B1 ({len(colour.SDS_ILLUMINANTS)} names: colour.SDS_ILLUMINANTS)")
+                                 f"FL2, LED-B1 ({len(names)} names: colour.SDS_ILLUMINANTS)")
         elif self.kind == "measured":
             self.string("name")
             wl, v = self.wavelengths_nm, self.values

@@ -130,14 +130,23 @@ def _checked(name: str, names, wl, values, citation: str) -> ReflectanceSet:
     return ReflectanceSet(name, tuple(str(n) for n in names), wl, np.clip(v, 0.0, None), citation)
 
 
-def _from_colour_msds(name: str, msds) -> ReflectanceSet:
-    return _checked(name, list(msds.labels), msds.wavelengths, np.asarray(msds.values).T, CITATIONS[name])
+def _from_colour_samples(name: str, key: str) -> ReflectanceSet:
+    """A set colour-science holds on one grid (:func:`spectracam.core.colour_data.sample_set`)."""
+    from spectracam.core import colour_data
+
+    labels, wl, values = colour_data.sample_set(key)
+    return _checked(name, list(labels), wl, values.T, CITATIONS[name])
 
 
-def _from_colour_sds(name: str, sds: dict) -> ReflectanceSet:
-    wl = next(iter(sds.values())).wavelengths
-    rows = [np.interp(wl, sd.wavelengths, sd.values) for sd in sds.values()]
-    return _checked(name, list(sds), wl, rows, CITATIONS[name])
+def _from_colour_sds(name: str, key: str) -> ReflectanceSet:
+    """A set colour-science holds as separate spectra (:func:`spectracam.core.colour_data.sd_set`), each
+    interpolated onto the first one's wavelengths."""
+    from spectracam.core import colour_data
+
+    sds = colour_data.sd_set(key)
+    wl = sds[0][1]
+    rows = [np.interp(wl, w, v) for _, w, v in sds]
+    return _checked(name, [n for n, _, _ in sds], wl, rows, CITATIONS[name])
 
 
 def _luxpy_file(filename: str) -> Path:
@@ -242,22 +251,14 @@ def check_available(name: str, what: str = "held_out") -> None:
 
 @lru_cache(maxsize=16)
 def _load_named(name: str) -> ReflectanceSet:
-    import colour
-
-    if name == "cfi99":
-        from colour.quality.cfi2017 import load_TCS_CIE2017
-
-        return _from_colour_msds(name, load_TCS_CIE2017(colour.SpectralShape(380, 780, 5)))
-    if name == "rawtoaces190":
-        return _from_colour_msds(name, colour.characterisation.read_training_data_rawtoaces_v1())
+    if name in ("cfi99", "rawtoaces190"):   # CIE 2017's 99 at 380-780 nm by 5 nm; rawtoaces' training data
+        return _from_colour_samples(name, name)
     if name in ("colorchecker24", "colorchecker24_ohta", "iso17321"):
         key = {"colorchecker24": "BabelColor Average", "colorchecker24_ohta": "ColorChecker N Ohta",
                "iso17321": "ISO 17321-1"}[name]
-        return _from_colour_sds(name, colour.SDS_COLOURCHECKERS[key])
-    if name == "tcs14":
-        return _from_colour_sds(name, dict(list(colour.quality.datasets.SDS_TCS["CIE 1995"].items())[:14]))
-    if name == "vs15":
-        return _from_colour_sds(name, colour.quality.datasets.SDS_VS["NIST CQS 9.0"])
+        return _from_colour_sds(name, f"colourchecker/{key}")
+    if name in ("tcs14", "vs15"):   # CIE 13.3's first 14 samples; NIST CQS 9.0's 15
+        return _from_colour_sds(name, name)
     if name == "munsell1269":
         return _luxpy_table(name, "Munsell1269.dat")
     if name == "tm30_4880":

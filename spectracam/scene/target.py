@@ -479,11 +479,11 @@ def _photo_layout(spec: TargetSpec, shape: tuple[int, int], library_lab: np.ndar
     key = (code[..., 0] << 24) | (code[..., 1] << 12) | code[..., 2]
     uniq, inverse = np.unique(key.ravel(), return_inverse=True)
     rgb = np.stack([(uniq >> 24) & 4095, (uniq >> 12) & 4095, uniq & 4095], axis=-1) / 4095.0
-    import colour
+    from spectracam.core import colour_data
 
-    srgb = colour.RGB_COLOURSPACES["sRGB"]
-    xyz = rgb @ np.asarray(srgb.matrix_RGB_to_XYZ).T                 # D65, Y = 1 for white
-    lab = xyz_to_lab(xyz, np.asarray(srgb.matrix_RGB_to_XYZ).sum(axis=1))
+    to_xyz = colour_data.srgb_matrix("RGB_to_XYZ")
+    xyz = rgb @ to_xyz.T                 # D65, Y = 1 for white
+    lab = xyz_to_lab(xyz, to_xyz.sum(axis=1))
     _, nearest = cKDTree(library_lab).query(lab)
     return nearest.astype(np.int32)[inverse].reshape(shape)
 

@@ -108,10 +108,10 @@ def srgb8(linear: np.ndarray) -> np.ndarray:
     ndarray
         The same shape, uint8 (IEC 61966-2-1's transfer function, rounded).
     """
-    import colour
+    from spectracam.core import colour_data
 
     x = np.clip(np.nan_to_num(linear, nan=0.0), 0.0, 1.0)
-    return (np.clip(colour.cctf_encoding(x, "sRGB"), 0, 1) * 255 + 0.5).astype(np.uint8)
+    return (np.clip(colour_data.srgb_encode(x), 0, 1) * 255 + 0.5).astype(np.uint8)
 
 
 def rgba(rgb8: np.ndarray) -> np.ndarray:
@@ -164,9 +164,9 @@ def _radiance(case: Case, cube):
         case.notes.append("radiance.exr records no light: the preview's white is the image's 99th percentile")
     xyz = np.tensordot(rad.astype(np.float64), w, axes=([-1], [0])) / white[1]
     case.scene_lab = xyz_to_lab(xyz, white / white[1]).astype(np.float32)
-    import colour
+    from spectracam.core import colour_data
 
-    m = np.asarray(colour.RGB_COLOURSPACES["sRGB"].matrix_XYZ_to_RGB)
+    m = colour_data.srgb_matrix("XYZ_to_RGB")
     case.images["scene"] = rgba(srgb8(np.tensordot(xyz, m, axes=([-1], [1]))))
     return scene, grid
 

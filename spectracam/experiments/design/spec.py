@@ -136,11 +136,12 @@ class DesignSpec(Spec):
         if not isinstance(lights, tuple) or not lights:
             raise self.error("lights", "must be a non-empty list of blackbody temperatures (K) and CIE illuminant "
                                        "names, e.g. [3000, 6500, 'D65']")
-        import colour
+        from spectracam.core import colour_data
 
+        names = colour_data.illuminant_names()
         for v in lights:
             ok = (isinstance(v, (int, float)) and not isinstance(v, bool) and 1000 <= v <= 40000) or \
-                 (isinstance(v, str) and v in colour.SDS_ILLUMINANTS)
+                 (isinstance(v, str) and v in names)
             if not ok:
                 raise self.error("lights", "each light must be a temperature 1000–40000 K or a CIE illuminant "
                                            "colour-science ships (e.g. 'D65', 'A', 'FL2')", v)

@@ -202,10 +202,10 @@ def _experiment_table(p: Path, mine: list) -> dict:
 
 def _budget_illuminant(t: dict, src: str) -> str:
     """The error budget's illuminant (taken from ``t``): a CIE illuminant colour-science ships."""
-    import colour
+    from spectracam.core import colour_data
 
     budget_illuminant = t.pop("budget_illuminant", PaperExperiment.budget_illuminant)
-    if budget_illuminant not in colour.SDS_ILLUMINANTS:
+    if budget_illuminant not in colour_data.illuminant_names():
         raise ConfigError("budget_illuminant", budget_illuminant,
                           "must be a CIE illuminant colour-science ships, e.g. D65", src)
     return budget_illuminant
