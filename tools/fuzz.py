@@ -9,7 +9,8 @@ targets (issue 19: their values, damaged photographs and measured SPD files), an
 issue 20 (stacked depths, schemes and demosaickers that do not apply, the architectures command), and the
 page of issue 23 (``view DIR`` on bad directories, ``--view`` under faults), and issue 34's new user: each of ten
 faults in its bad form (case_user_faults), the same inputs in their valid forms, which must be accepted with their
-files written (case_valid), and results checked for physical possibility (case_physical, impossible_outputs).
+files written (case_valid), and results checked for physical possibility (case_physical, impossible_outputs); issue
+38's snapshot of colour-science's tables damaged, missing or unwritable (case_colour_tables: every run succeeds).
 ``--only user_faults,valid,physical`` runs only those classes.
 
 Each case runs one real command in a fresh directory and is judged:
@@ -233,11 +234,13 @@ SWEEP = ('base_scene = "s.toml"\nrenderer = "analytic"\ntrials = 2\nseed = 3\n'
 def make_base(d: Path):
     (d / "s.toml").write_text(SCENE)
     (d / "sw.toml").write_text(SWEEP)
+    os.environ["SPECTRACAM_TABLES"] = str(d / "tables")   # every case's commands read one snapshot, made here
     for cmd in (["render", "s.toml", "-o", "r", "--renderer", "analytic", "--quiet"],
                 ["capture", "r/radiance.exr", "-o", "c", "--quiet"],
                 ["sweep", "sw.toml", "-o", "sw", "--serial", "--quiet"]):
         r, _, _ = run(cmd, d)
         assert r.returncode == 0, r.stderr
+    assert list((d / "tables").glob("colour-science-*.npz")), "make_base: no snapshot of colour-science's tables"
 
 
 def case_damaged_file(rng, d: Path):
@@ -1247,12 +1250,47 @@ def case_channel_planes(rng, d: Path):
     return _with_fault(rng, cmd, bad)
 
 
+def case_colour_tables(rng, d: Path):
+    """Issue 38: the snapshot of colour-science's tables (spectracam.core.colour_data, ``$SPECTRACAM_TABLES``) missing,
+    truncated, garbage, empty, a directory where it should be, a file where its folder should be, its folder
+    read-only, or a full disk as it is written: a cache never stops a run, so every command succeeds with its files;
+    where the folder can be written, a whole snapshot is left there (never a temporary file)."""
+    from importlib import metadata
+
+    tables = d / "case_tables"   # this case's own folder (d / "tables" holds make_base's good snapshot)
+    name = f"colour-science-{metadata.version('colour-science')}.npz"
+    snap = tables / name
+    kind = rng.choice(["missing", "truncated", "garbage", "empty", "directory", "file_for_folder", "read_only",
+                       "full_disk"])
+    good = (d / "tables" / name).read_bytes()
+    opts = {"env": {"SPECTRACAM_TABLES": str(tables)}, "physical": True,
+            "expect": ["out/radiance.exr", "out/raw.exr", "out/report.json"]}
+    if kind in ("truncated", "garbage", "empty", "read_only", "full_disk"):
+        tables.mkdir()
+        garbage = bytes(rng.randrange(256) for _ in range(2048))
+        snap.write_bytes({"truncated": good[: rng.randrange(1, len(good))], "garbage": garbage}.get(kind, b""))
+    if kind == "directory":
+        snap.mkdir(parents=True)
+    if kind == "file_for_folder":
+        tables.write_text("a file where the folder should be")
+    if kind == "read_only":
+        os.chmod(tables, 0o555)
+        opts["drop_caps"] = True
+    if kind == "full_disk":
+        opts["fsize"] = 300_000   # the tiny scene's files fit; the snapshot (~0.6 MB) does not
+    if kind in ("missing", "truncated", "garbage", "empty"):
+        opts["expect"].append(str(snap.relative_to(d)))
+    cmd = rng.choice([["simulate", "s.toml", "-o", "out", *SIM], ["simulate", "d65", "-o", "out", *SIM, "--set",
+                      "image.width=64", "--set", "image.height=48"]])
+    return cmd, False, f"colour tables {kind}: {cmd[0]} {cmd[1]}", opts
+
+
 CASES = [case_damaged_file, case_scene_value, case_environment, case_garbage_text, case_camera_file, case_foreign_exr,
          case_new_commands, case_signal, case_full_disk, case_memory_limit, case_raw_attributes, case_journal,
          case_experiment_values, case_group_signal, case_scheduler_peer, case_read_only, case_reflectances,
          case_target, case_architectures, case_spacetime, case_design, case_view, case_developed,
          case_white_balance, case_user_faults, case_valid, case_physical, case_honest_scores, case_dynamic_range,
-         case_field, case_channel_planes]
+         case_field, case_channel_planes, case_colour_tables]
 
 
 def one(i: int, seed: int, base: Path, cycle: bool = False, classes=None) -> tuple[str, dict]:
