@@ -1342,12 +1342,19 @@ def main(argv=None) -> int:
         if unknown:
             ap.error(f"--only: no class {', '.join(unknown)}; classes: {', '.join(by_name)}")
         classes = [by_name[n] for n in a.only.split(",")]
-    with tempfile.TemporaryDirectory() as t:
-        base = Path(t)
-        make_base(base)
-        with ThreadPoolExecutor(a.jobs) as ex:
-            results = list(ex.map(lambda i: one(i, a.seed, base, cycle=not a.random_classes, classes=classes),
-                                  range(a.cases)))
+    kept = os.environ.get("SPECTRACAM_TABLES")
+    try:
+        with tempfile.TemporaryDirectory() as t:
+            base = Path(t)
+            make_base(base)
+            with ThreadPoolExecutor(a.jobs) as ex:
+                results = list(ex.map(lambda i: one(i, a.seed, base, cycle=not a.random_classes, classes=classes),
+                                      range(a.cases)))
+    finally:   # make_base pointed the variable at its folder: a caller in the same process (the tests) gets its own back
+        if kept is None:
+            os.environ.pop("SPECTRACAM_TABLES", None)
+        else:
+            os.environ["SPECTRACAM_TABLES"] = kept
     counts = {k: sum(bool(r.get(k)) for _, r in results) for k in KINDS}
     for label, r in results:
         if any(r.get(k) for k in KINDS):
