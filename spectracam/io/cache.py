@@ -65,13 +65,16 @@ def render_key(scene: Scene, renderer: str) -> tuple[str, dict]:
         What the key identifies: the scene's tables, the renderer, the render method (:data:`RENDER_METHOD` or
         :data:`TEXTURED_RENDER_METHOD`) and the spectracam and Mitsuba versions (Mitsuba's only for its renderer).
     """
-    import mitsuba
-
     d = scene.to_dict()
     tables = ("target", *RENDER_TABLES) if "target" in d else RENDER_TABLES   # to_dict has it when textured
+    mitsuba_version = None
+    if renderer == "mitsuba":   # imported only for its renderer (0.3-0.6 s that an analytic run does not need)
+        import mitsuba
+
+        mitsuba_version = mitsuba.__version__
     ident = {"scene": {k: d[k] for k in tables}, "renderer": renderer,
              "method": TEXTURED_RENDER_METHOD if "target" in d else RENDER_METHOD,
-             "spectracam": __version__, "mitsuba": mitsuba.__version__ if renderer == "mitsuba" else None}
+             "spectracam": __version__, "mitsuba": mitsuba_version}
     text = json.dumps(ident, sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:32], ident
 

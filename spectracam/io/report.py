@@ -104,11 +104,13 @@ def write_png(path: Path, rgb8: np.ndarray) -> Path:
     Path
         The file written.
     """
-    from spectracam.io.plots import pyplot
+    from spectracam.io.plots import configure
 
-    plt = pyplot()
+    configure()
+    import matplotlib.image   # pyplot.imsave's own function, without pyplot
+
     buf = io.BytesIO()
-    plt.imsave(buf, rgb8, format="png")
+    matplotlib.image.imsave(buf, rgb8, format="png")
     return atomic_write(path, buf.getvalue())
 
 
@@ -138,16 +140,18 @@ def delta_e_figure(delta_e_map: np.ndarray, title: str, vmax: float | None = DEL
     """
     from mpl_toolkits.axes_grid1 import make_axes_locatable
 
-    from spectracam.io.plots import pyplot
+    from matplotlib import colormaps
 
-    plt = pyplot()
+    from spectracam.io.plots import figure
+
     h, w = delta_e_map.shape
     fixed = vmax is not None
     if not fixed:
         finite = delta_e_map[np.isfinite(delta_e_map)]
         vmax = max(10.0, float(np.percentile(finite, 99))) if finite.size else 10.0
-    fig, ax = plt.subplots(figsize=(7.0, 7.0 * h / w + 0.6))
-    cmap = plt.get_cmap("magma").with_extremes(bad="#d0d0d0")
+    fig = figure(figsize=(7.0, 7.0 * h / w + 0.6))
+    ax = fig.subplots()
+    cmap = colormaps["magma"].with_extremes(bad="#d0d0d0")
     im = ax.imshow(delta_e_map, cmap=cmap, vmin=0, vmax=vmax, interpolation="nearest")
     ax.set_axis_off()
     ax.set_title(title, fontsize=9)

@@ -6,7 +6,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from spectracam.io.plots import OKABE_ITO
-from spectracam.io.plots import pyplot as _plt
+from spectracam.io.plots import figure
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -39,12 +39,14 @@ def fig4(results: dict) -> Figure:
     matplotlib.figure.Figure
         One panel per design drawn: ``cfa/single`` and ``fsc/optimal``, and any design outside the paper's.
     """
-    plt = _plt()
+    from matplotlib.lines import Line2D
+
     f4 = results["fig4_white_response"]
     fill = (results.get("parameters", {}).get("scene") or {}).get("capture", {}).get("white_fill", 1.0)
     designs = [d for d in ("cfa/single", "fsc/optimal") if d in f4] + [d for d in f4 if d not in PAPER_DESIGNS]
     designs = designs or list(f4)[:2]
-    fig, axes = plt.subplots(1, len(designs), figsize=(4.2 * len(designs) + 2.1, 3.6), sharey=True, squeeze=False)
+    fig = figure(figsize=(4.2 * len(designs) + 2.1, 3.6))
+    axes = fig.subplots(1, len(designs), sharey=True, squeeze=False)
     names = {"R": "red", "G": "green", "B": "blue", "C": "cyan", "M": "magenta", "Y": "yellow", "W": "white (clear)"}
     seen: dict = {}
     for ax, d in zip(axes[0], designs):
@@ -66,7 +68,7 @@ def fig4(results: dict) -> Figure:
         ax.grid(alpha=0.3)
     axes[0][0].set_ylabel("relative response to white (1 = full well)")
     labels, handles = list(seen), list(seen.values())
-    handles.append(plt.Line2D([], [], ls="none", marker="o", color="0.3"))
+    handles.append(Line2D([], [], ls="none", marker="o", color="0.3"))
     labels.append(f"filled: at the metered\nfill ({fill:g} of the well)")
     fig.legend(handles, labels, loc="center right", fontsize=8, frameon=False)
     fig.suptitle("Figure 4: response of each channel to a white surface", fontsize=10)
@@ -99,8 +101,8 @@ def fig5(results: dict) -> Figure:
     matplotlib.figure.Figure
         The two panels.
     """
-    plt = _plt()
-    fig, (a, b) = plt.subplots(1, 2, figsize=(9, 3.8))
+    fig = figure(figsize=(9, 3.8))
+    a, b = fig.subplots(1, 2)
     for ax, key, ylabel, title in ((a, "fig5a_snr_db", "SNR (dB)", "(a) SNR"),
                                    (b, "fig5b_delta_e", "mean ΔE*ab", "(b) perceptual error")):
         for d, per_T in results[key].items():
@@ -138,9 +140,9 @@ def fig6(results: dict) -> Figure:
     matplotlib.figure.Figure
         One bar per step, labelled with its ΔE*ab.
     """
-    plt = _plt()
     steps = [(s["label"], s["delta_e"]) for s in results["fig6_budget_delta_e"]]
-    fig, ax = plt.subplots(figsize=(6.5, 3.6))
+    fig = figure(figsize=(6.5, 3.6))
+    ax = fig.subplots()
     names = [s.replace("+ ", "+\n").replace(" (", "\n(") for s, _ in steps]
     ax.bar(range(len(steps)), [v for _, v in steps], color="0.55", edgecolor="black")
     for i, (_, v) in enumerate(steps):
