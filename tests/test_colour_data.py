@@ -65,6 +65,12 @@ def test_every_table_is_colour_sciences_bit_for_bit():
     prim = colour.MSDS_DISPLAY_PRIMARIES["Typical CRT Brainard 1997"]
     wl, v = colour_data.display_primaries("Typical CRT Brainard 1997")
     assert _same(wl, np.asarray(prim.wavelengths, float)) and _same(v, np.asarray(prim.values, float))
+    for name, msds in colour.MSDS_CAMERA_SENSITIVITIES.items():
+        wl, v = colour_data.camera_sensitivities(name)
+        assert _same(wl, np.asarray(msds.wavelengths, float)) and _same(v, np.asarray(msds.values, float)), name
+    path = colour_data.colour_package_file("characterisation", "datasets", "rawtoaces",
+                                           "CANON_EOS_5DMark_II_RGB_Sensitivities.csv")
+    assert path.is_file() and path.parent.parent.parent.parent == Path(colour.__file__).parent
     srgb = colour.RGB_COLOURSPACES["sRGB"]
     assert _same(colour_data.srgb_matrix("RGB_to_XYZ"), np.asarray(srgb.matrix_RGB_to_XYZ, float))
     assert _same(colour_data.srgb_matrix("XYZ_to_RGB"), np.asarray(srgb.matrix_XYZ_to_RGB, float))
@@ -84,7 +90,8 @@ def test_a_table_handed_out_is_a_copy():
 @pytest.mark.parametrize("ask", [lambda: colour_data.illuminant_sd("D66"), lambda: colour_data.illuminant_xy("D66"),
                                  lambda: colour_data.sd_set("colourchecker/nosuch"), lambda: colour_data.sd_set("cmfs"),
                                  lambda: colour_data.sample_set("tcs14"), lambda: colour_data.srgb_matrix("RGB"),
-                                 lambda: colour_data.cat_matrix("CAT02"), lambda: colour_data.display_primaries("LCD")])
+                                 lambda: colour_data.cat_matrix("CAT02"), lambda: colour_data.display_primaries("LCD"),
+                                 lambda: colour_data.camera_sensitivities("Nikon D70")])
 def test_an_unknown_name_is_a_key_error(ask):
     with pytest.raises(KeyError):
         ask()
@@ -172,7 +179,8 @@ def test_a_damaged_or_stale_snapshot_is_rebuilt(fresh, how):
     assert _same(colour_data.illuminant_sd("D65")[1], np.asarray(colour.SDS_ILLUMINANTS["D65"].values, float))
 
 
-@pytest.mark.parametrize("key", ["illuminants/3/values", "colourchecker/BabelColor Average/23/wl", "cat/CAT16"])
+@pytest.mark.parametrize("key", ["illuminants/3/values", "colourchecker/BabelColor Average/23/wl", "cat/CAT16",
+                                 "cameras/1/values"])
 def test_a_snapshot_without_one_of_its_tables_is_not_whole(fresh, key):
     t = dict(colour_data.tables())
     assert colour_data._whole(t)

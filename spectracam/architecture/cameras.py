@@ -140,17 +140,16 @@ class CameraCurves:
 
 
 def _colour_dataset(name: str) -> tuple[np.ndarray, np.ndarray]:
-    import colour
+    from spectracam.core import colour_data
 
-    msds = colour.MSDS_CAMERA_SENSITIVITIES[name]
-    return np.asarray(msds.wavelengths, float), np.asarray(msds.values, float)
+    return colour_data.camera_sensitivities(name)
 
 
 def _rawtoaces_canon() -> tuple[np.ndarray, np.ndarray]:
-    import colour
+    from spectracam.core import colour_data
 
-    path = Path(colour.characterisation.__file__).parent / "datasets" / "rawtoaces" / \
-        "CANON_EOS_5DMark_II_RGB_Sensitivities.csv"
+    path = colour_data.colour_package_file("characterisation", "datasets", "rawtoaces",
+                                           "CANON_EOS_5DMark_II_RGB_Sensitivities.csv")
     d = np.loadtxt(path, delimiter=",", skiprows=1)
     return d[:, 0], d[:, 1:4]
 

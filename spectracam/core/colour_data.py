@@ -3,8 +3,8 @@
 ``import colour`` costs 1.4–2.4 s on a 2-core machine (colour-science 0.4.7 imports its plotting, with matplotlib,
 and SciPy's interpolation and pandas): more than the whole computation of ``spectracam simulate`` on the default
 scene (issue 38). What the commands read from it are published tables — the CIE 1931 colour-matching functions, the
-CIE and other illuminants, the ColorChecker and other reflectance sets, the sRGB and CRT primaries, the chromatic
-adaptation transforms' matrices and Robertson's (1968) isotemperature lines — so they are taken from colour-science
+CIE and other illuminants, the ColorChecker and other reflectance sets, the sRGB and CRT primaries, the measured
+cameras' sensitivities, the chromatic adaptation transforms' matrices and Robertson's (1968) isotemperature lines — so they are taken from colour-science
 once per installed version and kept in ``<tables>/colour-science-<version>.npz`` (:func:`snapshot_path`). A run reads
 that file (a few milliseconds) and never imports colour-science unless it needs something else from it.
 
@@ -31,14 +31,14 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["SCHEMA", "cat_matrix", "cmfs_1931", "cmfs_1931_380_780_5", "colour_version", "display_primaries",
+__all__ = ["SCHEMA", "camera_sensitivities", "cat_matrix", "cmfs_1931", "colour_package_file", "cmfs_1931_380_780_5", "colour_version", "display_primaries",
            "illuminant_names", "illuminant_sd", "illuminant_xy", "robertson_table", "sample_set", "sd_set",
            "snapshot_path", "srgb_encode", "srgb_matrix", "tables", "uv_to_cct_robertson", "von_kries_matrix",
            "xy_to_uv"]
 
 #: The snapshot's layout; bumped whenever :func:`_build` stores something new or stores it differently, so an older
 #: file is rebuilt, never misread.
-SCHEMA = 1
+SCHEMA = 2   # 2: the measured cameras' sensitivities (MSDS_CAMERA_SENSITIVITIES)
 
 #: The observer every table here is for (colour-science's key).
 OBSERVER = "CIE 1931 2 Degree Standard Observer"
@@ -122,6 +122,9 @@ def _build() -> dict[str, np.ndarray]:
     _put_msds(out, "rawtoaces190", colour.characterisation.read_training_data_rawtoaces_v1())
     for name in DISPLAY_PRIMARIES:
         _put_msds(out, f"display/{name}", colour.MSDS_DISPLAY_PRIMARIES[name])
+    out["cameras/names"] = np.array([str(n) for n in colour.MSDS_CAMERA_SENSITIVITIES])
+    for i, name in enumerate(colour.MSDS_CAMERA_SENSITIVITIES):
+        _put_msds(out, f"cameras/{i}", colour.MSDS_CAMERA_SENSITIVITIES[name])
     srgb = colour.RGB_COLOURSPACES["sRGB"]
     out["srgb/RGB_to_XYZ"] = np.array(srgb.matrix_RGB_to_XYZ, dtype=float)
     out["srgb/XYZ_to_RGB"] = np.array(srgb.matrix_XYZ_to_RGB, dtype=float)
@@ -149,7 +152,7 @@ def _required() -> tuple[str, ...]:
     """The tables every snapshot holds (a set of spectra: its names; each entry is checked by :func:`_whole`)."""
     keys = ["illuminants/names", "illuminant_xy/names", "illuminant_xy/values", "cmfs/wl", "cmfs/values",
             "cmfs_380_780_5/values", "tcs14/names", "vs15/names", "srgb/RGB_to_XYZ", "srgb/XYZ_to_RGB",
-            "robertson/table"]
+            "robertson/table", "cameras/names"]
     keys += [f"{k}/{part}" for k in ("cfi99", "rawtoaces190") for part in ("names", "wl", "values")]
     keys += [f"display/{n}/{part}" for n in DISPLAY_PRIMARIES for part in ("names", "wl", "values")]
     keys += [f"cat/{n}" for n in CAT_TRANSFORMS]
@@ -165,7 +168,7 @@ def _whole(t: dict[str, np.ndarray]) -> bool:
         if key.endswith("/names") and (group == "illuminants" or group.startswith(_SD_SETS)):
             if any(f"{group}/{i}/{part}" not in t for i in range(names.size) for part in ("wl", "values")):
                 return False
-    return True
+    return all(f"cameras/{i}/{part}" in t for i in range(t["cameras/names"].size) for part in ("wl", "values"))
 
 
 def _unpack(packed: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
@@ -368,6 +371,49 @@ def display_primaries(name: str) -> tuple[np.ndarray, np.ndarray]:
     if name not in DISPLAY_PRIMARIES:
         raise KeyError(name)
     return _get(f"display/{name}/wl"), _get(f"display/{name}/values")
+
+
+def camera_sensitivities(name: str) -> tuple[np.ndarray, np.ndarray]:
+    """A measured camera's spectral sensitivities (colour-science's ``MSDS_CAMERA_SENSITIVITIES``).
+
+    Parameters
+    ----------
+    name : str
+        Its key (``"Nikon 5100 (NPL)"``, ``"Sigma SDMerill (NPL)"``).
+
+    Returns
+    -------
+    wavelengths : ndarray
+        ``(n,)`` nm.
+    values : ndarray
+        ``(n, 3)`` R, G, B, as published.
+    """
+    names = [str(n) for n in tables()["cameras/names"]]
+    if name not in names:
+        raise KeyError(name)
+    i = names.index(name)
+    return _get(f"cameras/{i}/wl"), _get(f"cameras/{i}/values")
+
+
+def colour_package_file(*parts: str) -> Path:
+    """A data file shipped inside the installed colour-science, found without importing it.
+
+    Parameters
+    ----------
+    *parts : str
+        The path below the package's folder, e.g. ``"characterisation", "datasets", "rawtoaces", "x.csv"``.
+
+    Returns
+    -------
+    Path
+        Its path (not checked for existence).
+    """
+    from importlib.util import find_spec
+
+    spec = find_spec("colour")   # a top-level package's spec: found, not executed
+    if spec is None or spec.origin is None:
+        raise ModuleNotFoundError("colour-science is not installed")
+    return Path(spec.origin).parent.joinpath(*parts)
 
 
 def srgb_matrix(direction: str) -> np.ndarray:
