@@ -30,6 +30,7 @@ import threading
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 __all__ = ["SCHEMA", "camera_sensitivities", "cat_matrix", "cmfs_1931", "colour_package_file", "cmfs_1931_380_780_5", "colour_version", "display_primaries",
            "illuminant_names", "illuminant_sd", "illuminant_xy", "robertson_table", "sample_set", "sd_set",
@@ -465,7 +466,7 @@ def _safe_divide(a, b):
 
 def von_kries_matrix(xyz_w: np.ndarray, xyz_wr: np.ndarray, transform: str) -> np.ndarray:
     """The von Kries adaptation matrix from white ``xyz_w`` to white ``xyz_wr`` in a transform's cone space:
-    M⁻¹ · diag(M·XYZ_wr / M·XYZ_w) · M (full adaptation).
+    M⁻¹ · diag(M·XYZ_wr / M·XYZ_w) · M (full adaptation; Bradford [Lam1985]_, CAT16 [Li2017]_: docs/references.md).
 
     Parameters
     ----------
@@ -492,7 +493,7 @@ def von_kries_matrix(xyz_w: np.ndarray, xyz_wr: np.ndarray, transform: str) -> n
     return np.matmul(np.matmul(np.linalg.inv(m), d[..., None] * np.eye(3)), m)
 
 
-def xy_to_uv(xy) -> np.ndarray:
+def xy_to_uv(xy: ArrayLike) -> np.ndarray:
     """CIE 1960 UCS u, v of CIE 1931 x, y: u = 4x / (−2x + 12y + 3), v = 6y / (−2x + 12y + 3).
 
     Parameters
@@ -511,12 +512,13 @@ def xy_to_uv(xy) -> np.ndarray:
     return np.stack([_safe_divide(4 * x, d), _safe_divide(6 * y, d)], axis=-1)
 
 
-def uv_to_cct_robertson(uv) -> np.ndarray:
+def uv_to_cct_robertson(uv: ArrayLike) -> np.ndarray:
     """Correlated colour temperature and distance from the Planckian locus by Robertson's method (1968).
 
     The point is placed between the two isotemperature lines of :func:`robertson_table` whose signed distances to
     it change sign; its reciprocal temperature is interpolated between theirs in proportion to those distances
-    (Wyszecki & Stiles, *Color Science*, 2nd ed., 3.11). Beyond the table's ends the last pair is used.
+    (Wyszecki & Stiles, *Color Science*, 2nd ed., 3.11) [Robertson1968]_ (see docs/references.md). Beyond the
+    table's ends the last pair is used.
 
     Parameters
     ----------
@@ -554,9 +556,9 @@ def uv_to_cct_robertson(uv) -> np.ndarray:
     return np.stack([cct, -d_uv], axis=-1).reshape(shape)
 
 
-def srgb_encode(linear) -> np.ndarray:
+def srgb_encode(linear: ArrayLike) -> np.ndarray:
     """IEC 61966-2-1's encoding (its inverse EOTF): 12.92·L up to L = 0.0031308, else 1.055·L^(1/2.4) − 0.055
-    (a negative L by its magnitude, sign kept).
+    (a negative L by its magnitude, sign kept) [IEC61966-2-1]_ (see docs/references.md).
 
     Parameters
     ----------

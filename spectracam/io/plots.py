@@ -67,7 +67,7 @@ def pyplot() -> ModuleType:
     return plt
 
 
-def figure(**kwargs) -> Figure:
+def figure(**kwargs: object) -> Figure:
     """A figure made without pyplot (whose import, 0.3 s, a command that draws one figure need not pay), on the
     settings of :func:`configure`; :func:`save_figure` saves it like any other.
 
