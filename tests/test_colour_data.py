@@ -196,6 +196,16 @@ def test_a_folder_that_cannot_be_written_leaves_the_tables_in_memory(fresh, monk
     assert blocked.read_text() == "a file where the folder should be"
 
 
+def test_no_place_for_the_snapshot_leaves_the_tables_in_memory(fresh, monkeypatch):
+    """No version metadata to name the file by (or no home folder): the run goes on, nothing is written."""
+    def nowhere():
+        raise RuntimeError("Could not determine home directory.")
+
+    monkeypatch.setattr(colour_data, "snapshot_path", nowhere)
+    assert _same(colour_data.robertson_table()[0], np.asarray(colour_data._build()["robertson/table"][0]))
+    assert not list(fresh.iterdir())
+
+
 def test_the_folder_follows_xdg_then_home(monkeypatch, tmp_path):
     monkeypatch.delenv("SPECTRACAM_TABLES")
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))

@@ -1350,7 +1350,7 @@ def main(argv=None) -> int:
             with ThreadPoolExecutor(a.jobs) as ex:
                 results = list(ex.map(lambda i: one(i, a.seed, base, cycle=not a.random_classes, classes=classes),
                                       range(a.cases)))
-    finally:   # make_base pointed the variable at its folder: a caller in the same process (the tests) gets its own back
+    finally:   # make_base pointed the variable at its folder: a caller in this process (the tests) gets its own back
         if kept is None:
             os.environ.pop("SPECTRACAM_TABLES", None)
         else:

@@ -4,9 +4,10 @@
 and SciPy's interpolation and pandas): more than the whole computation of ``spectracam simulate`` on the default
 scene (issue 38). What the commands read from it are published tables — the CIE 1931 colour-matching functions, the
 CIE and other illuminants, the ColorChecker and other reflectance sets, the sRGB and CRT primaries, the measured
-cameras' sensitivities, the chromatic adaptation transforms' matrices and Robertson's (1968) isotemperature lines — so they are taken from colour-science
-once per installed version and kept in ``<tables>/colour-science-<version>.npz`` (:func:`snapshot_path`). A run reads
-that file (a few milliseconds) and never imports colour-science unless it needs something else from it.
+cameras' sensitivities, the chromatic adaptation transforms' matrices and Robertson's (1968) isotemperature lines —
+so they are taken from colour-science once per installed version and kept in
+``<tables>/colour-science-<version>.npz`` (:func:`snapshot_path`, 0.6 MB). A run reads that file (0.05 s) and never
+imports colour-science unless it needs something else from it.
 
 The file is colour-science's own arrays, float64 bit for bit (``tests/test_colour_data.py`` compares every table with
 the live package). It is written atomically; one whose version or layout does not match, or that cannot be read
@@ -32,10 +33,10 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike
 
-__all__ = ["SCHEMA", "camera_sensitivities", "cat_matrix", "cmfs_1931", "colour_package_file", "cmfs_1931_380_780_5", "colour_version", "display_primaries",
-           "illuminant_names", "illuminant_sd", "illuminant_xy", "robertson_table", "sample_set", "sd_set",
-           "snapshot_path", "srgb_encode", "srgb_matrix", "tables", "uv_to_cct_robertson", "von_kries_matrix",
-           "xy_to_uv"]
+__all__ = ["SCHEMA", "camera_sensitivities", "cat_matrix", "cmfs_1931", "cmfs_1931_380_780_5", "colour_package_file",
+           "colour_version", "display_primaries", "illuminant_names", "illuminant_sd", "illuminant_xy",
+           "robertson_table", "sample_set", "sd_set", "snapshot_path", "srgb_encode", "srgb_matrix", "tables",
+           "uv_to_cct_robertson", "von_kries_matrix", "xy_to_uv"]
 
 #: The snapshot's layout; bumped whenever :func:`_build` stores something new or stores it differently, so an older
 #: file is rebuilt, never misread.
@@ -210,14 +211,19 @@ def tables() -> dict[str, np.ndarray]:
     global _TABLES
     with _LOCK:
         if _TABLES is None:
-            path = snapshot_path()
-            t = _read(path)
+            try:
+                path = snapshot_path()
+            except Exception:  # noqa: BLE001 - no version metadata or no home folder: the tables stay in memory
+                path = None
+            t = None if path is None else _read(path)
             if t is None:
                 packed = _pack(_build())
                 t = _unpack(packed)   # the same arrays, and the same types, as a later read of the file
                 try:
                     from spectracam.core.files import atomic_write
 
+                    if path is None:
+                        raise FileNotFoundError("no place for the snapshot")
                     path.parent.mkdir(parents=True, exist_ok=True)
                     atomic_write(path, lambda tmp: np.savez(tmp, **packed), now=True)
                 except OSError:   # a read-only or full cache never stops a run: the tables stay in memory
@@ -466,7 +472,8 @@ def _safe_divide(a, b):
 
 def von_kries_matrix(xyz_w: np.ndarray, xyz_wr: np.ndarray, transform: str) -> np.ndarray:
     """The von Kries adaptation matrix from white ``xyz_w`` to white ``xyz_wr`` in a transform's cone space:
-    M⁻¹ · diag(M·XYZ_wr / M·XYZ_w) · M (full adaptation; Bradford [Lam1985]_, CAT16 [Li2017]_: docs/references.md).
+    M⁻¹ · diag(M·XYZ_wr / M·XYZ_w) · M (full adaptation; Bradford [Lam1985]_, CAT16 [Li2017]_: see
+    docs/references.md).
 
     Parameters
     ----------
