@@ -104,6 +104,19 @@ def _free_port():
         return s.getsockname()[1]
 
 
+def _wait_for_port(port, timeout_s=60.0):
+    """Until something listens on 127.0.0.1:``port`` (a scheduler just started), or fail after ``timeout_s``."""
+    deadline = time.monotonic() + timeout_s
+    while True:
+        try:
+            with socket.create_connection(("127.0.0.1", port), timeout=1.0):
+                return
+        except OSError:
+            if time.monotonic() > deadline:
+                pytest.fail(f"nothing listens on 127.0.0.1:{port} after {timeout_s:g} s")
+            time.sleep(0.2)
+
+
 def test_sweep_through_a_separate_scheduler_and_worker(tmp_path):
     port = _free_port()
     addr = f"tcp://127.0.0.1:{port}"
@@ -115,7 +128,8 @@ def test_sweep_through_a_separate_scheduler_and_worker(tmp_path):
                                "--nthreads", "1", "--no-dashboard", "--host", "127.0.0.1"],
                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
     try:
-        sw_path = sweep_file(tmp_path)
+        _wait_for_port(port)   # the sweep starts faster than the scheduler binds its port (since issue 38's sixth
+        sw_path = sweep_file(tmp_path)   # session it no longer imports colour-science): a race the test must not run
         r = subprocess.run([sys.executable, "-m", "spectracam", "sweep", str(sw_path), "-o", str(tmp_path / "remote"),
                             "--scheduler", addr, "--quiet"], capture_output=True, text=True, timeout=180)
         assert r.returncode == 0, r.stderr

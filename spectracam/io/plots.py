@@ -82,9 +82,12 @@ def figure(**kwargs: object) -> Figure:
         The figure.
     """
     configure()
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    return Figure(**kwargs)
+    fig = Figure(**kwargs)
+    FigureCanvasAgg(fig)   # the canvas pyplot's Agg backend would give it: draw() and get_renderer() work as there
+    return fig
 
 
 def save_figure(fig: Figure, *paths: str | Path, dpi: int | None = None, tight: bool = True) -> list[Path] | Path:
