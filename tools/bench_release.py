@@ -5,12 +5,11 @@ release" (issue 38).
 
 The earlier commit is checked out into a git worktree (``git worktree add --detach``; removed at the end); both
 trees' modules are compiled to bytecode first (``compileall``, as an installed package's are), and both run with this
-interpreter and its packages, each with ``PYTHONPATH`` at its own tree, from
-an empty working directory, one command of each tree in turn (so a machine that slows down slows both alike), each
-with its own empty render cache (``SPECTRACAM_CACHE``) so neither reads the other's renders. HEAD reads colour-science's
-tables from their snapshot in the user's cache (``spectracam.core.colour_data``), as every run after the first one
-after an install does; when there is none yet, HEAD's first run makes it (about 3 s, once), which the median of three
-runs leaves out.
+interpreter and its packages, each with ``PYTHONPATH`` at its own tree, from an empty working directory, one command
+of each tree in turn (so a machine that slows down slows both alike), each with its own empty render cache
+(``SPECTRACAM_CACHE``) so neither reads the other's renders. HEAD reads colour-science's tables from their snapshot
+in the user's cache (``spectracam.core.colour_data``), as every run after the first one after an install does; when
+there is none yet, HEAD's first run makes it (about 3 s, once), which the median of three runs leaves out.
 
 Commands (``--only`` picks some):
 
@@ -119,8 +118,8 @@ def main() -> None:
             trees = {"HEAD": ROOT, args.against: old}
             # Both trees' modules compiled to bytecode first, as an installed package's are: the runs are made with
             # PYTHONDONTWRITEBYTECODE, so a fresh worktree would otherwise compile its sources in every run while
-            # this one read the __pycache__ its earlier runs left (0.3-0.5 s of every old run, before issue 38's
-            # sixth session)
+            # this one read the __pycache__ its earlier runs left (so, before issue 38's sixth session, every old
+            # run's CPU included compiling its sources)
             for tree in trees.values():
                 subprocess.run([sys.executable, "-m", "compileall", "-q", str(tree / "spectracam")], check=True)
             print(f"HEAD {head.strip()}{' (with uncommitted changes)' if dirty else ''} against {args.against} "
