@@ -207,7 +207,7 @@ def test_no_place_for_the_snapshot_leaves_the_tables_in_memory(fresh, monkeypatc
 
 
 def test_the_folder_follows_xdg_then_home(monkeypatch, tmp_path):
-    monkeypatch.delenv("SPECTRACAM_TABLES")
+    monkeypatch.delenv("SPECTRACAM_TABLES", raising=False)
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     assert colour_data.snapshot_path().parent == tmp_path / "spectracam" / "tables"
     monkeypatch.setenv("XDG_CACHE_HOME", "relative/ignored")

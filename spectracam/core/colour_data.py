@@ -76,12 +76,10 @@ def snapshot_path() -> Path:
     Path
         ``<tables>/colour-science-<version>.npz`` (the folder: see the module's docstring).
     """
-    if os.environ.get("SPECTRACAM_TABLES"):
-        folder = Path(os.environ["SPECTRACAM_TABLES"])
-    else:
-        xdg = os.environ.get("XDG_CACHE_HOME", "")
-        base = Path(xdg) if xdg and Path(xdg).is_absolute() else Path.home() / ".cache"   # a relative one is ignored
-        folder = base / "spectracam" / "tables"
+    from spectracam.core.files import user_cache_dir
+
+    env = os.environ.get("SPECTRACAM_TABLES")
+    folder = Path(env) if env else user_cache_dir() / "tables"
     return folder / f"colour-science-{colour_version()}.npz"
 
 
@@ -219,15 +217,14 @@ def tables() -> dict[str, np.ndarray]:
             if t is None:
                 packed = _pack(_build())
                 t = _unpack(packed)   # the same arrays, and the same types, as a later read of the file
-                try:
+                if path is not None:
                     from spectracam.core.files import atomic_write
 
-                    if path is None:
-                        raise FileNotFoundError("no place for the snapshot")
-                    path.parent.mkdir(parents=True, exist_ok=True)
-                    atomic_write(path, lambda tmp: np.savez(tmp, **packed), now=True)
-                except OSError:   # a read-only or full cache never stops a run: the tables stay in memory
-                    pass
+                    try:
+                        path.parent.mkdir(parents=True, exist_ok=True)
+                        atomic_write(path, lambda tmp: np.savez(tmp, **packed), now=True)
+                    except OSError:   # a read-only or full cache never stops a run: the tables stay in memory
+                        pass
             _TABLES = t
         return _TABLES
 

@@ -19,11 +19,26 @@ from pathlib import Path
 from typing import Callable, Iterator
 
 __all__ = ["WriteError", "atomic_write", "json_default", "regular_file", "remove_unfinished",
-           "stage_outputs", "staged", "staged_after"]
+           "stage_outputs", "staged", "staged_after", "user_cache_dir"]
 
 _STAGES: list[dict] = []
 #: Temporary files that exist right now (being written, or staged): what a signal handler removes.
 _LIVE: set = set()
+
+
+def user_cache_dir() -> Path:
+    """spectracam's folder in the user's cache: ``$XDG_CACHE_HOME/spectracam`` (the XDG Base Directory
+    specification's user cache, when set to an absolute path; a relative one is ignored), else
+    ``~/.cache/spectracam``.  The render cache and the snapshot of colour-science's tables live below it.
+
+    Returns
+    -------
+    Path
+        The folder (not made here).
+    """
+    xdg = os.environ.get("XDG_CACHE_HOME", "")
+    base = Path(xdg) if xdg and Path(xdg).is_absolute() else Path.home() / ".cache"
+    return base / "spectracam"
 
 
 def _umask() -> int:

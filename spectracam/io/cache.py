@@ -40,11 +40,11 @@ TEXTURED_RENDER_METHOD = 3
 def cache_dir() -> Path:
     """``$SPECTRACAM_CACHE``, else ``$XDG_CACHE_HOME/spectracam/renders`` (the XDG Base Directory specification's
     user cache, when set to an absolute path), else ``~/.cache/spectracam/renders``."""
+    from spectracam.core.files import user_cache_dir
+
     if os.environ.get("SPECTRACAM_CACHE"):
         return Path(os.environ["SPECTRACAM_CACHE"])
-    xdg = os.environ.get("XDG_CACHE_HOME", "")
-    base = Path(xdg) if xdg and Path(xdg).is_absolute() else Path.home() / ".cache"   # a relative one is ignored
-    return base / "spectracam" / "renders"
+    return user_cache_dir() / "renders"
 
 
 def render_key(scene: Scene, renderer: str) -> tuple[str, dict]:
