@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from spectracam._version import __version__
+from spectracam.core.files import user_cache_dir
 from spectracam.io.exr import read_radiance_exr, write_radiance_exr
 from spectracam.render import render
 
@@ -40,8 +41,6 @@ TEXTURED_RENDER_METHOD = 3
 def cache_dir() -> Path:
     """``$SPECTRACAM_CACHE``, else ``$XDG_CACHE_HOME/spectracam/renders`` (the XDG Base Directory specification's
     user cache, when set to an absolute path), else ``~/.cache/spectracam/renders``."""
-    from spectracam.core.files import user_cache_dir
-
     if os.environ.get("SPECTRACAM_CACHE"):
         return Path(os.environ["SPECTRACAM_CACHE"])
     return user_cache_dir() / "renders"
